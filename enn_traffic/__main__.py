@@ -1,0 +1,5 @@
+import sys
+
+from enn_traffic.cli import main
+
+sys.exit(main())

@@ -1,0 +1,85 @@
+"""``enn-traffic bench``: throughput of the evaluation workloads, in vehicle-steps per second.
+
+The navigation workload is the real one: the generations of a GA run on the narrow track
+(19 beams, P = 200). It is timed with the compiled batch on all cores and on one core, and
+against the plain per-vehicle Python loop of :mod:`enn_traffic.sim.reference` on chromosomes
+of the same generations, in the same process, so machine drift cancels out of the ratio.
+"""
+
+from __future__ import annotations
+
+import time
+
+import numba
+import numpy as np
+import pandas as pd
+
+from enn_traffic.evolution import ga
+from enn_traffic.experiments.common import scenario as shipped_scenario
+from enn_traffic.runner import ga_params
+from enn_traffic.sim.reference import reference_episode
+from enn_traffic.sim.world import NavigationWorld
+
+
+def _timed_batches(world: NavigationWorld, populations: list[np.ndarray]) -> tuple[int, float]:
+    steps, seconds = 0, 0.0
+    for population in populations:
+        started = time.perf_counter()
+        results = world.evaluate(population)
+        seconds += time.perf_counter() - started
+        steps += results.vehicle_steps
+    return steps, seconds
+
+
+def navigation_bench(generations: int = 30, reference_seconds: float = 10.0) -> pd.DataFrame:
+    scenario = shipped_scenario("navigation_narrow")
+    world = NavigationWorld(scenario)
+    rng = np.random.default_rng(scenario.seed)
+    params = ga_params(scenario)
+    population = ga.initial_population(
+        rng, params.population_size, world.spec.chromosome_length, params.init_range
+    )
+    world.evaluate(population[:2])  # compile outside the timing
+    populations = []
+    for _ in range(generations):
+        populations.append(population)
+        population = ga.next_generation(rng, population, world.evaluate(population).fitness,
+                                        params)
+    threads = numba.get_num_threads()
+    rows = []
+    steps, seconds = _timed_batches(world, populations)
+    rows.append(("compiled batch", threads, steps, seconds))
+    numba.set_num_threads(1)
+    try:
+        steps, seconds = _timed_batches(world, populations)
+    finally:
+        numba.set_num_threads(threads)
+    rows.append(("compiled batch", 1, steps, seconds))
+    # The reference loop runs chromosomes drawn evenly from every generation until its time is up.
+    order = np.random.default_rng(0).permutation(generations * params.population_size)
+    pool = np.concatenate(populations)[order]
+    steps, seconds, checked = 0, 0.0, []
+    for chromosome in pool:
+        started = time.perf_counter()
+        checked.append(reference_episode(world, chromosome))
+        seconds += time.perf_counter() - started
+        steps += checked[-1][0]
+        if seconds > reference_seconds:
+            break
+    compiled = world.evaluate(pool[: len(checked)])
+    if list(zip(compiled.steps.tolist(), compiled.outcome.tolist(), strict=True)) != checked:
+        raise RuntimeError("compiled and reference episodes disagree")
+    rows.append(("plain Python reference", 1, steps, seconds))
+    table = pd.DataFrame(rows, columns=["implementation", "threads", "vehicle_steps", "seconds"])
+    table.insert(0, "workload", "navigation: narrow track, 19 beams, P=200")
+    table["vehicle_steps_per_s"] = table["vehicle_steps"] / table["seconds"]
+    reference = table["vehicle_steps_per_s"].iloc[-1]
+    table["speedup_vs_reference"] = table["vehicle_steps_per_s"] / reference
+    table.attrs["reference_chromosomes_checked"] = len(checked)
+    return table
+
+
+def run_bench(quick: bool = False) -> pd.DataFrame:
+    """Every workload's throughput table."""
+    return navigation_bench(generations=10 if quick else 30,
+                            reference_seconds=3.0 if quick else 10.0)

@@ -1,0 +1,197 @@
+"""The ``enn-traffic`` command line (DESIGN.md, "Command line").
+
+Bad input ends with one message naming the file and key, and exit status 2; never a traceback.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import time
+from pathlib import Path
+
+from enn_traffic import __version__
+from enn_traffic.errors import InputError
+
+EPILOG = "Scenario files are described in README.md, section 'Scenario reference'."
+
+
+def _positive(text: str) -> int:
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a positive integer, got {text!r}") from None
+    if value < 1:
+        raise argparse.ArgumentTypeError(f"expected a positive integer, got {value}")
+    return value
+
+
+def _non_negative(text: str) -> int:
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected an integer >= 0, got {text!r}") from None
+    if value < 0:
+        raise argparse.ArgumentTypeError(f"expected an integer >= 0, got {value}")
+    return value
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(
+        prog="enn-traffic",
+        description="Evolve neural-network driving controllers in SUMO traffic "
+        "(Eraqi et al., 2016).",
+        epilog=EPILOG,
+    )
+    parser.add_argument("--version", action="version", version=f"enn-traffic {__version__}")
+    commands = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
+
+    run = commands.add_parser("run", help="evolve a controller on a scenario", epilog=EPILOG,
+                              description="Evolve a controller; writes scenario.toml, "
+                              "generations.csv, best.npz, learning_curve.png and a checkpoint.")
+    run.add_argument("scenario", type=Path, metavar="SCENARIO.toml")
+    run.add_argument("--out", type=Path, help="run folder (default: results/<scenario name>)")
+    run.add_argument("--seed", type=_non_negative, help="override the scenario's seed")
+    run.add_argument("--generations", type=_positive, help="override ga.generations")
+    run.add_argument("--population", type=_positive, help="override ga.population_size")
+    run.add_argument("--executor", choices=["local", "process", "ray"], default="local",
+                     help="where fitness is evaluated (default: local, in-process)")
+    run.add_argument("--address", help="Ray cluster address (with --executor ray)")
+    run.add_argument("--resume", action="store_true",
+                     help="continue the run in the folder from its checkpoint")
+    run.add_argument("--force", action="store_true",
+                     help="start over even if the folder holds another run")
+    run.add_argument("--quiet", action="store_true", help="no progress bar")
+
+    evaluate = commands.add_parser("evaluate", help="run a saved controller on a scenario",
+                                   epilog=EPILOG)
+    evaluate.add_argument("controller", type=Path, metavar="CONTROLLER.npz")
+    evaluate.add_argument("scenario", type=Path, metavar="SCENARIO.toml")
+    evaluate.add_argument("--episodes", type=_positive, default=1)
+    evaluate.add_argument("--out", type=Path, metavar="FILE.csv", help="write the lifetimes")
+
+    render = commands.add_parser("render", help="draw a controller's path (PNG) or animate it "
+                                 "(GIF)", epilog=EPILOG)
+    render.add_argument("controller", type=Path, metavar="CONTROLLER.npz")
+    render.add_argument("scenario", type=Path, metavar="SCENARIO.toml")
+    render.add_argument("--out", type=Path, required=True, metavar="FILE.png|FILE.gif")
+    render.add_argument("--max-steps", type=_positive, default=5000,
+                        help="draw at most this many steps (default 5000)")
+
+    reproduce = commands.add_parser("reproduce", help="run the paper's experiments",
+                                    epilog=EPILOG)
+    reproduce.add_argument("--out", type=Path, default=Path("results/paper"))
+    reproduce.add_argument("--quick", action="store_true",
+                           help="small populations and few generations (minutes)")
+    reproduce.add_argument("--only", help="comma-separated experiment names (default: all)")
+    reproduce.add_argument("--quiet", action="store_true", help="no progress bars")
+
+    bench = commands.add_parser("bench", help="throughput table (vehicle-steps per second)")
+    bench.add_argument("--quick", action="store_true", help="shorter timing runs")
+    bench.add_argument("--out", type=Path, metavar="FILE.csv", help="also write the table")
+    return parser
+
+
+def _cmd_run(args) -> int:
+    from enn_traffic.evolution.evaluate import make_evaluator
+    from enn_traffic.runner import evolve
+    from enn_traffic.scenario import load_scenario
+
+    scenario = load_scenario(args.scenario)
+    overrides = {}
+    if args.generations:
+        overrides["generations"] = args.generations
+    if args.population:
+        overrides["population_size"] = args.population
+    scenario = scenario.with_overrides(
+        **({"ga": overrides} if overrides else {}),
+        **({"seed": args.seed} if args.seed is not None else {}),
+    )
+    out = args.out or Path("results") / scenario.name
+    evaluator = make_evaluator(scenario, args.executor, args.address)
+    try:
+        table = evolve(scenario, out, evaluator, resume=args.resume, force=args.force,
+                       progress=not args.quiet)
+    finally:
+        evaluator.close()
+    last = table.iloc[-1]
+    best = table["best_fitness"].max()
+    print(f"{scenario.name}: {len(table)} generations, best fitness {best:.0f} steps "
+          f"(last generation: best {last['best_fitness']:.0f}, mean {last['mean_fitness']:.1f}); "
+          f"{table['vehicle_steps'].sum():,} vehicle-steps in {last['elapsed_s']:.1f} s")
+    print(f"results in {out}/")
+    return 0
+
+
+def _cmd_evaluate(args) -> int:
+    from enn_traffic.controller import Controller
+    from enn_traffic.evaluation import evaluate_controller
+    from enn_traffic.io import write_csv
+    from enn_traffic.scenario import load_scenario
+
+    controller = Controller.load(args.controller)
+    scenario = load_scenario(args.scenario)
+    table = evaluate_controller(controller, scenario, args.episodes)
+    print(table.to_string(index=False))
+    if args.out:
+        write_csv(args.out, table)
+        print(f"written {args.out}")
+    return 0
+
+
+def _cmd_render(args) -> int:
+    from enn_traffic.controller import Controller
+    from enn_traffic.evaluation import render
+    from enn_traffic.scenario import load_scenario
+
+    if args.out.suffix.lower() not in (".png", ".gif", ".svg", ".pdf"):
+        raise InputError("the output must end in .png, .gif, .svg or .pdf", args.out, "--out")
+    controller = Controller.load(args.controller)
+    info = render(controller, load_scenario(args.scenario), args.out, args.max_steps)
+    print(f"{info['steps']} steps ({info['outcome']}); written {info['file']}")
+    return 0
+
+
+def _cmd_reproduce(args) -> int:
+    from enn_traffic.reproduce import reproduce
+
+    names = [n.strip() for n in args.only.split(",") if n.strip()] if args.only else None
+    reproduce(args.out, quick=args.quick, only=names, progress=not args.quiet)
+    return 0
+
+
+def _cmd_bench(args) -> int:
+    from enn_traffic.bench import run_bench
+    from enn_traffic.io import write_csv
+
+    table = run_bench(quick=args.quick)
+    shown = table.copy()
+    shown["vehicle_steps_per_s"] = shown["vehicle_steps_per_s"].map("{:,.0f}".format)
+    shown["speedup_vs_reference"] = shown["speedup_vs_reference"].map("{:.1f}x".format)
+    shown["seconds"] = shown["seconds"].map("{:.2f}".format)
+    print(shown.to_string(index=False))
+    if args.out:
+        write_csv(args.out, table)
+    return 0
+
+
+COMMANDS = {"run": _cmd_run, "evaluate": _cmd_evaluate, "render": _cmd_render,
+            "reproduce": _cmd_reproduce, "bench": _cmd_bench}
+
+
+def main(argv: list[str] | None = None) -> int:
+    args = build_parser().parse_args(argv)
+    started = time.perf_counter()
+    try:
+        return COMMANDS[args.command](args)
+    except InputError as exc:
+        print(f"enn-traffic: error: {exc}", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:
+        print(f"\nenn-traffic: interrupted after {time.perf_counter() - started:.0f} s; "
+              "finished generations are checkpointed (continue with --resume)", file=sys.stderr)
+        return 130
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,110 @@
+"""Saved controllers (``best.npz``): a chromosome with the network and sensor it was made for."""
+
+from __future__ import annotations
+
+import io
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from enn_traffic.errors import InputError
+from enn_traffic.evolution.genome import NetworkSpec
+from enn_traffic.io import write_atomic
+from enn_traffic.scenario import Scenario
+
+
+@dataclass(frozen=True)
+class Controller:
+    chromosome: np.ndarray
+    layer_sizes: tuple[int, ...]
+    layout: str
+    steering_gain_deg: float
+    span_deg: float
+    range: float
+    fitness: float
+    scenario_name: str
+    generation: int
+
+    @classmethod
+    def from_scenario(
+        cls, scenario: Scenario, chromosome: np.ndarray, fitness: float, generation: int
+    ) -> Controller:
+        return cls(
+            chromosome=np.asarray(chromosome, dtype=np.float64),
+            layer_sizes=tuple(scenario.layer_sizes),
+            layout=scenario.network.layout,
+            steering_gain_deg=scenario.network.steering_gain_deg,
+            span_deg=scenario.sensor.span_deg,
+            range=scenario.sensor.range,
+            fitness=float(fitness),
+            scenario_name=scenario.name,
+            generation=int(generation),
+        )
+
+    def save(self, path: str | Path) -> None:
+        buffer = io.BytesIO()
+        np.savez(
+            buffer,
+            chromosome=self.chromosome,
+            layer_sizes=np.asarray(self.layer_sizes),
+            layout=self.layout,
+            steering_gain_deg=self.steering_gain_deg,
+            span_deg=self.span_deg,
+            range=self.range,
+            fitness=self.fitness,
+            scenario_name=self.scenario_name,
+            generation=self.generation,
+        )
+        write_atomic(path, lambda handle: handle.write(buffer.getvalue()), binary=True)
+
+    @classmethod
+    def load(cls, path: str | Path) -> Controller:
+        path = Path(path)
+        if not path.is_file():
+            raise InputError("controller file not found", path)
+        try:
+            with np.load(path, allow_pickle=False) as data:
+                controller = cls(
+                    chromosome=data["chromosome"].astype(np.float64),
+                    layer_sizes=tuple(int(n) for n in data["layer_sizes"]),
+                    layout=str(data["layout"]),
+                    steering_gain_deg=float(data["steering_gain_deg"]),
+                    span_deg=float(data["span_deg"]),
+                    range=float(data["range"]),
+                    fitness=float(data["fitness"]),
+                    scenario_name=str(data["scenario_name"]),
+                    generation=int(data["generation"]),
+                )
+        except Exception as exc:  # numpy raises many types on a damaged archive
+            raise InputError(f"not a readable controller file ({type(exc).__name__}: {exc})",
+                             path) from None
+        try:
+            spec = NetworkSpec(controller.layer_sizes, controller.layout)  # type: ignore[arg-type]
+        except ValueError as exc:
+            raise InputError(str(exc), path, "layer_sizes") from None
+        if controller.chromosome.shape != (spec.chromosome_length,):
+            raise InputError(
+                f"chromosome has shape {controller.chromosome.shape}, the network "
+                f"{controller.layer_sizes} needs {spec.chromosome_length} genes", path, "chromosome"
+            )
+        if not np.all(np.isfinite(controller.chromosome)):
+            raise InputError("chromosome holds NaN or inf", path, "chromosome")
+        return controller
+
+    def fit(self, scenario: Scenario, path: str | Path | None = None) -> Scenario:
+        """``scenario`` with this controller's network and sensor; a clear error if the
+        scenario's rangefinder has another number of beams than the network has inputs."""
+        if self.layer_sizes[0] != scenario.sensor.beams:
+            raise InputError(
+                f"the controller's network takes {self.layer_sizes[0]} beams, the scenario's "
+                f"sensor has {scenario.sensor.beams}", path, "sensor.beams"
+            )
+        return scenario.with_overrides(
+            network={
+                "hidden": list(self.layer_sizes[1:-1]),
+                "layout": self.layout,
+                "steering_gain_deg": self.steering_gain_deg,
+            },
+            sensor={"span_deg": self.span_deg, "range": self.range},
+        )

@@ -1,0 +1,1 @@
+"""The GA, the chromosome layout, and the evaluators that connect them to a problem."""

@@ -1,0 +1,75 @@
+"""Chromosome layout and the batched forward pass (paper §3, Figure 1).
+
+A chromosome is a flat vector of every weight, layer by layer. Within a layer, all weights
+coming *out of* one source neuron are consecutive, and the bias node is the last source
+("source" layout, the paper's Figure 1). The authors' MATLAB code groups weights by *target*
+neuron instead ("target" layout, reference-implementation.md §4); it is offered as an option.
+Every layer, the output layer included, applies the logistic sigmoid.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from itertools import pairwise
+from typing import Literal
+
+import numpy as np
+
+Layout = Literal["source", "target"]
+
+
+@dataclass(frozen=True)
+class NetworkSpec:
+    """Layer sizes from inputs to outputs, e.g. ``(19, 3, 2)``, and the gene layout."""
+
+    layer_sizes: tuple[int, ...]
+    layout: Layout = "source"
+
+    def __post_init__(self) -> None:
+        if len(self.layer_sizes) < 2 or min(self.layer_sizes) < 1:
+            raise ValueError(f"invalid layer sizes {self.layer_sizes}")
+        if self.layout not in ("source", "target"):
+            raise ValueError(f"unknown layout {self.layout!r}")
+
+    @property
+    def layer_shapes(self) -> list[tuple[int, int]]:
+        """(sources including the bias, targets) of each weight layer."""
+        return [(n_in + 1, n_out) for n_in, n_out in pairwise(self.layer_sizes)]
+
+    @property
+    def chromosome_length(self) -> int:
+        return sum(rows * cols for rows, cols in self.layer_shapes)
+
+    def source_order(self) -> np.ndarray:
+        """Index array ``i`` such that ``chromosome[..., i]`` is in the source layout."""
+        if self.layout == "source":
+            return np.arange(self.chromosome_length)
+        order, offset = [], 0
+        for rows, cols in self.layer_shapes:
+            # gene (source r, target c) sits at offset + c*rows + r in the target layout
+            block = np.arange(rows * cols).reshape(cols, rows).T.ravel()
+            order.append(offset + block)
+            offset += rows * cols
+        return np.concatenate(order)
+
+    def weights(self, population: np.ndarray) -> list[np.ndarray]:
+        """Per-layer weight arrays of shape (P, sources + 1, targets)."""
+        population = np.atleast_2d(population)[:, self.source_order()]
+        matrices, offset = [], 0
+        for rows, cols in self.layer_shapes:
+            block = population[:, offset : offset + rows * cols]
+            matrices.append(block.reshape(-1, rows, cols))
+            offset += rows * cols
+        return matrices
+
+    def forward(self, population: np.ndarray, inputs: np.ndarray) -> np.ndarray:
+        """Outputs (P, n_out) of P networks, each on its own input row (P, n_in)."""
+        activation = np.atleast_2d(inputs).astype(float)
+        for matrix in self.weights(population):
+            with_bias = np.concatenate([activation, np.ones((len(activation), 1))], axis=1)
+            activation = sigmoid(np.einsum("pi,pio->po", with_bias, matrix))
+        return activation
+
+
+def sigmoid(z: np.ndarray) -> np.ndarray:
+    return 1.0 / (1.0 + np.exp(-z))

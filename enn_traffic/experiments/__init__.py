@@ -1,0 +1,14 @@
+"""One module per paper experiment; each writes its tables and figures into the reproduce folder.
+
+``EXPERIMENTS`` maps the names that ``enn-traffic reproduce --only`` takes to functions
+``(out: Path, quick: bool, progress: bool) -> list[str]`` that return summary lines.
+"""
+
+from enn_traffic.experiments import navigation
+
+EXPERIMENTS = {
+    "fig7": navigation.fig7,
+    "fig8": navigation.fig8,
+    "fig9": navigation.fig9,
+    "generalization": navigation.generalization,
+}

@@ -1,0 +1,1 @@
+"""CSV tables and matplotlib figures."""

@@ -1,0 +1,92 @@
+"""Learning curves and trajectory pictures (matplotlib, headless)."""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from pathlib import Path
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+import pandas as pd  # noqa: E402
+
+from enn_traffic.io import write_atomic  # noqa: E402
+
+
+def save_figure(figure, path: str | Path) -> None:
+    suffix = Path(path).suffix.lstrip(".") or "png"
+    write_atomic(path, lambda handle: figure.savefig(handle, format=suffix, dpi=120), binary=True)
+    plt.close(figure)
+
+
+def learning_curve(table: pd.DataFrame, path: str | Path, title: str = "") -> None:
+    """Best, mean and median fitness per generation of one run."""
+    figure, axes = plt.subplots(figsize=(6, 3.6))
+    axes.plot(table["generation"], table["best_fitness"], label="best", color="C3")
+    axes.plot(table["generation"], table["mean_fitness"], label="mean", color="C0")
+    axes.plot(table["generation"], table["median_fitness"], label="median", color="C0", ls=":")
+    axes.set_xlabel("generation")
+    axes.set_ylabel("fitness [steps survived]")
+    axes.set_title(title)
+    axes.legend()
+    axes.grid(alpha=0.3)
+    figure.tight_layout()
+    save_figure(figure, path)
+
+
+def learning_curves(
+    runs: dict[str, pd.DataFrame],
+    path: str | Path,
+    title: str = "",
+    hline: float | None = None,
+    log: bool = False,
+    axes=None,
+) -> None:
+    """Best fitness per generation of several runs on one plot."""
+    own = axes is None
+    if own:
+        figure, axes = plt.subplots(figsize=(6.4, 3.8))
+    for label, table in runs.items():
+        axes.plot(table["generation"], table["best_fitness"], label=label, lw=1.4)
+    if hline is not None:
+        axes.axhline(hline, color="grey", ls="--", lw=0.8)
+    if log:
+        axes.set_yscale("log")
+    axes.set_xlabel("generation")
+    axes.set_ylabel("best fitness [steps]")
+    axes.set_title(title)
+    axes.legend(fontsize=8)
+    axes.grid(alpha=0.3)
+    if own:
+        figure.tight_layout()
+        save_figure(figure, path)
+
+
+def trajectories(
+    walls: np.ndarray,
+    paths: Sequence[np.ndarray],
+    path: str | Path,
+    title: str = "",
+    labels: Sequence[str] | None = None,
+    start: tuple[float, float, float] | None = None,
+) -> None:
+    """Walls in black and each trajectory (n, 2+) as a coloured line."""
+    figure, axes = plt.subplots(figsize=(6.4, 6.4))
+    for x1, y1, x2, y2 in walls:
+        axes.plot([x1, x2], [y1, y2], color="black", lw=0.8)
+    for index, poses in enumerate(paths):
+        label = labels[index] if labels else None
+        axes.plot(poses[:, 0], poses[:, 1], lw=1.0, label=label)
+        axes.plot(poses[-1, 0], poses[-1, 1], "x", color="C3")
+    if start is not None:
+        axes.plot(start[0], start[1], "o", color="C2", label="start")
+    axes.set_aspect("equal")
+    axes.set_title(title)
+    axes.set_xlabel("x [m]")
+    axes.set_ylabel("y [m]")
+    if labels or start is not None:
+        axes.legend(fontsize=8, loc="best")
+    figure.tight_layout()
+    save_figure(figure, path)

@@ -1,0 +1,133 @@
+"""One evolutionary run: GA + evaluator + outputs, checkpointed after every generation.
+
+Writes into the run folder: ``scenario.toml`` (resolved), ``generations.csv``, ``best.npz``,
+``learning_curve.png`` and ``checkpoint.npz``. ``resume=True`` continues from the checkpoint
+to exactly the result of an uninterrupted run: the GA's generator state is checkpointed and
+evaluation is deterministic.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import time
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+from tqdm import tqdm
+
+from enn_traffic.controller import Controller
+from enn_traffic.errors import InputError
+from enn_traffic.evolution import ga
+from enn_traffic.evolution.evaluate import Evaluator, make_evaluator
+from enn_traffic.evolution.genome import NetworkSpec
+from enn_traffic.io import write_csv, write_text
+from enn_traffic.report.plots import learning_curve
+from enn_traffic.scenario import Scenario
+from enn_traffic.sim.world import CAPPED, COLLIDED, SPUN
+
+CHECKPOINT = "checkpoint.npz"
+COLUMNS = [
+    "generation", "best_fitness", "mean_fitness", "median_fitness", "min_fitness",
+    "vehicle_steps", "collisions", "spins", "capped", "elapsed_s",
+]  # fmt: skip
+
+
+def ga_params(scenario: Scenario) -> ga.GAParams:
+    settings = scenario.ga.model_dump(exclude={"generations"})
+    return ga.GAParams(**settings)
+
+
+def fingerprint(scenario: Scenario) -> str:
+    """Identifies a run's settings (everything but the number of generations)."""
+    settings = scenario.with_overrides(ga={"generations": 1}).to_toml()
+    return hashlib.sha256(settings.encode()).hexdigest()[:16]
+
+
+def _fresh_state(scenario: Scenario) -> ga.GAState:
+    rng = np.random.default_rng(scenario.seed)
+    length = NetworkSpec(scenario.layer_sizes, scenario.network.layout).chromosome_length
+    population = ga.initial_population(
+        rng, scenario.ga.population_size, length, scenario.ga.init_range
+    )
+    return ga.GAState(generation=0, population=population, rng=rng,
+                      fingerprint=fingerprint(scenario), extra={"elapsed_s": 0.0})
+
+
+def _open_state(scenario: Scenario, out: Path, resume: bool, force: bool) -> ga.GAState:
+    checkpoint = out / CHECKPOINT
+    if not checkpoint.exists() or force:
+        return _fresh_state(scenario)
+    if not resume:
+        raise InputError(
+            "the folder already holds a run; pass --resume to continue it or --force to "
+            "start over", out)
+    state = ga.GAState.load(checkpoint)
+    if state.fingerprint != fingerprint(scenario):
+        raise InputError(
+            "the folder holds a run of different settings; use another --out or --force", out)
+    return state
+
+
+def evolve(
+    scenario: Scenario,
+    out: str | Path,
+    evaluator: Evaluator | None = None,
+    resume: bool = False,
+    force: bool = False,
+    progress: bool = True,
+) -> pd.DataFrame:
+    """Run the GA for ``scenario.ga.generations`` generations; return the generations table."""
+    out = Path(out)
+    out.mkdir(parents=True, exist_ok=True)
+    state = _open_state(scenario, out, resume, force)
+    table_path = out / "generations.csv"
+    rows = []
+    if state.generation > 0 and table_path.exists():
+        done = pd.read_csv(table_path)
+        rows = done[done["generation"] < state.generation].to_dict("records")
+    write_text(out / "scenario.toml", scenario.to_toml())
+    params = ga_params(scenario)
+    own_evaluator = evaluator is None
+    evaluator = evaluator or make_evaluator(scenario)
+    total = scenario.ga.generations
+    bar = tqdm(total=total, initial=min(state.generation, total), desc=scenario.name,
+               unit="gen", disable=not progress, leave=False)
+    try:
+        while state.generation < total:
+            started = time.perf_counter()
+            results = evaluator.evaluate(state.population)
+            fitness = results.fitness
+            best = int(np.argmax(fitness))
+            if fitness[best] > state.best_fitness:
+                state.best_fitness = float(fitness[best])
+                state.best_chromosome = state.population[best].copy()
+                Controller.from_scenario(
+                    scenario, state.best_chromosome, state.best_fitness, state.generation
+                ).save(out / "best.npz")
+            state.population = ga.next_generation(state.rng, state.population, fitness, params)
+            state.extra["elapsed_s"] += time.perf_counter() - started
+            rows.append({
+                "generation": state.generation,
+                "best_fitness": fitness.max(),
+                "mean_fitness": fitness.mean(),
+                "median_fitness": float(np.median(fitness)),
+                "min_fitness": fitness.min(),
+                "vehicle_steps": results.vehicle_steps,
+                "collisions": int((results.outcome == COLLIDED).sum()),
+                "spins": int((results.outcome == SPUN).sum()),
+                "capped": int((results.outcome == CAPPED).sum()),
+                "elapsed_s": state.extra["elapsed_s"],
+            })  # fmt: skip
+            state.generation += 1
+            write_csv(table_path, pd.DataFrame(rows, columns=COLUMNS))
+            state.save(out / CHECKPOINT)
+            bar.update(1)
+            bar.set_postfix(best=int(fitness.max()), mean=round(float(fitness.mean()), 1))
+    finally:
+        bar.close()
+        if own_evaluator:
+            evaluator.close()
+    table = pd.DataFrame(rows, columns=COLUMNS)
+    learning_curve(table, out / "learning_curve.png", title=scenario.name)
+    return table

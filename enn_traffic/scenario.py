@@ -1,0 +1,174 @@
+"""Scenario files (TOML): schema, loading, and validation with clear errors.
+
+A scenario names a SUMO network, the vehicle, its rangefinder, the controller network, the GA
+settings and the episode rules. Degrees appear only here (keys ending in ``_deg``); everything
+after loading is in metres, seconds and radians. See README "Scenario reference".
+"""
+
+from __future__ import annotations
+
+import math
+import tomllib
+from pathlib import Path
+from typing import Annotated, Literal
+
+import tomli_w
+from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_validator
+
+from enn_traffic.errors import InputError
+
+PositiveFloat = Annotated[float, Field(gt=0, allow_inf_nan=False)]
+
+
+class _Section(BaseModel):
+    model_config = ConfigDict(extra="forbid", frozen=True)
+
+
+class TrackConfig(_Section):
+    """Where the vehicle drives: a SUMO network and a start pose on it."""
+
+    net: Path
+    start_xy: tuple[float, float] | None = None
+    start_heading_deg: float = Field(0.0, allow_inf_nan=False)
+    start_lane: str | None = None
+    start_offset: float = Field(10.0, ge=0, allow_inf_nan=False)
+
+    @model_validator(mode="after")
+    def _one_start(self) -> TrackConfig:
+        if (self.start_xy is None) == (self.start_lane is None):
+            raise ValueError("give exactly one of start_xy (with start_heading_deg) or start_lane")
+        return self
+
+
+class VehicleConfig(_Section):
+    """Kinematic bicycle, constant speed (paper §4; reference-implementation.md §2)."""
+
+    length: PositiveFloat = 4.3
+    width: PositiveFloat = 1.7
+    wheelbase: PositiveFloat = 2.6
+    speed: PositiveFloat = 10.0
+    dt: PositiveFloat = 0.1
+
+
+class SensorConfig(_Section):
+    """Rangefinder: ``beams`` equally spaced over ``span_deg``, right to left (paper §3, §5.2)."""
+
+    beams: int = Field(19, ge=1, le=361)
+    span_deg: float = Field(180.0, gt=0, le=360, allow_inf_nan=False)
+    range: PositiveFloat = 25.0
+
+
+class NetworkConfig(_Section):
+    """Fully connected sigmoid network; 2 outputs (right, left steering force)."""
+
+    hidden: list[Annotated[int, Field(ge=1, le=1024)]] = [3]
+    steering_gain_deg: float = Field(90.0, gt=0, le=180, allow_inf_nan=False)
+    layout: Literal["source", "target"] = "source"
+
+
+class GAConfig(_Section):
+    """The paper's GA (§5) and its options."""
+
+    population_size: int = Field(200, ge=2, le=100_000)
+    generations: int = Field(50, ge=1, le=100_000)
+    tournament_size: int = Field(10, ge=1)
+    crossover_probability: float = Field(1.0, ge=0, le=1)
+    crossover_cut_mean: float = Field(0.95, ge=0, le=1)
+    crossover_cut_std: float = Field(0.05, ge=0, le=1)
+    mutation_probability: float = Field(0.1, ge=0, le=1)
+    init_range: PositiveFloat = 1.0
+    elite_count: int = Field(0, ge=0)
+
+    @model_validator(mode="after")
+    def _fits_population(self) -> GAConfig:
+        if self.elite_count >= self.population_size:
+            raise ValueError("elite_count must be smaller than population_size")
+        if self.tournament_size > self.population_size:
+            raise ValueError("tournament_size must not exceed population_size")
+        return self
+
+
+class EpisodeConfig(_Section):
+    """Episode rules: step cap and the spin ("rotating around itself") penalty of §5.3."""
+
+    max_steps: int = Field(20_000, ge=1, le=10_000_000)
+    spin_window: int = Field(49, ge=2)
+    spin_variance: float = Field(64.0, ge=0, allow_inf_nan=False)
+
+
+class Scenario(_Section):
+    """A whole scenario file."""
+
+    name: str = Field(min_length=1, pattern=r"^[A-Za-z0-9_.-]+$")
+    description: str = ""
+    seed: int = Field(0, ge=0)
+    track: TrackConfig
+    vehicle: VehicleConfig = VehicleConfig()
+    sensor: SensorConfig = SensorConfig()
+    network: NetworkConfig = NetworkConfig()
+    ga: GAConfig = GAConfig()
+    episode: EpisodeConfig = EpisodeConfig()
+    source: Path | None = Field(None, exclude=True)
+
+    @property
+    def beam_angles(self) -> list[float]:
+        """Beam directions relative to the heading, radians, right (negative) to left."""
+        n, span = self.sensor.beams, math.radians(self.sensor.span_deg)
+        if n == 1:
+            return [0.0]
+        return [-span / 2 + span * i / (n - 1) for i in range(n)]
+
+    @property
+    def layer_sizes(self) -> tuple[int, ...]:
+        return (self.sensor.beams, *self.network.hidden, 2)
+
+    def with_overrides(self, **sections: dict) -> Scenario:
+        """A copy with some section fields replaced, validated again."""
+        data = self.model_dump()
+        for section, values in sections.items():
+            if isinstance(values, dict):
+                data[section] = {**data.get(section, {}), **values}
+            else:
+                data[section] = values
+        return _validate(data, self.source)
+
+    def to_toml(self) -> str:
+        data = self.model_dump(mode="json", exclude_none=True)
+        return tomli_w.dumps(data)
+
+
+def _key_of(error: dict) -> str:
+    return ".".join(str(part) for part in error["loc"]) or "(top level)"
+
+
+def _validate(data: dict, source: Path | None) -> Scenario:
+    try:
+        scenario = Scenario.model_validate(data)
+    except ValidationError as exc:
+        first = exc.errors()[0]
+        message = first["msg"]
+        if first["type"] == "extra_forbidden":
+            message = "unknown key"
+        elif first["type"] == "missing":
+            message = "required key is missing"
+        extra = f" (and {exc.error_count() - 1} more problems)" if exc.error_count() > 1 else ""
+        raise InputError(message + extra, source, _key_of(first)) from None
+    return scenario.model_copy(update={"source": source})
+
+
+def load_scenario(path: str | Path) -> Scenario:
+    """Read and validate a scenario; network paths resolve relative to the scenario file."""
+    path = Path(path)
+    if not path.is_file():
+        raise InputError("scenario file not found", path)
+    try:
+        data = tomllib.loads(path.read_text())
+    except (tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
+        raise InputError(f"not valid TOML: {exc}", path) from None
+    track = data.get("track")
+    if isinstance(track, dict) and isinstance(track.get("net"), str):
+        track["net"] = str((path.parent / track["net"]).resolve())
+    scenario = _validate(data, path.resolve())
+    if not scenario.track.net.is_file():
+        raise InputError(f"network file not found: {scenario.track.net}", path, "track.net")
+    return scenario

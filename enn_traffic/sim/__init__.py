@@ -1,0 +1,1 @@
+"""Batched simulation: kinematics, sensors, collisions and the episode loop."""

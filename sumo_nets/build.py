@@ -1,0 +1,157 @@
+"""Write the plain-XML sources of the shipped tracks and build them with netconvert.
+
+Usage (from the repository root; netconvert comes with the ``eclipse-sumo`` wheel):
+
+    python sumo_nets/build.py            # rewrite *.nod.xml/*.edg.xml and rebuild every *.net.xml
+
+Each track is a chain of nodes on the corridor centreline joined by one-lane edges whose lane
+width is the corridor width (``spreadType="center"`` keeps the lane centred on the node line).
+Corner nodes of the authors' tracks carry a square ``shape`` so that the union of lane and
+junction shapes has the square corners of the reference polyline
+(../shared/paper/reference-implementation.md §1.2); other tracks keep netconvert's own rounded
+junction shapes. ``track_grid`` is a small town grid with three 5 m lanes each way (30 m roads).
+"""
+
+from __future__ import annotations
+
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+HERE = Path(__file__).resolve().parent
+
+# Centreline of the authors' 12 m navigation corridor (reference-implementation.md §1.2): the
+# medial line of their 57-segment polyline, from the start cap (-8..4, -20) to the far cap at B.
+NARROW_CENTRELINE = [
+    (-2, -20), (-2, 16), (28, 16), (28, 34), (-52, 34), (-52, 76), (-22, 76), (-22, 144),
+    (-40, 144), (-40, 104), (-82, 104), (-82, 196), (-2, 196), (-2, 214), (-190, 214),
+    (-190, 196), (-150, 196), (-150, 154), (-230, 154), (-230, 136), (-190, 136), (-190, 76),
+    (-172, 76), (-172, 136), (-130, 136), (-130, 44), (-210, 44), (-210, -30),
+]
+# The wide track is the same course scaled by 2.5: a 30 m corridor, the width the authors name
+# for their wide map (README of their code, "30 m instead of 12 m"), with 15 m wall blocks
+# between neighbouring legs. At 24 m (scale 2) no seed learned the 180-degree turn at B within
+# 50 generations; at 30 m most do.
+WIDE_SCALE = 2.5
+
+TRACKS = {
+    "track_narrow": dict(points=NARROW_CENTRELINE, width=12.0, square_corners=True),
+    "track_wide": dict(
+        points=[(x * WIDE_SCALE, y * WIDE_SCALE) for x, y in NARROW_CENTRELINE],
+        width=12.0 * WIDE_SCALE,
+        square_corners=True,
+    ),
+    # 100 m x 100 m free area: one 100 m-wide lane from x=0 to x=100 along y=50.
+    "arena": dict(points=[(0, 50), (100, 50)], width=100.0, square_corners=False),
+    # Tracks for generalisation, in the wide track's 30 m width class but of other shapes.
+    # A closed rectangular ring road with netconvert's rounded corners.
+    "track_loop": dict(
+        points=[(0, 0), (200, 0), (200, 120), (0, 120)], width=30.0, square_corners=False,
+        closed=True,
+    ),
+    # A dead-ended course with 45-degree legs.
+    "track_zigzag": dict(
+        points=[(0, -10), (0, 60), (50, 110), (50, 190), (0, 240), (-60, 240), (-110, 290),
+                (-110, 370)],
+        width=30.0, square_corners=False,
+    ),
+}
+
+
+def _fmt(v: float) -> str:
+    return f"{v:g}"
+
+
+def corridor_xml(points, width, square_corners, closed=False) -> tuple[str, str]:
+    """Plain node and edge XML for a one-lane corridor along ``points``."""
+    half = width / 2
+    n = len(points)
+    nodes = ["<nodes>"]
+    for i, (x, y) in enumerate(points):
+        end = not closed and i in (0, n - 1)
+        attrs = f'id="n{i}" x="{_fmt(x)}" y="{_fmt(y)}"'
+        if end:
+            nodes.append(f'    <node {attrs} type="dead_end"/>')
+        elif square_corners:
+            shape = " ".join(
+                f"{_fmt(x + dx)},{_fmt(y + dy)}"
+                for dx, dy in ((-half, -half), (half, -half), (half, half), (-half, half))
+            )
+            nodes.append(f'    <node {attrs} type="priority" shape="{shape}"/>')
+        else:
+            nodes.append(f'    <node {attrs} type="priority"/>')
+    nodes.append("</nodes>")
+    edges = ["<edges>"]
+    pairs = [(i, i + 1) for i in range(n - 1)] + ([(n - 1, 0)] if closed else [])
+    for a, b in pairs:
+        edges.append(
+            f'    <edge id="e{a}" from="n{a}" to="n{b}" numLanes="1" width="{_fmt(width)}"'
+            ' speed="13.89" spreadType="center"/>'
+        )
+    edges.append("</edges>")
+    return "\n".join(nodes) + "\n", "\n".join(edges) + "\n"
+
+
+def grid_xml(blocks: int = 3, block_length: float = 120.0, lanes: int = 3,
+             lane_width: float = 5.0) -> tuple[str, str]:
+    """Plain XML of a town grid: (blocks+1)^2 junctions, two-way roads, ``lanes`` lanes each way."""
+    nodes = ["<nodes>"]
+    for i in range(blocks + 1):
+        for j in range(blocks + 1):
+            nodes.append(
+                f'    <node id="g{i}_{j}" x="{_fmt(i * block_length)}" y="{_fmt(j * block_length)}"'
+                ' type="priority"/>'
+            )
+    nodes.append("</nodes>")
+    edges = ["<edges>"]
+    for i in range(blocks + 1):
+        for j in range(blocks + 1):
+            for di, dj in ((1, 0), (0, 1)):
+                a, b = (i, j), (i + di, j + dj)
+                if b[0] > blocks or b[1] > blocks:
+                    continue
+                for src, dst in ((a, b), (b, a)):
+                    edges.append(
+                        f'    <edge id="g{src[0]}_{src[1]}to{dst[0]}_{dst[1]}"'
+                        f' from="g{src[0]}_{src[1]}" to="g{dst[0]}_{dst[1]}" numLanes="{lanes}"'
+                        f' width="{_fmt(lane_width)}" speed="13.89"/>'
+                    )
+    edges.append("</edges>")
+    return "\n".join(nodes) + "\n", "\n".join(edges) + "\n"
+
+
+def netconvert_command(name: str) -> list[str]:
+    """The netconvert call that builds ``name.net.xml`` from its plain XML."""
+    exe = shutil.which("netconvert")
+    if exe is None:
+        import sumo  # the eclipse-sumo wheel
+
+        exe = str(Path(sumo.SUMO_HOME) / "bin" / "netconvert")
+    return [
+        exe,
+        "--node-files", f"{name}.nod.xml",
+        "--edge-files", f"{name}.edg.xml",
+        "--output-file", f"{name}.net.xml",
+        "--offset.disable-normalization",  # keep the authors' coordinates
+        "--no-turnarounds",
+        "--no-internal-links",
+    ]
+
+
+def main() -> int:
+    sources = {name: corridor_xml(**spec) for name, spec in TRACKS.items()}
+    sources["track_grid"] = grid_xml()
+    for name, (nod, edg) in sources.items():
+        (HERE / f"{name}.nod.xml").write_text(nod)
+        (HERE / f"{name}.edg.xml").write_text(edg)
+        result = subprocess.run(netconvert_command(name), cwd=HERE, capture_output=True, text=True)
+        if result.returncode != 0:
+            print(result.stdout, result.stderr, file=sys.stderr)
+            return result.returncode
+        print(f"built {name}.net.xml")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,130 @@
+"""The command line, run as a user runs it: a real process, real files."""
+
+import subprocess
+import sys
+
+import numpy as np
+import pandas as pd
+import pytest
+
+
+def cli(*args, cwd=None):
+    return subprocess.run([sys.executable, "-m", "enn_traffic", *map(str, args)],
+                          capture_output=True, text=True, cwd=cwd)
+
+
+@pytest.fixture(scope="module")
+def small_run(tmp_path_factory, request):
+    root = request.config.rootpath
+    out = tmp_path_factory.mktemp("run") / "narrow"
+    result = cli("run", root / "scenarios" / "navigation_narrow.toml", "--out", out,
+                 "--population", 30, "--generations", 6, "--seed", 3, "--quiet")
+    assert result.returncode == 0, result.stderr
+    return out
+
+
+def test_run_writes_every_output(small_run):
+    for name in ("scenario.toml", "generations.csv", "best.npz", "learning_curve.png",
+                 "checkpoint.npz"):
+        assert (small_run / name).is_file(), name
+    table = pd.read_csv(small_run / "generations.csv")
+    assert list(table["generation"]) == list(range(6))
+    for column in ("best_fitness", "mean_fitness", "median_fitness", "min_fitness",
+                   "vehicle_steps", "elapsed_s"):
+        assert column in table
+    assert (table["best_fitness"] >= table["mean_fitness"]).all()
+    assert (table["mean_fitness"] >= table["min_fitness"]).all()
+
+
+def test_resume_gives_the_uninterrupted_result(small_run, tmp_path, root):
+    scenario = root / "scenarios" / "navigation_narrow.toml"
+    part = tmp_path / "part"
+    common = ("--population", 30, "--seed", 3, "--quiet")
+    assert cli("run", scenario, "--out", part, "--generations", 2, *common).returncode == 0
+    refused = cli("run", scenario, "--out", part, "--generations", 6, *common)
+    assert refused.returncode == 2 and "--resume" in refused.stderr
+    resumed = cli("run", scenario, "--out", part, "--generations", 6, "--resume", *common)
+    assert resumed.returncode == 0, resumed.stderr
+    whole = pd.read_csv(small_run / "generations.csv").drop(columns="elapsed_s")
+    parts = pd.read_csv(part / "generations.csv").drop(columns="elapsed_s")
+    pd.testing.assert_frame_equal(whole, parts)
+    with np.load(small_run / "checkpoint.npz") as a, np.load(part / "checkpoint.npz") as b:
+        np.testing.assert_array_equal(a["population"], b["population"])
+
+
+def test_resume_refuses_other_settings(small_run, root):
+    other = cli("run", root / "scenarios" / "navigation_narrow.toml", "--out", small_run,
+                "--population", 30, "--generations", 8, "--seed", 4, "--resume", "--quiet")
+    assert other.returncode == 2 and "different settings" in other.stderr
+
+
+def test_evaluate_and_render_a_saved_controller(small_run, tmp_path, root):
+    csv = tmp_path / "lifetimes.csv"
+    result = cli("evaluate", small_run / "best.npz", root / "scenarios" / "unseen_loop.toml",
+                 "--episodes", 2, "--out", csv)
+    assert result.returncode == 0, result.stderr
+    table = pd.read_csv(csv)
+    assert len(table) == 2 and set(table["outcome"]) <= {"collision", "spin", "capped"}
+    assert (table["lifetime_steps"] >= 0).all()
+    picture = tmp_path / "path.png"
+    result = cli("render", small_run / "best.npz", root / "scenarios" / "navigation_narrow.toml",
+                 "--out", picture)
+    assert result.returncode == 0, result.stderr
+    assert picture.read_bytes()[:4] == b"\x89PNG"
+
+
+def test_evaluate_reproduces_the_recorded_best_fitness(small_run, root):
+    best = pd.read_csv(small_run / "generations.csv")["best_fitness"].max()
+    result = cli("evaluate", small_run / "best.npz", root / "scenarios" / "navigation_narrow.toml")
+    assert result.returncode == 0
+    assert f" {int(best)} " in result.stdout
+
+
+@pytest.mark.parametrize(
+    "args, needle",
+    [
+        (("run", "no/such.toml"), "scenario file not found"),
+        (("evaluate", "no.npz", "scenarios/navigation_narrow.toml"), "controller file not found"),
+        (("reproduce", "--only", "fig99"), "unknown experiment"),
+        (("run", "scenarios/navigation_narrow.toml", "--population", "-3"), "positive integer"),
+        (("run", "scenarios/navigation_narrow.toml", "--executor", "ray"), "not available"),
+    ],
+)
+def test_bad_input_is_one_clear_message_and_exit_2(args, needle, root):
+    result = cli(*args, cwd=root)
+    assert result.returncode == 2
+    assert needle in result.stderr
+    assert "Traceback" not in result.stderr
+
+
+def test_controller_that_does_not_fit_the_sensor(small_run, tmp_path, root):
+    scenario = tmp_path / "five.toml"
+    text = (root / "scenarios" / "navigation_narrow.toml").read_text()
+    net = (root / "sumo_nets" / "track_narrow.net.xml").as_posix()
+    scenario.write_text(text.replace("beams = 19", "beams = 5")
+                        .replace("../sumo_nets/track_narrow.net.xml", net))
+    result = cli("evaluate", small_run / "best.npz", scenario)
+    assert result.returncode == 2 and "sensor.beams" in result.stderr
+    assert "Traceback" not in result.stderr
+
+
+def test_nan_controller_is_refused(small_run, tmp_path, root):
+    with np.load(small_run / "best.npz") as data:
+        fields = {k: data[k] for k in data.files}
+    fields["chromosome"][3] = np.nan
+    broken = tmp_path / "nan.npz"
+    np.savez(broken, **fields)
+    result = cli("evaluate", broken, root / "scenarios" / "navigation_narrow.toml")
+    assert result.returncode == 2 and "NaN" in result.stderr
+
+
+def test_reproduce_quick_fig7(tmp_path):
+    result = cli("reproduce", "--quick", "--only", "fig7", "--out", tmp_path, "--quiet")
+    assert result.returncode == 0, result.stderr
+    table = pd.read_csv(tmp_path / "fig7.csv")
+    assert list(table["seed"]) == [1, 2]
+    assert (tmp_path / "fig7.png").is_file() and (tmp_path / "summary.md").is_file()
+    # a second call reuses the finished runs
+    again = cli("reproduce", "--quick", "--only", "fig7", "--out", tmp_path, "--quiet")
+    assert again.returncode == 0
+    pd.testing.assert_frame_equal(table, pd.read_csv(tmp_path / "fig7.csv"))

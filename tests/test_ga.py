@@ -1,0 +1,103 @@
+import numpy as np
+import pytest
+
+from enn_traffic.evolution import ga
+
+
+def test_tournament_of_whole_population_always_picks_the_best():
+    rng = np.random.default_rng(0)
+    fitness = np.array([3.0, 9.0, 1.0, 4.0])
+    winners = ga.tournament_select(rng, fitness, count=500, tournament_size=40)
+    assert np.all(winners == 1)
+
+
+def test_tournament_size_one_is_uniform():
+    rng = np.random.default_rng(1)
+    winners = ga.tournament_select(rng, np.arange(10.0), count=20_000, tournament_size=1)
+    counts = np.bincount(winners, minlength=10)
+    assert counts.min() > 1700 and counts.max() < 2300
+
+
+def test_crossover_cut_follows_normal_095_005():
+    rng = np.random.default_rng(2)
+    length, pairs = 68, 20_000
+    first, second = np.zeros((pairs, length)), np.ones((pairs, length))
+    children = ga.one_point_crossover(rng, first, second, 1.0, 0.95, 0.05)
+    child_a, child_b = children[:pairs], children[pairs:]
+    np.testing.assert_array_equal(child_a + child_b, 1.0)  # complementary children
+    cut = length - child_a.sum(axis=1)  # genes taken from the second parent start at the cut
+    # round(N(0.95, 0.05) * 68) clipped to [1, 67]: the clip at 67 pulls the mean below 64.6
+    expected = np.clip(np.rint(np.random.default_rng(99).normal(0.95, 0.05, 10**6) * 68), 1, 67)
+    assert abs(cut.mean() - expected.mean()) < 0.1
+    assert abs(cut.std() - expected.std()) < 0.1
+    assert abs((cut == 67).mean() - (expected == 67).mean()) < 0.02
+    assert cut.min() >= 1 and cut.max() <= length - 1
+
+
+def test_crossover_probability_zero_copies_parents():
+    rng = np.random.default_rng(3)
+    a, b = rng.random((5, 10)), rng.random((5, 10))
+    children = ga.one_point_crossover(rng, a, b, 0.0, 0.95, 0.05)
+    np.testing.assert_array_equal(children, np.concatenate([a, b]))
+
+
+def test_mutation_replaces_a_tenth_of_genes_within_range():
+    rng = np.random.default_rng(4)
+    population = np.full((400, 68), 5.0)
+    mutated = ga.mutate(rng, population, 0.1, 1.0)
+    changed = mutated != 5.0
+    assert abs(changed.mean() - 0.1) < 0.01
+    assert np.all(np.abs(mutated[changed]) <= 1.0)
+
+
+def test_elites_survive_unchanged():
+    rng = np.random.default_rng(5)
+    population = rng.uniform(-1, 1, (20, 8))
+    fitness = rng.random(20)
+    params = ga.GAParams(population_size=20, elite_count=2, mutation_probability=1.0)
+    child = ga.next_generation(rng, population, fitness, params)
+    assert child.shape == population.shape
+    top = np.argsort(-fitness)[:2]
+    np.testing.assert_array_equal(child[:2], population[top])
+
+
+def test_same_seed_same_generation():
+    def one(seed):
+        rng = np.random.default_rng(seed)
+        population = ga.initial_population(rng, 30, 12, 1.0)
+        return ga.next_generation(rng, population, population.sum(axis=1), ga.GAParams(30, 5))
+
+    np.testing.assert_array_equal(one(7), one(7))
+    assert not np.array_equal(one(7), one(8))
+
+
+def test_ga_improves_fitness_on_a_small_problem():
+    """Maximise -||x - target||^2 over 10 genes: the paper's operators must make progress."""
+    rng = np.random.default_rng(6)
+    target = rng.uniform(-1, 1, 10)
+    params = ga.GAParams(population_size=60, tournament_size=4, elite_count=1)
+    population = ga.initial_population(rng, 60, 10, 1.0)
+    first = None
+    for _ in range(60):
+        fitness = -((population - target) ** 2).sum(axis=1)
+        first = fitness.max() if first is None else first
+        population = ga.next_generation(rng, population, fitness, params)
+    final = (-((population - target) ** 2).sum(axis=1)).max()
+    assert final > first / 10  # the best squared error shrank at least tenfold
+
+
+def test_checkpoint_round_trip_and_corruption(tmp_path):
+    from enn_traffic.errors import InputError
+
+    rng = np.random.default_rng(9)
+    state = ga.GAState(generation=4, population=rng.random((6, 3)), rng=rng,
+                       best_chromosome=np.ones(3), best_fitness=12.0, fingerprint="abc")
+    path = tmp_path / "checkpoint.npz"
+    state.save(path)
+    loaded = ga.GAState.load(path)
+    assert loaded.generation == 4 and loaded.fingerprint == "abc"
+    np.testing.assert_array_equal(loaded.population, state.population)
+    assert loaded.rng.random() == rng.random()  # generator continues identically
+    path.write_bytes(path.read_bytes()[:100])
+    with pytest.raises(InputError, match="corrupted"):
+        ga.GAState.load(path)

@@ -1,0 +1,71 @@
+import numpy as np
+import pytest
+from shapely.geometry import LineString, Polygon
+
+from enn_traffic.errors import InputError
+from enn_traffic.roads import load_track
+
+# reference-implementation.md §1.2: the authors' narrow track, start vertex and 57 moves
+AUTHORS_MOVES = [12, 30, 30, 30, -80, 30, 30, 80, -30, -40, -30, 80, 80, 30, -200, -30, 40, -30,
+                 -80, -30, 40, -60, 30, 60, 30, -80, -80, -80, 12, 68, 80, 104, -54, -60, -6,
+                 60, -40, 6, 80, 54, -40, 6, 176, -6, -80, -104, 54, 40, 6, -56, -30, -54, 80,
+                 -6, -30, -42, 12]
+
+
+def authors_polyline():
+    points = [(-8.0, -20.0)]
+    for i, move in enumerate(AUTHORS_MOVES):
+        x, y = points[-1]
+        points.append((x + move, y) if i % 2 == 0 else (x, y + move))
+    return points
+
+
+def test_narrow_track_walls_follow_the_authors_polyline(root):
+    track = load_track(root / "sumo_nets" / "track_narrow.net.xml")
+    reference = LineString(authors_polyline())
+    wall_points = np.vstack([track.walls[:, :2], track.walls[:, 2:]])
+    # every wall vertex within 0.5 m of the polyline, and every polyline vertex within 0.5 m
+    # of a wall, and the same enclosed area
+    walls = [LineString([w[:2], w[2:]]) for w in track.walls]
+    assert max(reference.distance(LineString([p, p])) for p in wall_points) < 0.5
+    assert max(min(w.distance(LineString([p, p])) for w in walls)
+               for p in authors_polyline()) < 0.5
+    assert track.area.area == pytest.approx(Polygon(authors_polyline()[:-1]).area, rel=1e-3)
+
+
+def test_arena_is_a_100m_square(root):
+    track = load_track(root / "sumo_nets" / "arena.net.xml")
+    assert track.bounds == pytest.approx((0, 0, 100, 100))
+    assert track.area.area == pytest.approx(10_000)
+    assert len(track.walls) == 4
+
+
+def test_wide_track_is_the_narrow_course_scaled(root):
+    narrow = load_track(root / "sumo_nets" / "track_narrow.net.xml")
+    wide = load_track(root / "sumo_nets" / "track_wide.net.xml")
+    assert wide.area.area == pytest.approx(narrow.area.area * 2.5**2, rel=1e-3)
+
+
+def test_every_shipped_network_loads_into_one_area(root):
+    for net in sorted((root / "sumo_nets").glob("*.net.xml")):
+        track = load_track(net)
+        assert track.area.geom_type == "Polygon", net.name
+        assert len(track.walls) >= 4
+
+
+def test_broken_network_is_a_clear_error(tmp_path):
+    broken = tmp_path / "broken.net.xml"
+    broken.write_text("<net><edge id='e'><lane id='e_0' shape='0,0 10,0'")
+    with pytest.raises(InputError, match="not a readable SUMO network") as info:
+        load_track(broken)
+    assert "broken.net.xml" in str(info.value)
+
+
+def test_missing_network_and_empty_network(tmp_path):
+    with pytest.raises(InputError, match="not found"):
+        load_track(tmp_path / "absent.net.xml")
+    empty = tmp_path / "empty.net.xml"
+    empty.write_text('<net version="1.20"><location netOffset="0,0" convBoundary="0,0,1,1" '
+                     'origBoundary="0,0,1,1" projParameter="!"/></net>')
+    with pytest.raises(InputError, match="no drivable area"):
+        load_track(empty)

@@ -1,0 +1,94 @@
+import pytest
+
+from enn_traffic.errors import InputError
+from enn_traffic.scenario import load_scenario
+
+GOOD = """
+name = "t"
+[track]
+net = "{net}"
+start_xy = [0.0, 0.0]
+start_heading_deg = 90.0
+"""
+
+
+@pytest.fixture
+def net(root):
+    return root / "sumo_nets" / "track_narrow.net.xml"
+
+
+def load_text(tmp_path, text):
+    path = tmp_path / "s.toml"
+    path.write_text(text)
+    return load_scenario(path)
+
+
+def test_shipped_scenarios_load(root):
+    for path in sorted((root / "scenarios").glob("*.toml")):
+        scenario = load_scenario(path)
+        assert scenario.track.net.is_file(), path
+
+
+def test_defaults_are_the_papers(tmp_path, net):
+    scenario = load_text(tmp_path, GOOD.format(net=net))
+    assert scenario.ga.population_size == 200 and scenario.ga.tournament_size == 10
+    assert scenario.ga.mutation_probability == 0.1 and scenario.ga.crossover_cut_mean == 0.95
+    assert scenario.layer_sizes == (19, 3, 2)
+    angles = scenario.beam_angles
+    assert angles[0] == pytest.approx(-1.5707963) and angles[-1] == pytest.approx(1.5707963)
+    assert angles[9] == pytest.approx(0.0)
+
+
+def test_one_beam_looks_straight_ahead(tmp_path, net):
+    scenario = load_text(tmp_path, GOOD.format(net=net) + "[sensor]\nbeams = 1\n")
+    assert scenario.beam_angles == [0.0]
+
+
+def test_network_path_resolves_relative_to_the_scenario_file(tmp_path, net):
+    (tmp_path / "nets").mkdir()
+    (tmp_path / "nets" / "n.net.xml").write_bytes(net.read_bytes())
+    scenario = load_text(tmp_path, GOOD.format(net="nets/n.net.xml"))
+    assert scenario.track.net == (tmp_path / "nets" / "n.net.xml").resolve()
+
+
+@pytest.mark.parametrize(
+    "extra, key, message",
+    [
+        ("[ga]\npopulation_size = 0\n", "ga.population_size", "greater than or equal to 2"),
+        ("[ga]\npopulation_sise = 10\n", "ga.population_sise", "unknown key"),
+        ("[sensor]\nbeams = 'many'\n", "sensor.beams", "integer"),
+        ("[ga]\nmutation_probability = 1.5\n", "ga.mutation_probability", "less than or equal"),
+        ("[vehicle]\nspeed = -1\n", "vehicle.speed", "greater than 0"),
+        ("[ga]\nelite_count = 500\n", "ga", "elite_count"),
+        ("colour = 'red'\n", "track.colour", "unknown key"),
+    ],
+)
+def test_bad_values_name_file_and_key(tmp_path, net, extra, key, message):
+    with pytest.raises(InputError) as info:
+        load_text(tmp_path, GOOD.format(net=net) + extra)
+    assert info.value.key == key
+    assert message in info.value.message
+    assert str(info.value).startswith(str(tmp_path / "s.toml"))
+
+
+def test_missing_network_file(tmp_path):
+    with pytest.raises(InputError, match="network file not found") as info:
+        load_text(tmp_path, GOOD.format(net="nowhere.net.xml"))
+    assert info.value.key == "track.net"
+
+
+def test_missing_required_key_and_broken_toml(tmp_path):
+    with pytest.raises(InputError, match="required key is missing") as info:
+        load_text(tmp_path, 'name = "x"\n')
+    assert info.value.key == "track"
+    with pytest.raises(InputError, match="not valid TOML"):
+        load_text(tmp_path, "name = \n")
+
+
+def test_start_off_the_road_is_refused(tmp_path, net):
+    from enn_traffic.sim.world import NavigationWorld
+
+    scenario = load_text(tmp_path, GOOD.format(net=net).replace("[0.0, 0.0]", "[500.0, 0.0]"))
+    with pytest.raises(InputError, match="off the drivable area") as info:
+        NavigationWorld(scenario)
+    assert info.value.key == "track.start_xy"

@@ -1,0 +1,86 @@
+import math
+
+import numpy as np
+import pytest
+
+from enn_traffic.sim.collide import body_polygon, box_hits_segment, boxes_overlap
+from enn_traffic.sim.kinematics import bicycle_step
+from enn_traffic.sim.sensors import WallGrid, nearby_walls, sense_walls
+
+
+@pytest.mark.parametrize(
+    "steering_deg, turn_deg, moved",
+    # reference-implementation.md §2.3, d = 1 m, wheelbase 2.6 m
+    [(10, 3.8, 0.996), (30, 11.5, 0.966), (45, 17.0, 0.924), (60, 22.4, 0.866)],
+)
+def test_bicycle_step_matches_the_authors_table(steering_deg, turn_deg, moved):
+    x, y, heading = bicycle_step(3.0, -2.0, 0.3, math.radians(steering_deg), 1.0, 2.6)
+    assert math.degrees(heading - 0.3) == pytest.approx(turn_deg, abs=0.05)
+    assert math.hypot(x - 3.0, y + 2.0) == pytest.approx(moved, abs=0.0005)
+
+
+def test_bicycle_step_closed_form():
+    delta, d, wb, heading = 0.7, 1.0, 2.6, 1.1
+    x, y, new_heading = bicycle_step(0.0, 0.0, heading, delta, d, wb)
+    assert new_heading - heading == pytest.approx(
+        math.atan2(d * math.sin(delta), wb + d * (math.cos(delta) - 1)))
+    body = np.array([d / 2 * (1 + math.cos(delta)), d / 2 * math.sin(delta)])
+    c, s = math.cos(heading), math.sin(heading)
+    assert (x, y) == pytest.approx((c * body[0] - s * body[1], s * body[0] + c * body[1]))
+
+
+def test_straight_step_moves_the_full_distance():
+    moved = bicycle_step(1.0, 2.0, math.pi / 2, 0.0, 1.0, 2.6)
+    assert moved == pytest.approx((1.0, 3.0, math.pi / 2))
+
+
+def test_body_extends_behind_the_front_bumper():
+    corners = body_polygon(10.0, 5.0, math.pi / 2, 4.3, 1.7)  # heading north
+    np.testing.assert_allclose(
+        corners, [[10.85, 5.0], [9.15, 5.0], [9.15, 0.7], [10.85, 0.7]], atol=1e-12)
+
+
+def test_box_segment_tests():
+    box = body_polygon(0.0, 0.0, 0.0, 4.3, 1.7)  # spans x -4.3..0, y -0.85..0.85
+    assert box_hits_segment(box, 0.5, -2.0, -0.5, 2.0)  # crosses the front edge
+    assert box_hits_segment(box, -2.0, 0.0, -1.0, 0.1)  # lies wholly inside the body
+    assert not box_hits_segment(box, 0.2, -2.0, 0.2, 2.0)  # 0.2 m ahead of the bumper
+    assert boxes_overlap(box, body_polygon(1.0, 0.5, 0.3, 4.3, 1.7))
+    assert not boxes_overlap(box, body_polygon(0.0, 3.0, 0.0, 4.3, 1.7))
+
+
+SQUARE = np.array([[0, 0, 100, 0], [100, 0, 100, 100], [100, 100, 0, 100], [0, 100, 0, 0]],
+                  dtype=float)
+
+
+def _readings(x, y, heading, angles, max_range=25.0, walls=SQUARE):
+    out = np.empty(len(angles))
+    sense_walls(x, y, heading, np.asarray(angles, dtype=float), max_range, walls,
+                np.arange(len(walls)), out)
+    return out
+
+
+def test_rangefinder_hand_computed_in_a_square():
+    # at (90, 40) heading east: right beam sees y=0 at 40 (beyond range), ahead x=100 at 10,
+    # left sees y=100 at 60 (beyond range); 45 degrees left hits x=100 at 10*sqrt(2)
+    got = _readings(90.0, 40.0, 0.0, [-math.pi / 2, 0.0, math.pi / 4, math.pi / 2])
+    np.testing.assert_allclose(got, [25.0, 10.0, 10 * math.sqrt(2), 25.0])
+    got = _readings(90.0, 40.0, 0.0, [-math.pi / 2, 0.0, math.pi / 2], max_range=100.0)
+    np.testing.assert_allclose(got, [40.0, 10.0, 60.0])
+
+
+def test_grid_culling_gives_the_same_readings_as_all_walls(root):
+    from enn_traffic.roads import load_track
+
+    track = load_track(root / "sumo_nets" / "track_narrow.net.xml")
+    grid = WallGrid.build(track.walls, reach=26.0)
+    rng = np.random.default_rng(0)
+    angles = np.linspace(-math.pi / 2, math.pi / 2, 19)
+    for _ in range(300):
+        x, y = rng.uniform(-240, 40), rng.uniform(-35, 225)
+        heading = rng.uniform(-math.pi, math.pi)
+        near = nearby_walls(x, y, *grid.kernel_args()[1:])
+        culled = np.empty(19)
+        sense_walls(x, y, heading, angles, 25.0, track.walls, near, culled)
+        np.testing.assert_array_equal(culled, _readings(x, y, heading, angles, 25.0, track.walls))
+        assert len(near) < len(track.walls) or not track.contains(x, y)
