@@ -1,7 +1,12 @@
-"""``enn-traffic reproduce``: every experiment of the paper into one folder, with summary.md."""
+"""``enn-traffic reproduce``: every experiment of the paper into one folder, with summary.md.
+
+Each experiment's headline lines and wall time are kept in ``summary.json``, so a call with
+``--only`` updates its own experiments and summary.md still lists every one done so far.
+"""
 
 from __future__ import annotations
 
+import json
 import time
 from pathlib import Path
 
@@ -10,7 +15,7 @@ from enn_traffic.io import write_text
 
 
 def reproduce(out: Path, quick: bool = False, only: list[str] | None = None,
-              progress: bool = True) -> list[str]:
+              progress: bool = True) -> dict:
     from enn_traffic.experiments import EXPERIMENTS
 
     names = only or list(EXPERIMENTS)
@@ -20,18 +25,21 @@ def reproduce(out: Path, quick: bool = False, only: list[str] | None = None,
                          f"{', '.join(EXPERIMENTS)}", key="--only")
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
-    lines, timings = [], []
+    record_path = out / "summary.json"
+    records = json.loads(record_path.read_text()) if record_path.exists() else {}
     for name in names:
         started = time.perf_counter()
-        lines += EXPERIMENTS[name](out, quick=quick, progress=progress)
-        timings.append((name, time.perf_counter() - started))
-        print(lines[-1], flush=True)
-    summary = ["# enn-traffic: reproduction of Eraqi et al. (2016)", "",
-               f"Settings: {'--quick' if quick else 'full'}; experiments: {', '.join(names)}.", ""]
-    summary += [f"- {line}" for line in lines]
-    summary += ["", "| experiment | wall time [s] |", "|---|---|"]
-    summary += [f"| {name} | {seconds:.1f} |" for name, seconds in timings]
+        lines = EXPERIMENTS[name](out, quick=quick, progress=progress)
+        records[name] = {"lines": lines, "seconds": round(time.perf_counter() - started, 1),
+                         "settings": "quick" if quick else "full"}
+        write_text(record_path, json.dumps(records, indent=1))
+        print("\n".join(lines), flush=True)
+    done = [n for n in EXPERIMENTS if n in records]
+    summary = ["# enn-traffic: reproduction of Eraqi et al. (2016)", ""]
+    summary += [f"- {line}" for n in done for line in records[n]["lines"]]
+    summary += ["", "| experiment | settings | wall time of the last call [s] (finished runs are reused) |", "|---|---|---|"]
+    summary += [f"| {n} | {records[n]['settings']} | {records[n]['seconds']} |" for n in done]
     write_text(out / "summary.md", "\n".join(summary) + "\n")
-    for name, seconds in timings:
-        print(f"{name:>16}: {seconds:7.1f} s")
-    return lines
+    for name in names:
+        print(f"{name:>16}: {records[name]['seconds']:7.1f} s")
+    return records

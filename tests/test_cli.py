@@ -71,6 +71,11 @@ def test_evaluate_and_render_a_saved_controller(small_run, tmp_path, root):
                  "--out", picture)
     assert result.returncode == 0, result.stderr
     assert picture.read_bytes()[:4] == b"\x89PNG"
+    animation = tmp_path / "path.gif"
+    result = cli("render", small_run / "best.npz", root / "scenarios" / "navigation_narrow.toml",
+                 "--out", animation, "--max-steps", 20)
+    assert result.returncode == 0, result.stderr
+    assert animation.read_bytes()[:3] == b"GIF"
 
 
 def test_evaluate_reproduces_the_recorded_best_fitness(small_run, root):
@@ -86,7 +91,7 @@ def test_evaluate_reproduces_the_recorded_best_fitness(small_run, root):
         (("run", "no/such.toml"), "scenario file not found"),
         (("evaluate", "no.npz", "scenarios/navigation_narrow.toml"), "controller file not found"),
         (("reproduce", "--only", "fig99"), "unknown experiment"),
-        (("run", "scenarios/navigation_narrow.toml", "--population", "-3"), "positive integer"),
+        (("run", "scenarios/navigation_narrow.toml", "--population", "-3"), "integer >= 1"),
         (("run", "scenarios/navigation_narrow.toml", "--executor", "ray"), "not available"),
     ],
 )

@@ -98,3 +98,18 @@ def test_learning_on_the_narrow_track_improves_fitness(root):
         bests.append(fitness.max())
         population = ga.next_generation(rng, population, fitness, ga_params(scenario))
     assert max(bests[-4:]) > bests[0]
+
+
+def test_process_pool_gives_the_local_results(root):
+    from enn_traffic.evolution.evaluate import LocalEvaluator, ProcessEvaluator
+
+    scenario = load_scenario(root / "scenarios" / "navigation_narrow.toml")
+    population = np.random.default_rng(5).uniform(-1, 1, (37, 68))
+    local = LocalEvaluator(scenario).evaluate(population)
+    pool = ProcessEvaluator(scenario, workers=2)
+    try:
+        spread = pool.evaluate(population)
+    finally:
+        pool.close()
+    np.testing.assert_array_equal(local.fitness, spread.fitness)
+    np.testing.assert_array_equal(local.outcome, spread.outcome)

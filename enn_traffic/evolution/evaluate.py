@@ -8,6 +8,7 @@ do not depend on the backend or the number of workers.
 
 from __future__ import annotations
 
+import multiprocessing
 import os
 from concurrent.futures import ProcessPoolExecutor
 from typing import Protocol
@@ -60,12 +61,19 @@ def _evaluate_chunk(chunk: np.ndarray) -> EpisodeResults:
 
 
 class ProcessEvaluator:
-    """Population chunks over a pool of worker processes."""
+    """Population chunks over a pool of worker processes.
+
+    Workers are spawned, not forked: numba's OpenMP threads (and later libsumo) do not survive
+    a fork.
+    """
 
     def __init__(self, scenario: Scenario, workers: int | None = None):
         self.workers = workers or os.cpu_count() or 1
         self.pool = ProcessPoolExecutor(
-            self.workers, initializer=_init_worker, initargs=(scenario,)
+            self.workers,
+            mp_context=multiprocessing.get_context("spawn"),
+            initializer=_init_worker,
+            initargs=(scenario,),
         )
 
     def evaluate(self, population: np.ndarray) -> EpisodeResults:

@@ -48,8 +48,10 @@ def reference_episode(world: NavigationWorld, chromosome: np.ndarray) -> tuple[i
     steps = 0
     while True:
         readings = []
+        cos_h, sin_h = math.cos(heading), math.sin(heading)
         for angle in angles:
-            ux, uy = math.cos(heading + angle), math.sin(heading + angle)
+            cos_b, sin_b = math.cos(angle), math.sin(angle)
+            ux, uy = cos_h * cos_b - sin_h * sin_b, sin_h * cos_b + cos_h * sin_b
             best = sensor.range
             for x1, y1, x2, y2 in walls:
                 ex, ey = x2 - x1, y2 - y1

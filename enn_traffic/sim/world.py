@@ -56,7 +56,7 @@ def network_steering(genes, layer_sizes, readings, activation, scratch, gain):
 @njit(cache=True)
 def run_episode(
     genes, layer_sizes, gain, x, y, heading,
-    length, width, wheelbase, distance, beam_angles, max_range,
+    length, width, wheelbase, distance, beam_cos, beam_sin, max_range,
     walls, origin, cell_size, nx, ny, cell_start, cell_walls, all_walls,
     max_steps, spin_window, spin_variance, trace,
 ):  # fmt: skip
@@ -64,7 +64,7 @@ def run_episode(
 
     ``trace`` (n, 3) receives the poses 0..n-1 when n > 0.
     """
-    readings = np.empty(beam_angles.shape[0])
+    readings = np.empty(beam_cos.shape[0])
     width_max = layer_sizes.max()
     activation = np.empty(width_max)
     scratch = np.empty(width_max)
@@ -77,7 +77,7 @@ def run_episode(
         candidates = nearby_walls(
             x, y, origin, cell_size, nx, ny, cell_start, cell_walls, all_walls
         )
-        sense_walls(x, y, heading, beam_angles, max_range, walls, candidates, readings)
+        sense_walls(x, y, heading, beam_cos, beam_sin, max_range, walls, candidates, readings)
         steering = network_steering(genes, layer_sizes, readings, activation, scratch, gain)
         body_corners(x, y, heading, length, width, corners)
         if box_hits_walls(corners, walls, candidates, candidates.shape[0]):
@@ -106,7 +106,7 @@ def _small_spread(points, limit) -> bool:
 @njit(cache=True, parallel=True)
 def run_population(
     population, layer_sizes, gain, x, y, heading,
-    length, width, wheelbase, distance, beam_angles, max_range,
+    length, width, wheelbase, distance, beam_cos, beam_sin, max_range,
     walls, origin, cell_size, nx, ny, cell_start, cell_walls, all_walls,
     max_steps, spin_window, spin_variance,
 ):  # fmt: skip
@@ -118,7 +118,7 @@ def run_population(
     for p in prange(count):
         steps[p], outcome[p] = run_episode(
             population[p], layer_sizes, gain, x, y, heading,
-            length, width, wheelbase, distance, beam_angles, max_range,
+            length, width, wheelbase, distance, beam_cos, beam_sin, max_range,
             walls, origin, cell_size, nx, ny, cell_start, cell_walls, all_walls,
             max_steps, spin_window, spin_variance, no_trace,
         )  # fmt: skip
@@ -158,7 +158,8 @@ class NavigationWorld:
             vehicle.width,
             vehicle.wheelbase,
             vehicle.speed * vehicle.dt,
-            np.asarray(scenario.beam_angles),
+            np.cos(scenario.beam_angles),
+            np.sin(scenario.beam_angles),
             sensor.range,
             *self.grid.kernel_args(),
         )
