@@ -37,8 +37,9 @@ def reproduce(out: Path, quick: bool = False, only: list[str] | None = None,
     done = [n for n in EXPERIMENTS if n in records]
     summary = ["# enn-traffic: reproduction of Eraqi et al. (2016)", ""]
     summary += [f"- {line}" for n in done for line in records[n]["lines"]]
-    summary += ["", "| experiment | settings | wall time of the last call [s] (finished runs are reused) |", "|---|---|---|"]
+    summary += ["", "| experiment | settings | wall time of its last call [s] |", "|---|---|---|"]
     summary += [f"| {n} | {records[n]['settings']} | {records[n]['seconds']} |" for n in done]
+    summary += ["", "A call reuses finished runs: its wall time can be far below the compute."]
     write_text(out / "summary.md", "\n".join(summary) + "\n")
     for name in names:
         print(f"{name:>16}: {records[name]['seconds']:7.1f} s")

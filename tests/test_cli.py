@@ -133,3 +133,14 @@ def test_reproduce_quick_fig7(tmp_path):
     again = cli("reproduce", "--quick", "--only", "fig7", "--out", tmp_path, "--quiet")
     assert again.returncode == 0
     pd.testing.assert_frame_equal(table, pd.read_csv(tmp_path / "fig7.csv"))
+
+
+def test_scenario_with_a_broken_network(tmp_path, root):
+    net = tmp_path / "broken.net.xml"
+    net.write_text("<net><edge id='a'><lane id='a_0' shape='0,0 10,0' width='3'/></edge>")
+    scenario = tmp_path / "s.toml"
+    scenario.write_text('name = "s"\n[track]\nnet = "broken.net.xml"\nstart_xy = [1.0, 0.0]\n')
+    result = cli("run", scenario, "--out", tmp_path / "out", "--generations", 1)
+    assert result.returncode == 2
+    assert "broken.net.xml" in result.stderr and "not a readable SUMO network" in result.stderr
+    assert "Traceback" not in result.stderr
