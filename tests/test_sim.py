@@ -55,7 +55,8 @@ SQUARE = np.array([[0, 0, 100, 0], [100, 0, 100, 100], [100, 100, 0, 100], [0, 1
 
 def _readings(x, y, heading, angles, max_range=25.0, walls=SQUARE):
     out = np.empty(len(angles))
-    sense_walls(x, y, heading, np.asarray(angles, dtype=float), max_range, walls,
+    angles = np.asarray(angles, dtype=float)
+    sense_walls(x, y, heading, np.cos(angles), np.sin(angles), max_range, walls,
                 np.arange(len(walls)), out)
     return out
 
@@ -81,6 +82,7 @@ def test_grid_culling_gives_the_same_readings_as_all_walls(root):
         heading = rng.uniform(-math.pi, math.pi)
         near = nearby_walls(x, y, *grid.kernel_args()[1:])
         culled = np.empty(19)
-        sense_walls(x, y, heading, angles, 25.0, track.walls, near, culled)
+        sense_walls(x, y, heading, np.cos(angles), np.sin(angles), 25.0, track.walls, near,
+                    culled)
         np.testing.assert_array_equal(culled, _readings(x, y, heading, angles, 25.0, track.walls))
         assert len(near) < len(track.walls) or not track.contains(x, y)
