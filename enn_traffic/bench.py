@@ -18,10 +18,10 @@ from enn_traffic.evolution import ga
 from enn_traffic.experiments.common import scenario as shipped_scenario
 from enn_traffic.runner import ga_params
 from enn_traffic.sim.reference import reference_episode
-from enn_traffic.sim.world import NavigationWorld
+from enn_traffic.sim.world import World
 
 
-def _timed_batches(world: NavigationWorld, populations: list[np.ndarray]) -> tuple[int, float]:
+def _timed_batches(world: World, populations: list[np.ndarray]) -> tuple[int, float]:
     steps, seconds = 0, 0.0
     for population in populations:
         started = time.perf_counter()
@@ -33,7 +33,7 @@ def _timed_batches(world: NavigationWorld, populations: list[np.ndarray]) -> tup
 
 def navigation_bench(generations: int = 30, reference_seconds: float = 10.0) -> pd.DataFrame:
     scenario = shipped_scenario("navigation_narrow")
-    world = NavigationWorld(scenario)
+    world = World(scenario)
     rng = np.random.default_rng(scenario.seed)
     params = ga_params(scenario)
     population = ga.initial_population(
@@ -67,7 +67,8 @@ def navigation_bench(generations: int = 30, reference_seconds: float = 10.0) -> 
         if seconds > reference_seconds:
             break
     compiled = world.evaluate(pool[: len(checked)])
-    if list(zip(compiled.steps.tolist(), compiled.outcome.tolist(), strict=True)) != checked:
+    pairs = zip(compiled.steps[:, 0].tolist(), compiled.outcome[:, 0].tolist(), strict=True)
+    if list(pairs) != checked:
         raise RuntimeError("compiled and reference episodes disagree")
     rows.append(("plain Python reference", 1, steps, seconds))
     table = pd.DataFrame(rows, columns=["implementation", "threads", "vehicle_steps", "seconds"])
@@ -79,7 +80,37 @@ def navigation_bench(generations: int = 30, reference_seconds: float = 10.0) -> 
     return table
 
 
+def arena_bench(generations: int = 10) -> pd.DataFrame:
+    """The arena workload: P = 200 worlds × 8 vehicles (strategy 1, random-network traffic),
+    over the generations of a real GA run; every vehicle's steps count."""
+    scenario = shipped_scenario("arena_strategy1")
+    world = World(scenario)
+    rng = np.random.default_rng(scenario.seed)
+    params = ga_params(scenario)
+    population = ga.initial_population(
+        rng, params.population_size, world.spec.chromosome_length, params.init_range
+    )
+    world.evaluate(population[:2])  # compile outside the timing
+    threads = numba.get_num_threads()
+    steps, seconds = 0, 0.0
+    for generation in range(generations):
+        started = time.perf_counter()
+        results = world.evaluate(population, generation)
+        seconds += time.perf_counter() - started
+        steps += results.vehicle_steps
+        population = ga.next_generation(rng, population, results.fitness, params)
+    table = pd.DataFrame([("compiled batch", threads, steps, seconds)],
+                         columns=["implementation", "threads", "vehicle_steps", "seconds"])
+    table.insert(0, "workload", f"arena: P=200 worlds x {world.vehicles} vehicles, strategy 1")
+    table["vehicle_steps_per_s"] = table["vehicle_steps"] / table["seconds"]
+    table["speedup_vs_reference"] = np.nan
+    return table
+
+
 def run_bench(quick: bool = False) -> pd.DataFrame:
     """Every workload's throughput table."""
-    return navigation_bench(generations=10 if quick else 30,
-                            reference_seconds=3.0 if quick else 10.0)
+    return pd.concat([
+        navigation_bench(generations=10 if quick else 30,
+                         reference_seconds=3.0 if quick else 10.0),
+        arena_bench(generations=3 if quick else 10),
+    ], ignore_index=True)

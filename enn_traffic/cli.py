@@ -159,13 +159,16 @@ def _cmd_reproduce(args) -> int:
 
 
 def _cmd_bench(args) -> int:
+    import numpy as np
+
     from enn_traffic.bench import run_bench
     from enn_traffic.io import write_csv
 
     table = run_bench(quick=args.quick)
     shown = table.copy()
     shown["vehicle_steps_per_s"] = shown["vehicle_steps_per_s"].map("{:,.0f}".format)
-    shown["speedup_vs_reference"] = shown["speedup_vs_reference"].map("{:.1f}x".format)
+    shown["speedup_vs_reference"] = shown["speedup_vs_reference"].map(
+        lambda ratio: "" if np.isnan(ratio) else f"{ratio:.1f}x")
     shown["seconds"] = shown["seconds"].map("{:.2f}".format)
     print(shown.to_string(index=False))
     if args.out:

@@ -9,38 +9,58 @@ import pandas as pd
 
 from enn_traffic.controller import Controller
 from enn_traffic.scenario import Scenario
-from enn_traffic.sim.world import OUTCOMES, NavigationWorld
+from enn_traffic.sim.world import OUTCOMES, World
+
+# Evaluation episodes draw their traffic from generation keys far past any training run, so
+# a controller is never deployed on the traffic it was trained on.
+EVALUATION_KEY = 1_000_000_000
 
 
 def evaluate_controller(
-    controller: Controller, scenario: Scenario, episodes: int = 1
+    controller: Controller, scenario: Scenario, episodes: int = 1, world: World | None = None
 ) -> pd.DataFrame:
-    """One row per episode: lifetime in steps and seconds, distance driven, how it ended.
+    """One row per traffic strategy and episode: lifetime in steps and seconds, distance, how
+    it ended, and the collisions the controller suffered without causing them.
 
-    Navigation scenarios are deterministic, so their episodes repeat one another; scenarios
-    with traffic draw a new traffic seed per episode.
+    Episodes draw their traffic from the evaluation stream, never from training's; scenarios
+    without traffic are deterministic, so their episodes repeat one another.
     """
-    world = NavigationWorld(controller.fit(scenario))
-    population = np.repeat(controller.chromosome[None, :], episodes, axis=0)
-    results = world.evaluate(population)
+    world = world or World(evaluation_scenario(controller, scenario, episodes))
     vehicle = scenario.vehicle
-    return pd.DataFrame({
-        "scenario": scenario.name,
-        "track": world.track.name,
-        "episode": np.arange(episodes),
-        "lifetime_steps": results.steps,
-        "lifetime_s": results.steps * vehicle.dt,
-        "distance_m": results.steps * vehicle.speed * vehicle.dt,
-        "fitness": results.fitness,
-        "outcome": [OUTCOMES[int(code)] for code in results.outcome],
-        "capped": results.outcome == 0,
-    })  # fmt: skip
+    results = world.evaluate(controller.chromosome[None, :], EVALUATION_KEY)
+    rows = []
+    for column, strategy in enumerate(world.episode_labels()):
+        steps = int(results.steps[0, column])
+        outcome = int(results.outcome[0, column])
+        rows.append({
+                "scenario": scenario.name,
+                "track": world.track.name,
+                "strategy": strategy,
+                "episode": column % episodes,
+                "lifetime_steps": steps,
+                "lifetime_s": steps * vehicle.dt,
+                "distance_m": steps * vehicle.speed * vehicle.dt,
+                "fitness": 0 if outcome == 2 else steps,
+                "outcome": OUTCOMES[outcome],
+                "capped": outcome == 0,
+                "suffered_collisions": int(results.suffered[0, column]),
+            })  # fmt: skip
+    return pd.DataFrame(rows)
 
 
-def controller_trace(controller: Controller, scenario: Scenario, max_steps: int | None = None):
-    """The world and the poses of one episode of ``controller`` on ``scenario``."""
-    world = NavigationWorld(controller.fit(scenario))
-    poses, outcome = world.trace(controller.chromosome, max_steps)
+def evaluation_scenario(controller: Controller, scenario: Scenario, episodes: int) -> Scenario:
+    """``scenario`` fitted to the controller, with ``episodes`` traffic situations."""
+    return controller.fit(scenario).with_overrides(traffic={"episodes": episodes})
+
+
+def controller_trace(
+    controller: Controller, scenario: Scenario, max_steps: int | None = None, episode: int = 0
+):
+    """The world, every vehicle's poses (n, V, 3) in one episode, and the learner's outcome."""
+    world = World(evaluation_scenario(controller, scenario, episode + 1))
+    poses, outcome = world.trace(
+        controller.chromosome, EVALUATION_KEY, episode, max_steps=max_steps
+    )
     return world, poses, outcome
 
 
@@ -53,9 +73,24 @@ def render(
 
     world, poses, outcome = controller_trace(controller, scenario, max_steps)
     out = Path(out)
-    title = f"{scenario.name}: {len(poses) - 1} steps, {OUTCOMES[outcome]}"
+    steps = len(poses) - 1
+    title = f"{scenario.name}: {steps} steps, {OUTCOMES[outcome]}"
     if out.suffix.lower() == ".gif":
         animate_run(world, poses, out, title)
     else:
-        trajectories(world.track.walls, [poses], out, title=title, start=world.start)
-    return {"steps": len(poses) - 1, "outcome": OUTCOMES[outcome], "file": str(out)}
+        paths = [poses[:, v] for v in range(poses.shape[1])]
+        labels = ["learner"] + [f"vehicle {v}" for v in range(1, len(paths))]
+        trajectories(
+            world.track.walls,
+            paths,
+            out,
+            title=title,
+            start=world.start,
+            labels=labels if len(paths) > 1 else None,
+        )
+    return {"steps": steps, "outcome": OUTCOMES[outcome], "file": str(out)}
+
+
+def mean_lifetime(table: pd.DataFrame) -> float:
+    """Mean fitness over the rows of an evaluation table."""
+    return float(np.mean(table["fitness"]))

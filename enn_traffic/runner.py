@@ -29,12 +29,12 @@ from enn_traffic.sim.world import CAPPED, COLLIDED, SPUN
 CHECKPOINT = "checkpoint.npz"
 COLUMNS = [
     "generation", "best_fitness", "mean_fitness", "median_fitness", "min_fitness",
-    "vehicle_steps", "collisions", "spins", "capped", "elapsed_s",
+    "vehicle_steps", "collisions", "spins", "capped", "suffered", "elapsed_s",
 ]  # fmt: skip
 
 
 def ga_params(scenario: Scenario) -> ga.GAParams:
-    settings = scenario.ga.model_dump(exclude={"generations"})
+    settings = scenario.ga.model_dump(exclude={"generations", "target_fitness"})
     return ga.GAParams(**settings)
 
 
@@ -44,20 +44,25 @@ def fingerprint(scenario: Scenario) -> str:
     return hashlib.sha256(settings.encode()).hexdigest()[:16]
 
 
-def _fresh_state(scenario: Scenario) -> ga.GAState:
+def _fresh_state(scenario: Scenario, population: np.ndarray | None = None) -> ga.GAState:
     rng = np.random.default_rng(scenario.seed)
     length = NetworkSpec(scenario.layer_sizes, scenario.network.layout).chromosome_length
-    population = ga.initial_population(
-        rng, scenario.ga.population_size, length, scenario.ga.init_range
-    )
+    if population is None:
+        population = ga.initial_population(
+            rng, scenario.ga.population_size, length, scenario.ga.init_range
+        )
+    elif population.shape != (scenario.ga.population_size, length):
+        raise ValueError(f"initial population has shape {population.shape}, the scenario "
+                         f"needs ({scenario.ga.population_size}, {length})")
     return ga.GAState(generation=0, population=population, rng=rng,
                       fingerprint=fingerprint(scenario), extra={"elapsed_s": 0.0})
 
 
-def _open_state(scenario: Scenario, out: Path, resume: bool, force: bool) -> ga.GAState:
+def _open_state(scenario: Scenario, out: Path, resume: bool, force: bool,
+                population: np.ndarray | None) -> ga.GAState:
     checkpoint = out / CHECKPOINT
     if not checkpoint.exists() or force:
-        return _fresh_state(scenario)
+        return _fresh_state(scenario, population)
     if not resume:
         raise InputError(
             "the folder already holds a run; pass --resume to continue it or --force to "
@@ -76,11 +81,14 @@ def evolve(
     resume: bool = False,
     force: bool = False,
     progress: bool = True,
+    initial_population: np.ndarray | None = None,
 ) -> pd.DataFrame:
-    """Run the GA for ``scenario.ga.generations`` generations; return the generations table."""
+    """Run the GA for ``scenario.ga.generations`` generations (or until a generation's best
+    reaches ``ga.target_fitness``); return the generations table. ``initial_population``
+    replaces the random first generation of a fresh run (incremental evolution, §5.4.1)."""
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
-    state = _open_state(scenario, out, resume, force)
+    state = _open_state(scenario, out, resume, force, initial_population)
     table_path = out / "generations.csv"
     rows = []
     if state.generation > 0 and table_path.exists():
@@ -94,9 +102,9 @@ def evolve(
     bar = tqdm(total=total, initial=min(state.generation, total), desc=scenario.name,
                unit="gen", disable=not progress, leave=False)
     try:
-        while state.generation < total:
+        while state.generation < total and not state.extra.get("target_reached", False):
             started = time.perf_counter()
-            results = evaluator.evaluate(state.population)
+            results = evaluator.evaluate(state.population, state.generation)
             fitness = results.fitness
             best = int(np.argmax(fitness))
             if fitness[best] > state.best_fitness:
@@ -117,6 +125,7 @@ def evolve(
                 "collisions": int((results.outcome == COLLIDED).sum()),
                 "spins": int((results.outcome == SPUN).sum()),
                 "capped": int((results.outcome == CAPPED).sum()),
+                "suffered": int(results.suffered.sum()),
                 "elapsed_s": state.extra["elapsed_s"],
             })  # fmt: skip
             state.generation += 1
@@ -124,10 +133,14 @@ def evolve(
             state.save(out / CHECKPOINT)
             bar.update(1)
             bar.set_postfix(best=int(fitness.max()), mean=round(float(fitness.mean()), 1))
+            target = scenario.ga.target_fitness
+            if target is not None and fitness.max() >= target:
+                state.extra["target_reached"] = True
+                state.save(out / CHECKPOINT)
     finally:
         bar.close()
         if own_evaluator:
             evaluator.close()
-    table = pd.DataFrame(rows, columns=COLUMNS)
+    table = pd.read_csv(table_path)  # the same types whether the run was resumed or not
     learning_curve(table, out / "learning_curve.png", title=scenario.name)
     return table

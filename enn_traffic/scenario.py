@@ -67,7 +67,8 @@ class NetworkConfig(_Section):
 
 
 class GAConfig(_Section):
-    """The paper's GA (§5) and its options."""
+    """The paper's GA (§5) and its options; ``target_fitness`` stops a run early once a
+    generation's best fitness reaches it."""
 
     population_size: int = Field(200, ge=2, le=100_000)
     generations: int = Field(50, ge=1, le=100_000)
@@ -78,6 +79,7 @@ class GAConfig(_Section):
     mutation_probability: float = Field(0.1, ge=0, le=1)
     init_range: PositiveFloat = 1.0
     elite_count: int = Field(0, ge=0)
+    target_fitness: float | None = Field(None, gt=0, allow_inf_nan=False)
 
     @model_validator(mode="after")
     def _fits_population(self) -> GAConfig:
@@ -96,6 +98,62 @@ class EpisodeConfig(_Section):
     spin_variance: float = Field(64.0, ge=0, allow_inf_nan=False)
 
 
+Strategy = Literal["random_network", "straight", "circling", "wander"]
+
+
+class TrafficConfig(_Section):
+    """Uncontrolled vehicles around the learner (paper §5.3): one vehicle per start, all
+    driving by ``strategy`` (a list: the fitness averages over the strategies, §5.4.1)."""
+
+    strategy: Strategy | list[Strategy] = "random_network"
+    starts_xy: list[tuple[float, float]] = []
+    start_heading_deg: tuple[float, float] = (-90.0, 90.0)
+    seed: int = Field(1000, ge=0)
+    vary: Literal["generation", "fixed"] = "generation"
+    episodes: int = Field(1, ge=1, le=1000)
+    turn_distance: float = Field(10.0, ge=0, allow_inf_nan=False)
+    turn_steering_deg: float = Field(35.0, gt=0, le=90, allow_inf_nan=False)
+    turn_cone_deg: float = Field(20.0, ge=0, le=90, allow_inf_nan=False)
+    circle_radius: tuple[PositiveFloat, PositiveFloat] = (6.0, 25.0)
+    wander_sigma_deg: float = Field(6.0, ge=0, le=90, allow_inf_nan=False)
+    wander_decay: float = Field(0.95, ge=0, le=1)
+    wander_max_deg: float = Field(45.0, gt=0, le=90, allow_inf_nan=False)
+    respawn_clearance: float = Field(10.0, ge=0, allow_inf_nan=False)
+
+    @model_validator(mode="after")
+    def _ordered_ranges(self) -> TrafficConfig:
+        if self.circle_radius[0] > self.circle_radius[1]:
+            raise ValueError("circle_radius must be [smallest, largest]")
+        if self.start_heading_deg[0] > self.start_heading_deg[1]:
+            raise ValueError("start_heading_deg must be [lowest, highest]")
+        return self
+
+    @property
+    def strategy_list(self) -> list[str]:
+        """The strategies to average over; ``["none"]`` when there are no vehicles."""
+        if not self.starts_xy:
+            return ["none"]
+        return [self.strategy] if isinstance(self.strategy, str) else list(self.strategy)
+
+    def kernel_params(self):
+        """The float parameter vector of :mod:`enn_traffic.traffic.kinematic`."""
+        import numpy as np
+
+        from enn_traffic.traffic import kinematic as k
+
+        params = np.zeros(k.N_PARAMS)
+        params[k.P_TURN_DISTANCE] = self.turn_distance
+        params[k.P_TURN_STEERING] = math.radians(self.turn_steering_deg)
+        params[k.P_TURN_CONE] = math.radians(self.turn_cone_deg)
+        params[k.P_RADIUS_MIN], params[k.P_RADIUS_MAX] = self.circle_radius
+        params[k.P_WANDER_SIGMA] = math.radians(self.wander_sigma_deg)
+        params[k.P_WANDER_DECAY] = self.wander_decay
+        params[k.P_WANDER_MAX] = math.radians(self.wander_max_deg)
+        params[k.P_CLEARANCE] = self.respawn_clearance
+        params[k.P_HEADING_LOW], params[k.P_HEADING_HIGH] = np.radians(self.start_heading_deg)
+        return params
+
+
 class Scenario(_Section):
     """A whole scenario file."""
 
@@ -108,6 +166,7 @@ class Scenario(_Section):
     network: NetworkConfig = NetworkConfig()
     ga: GAConfig = GAConfig()
     episode: EpisodeConfig = EpisodeConfig()
+    traffic: TrafficConfig = TrafficConfig()
     source: Path | None = Field(None, exclude=True)
 
     @property

@@ -3,7 +3,7 @@ import pytest
 
 from enn_traffic.scenario import load_scenario
 from enn_traffic.sim.reference import reference_episode
-from enn_traffic.sim.world import CAPPED, COLLIDED, SPUN, NavigationWorld
+from enn_traffic.sim.world import CAPPED, COLLIDED, SPUN, World
 
 ARENA = """
 name = "arena_test"
@@ -22,7 +22,7 @@ def arena_world(tmp_path, root, max_steps=1000, x=10.0, y=50.0):
     path = tmp_path / "arena.toml"
     path.write_text(ARENA.format(net=root / "sumo_nets" / "arena.net.xml", max_steps=max_steps,
                                  x=x, y=y))
-    return NavigationWorld(load_scenario(path))
+    return World(load_scenario(path))
 
 
 def test_straight_driving_hits_the_far_wall_at_the_expected_step(tmp_path, root):
@@ -30,7 +30,7 @@ def test_straight_driving_hits_the_far_wall_at_the_expected_step(tmp_path, root)
     per step, touching the wall x=100 after 90 steps."""
     world = arena_world(tmp_path, root)
     results = world.evaluate(np.zeros((1, world.spec.chromosome_length)))
-    assert results.steps[0] == 90 and results.outcome[0] == COLLIDED
+    assert results.steps[0, 0] == 90 and results.outcome[0, 0] == COLLIDED
     assert results.fitness[0] == 90
 
 
@@ -39,8 +39,8 @@ def test_circling_in_place_is_a_spin_and_scores_zero(tmp_path, root):
     genes = np.zeros(world.spec.chromosome_length)
     genes[-1] = 10.0  # bias into the left output: hard left turn forever
     results = world.evaluate(genes[None, :])
-    assert results.outcome[0] == SPUN and results.fitness[0] == 0
-    assert results.steps[0] == world.scenario.episode.spin_window - 1
+    assert results.outcome[0, 0] == SPUN and results.fitness[0] == 0
+    assert results.steps[0, 0] == world.scenario.episode.spin_window - 1
 
 
 def test_step_cap_ends_a_wide_circle(tmp_path, root):
@@ -50,34 +50,35 @@ def test_step_cap_ends_a_wide_circle(tmp_path, root):
     genes = np.zeros(world.spec.chromosome_length)
     genes[-1] = 0.35  # left output a little above the right: steering ~7.8 degrees
     results = world.evaluate(genes[None, :])
-    assert results.outcome[0] == CAPPED and results.steps[0] == 500
+    assert results.outcome[0, 0] == CAPPED and results.steps[0, 0] == 500
 
 
 def test_compiled_episodes_equal_the_plain_reference_loop(root):
     scenario = load_scenario(root / "scenarios" / "navigation_narrow.toml")
-    world = NavigationWorld(scenario)
+    world = World(scenario)
     rng = np.random.default_rng(11)
     population = rng.uniform(-1, 1, (40, world.spec.chromosome_length))
     results = world.evaluate(population)
     for p in range(len(population)):
-        assert (results.steps[p], results.outcome[p]) == reference_episode(world, population[p])
-    assert len(set(results.steps.tolist())) > 5  # the sample is not trivial
+        expected = reference_episode(world, population[p])
+        assert (results.steps[p, 0], results.outcome[p, 0]) == expected
+    assert len(set(results.steps[:, 0].tolist())) > 5  # the sample is not trivial
 
 
 def test_trace_starts_at_the_start_pose_and_ends_where_evaluate_says(root):
     scenario = load_scenario(root / "scenarios" / "navigation_narrow.toml")
-    world = NavigationWorld(scenario)
+    world = World(scenario)
     chromosome = np.random.default_rng(2).uniform(-1, 1, world.spec.chromosome_length)
     poses, outcome = world.trace(chromosome)
     results = world.evaluate(chromosome[None, :])
-    assert poses[0] == pytest.approx(world.start)
-    assert len(poses) - 1 == results.steps[0] and outcome == results.outcome[0]
-    steps = np.hypot(*np.diff(poses[:, :2], axis=0).T)
+    assert poses[0, 0] == pytest.approx(world.start)
+    assert len(poses) - 1 == results.steps[0, 0] and outcome == results.outcome[0, 0]
+    steps = np.hypot(*np.diff(poses[:, 0, :2], axis=0).T)
     assert np.all(steps <= 1.0 + 1e-12) and np.all(steps > 0.7)
 
 
 def test_wrong_chromosome_length_is_refused(root):
-    world = NavigationWorld(load_scenario(root / "scenarios" / "navigation_narrow.toml"))
+    world = World(load_scenario(root / "scenarios" / "navigation_narrow.toml"))
     with pytest.raises(ValueError, match="needs 68"):
         world.evaluate(np.zeros((2, 20)))
 
@@ -89,7 +90,7 @@ def test_learning_on_the_narrow_track_improves_fitness(root):
 
     scenario = load_scenario(root / "scenarios" / "navigation_narrow.toml").with_overrides(
         ga={"population_size": 40})
-    world = NavigationWorld(scenario)
+    world = World(scenario)
     rng = np.random.default_rng(scenario.seed)
     population = ga.initial_population(rng, 40, world.spec.chromosome_length, 1.0)
     bests = []

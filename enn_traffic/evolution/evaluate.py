@@ -1,6 +1,7 @@
 """Evaluators: how a population's fitness gets computed (DESIGN.md, "Scale-out").
 
-The GA calls ``evaluator.evaluate(population) -> EpisodeResults`` and nothing else. ``local``
+The GA calls ``evaluator.evaluate(population, generation) -> EpisodeResults`` and nothing else
+(the generation picks the traffic situations). ``local``
 runs the compiled batch in this process (numba threads over the cores); ``process`` splits the
 population into chunks over a process pool, each worker building its own world once. Results
 do not depend on the backend or the number of workers.
@@ -17,18 +18,18 @@ import numpy as np
 
 from enn_traffic.errors import InputError
 from enn_traffic.scenario import Scenario
-from enn_traffic.sim.world import EpisodeResults, NavigationWorld
+from enn_traffic.sim.world import EpisodeResults, World
 
 
 class Evaluator(Protocol):
-    def evaluate(self, population: np.ndarray) -> EpisodeResults: ...
+    def evaluate(self, population: np.ndarray, generation: int = 0) -> EpisodeResults: ...
 
     def close(self) -> None: ...
 
 
-def make_world(scenario: Scenario) -> NavigationWorld:
+def make_world(scenario: Scenario) -> World:
     """The world a scenario describes."""
-    return NavigationWorld(scenario)
+    return World(scenario)
 
 
 class LocalEvaluator:
@@ -37,14 +38,14 @@ class LocalEvaluator:
     def __init__(self, scenario: Scenario):
         self.world = make_world(scenario)
 
-    def evaluate(self, population: np.ndarray) -> EpisodeResults:
-        return self.world.evaluate(population)
+    def evaluate(self, population: np.ndarray, generation: int = 0) -> EpisodeResults:
+        return self.world.evaluate(population, generation)
 
     def close(self) -> None:
         pass
 
 
-_worker_world: NavigationWorld | None = None
+_worker_world: World | None = None
 
 
 def _init_worker(scenario: Scenario) -> None:
@@ -55,9 +56,9 @@ def _init_worker(scenario: Scenario) -> None:
     _worker_world = make_world(scenario)
 
 
-def _evaluate_chunk(chunk: np.ndarray) -> EpisodeResults:
+def _evaluate_chunk(chunk: np.ndarray, generation: int) -> EpisodeResults:
     assert _worker_world is not None
-    return _worker_world.evaluate(chunk)
+    return _worker_world.evaluate(chunk, generation)
 
 
 class ProcessEvaluator:
@@ -76,14 +77,10 @@ class ProcessEvaluator:
             initargs=(scenario,),
         )
 
-    def evaluate(self, population: np.ndarray) -> EpisodeResults:
+    def evaluate(self, population: np.ndarray, generation: int = 0) -> EpisodeResults:
         chunks = np.array_split(population, min(self.workers * 4, len(population)))
-        parts = list(self.pool.map(_evaluate_chunk, chunks))
-        return EpisodeResults(
-            fitness=np.concatenate([p.fitness for p in parts]),
-            steps=np.concatenate([p.steps for p in parts]),
-            outcome=np.concatenate([p.outcome for p in parts]),
-        )
+        parts = list(self.pool.map(_evaluate_chunk, chunks, [generation] * len(chunks)))
+        return EpisodeResults.concatenate(parts)
 
     def close(self) -> None:
         self.pool.shutdown()

@@ -4,11 +4,14 @@
 ``(out: Path, quick: bool, progress: bool) -> list[str]`` that return summary lines.
 """
 
-from enn_traffic.experiments import navigation
+from enn_traffic.experiments import dynamic, navigation
 
 EXPERIMENTS = {
     "fig7": navigation.fig7,
     "fig8": navigation.fig8,
     "fig9": navigation.fig9,
     "generalization": navigation.generalization,
+    "fig11": dynamic.fig11,
+    "table1": dynamic.table1,
+    "table2": dynamic.table2,
 }

@@ -11,7 +11,7 @@ import pandas as pd
 
 from enn_traffic.controller import Controller
 from enn_traffic.evaluation import controller_trace, evaluate_controller
-from enn_traffic.experiments.common import first_generation, run_or_reuse, scenario
+from enn_traffic.experiments.common import first_generation, scenario, seed_runs
 from enn_traffic.io import write_csv
 from enn_traffic.report.plots import learning_curves, save_figure
 
@@ -23,20 +23,9 @@ QUICK = {"population_size": 60, "generations": 20}
 UNSEEN_TRACKS = ["unseen_narrow", "unseen_loop", "unseen_zigzag", "unseen_grid"]
 
 
-def _settings(quick: bool, **ga) -> dict:
-    return {**ga, **(QUICK if quick else {})}
-
-
 def _seed_runs(name: str, out: Path, seeds, quick: bool, progress: bool, label: str = "",
                **overrides):
-    """One run per seed under ``out/runs/LABEL/seedN`` (LABEL defaults to the scenario name);
-    runs of equal settings share a folder, so fig7 and fig9's 19-beam runs are done once."""
-    base = scenario(name)
-    runs = {}
-    for seed in seeds:
-        sc = base.with_overrides(seed=seed, ga=_settings(quick), **overrides)
-        runs[seed] = run_or_reuse(sc, out / "runs" / (label or name) / f"seed{seed}", progress)
-    return runs
+    return seed_runs(name, out, seeds, QUICK if quick else {}, progress, label, **overrides)
 
 
 def fig7(out: Path, quick: bool = False, progress: bool = True) -> list[str]:
@@ -161,7 +150,7 @@ def generalization(out: Path, quick: bool = False, progress: bool = True) -> lis
         world, poses, _ = controller_trace(controllers[shown], scenario(name), max_steps=3000)
         for x1, y1, x2, y2 in world.track.walls:
             ax.plot([x1, x2], [y1, y2], color="black", lw=0.6)
-        ax.plot(poses[:, 0], poses[:, 1], lw=0.8, color="C0")
+        ax.plot(poses[:, 0, 0], poses[:, 0, 1], lw=0.8, color="C0")
         ax.plot(*world.start[:2], "o", color="C2")
         ax.set_aspect("equal")
         ax.set_title(name, fontsize=9)

@@ -1,4 +1,4 @@
-"""A GIF of one episode: the track, the path so far, and the vehicle body."""
+"""A GIF of one episode: the track, the learner's path so far, and every vehicle's body."""
 
 from __future__ import annotations
 
@@ -17,6 +17,7 @@ from enn_traffic.sim.collide import body_polygon  # noqa: E402
 
 def animate_run(world, poses: np.ndarray, out: str | Path, title: str = "",
                 frames: int = 150) -> None:
+    """``poses`` (n, V, 3): vehicle 0 is the learner (red), the others grey."""
     vehicle = world.scenario.vehicle
     figure, axes = plt.subplots(figsize=(5, 5))
     for x1, y1, x2, y2 in world.track.walls:
@@ -24,15 +25,18 @@ def animate_run(world, poses: np.ndarray, out: str | Path, title: str = "",
     axes.set_aspect("equal")
     axes.set_title(title, fontsize=9)
     (line,) = axes.plot([], [], color="C0", lw=1)
-    body = Polygon(np.zeros((4, 2)), closed=True, color="C3")
-    axes.add_patch(body)
+    bodies = [Polygon(np.zeros((4, 2)), closed=True, color="C3" if v == 0 else "0.5")
+              for v in range(poses.shape[1])]
+    for body in bodies:
+        axes.add_patch(body)
     indices = np.unique(np.linspace(0, len(poses) - 1, min(frames, len(poses))).astype(int))
 
     def draw(k):
         i = indices[k]
-        line.set_data(poses[: i + 1, 0], poses[: i + 1, 1])
-        body.set_xy(body_polygon(*poses[i], vehicle.length, vehicle.width))
-        return line, body
+        line.set_data(poses[: i + 1, 0, 0], poses[: i + 1, 0, 1])
+        for v, body in enumerate(bodies):
+            body.set_xy(body_polygon(*poses[i, v], vehicle.length, vehicle.width))
+        return (line, *bodies)
 
     animation = FuncAnimation(figure, draw, frames=len(indices), blit=True)
     Path(out).parent.mkdir(parents=True, exist_ok=True)

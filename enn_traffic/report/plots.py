@@ -38,7 +38,7 @@ def learning_curve(table: pd.DataFrame, path: str | Path, title: str = "") -> No
 
 def learning_curves(
     runs: dict[str, pd.DataFrame],
-    path: str | Path,
+    path: str | Path | None,
     title: str = "",
     hline: float | None = None,
     log: bool = False,
@@ -64,6 +64,13 @@ def learning_curves(
         save_figure(figure, path)
 
 
+def break_at_jumps(xy: np.ndarray, jump: float = 5.0) -> np.ndarray:
+    """``xy`` with a NaN row wherever consecutive points lie more than ``jump`` apart (a
+    respawn), so a line plot does not draw the jump."""
+    gaps = np.flatnonzero(np.hypot(*np.diff(xy, axis=0).T) > jump) + 1
+    return np.insert(xy.astype(float), gaps, np.nan, axis=0)
+
+
 def trajectories(
     walls: np.ndarray,
     paths: Sequence[np.ndarray],
@@ -72,13 +79,14 @@ def trajectories(
     labels: Sequence[str] | None = None,
     start: tuple[float, float, float] | None = None,
 ) -> None:
-    """Walls in black and each trajectory (n, 2+) as a coloured line."""
+    """Walls in black and each trajectory (n, 2+) as a coloured line, broken at respawns."""
     figure, axes = plt.subplots(figsize=(6.4, 6.4))
     for x1, y1, x2, y2 in walls:
         axes.plot([x1, x2], [y1, y2], color="black", lw=0.8)
     for index, poses in enumerate(paths):
         label = labels[index] if labels else None
-        axes.plot(poses[:, 0], poses[:, 1], lw=1.0, label=label)
+        xy = break_at_jumps(poses[:, :2])
+        axes.plot(xy[:, 0], xy[:, 1], lw=1.0, label=label)
         axes.plot(poses[-1, 0], poses[-1, 1], "x", color="C3")
     if start is not None:
         axes.plot(start[0], start[1], "o", color="C2", label="start")

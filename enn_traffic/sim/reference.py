@@ -11,7 +11,7 @@ from itertools import pairwise
 
 import numpy as np
 
-from enn_traffic.sim.world import CAPPED, COLLIDED, SPUN, NavigationWorld
+from enn_traffic.sim.world import CAPPED, COLLIDED, SPUN, World
 
 
 def _segments_intersect(ax, ay, bx, by, cx, cy, dx, dy):
@@ -33,7 +33,7 @@ def _inside(px, py, corners):
     return True
 
 
-def reference_episode(world: NavigationWorld, chromosome: np.ndarray) -> tuple[int, int]:
+def reference_episode(world: World, chromosome: np.ndarray) -> tuple[int, int]:
     """(steps moved, outcome) of one chromosome, computed the slow, obvious way."""
     scenario = world.scenario
     genes = [float(g) for g in world._genes(chromosome)[0]]

@@ -1,13 +1,21 @@
-"""Batched worlds and the episode loop (paper §4–§5.1).
+"""Batched worlds and the episode loop (paper §4–§5.4).
 
-One world is one vehicle driven by one chromosome on one track. Every chromosome starts from the
-same pose (the whole world is reset per evaluation, §5.3). Each step: sense at the current pose,
-decide the steering, check for a collision, then move. A world ends at its first collision,
-when it spins (the position variance over the last ``spin_window`` poses is at most
-``spin_variance`` on both axes: fitness 0, §5.3), or at the step cap.
+A world holds one learning vehicle (index 0), driven by the chromosome under evaluation, and
+``V - 1`` uncontrolled vehicles driven by a traffic strategy (:mod:`enn_traffic.traffic.kinematic`).
+Every evaluation resets the whole world to the same start (§5.3). Each step:
 
-All P worlds of a generation run in one compiled call, spread over the CPU cores with ``prange``;
-each world stops at its own end (its lane of the done-mask), and the call returns when all have.
+1. collisions at the current poses, by the blame rule (DESIGN.md): a vehicle is responsible if
+   its body touches a wall or the body another vehicle had *before* the step. The learner's
+   life ends at its first responsible collision; an uncontrolled vehicle that is responsible
+   respawns at a free spot, and if it ran into the learner the learner's ``suffered`` count
+   rises (a collision the learner did not cause);
+2. the spin test (the learner's positions over the last ``spin_window`` poses have variance at
+   most ``spin_variance`` on both axes: fitness 0) and the step cap;
+3. every vehicle senses (walls and every other vehicle's body) and decides its steering;
+4. every vehicle moves (bicycle model).
+
+All P worlds of a generation run in one compiled call spread over the cores with ``prange``;
+each world stops at its own end, and the call returns when all have.
 """
 
 from __future__ import annotations
@@ -19,12 +27,23 @@ import numba
 import numpy as np
 from numba import njit, prange
 
+from enn_traffic.errors import InputError
 from enn_traffic.evolution.genome import NetworkSpec
 from enn_traffic.roads import Track, load_track
 from enn_traffic.scenario import Scenario
-from enn_traffic.sim.collide import body_corners, box_hits_walls
+from enn_traffic.sim.collide import body_corners, box_hits_walls, boxes_overlap
 from enn_traffic.sim.kinematics import bicycle_step
-from enn_traffic.sim.sensors import WallGrid, nearby_walls, sense_walls
+from enn_traffic.sim.sensors import WallGrid, nearby_walls, ray_segment_distance, sense_walls
+from enn_traffic.traffic import kinematic
+from enn_traffic.traffic.kinematic import (
+    NONE,
+    P_CLEARANCE,
+    RANDOM_NETWORK,
+    STRAIGHT,
+    initial_memory,
+    next_uniform,
+    scripted_steering,
+)
 
 # How an episode ended.
 CAPPED, COLLIDED, SPUN = 0, 1, 2
@@ -54,41 +73,175 @@ def network_steering(genes, layer_sizes, readings, activation, scratch, gain):
 
 
 @njit(cache=True)
+def _sense_bodies(v, x, y, heading, beam_cos, beam_sin, corners, centres, radius, readings):
+    """Lower ``readings`` of vehicle ``v`` to the nearest edge of any other vehicle's body."""
+    cos_h, sin_h = math.cos(heading), math.sin(heading)
+    for other in range(corners.shape[0]):
+        if other == v:
+            continue
+        dx, dy = centres[other, 0] - x, centres[other, 1] - y
+        if math.hypot(dx, dy) - radius > readings.max():
+            continue
+        for b in range(beam_cos.shape[0]):
+            ux = cos_h * beam_cos[b] - sin_h * beam_sin[b]
+            uy = sin_h * beam_cos[b] + cos_h * beam_sin[b]
+            along = dx * ux + dy * uy
+            if along < -radius or along - radius > readings[b] or abs(dx * uy - dy * ux) > radius:
+                continue  # the beam passes clear of the body's bounding circle
+            for i in range(4):
+                j = (i + 1) % 4
+                d = ray_segment_distance(
+                    x, y, ux, uy, readings[b], corners[other, i, 0], corners[other, i, 1],
+                    corners[other, j, 0], corners[other, j, 1],
+                )  # fmt: skip
+                if d < readings[b]:
+                    readings[b] = d
+
+
+@njit(cache=True)
+def _inside(x, y, walls) -> bool:
+    """Is (x, y) inside the area the closed wall rings bound? (crossing number)"""
+    inside = False
+    for w in range(walls.shape[0]):
+        x1, y1, x2, y2 = walls[w, 0], walls[w, 1], walls[w, 2], walls[w, 3]
+        if (y1 > y) != (y2 > y) and x < x1 + (y - y1) * (x2 - x1) / (y2 - y1):
+            inside = not inside
+    return inside
+
+
+@njit(cache=True)
+def _respawn(v, pose, corners, centres, length, width, walls, grid_args, bounds, clearance, rng):
+    """Move vehicle ``v`` to a random free pose: on the drivable area, touching no wall, and at
+    least ``clearance`` from every other vehicle. Returns False if none was found."""
+    origin, cell_size, nx, ny, cell_start, cell_walls, all_walls = grid_args
+    trial = np.empty((4, 2))
+    for _ in range(200):
+        x = bounds[0] + (bounds[2] - bounds[0]) * next_uniform(rng)
+        y = bounds[1] + (bounds[3] - bounds[1]) * next_uniform(rng)
+        heading = math.pi * (2.0 * next_uniform(rng) - 1.0)
+        if not _inside(x, y, walls):
+            continue
+        body_corners(x, y, heading, length, width, trial)
+        candidates = nearby_walls(x, y, origin, cell_size, nx, ny, cell_start, cell_walls,
+                                  all_walls)
+        if box_hits_walls(trial, walls, candidates, candidates.shape[0]):
+            continue
+        if not _inside(trial[2, 0], trial[2, 1], walls):
+            continue
+        free = True
+        for other in range(pose.shape[0]):
+            if other != v and math.hypot(x - pose[other, 0], y - pose[other, 1]) < clearance:
+                free = False
+                break
+        if free:
+            pose[v, 0], pose[v, 1], pose[v, 2] = x, y, heading
+            corners[v] = trial
+            centres[v, 0] = 0.5 * (trial[0, 0] + trial[2, 0])
+            centres[v, 1] = 0.5 * (trial[0, 1] + trial[2, 1])
+            return True
+    return False
+
+
+@njit(cache=True)
 def run_episode(
-    genes, layer_sizes, gain, x, y, heading,
+    genes, layer_sizes, gain, start, kinds, traffic_genes,
     length, width, wheelbase, distance, beam_cos, beam_sin, max_range,
-    walls, origin, cell_size, nx, ny, cell_start, cell_walls, all_walls,
+    walls, grid_args, bounds, params, seed,
     max_steps, spin_window, spin_variance, trace,
 ):  # fmt: skip
-    """Drive one chromosome from the start pose; return (steps moved, outcome).
+    """Drive one chromosome as vehicle 0 among ``start.shape[0] - 1`` uncontrolled vehicles.
 
-    ``trace`` (n, 3) receives the poses 0..n-1 when n > 0.
+    Returns (steps moved, outcome, collisions suffered). ``trace`` (n, V, 3) receives the poses
+    of steps 0..n-1 when n > 0.
     """
+    origin, cell_size, nx, ny, cell_start, cell_walls, all_walls = grid_args
+    count = start.shape[0]
+    pose = start.copy()
+    corners = np.empty((count, 4, 2))
+    previous = np.empty((count, 4, 2))
+    centres = np.empty((count, 2))
+    fresh = np.zeros(count, dtype=np.bool_)  # respawned: no earlier body to blame against
+    memory = np.zeros((count, 1))
+    steering = np.zeros(count)
+    rng = np.full(1, seed, dtype=np.uint64)
+    radius = 0.5 * math.hypot(length, width)
     readings = np.empty(beam_cos.shape[0])
-    width_max = layer_sizes.max()
+    width_max = max(layer_sizes.max(), 2)
     activation = np.empty(width_max)
     scratch = np.empty(width_max)
-    corners = np.empty((4, 2))
     recent = np.empty((spin_window, 2))
+    for v in range(count):
+        memory[v, 0] = initial_memory(kinds[v], params, wheelbase, rng)
+        body_corners(pose[v, 0], pose[v, 1], pose[v, 2], length, width, corners[v])
+        centres[v, 0] = 0.5 * (corners[v, 0, 0] + corners[v, 2, 0])
+        centres[v, 1] = 0.5 * (corners[v, 0, 1] + corners[v, 2, 1])
+    previous[:] = corners
+    suffered = 0
     steps = 0
     while True:
         if steps < trace.shape[0]:
-            trace[steps, 0], trace[steps, 1], trace[steps, 2] = x, y, heading
-        candidates = nearby_walls(
-            x, y, origin, cell_size, nx, ny, cell_start, cell_walls, all_walls
-        )
-        sense_walls(x, y, heading, beam_cos, beam_sin, max_range, walls, candidates, readings)
-        steering = network_steering(genes, layer_sizes, readings, activation, scratch, gain)
-        body_corners(x, y, heading, length, width, corners)
-        if box_hits_walls(corners, walls, candidates, candidates.shape[0]):
-            return steps, COLLIDED
+            trace[steps] = pose
+        # 1. collisions by the blame rule
+        candidates = nearby_walls(pose[0, 0], pose[0, 1], origin, cell_size, nx, ny,
+                                  cell_start, cell_walls, all_walls)
+        if box_hits_walls(corners[0], walls, candidates, candidates.shape[0]):
+            return steps, COLLIDED, suffered
+        for other in range(1, count):
+            if not fresh[other] and boxes_overlap(corners[0], previous[other]):
+                return steps, COLLIDED, suffered
+        for v in range(1, count):
+            candidates = nearby_walls(pose[v, 0], pose[v, 1], origin, cell_size, nx, ny,
+                                      cell_start, cell_walls, all_walls)
+            hit = box_hits_walls(corners[v], walls, candidates, candidates.shape[0])
+            for other in range(count):
+                if hit:
+                    break
+                if other != v and not fresh[other] and boxes_overlap(corners[v], previous[other]):
+                    hit = True
+                    if other == 0:
+                        suffered += 1
+            if hit and _respawn(v, pose, corners, centres, length, width, walls, grid_args,
+                                bounds, params[P_CLEARANCE], rng):
+                previous[v] = corners[v]
+                fresh[v] = True
+                memory[v, 0] = initial_memory(kinds[v], params, wheelbase, rng)
+        # 2. spin test and step cap for the learner
         slot = steps % spin_window
-        recent[slot, 0], recent[slot, 1] = x, y
+        recent[slot, 0], recent[slot, 1] = pose[0, 0], pose[0, 1]
         if steps + 1 >= spin_window and _small_spread(recent, spin_variance):
-            return steps, SPUN
+            return steps, SPUN, suffered
         if steps >= max_steps:
-            return steps, CAPPED
-        x, y, heading = bicycle_step(x, y, heading, steering, distance, wheelbase)
+            return steps, CAPPED, suffered
+        # 3. sense and decide
+        for v in range(count):
+            kind = kinds[v]
+            if v == 0 or kind in (RANDOM_NETWORK, STRAIGHT):
+                candidates = nearby_walls(pose[v, 0], pose[v, 1], origin, cell_size, nx, ny,
+                                          cell_start, cell_walls, all_walls)
+                sense_walls(pose[v, 0], pose[v, 1], pose[v, 2], beam_cos, beam_sin, max_range,
+                            walls, candidates, readings)
+                if count > 1 and kind != STRAIGHT:  # straight drivers react to walls only
+                    _sense_bodies(v, pose[v, 0], pose[v, 1], pose[v, 2], beam_cos, beam_sin,
+                                  corners, centres, radius, readings)
+            if v == 0:
+                steering[v] = network_steering(genes, layer_sizes, readings, activation,
+                                               scratch, gain)
+            elif kind == RANDOM_NETWORK:
+                steering[v] = network_steering(traffic_genes[v], layer_sizes, readings,
+                                               activation, scratch, gain)
+            elif kind != NONE:
+                steering[v] = scripted_steering(kind, readings, beam_cos, beam_sin, max_range,
+                                                params, memory[v], rng)
+        # 4. move
+        previous[:] = corners
+        fresh[:] = False
+        for v in range(count):
+            x, y, heading = bicycle_step(pose[v, 0], pose[v, 1], pose[v, 2], steering[v],
+                                         distance, wheelbase)
+            pose[v, 0], pose[v, 1], pose[v, 2] = x, y, heading
+            body_corners(x, y, heading, length, width, corners[v])
+            centres[v, 0] = 0.5 * (corners[v, 0, 0] + corners[v, 2, 0])
+            centres[v, 1] = 0.5 * (corners[v, 0, 1] + corners[v, 2, 1])
         steps += 1
 
 
@@ -105,55 +258,85 @@ def _small_spread(points, limit) -> bool:
 
 @njit(cache=True, parallel=True)
 def run_population(
-    population, layer_sizes, gain, x, y, heading,
+    population, layer_sizes, gain, start, kinds, traffic_genes,
     length, width, wheelbase, distance, beam_cos, beam_sin, max_range,
-    walls, origin, cell_size, nx, ny, cell_start, cell_walls, all_walls,
+    walls, grid_args, bounds, params, seed,
     max_steps, spin_window, spin_variance,
 ):  # fmt: skip
-    """Run every chromosome of ``population`` (P, G) to its end; (steps, outcome) per world."""
-    count = population.shape[0]
-    steps = np.zeros(count, dtype=np.int64)
-    outcome = np.zeros(count, dtype=np.int64)
-    no_trace = np.empty((0, 3))
-    for p in prange(count):
-        steps[p], outcome[p] = run_episode(
-            population[p], layer_sizes, gain, x, y, heading,
+    """Run every chromosome of ``population`` (P, G) in its own world; per world
+    (steps, outcome, collisions suffered)."""
+    size = population.shape[0]
+    steps = np.zeros(size, dtype=np.int64)
+    outcome = np.zeros(size, dtype=np.int64)
+    suffered = np.zeros(size, dtype=np.int64)
+    no_trace = np.empty((0, start.shape[0], 3))
+    for p in prange(size):
+        steps[p], outcome[p], suffered[p] = run_episode(
+            population[p], layer_sizes, gain, start, kinds, traffic_genes,
             length, width, wheelbase, distance, beam_cos, beam_sin, max_range,
-            walls, origin, cell_size, nx, ny, cell_start, cell_walls, all_walls,
+            walls, grid_args, bounds, params, seed,
             max_steps, spin_window, spin_variance, no_trace,
         )  # fmt: skip
-    return steps, outcome
+    return steps, outcome, suffered
 
 
 @dataclass(frozen=True)
 class EpisodeResults:
-    """Per world: fitness, steps moved, and how the episode ended (``OUTCOMES``)."""
+    """Per world and episode (P, E): learner steps, outcome (``OUTCOMES``), collisions the
+    learner suffered; fitness (P,) is the mean over episodes of steps, 0 for a spin."""
 
     fitness: np.ndarray
     steps: np.ndarray
     outcome: np.ndarray
+    suffered: np.ndarray
+    vehicles: int = 1
 
     @property
     def vehicle_steps(self) -> int:
-        return int(self.steps.sum())
+        """Steps moved by every simulated vehicle."""
+        return int(self.steps.sum()) * self.vehicles
+
+    @staticmethod
+    def concatenate(parts: list[EpisodeResults]) -> EpisodeResults:
+        return EpisodeResults(*(np.concatenate([getattr(p, f) for p in parts])
+                                for f in ("fitness", "steps", "outcome", "suffered")),
+                              vehicles=parts[0].vehicles)
 
 
-class NavigationWorld:
-    """One learning vehicle alone on a SUMO track (paper §5.1–5.2)."""
+@dataclass(frozen=True)
+class Episode:
+    """One traffic situation: every vehicle's start pose, strategy and (for random networks)
+    genes, and the seed of the world's generator."""
+
+    start: np.ndarray  # (V, 3)
+    kinds: np.ndarray  # (V,)
+    traffic_genes: np.ndarray  # (V, G), source layout
+    seed: np.uint64
+
+
+class World:
+    """A scenario's worlds: its track, learner and traffic, ready to evaluate populations."""
 
     def __init__(self, scenario: Scenario, track: Track | None = None):
         self.scenario = scenario
         self.track = track or load_track(scenario.track.net)
         self.spec = NetworkSpec(scenario.layer_sizes, scenario.network.layout)
-        vehicle, sensor = scenario.vehicle, scenario.sensor
+        vehicle, sensor, traffic = scenario.vehicle, scenario.sensor, scenario.traffic
         reach = max(sensor.range, math.hypot(vehicle.length, vehicle.width / 2)) + 1.0
         self.grid = WallGrid.build(self.track.walls, reach)
         self.start = start_pose(scenario, self.track)
+        self.traffic_starts = [tuple(xy) for xy in traffic.starts_xy]
+        for index, (x, y) in enumerate(self.traffic_starts):
+            if not self.track.contains(x, y):
+                raise InputError(f"start ({x:g}, {y:g}) is off the drivable area",
+                                 scenario.source, f"traffic.starts_xy[{index}]")
+        self.vehicles = 1 + len(self.traffic_starts)
         self._order = self.spec.source_order()
-        self._constants = (
+        self._shape = (
             np.asarray(scenario.layer_sizes, dtype=np.int64),
             math.radians(scenario.network.steering_gain_deg),
-            *self.start,
+        )
+        self._physics = (
             vehicle.length,
             vehicle.width,
             vehicle.wheelbase,
@@ -161,7 +344,10 @@ class NavigationWorld:
             np.cos(scenario.beam_angles),
             np.sin(scenario.beam_angles),
             sensor.range,
-            *self.grid.kernel_args(),
+            self.grid.walls,
+            self.grid.kernel_args()[1:],
+            np.asarray(self.track.bounds, dtype=np.float64),
+            traffic.kernel_params(),
         )
         episode = scenario.episode
         self._limits = (episode.max_steps, episode.spin_window, episode.spin_variance)
@@ -175,29 +361,59 @@ class NavigationWorld:
             )
         return np.ascontiguousarray(population[:, self._order])
 
-    def evaluate(self, population: np.ndarray) -> EpisodeResults:
-        """Fitness of every chromosome: steps survived, 0 for a spin."""
-        with numba.parallel_chunksize(1):
-            steps, outcome = run_population(
-                self._genes(population), *self._constants, *self._limits
-            )
-        fitness = np.where(outcome == SPUN, 0, steps).astype(np.float64)
-        return EpisodeResults(fitness=fitness, steps=steps, outcome=outcome)
+    def episodes(self, generation: int) -> list[Episode]:
+        """The traffic situations of a generation: one per (strategy, episode), drawn from
+        (traffic seed, generation, strategy, episode) alone."""
+        traffic = self.scenario.traffic
+        key = generation if traffic.vary == "generation" else 0
+        result = []
+        for s, name in enumerate(traffic.strategy_list):
+            for e in range(traffic.episodes):
+                sequence = np.random.SeedSequence([traffic.seed, key, s, e])
+                rng = np.random.default_rng(sequence)
+                low, high = np.radians(traffic.start_heading_deg)
+                start = np.array([self.start] + [
+                    (x, y, rng.uniform(low, high)) for x, y in self.traffic_starts])
+                kind = kinematic.STRATEGIES.get(name, kinematic.NONE)
+                kinds = np.array([kinematic.NONE] + [kind] * len(self.traffic_starts))
+                genes = rng.uniform(-1, 1, size=(self.vehicles, self.spec.chromosome_length))
+                result.append(Episode(start, kinds, np.ascontiguousarray(genes[:, self._order]),
+                                      np.uint64(sequence.generate_state(1, np.uint64)[0])))
+        return result
 
-    def trace(self, chromosome: np.ndarray, max_steps: int | None = None) -> tuple[np.ndarray, int]:
-        """Poses (n, 3) of one episode and its outcome code."""
+    def episode_labels(self) -> list[str]:
+        """The strategy of each column of :meth:`evaluate`'s per-episode arrays."""
+        traffic = self.scenario.traffic
+        return [name for name in traffic.strategy_list for _ in range(traffic.episodes)]
+
+    def evaluate(self, population: np.ndarray, generation: int = 0) -> EpisodeResults:
+        """Fitness of every chromosome: steps survived (0 for a spin), averaged over the
+        generation's traffic situations."""
+        genes = self._genes(population)
+        runs = []
+        with numba.parallel_chunksize(1):
+            for episode in self.episodes(generation):
+                runs.append(run_population(
+                    genes, *self._shape, episode.start, episode.kinds, episode.traffic_genes,
+                    *self._physics, episode.seed, *self._limits))  # fmt: skip
+        steps, outcome, suffered = (np.stack([r[i] for r in runs], axis=1) for i in range(3))
+        fitness = np.where(outcome == SPUN, 0, steps).mean(axis=1).astype(np.float64)
+        return EpisodeResults(fitness, steps, outcome, suffered, self.vehicles)
+
+    def trace(self, chromosome: np.ndarray, generation: int = 0, episode: int = 0,
+              max_steps: int | None = None) -> tuple[np.ndarray, int]:
+        """Poses (n, V, 3) of every vehicle in one episode, and the learner's outcome code."""
         limit = self._limits[0] if max_steps is None else max_steps
-        trace = np.full((limit + 1, 3), np.nan)
-        steps, outcome = run_episode(
-            self._genes(chromosome)[0], *self._constants, limit, *self._limits[1:], trace
-        )
+        chosen = self.episodes(generation)[episode]
+        trace = np.full((limit + 1, self.vehicles, 3), np.nan)
+        steps, outcome, _ = run_episode(
+            self._genes(chromosome)[0], *self._shape, chosen.start, chosen.kinds,
+            chosen.traffic_genes, *self._physics, chosen.seed, limit, *self._limits[1:], trace)
         return trace[: steps + 1], int(outcome)
 
 
 def start_pose(scenario: Scenario, track: Track) -> tuple[float, float, float]:
-    """The scenario's start pose, checked to lie on the drivable area."""
-    from enn_traffic.errors import InputError
-
+    """The learner's start pose, checked to lie on the drivable area."""
     config = scenario.track
     if config.start_lane is not None:
         pose = track.lane_pose(config.net, config.start_lane, config.start_offset)

@@ -1,0 +1,1 @@
+"""Background traffic: free-moving kinematic strategies (and, later, SUMO through libsumo)."""

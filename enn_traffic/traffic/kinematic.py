@@ -1,0 +1,106 @@
+"""Movement strategies of the uncontrolled vehicles in the arena (paper §5.3, Figure 11).
+
+Every uncontrolled vehicle uses the learner's bicycle model and rangefinder. Its steering comes
+from its strategy:
+
+1. ``random_network`` — a fixed random network (genes U[-1, 1]) on its own readings: the
+   paper's setup, where every vehicle starts with random weights and a random heading.
+2. ``straight`` — drives straight; when a wall is closer than ``turn_distance`` within
+   ±``turn_cone_deg`` ahead, it turns towards the more open side until that cone is clear
+   (``turn_distance = 0``: it never turns, and respawns at the wall). It does not see vehicles.
+3. ``circling`` — constant steering, a radius per vehicle drawn from ``circle_radius``.
+4. ``wander`` — steering follows a random process: δ ← decay·δ + Normal(0, σ).
+
+An uncontrolled vehicle responsible for a collision respawns at a free spot. All randomness
+comes from one counter-based generator per world (:func:`next_uniform`), seeded the same for
+every world, so each chromosome meets the same traffic.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+NONE, RANDOM_NETWORK, STRAIGHT, CIRCLING, WANDER = 0, 1, 2, 3, 4
+STRATEGIES = {
+    "random_network": RANDOM_NETWORK,
+    "straight": STRAIGHT,
+    "circling": CIRCLING,
+    "wander": WANDER,
+}
+
+# Layout of the float parameter vector the kernel takes.
+P_TURN_DISTANCE, P_TURN_STEERING, P_TURN_CONE, P_RADIUS_MIN, P_RADIUS_MAX = 0, 1, 2, 3, 4
+P_WANDER_SIGMA, P_WANDER_DECAY, P_WANDER_MAX, P_CLEARANCE, P_HEADING_LOW, P_HEADING_HIGH = (
+    5, 6, 7, 8, 9, 10,
+)  # fmt: skip
+N_PARAMS = 11
+
+_GOLDEN = np.uint64(0x9E3779B97F4A7C15)
+_MIX1 = np.uint64(0xBF58476D1CE4E5B9)
+_MIX2 = np.uint64(0x94D049BB133111EB)
+
+
+@njit(cache=True)
+def next_uniform(state) -> float:
+    """A U[0, 1) draw from the splitmix64 generator whose state is ``state[0]`` (uint64)."""
+    state[0] += _GOLDEN
+    z = state[0]
+    z = (z ^ (z >> np.uint64(30))) * _MIX1
+    z = (z ^ (z >> np.uint64(27))) * _MIX2
+    z = z ^ (z >> np.uint64(31))
+    return float(z >> np.uint64(11)) * (1.0 / 9007199254740992.0)
+
+
+@njit(cache=True)
+def next_normal(state) -> float:
+    """A standard normal draw (Box–Muller)."""
+    u1 = max(next_uniform(state), 1e-300)
+    u2 = next_uniform(state)
+    return math.sqrt(-2.0 * math.log(u1)) * math.cos(2.0 * math.pi * u2)
+
+
+@njit(cache=True)
+def initial_memory(kind, params, wheelbase, rng) -> float:
+    """A vehicle's per-life strategy state: its circling steering, or the wander steering."""
+    if kind == CIRCLING:
+        low, high = params[P_RADIUS_MIN], params[P_RADIUS_MAX]
+        radius = low + (high - low) * next_uniform(rng)
+        side = 1.0 if next_uniform(rng) < 0.5 else -1.0
+        return side * math.atan(wheelbase / radius)
+    return 0.0
+
+
+@njit(cache=True)
+def scripted_steering(kind, readings, beam_cos, beam_sin, max_range, params, memory,
+                      rng) -> float:
+    """Steering of a scripted (non-network) strategy; updates ``memory[0]`` in place."""
+    if kind == STRAIGHT:
+        # Start turning when something is nearer than turn_distance in the cone ahead; keep
+        # turning the same way until nothing at all is in range there (so the vehicle heads
+        # back across the area instead of running along the wall).
+        cone = math.cos(params[P_TURN_CONE])
+        nearest = np.inf
+        left, right = 0.0, 0.0
+        for b in range(readings.shape[0]):
+            if beam_cos[b] >= cone:
+                nearest = min(nearest, readings[b])
+            if beam_sin[b] > 0.0:
+                left += readings[b]
+            elif beam_sin[b] < 0.0:
+                right += readings[b]
+        if memory[0] == 0.0 and nearest < params[P_TURN_DISTANCE]:
+            memory[0] = params[P_TURN_STEERING] if left >= right else -params[P_TURN_STEERING]
+        elif memory[0] != 0.0 and nearest >= max_range:
+            memory[0] = 0.0
+        return memory[0]
+    if kind == CIRCLING:
+        return memory[0]
+    if kind == WANDER:
+        limit = params[P_WANDER_MAX]
+        value = params[P_WANDER_DECAY] * memory[0] + params[P_WANDER_SIGMA] * next_normal(rng)
+        memory[0] = min(max(value, -limit), limit)
+        return memory[0]
+    return 0.0

@@ -1,0 +1,34 @@
+import numpy as np
+import pandas as pd
+import pytest
+
+from enn_traffic.evolution.ga import GAState
+from enn_traffic.runner import evolve
+from enn_traffic.scenario import load_scenario
+
+
+@pytest.fixture
+def small(root):
+    return load_scenario(root / "scenarios" / "navigation_narrow.toml").with_overrides(
+        ga={"population_size": 30, "generations": 40})
+
+
+def test_target_fitness_stops_the_run_and_resume_keeps_it_stopped(small, tmp_path):
+    scenario = small.with_overrides(ga={"target_fitness": 40.0})
+    table = evolve(scenario, tmp_path, progress=False)
+    assert table["best_fitness"].iloc[-1] >= 40 and (table["best_fitness"].iloc[:-1] < 40).all()
+    assert len(table) < 40
+    again = evolve(scenario, tmp_path, resume=True, progress=False)
+    pd.testing.assert_frame_equal(table, again)
+
+
+def test_initial_population_seeds_a_fresh_run(small, tmp_path):
+    first = evolve(small.with_overrides(ga={"generations": 3}), tmp_path / "a", progress=False)
+    population = GAState.load(tmp_path / "a" / "checkpoint.npz").population
+    continued = evolve(small.with_overrides(ga={"generations": 1}), tmp_path / "b",
+                       progress=False, initial_population=population)
+    fresh = evolve(small.with_overrides(ga={"generations": 1}), tmp_path / "c", progress=False)
+    assert continued["mean_fitness"].iloc[0] != fresh["mean_fitness"].iloc[0]
+    assert len(first) == 3
+    with pytest.raises(ValueError, match="initial population has shape"):
+        evolve(small, tmp_path / "d", progress=False, initial_population=np.zeros((3, 3)))

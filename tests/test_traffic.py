@@ -1,0 +1,139 @@
+"""The learner among other vehicles: the blame rule, sensing bodies, strategies, determinism."""
+
+import math
+
+import numpy as np
+import pytest
+
+from enn_traffic.errors import InputError
+from enn_traffic.scenario import load_scenario
+from enn_traffic.sim.collide import body_polygon
+from enn_traffic.sim.world import COLLIDED, World, _sense_bodies
+
+TWO_CARS = """
+name = "two_cars"
+[track]
+net = "{net}"
+start_xy = [{lx}, {ly}]
+start_heading_deg = 0.0
+[vehicle]
+width = 2.5
+[sensor]
+beams = 3
+[traffic]
+strategy = "straight"
+turn_distance = 0.0
+starts_xy = [[{tx}, {ty}]]
+start_heading_deg = [{th}, {th}]
+"""
+
+
+def two_cars(tmp_path, root, learner, other, heading):
+    path = tmp_path / "two.toml"
+    path.write_text(TWO_CARS.format(net=root / "sumo_nets" / "arena.net.xml", lx=learner[0],
+                                    ly=learner[1], tx=other[0], ty=other[1], th=heading))
+    return World(load_scenario(path))
+
+
+def test_head_on_both_responsible_learner_dies_at_the_expected_step(tmp_path, root):
+    """Bumpers 20 m apart closing at 2 m per step: after 11 steps each new body reaches into
+    the other's body of the step before (both responsible, paper Fig. 5)."""
+    world = two_cars(tmp_path, root, (20.0, 50.0), (40.0, 50.0), 180.0)
+    results = world.evaluate(np.zeros((1, world.spec.chromosome_length)))
+    assert results.outcome[0, 0] == COLLIDED and results.steps[0, 0] == 11
+
+
+def test_side_impact_by_another_vehicle_is_counted_not_fatal(tmp_path, root):
+    """A vehicle driving north runs into the learner's flank at step 5: it is responsible (its
+    new body meets the learner's old one, not the reverse), respawns, and the learner lives on
+    to the far wall."""
+    world = two_cars(tmp_path, root, (27.0, 50.0), (30.0, 44.0), 90.0)
+    genes = np.zeros((1, world.spec.chromosome_length))
+    results = world.evaluate(genes)
+    assert results.suffered[0, 0] >= 1
+    assert results.steps[0, 0] > 5
+    poses, _ = world.trace(genes[0], max_steps=8)
+    assert poses[6, 1, 1] != pytest.approx(50.0 - 6 + 1.0, abs=2.0)  # the other one respawned
+    np.testing.assert_allclose(poses[:9, 0, 0], 27.0 + np.arange(9))  # the learner drove on
+
+
+def test_beams_see_other_vehicles_bodies():
+    corners = np.stack([body_polygon(0.0, 0.0, 0.0, 4.3, 2.5),
+                        body_polygon(14.3, 0.0, 0.0, 4.3, 2.5)])  # rear bumper at x = 10
+    centres = corners.mean(axis=1)
+    angles = np.array([-math.pi / 2, 0.0, math.pi / 2])
+    readings = np.full(3, 25.0)
+    _sense_bodies(0, 0.0, 0.0, 0.0, np.cos(angles), np.sin(angles), corners, centres,
+                  0.5 * math.hypot(4.3, 2.5), readings)
+    np.testing.assert_allclose(readings, [25.0, 10.0, 25.0])
+
+
+@pytest.fixture(scope="module")
+def arena(request):
+    root = request.config.rootpath
+    return World(load_scenario(root / "scenarios" / "arena_strategy1.toml"))
+
+
+def test_every_world_of_a_generation_meets_the_same_traffic(arena):
+    chromosome = np.random.default_rng(0).uniform(-1, 1, arena.spec.chromosome_length)
+    results = arena.evaluate(np.repeat(chromosome[None, :], 6, axis=0), generation=3)
+    assert len(set(results.steps[:, 0].tolist())) == 1
+    again = arena.evaluate(chromosome[None, :], generation=3)
+    np.testing.assert_array_equal(again.steps[0], results.steps[0])
+
+
+def test_traffic_changes_with_the_generation(arena):
+    first = arena.episodes(0)[0]
+    second = arena.episodes(1)[0]
+    assert not np.array_equal(first.start, second.start)
+    np.testing.assert_array_equal(first.start[0], second.start[0])  # the learner starts alike
+    np.testing.assert_array_equal(first.start, arena.episodes(0)[0].start)
+
+
+@pytest.mark.parametrize("strategy", [1, 2, 3, 4])
+def test_uncontrolled_vehicles_stay_on_the_arena(strategy, root):
+    world = World(load_scenario(root / "scenarios" / f"arena_strategy{strategy}.toml"))
+    genes = np.zeros(world.spec.chromosome_length)
+    genes[-1] = 0.35  # the learner circles gently; the traffic does what its strategy says
+    poses, _ = world.trace(genes, max_steps=600)
+    traffic = poses[:, 1:, :2]
+    assert np.all((traffic > -0.5) & (traffic < 100.5))
+    moved = np.hypot(*np.diff(traffic, axis=0).transpose(2, 0, 1))
+    assert np.all((moved <= 1.0 + 1e-9) | (moved > 5.0))  # a step of driving, or a respawn
+    if strategy == 1:
+        assert (moved > 5.0).any()  # random networks crash, and their vehicles respawn
+
+
+def test_strategies_differ(root):
+    """Straight drivers mostly keep their heading; circling ones turn at every step."""
+    still = {}
+    for strategy in (2, 3):
+        world = World(load_scenario(root / "scenarios" / f"arena_strategy{strategy}.toml"))
+        poses, _ = world.trace(np.zeros(world.spec.chromosome_length), max_steps=40)
+        turned = np.abs(np.diff(np.unwrap(poses[:, 1:, 2], axis=0), axis=0))
+        still[strategy] = (turned < 1e-12).mean()
+    assert still[2] > 0.5 and still[3] < 0.05
+
+
+def test_traffic_start_off_the_area_is_refused(tmp_path, root):
+    path = tmp_path / "bad.toml"
+    path.write_text(TWO_CARS.format(net=root / "sumo_nets" / "arena.net.xml", lx=20, ly=50,
+                                    tx=150, ty=50, th=0))
+    with pytest.raises(InputError) as info:
+        World(load_scenario(path))
+    assert info.value.key == "traffic.starts_xy[0]"
+
+
+def test_process_pool_matches_local_with_traffic(root):
+    from enn_traffic.evolution.evaluate import LocalEvaluator, ProcessEvaluator
+
+    scenario = load_scenario(root / "scenarios" / "arena_strategy4.toml")
+    population = np.random.default_rng(1).uniform(-1, 1, (9, 68))
+    local = LocalEvaluator(scenario).evaluate(population, 7)
+    pool = ProcessEvaluator(scenario, workers=2)
+    try:
+        spread = pool.evaluate(population, 7)
+    finally:
+        pool.close()
+    np.testing.assert_array_equal(local.steps, spread.steps)
+    np.testing.assert_array_equal(local.suffered, spread.suffered)
