@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import hashlib
 import time
+from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
@@ -82,10 +83,13 @@ def evolve(
     force: bool = False,
     progress: bool = True,
     initial_population: np.ndarray | None = None,
+    stop: Callable[[np.ndarray, np.ndarray], bool] | None = None,
 ) -> pd.DataFrame:
     """Run the GA for ``scenario.ga.generations`` generations (or until a generation's best
     reaches ``ga.target_fitness``); return the generations table. ``initial_population``
-    replaces the random first generation of a fresh run (incremental evolution, §5.4.1)."""
+    replaces the random first generation of a fresh run (incremental evolution, §5.4.1);
+    ``stop(population, fitness)``, asked after every generation, ends the run when it says so.
+    """
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     state = _open_state(scenario, out, resume, force, initial_population)
@@ -104,7 +108,8 @@ def evolve(
     try:
         while state.generation < total and not state.extra.get("target_reached", False):
             started = time.perf_counter()
-            results = evaluator.evaluate(state.population, state.generation)
+            evaluated = state.population
+            results = evaluator.evaluate(evaluated, state.generation)
             fitness = results.fitness
             best = int(np.argmax(fitness))
             if fitness[best] > state.best_fitness:
@@ -134,7 +139,8 @@ def evolve(
             bar.update(1)
             bar.set_postfix(best=int(fitness.max()), mean=round(float(fitness.mean()), 1))
             target = scenario.ga.target_fitness
-            if target is not None and fitness.max() >= target:
+            if (target is not None and fitness.max() >= target) or (
+                    stop is not None and stop(evaluated, fitness)):
                 state.extra["target_reached"] = True
                 state.save(out / CHECKPOINT)
     finally:

@@ -114,10 +114,10 @@ class TrafficConfig(_Section):
     turn_distance: float = Field(10.0, ge=0, allow_inf_nan=False)
     turn_steering_deg: float = Field(35.0, gt=0, le=90, allow_inf_nan=False)
     turn_cone_deg: float = Field(20.0, ge=0, le=90, allow_inf_nan=False)
-    circle_radius: tuple[PositiveFloat, PositiveFloat] = (6.0, 25.0)
     wander_sigma_deg: float = Field(6.0, ge=0, le=90, allow_inf_nan=False)
     wander_decay: float = Field(0.95, ge=0, le=1)
     wander_max_deg: float = Field(45.0, gt=0, le=90, allow_inf_nan=False)
+    circle_radius: tuple[PositiveFloat, PositiveFloat] = (15.0, 46.0)
     respawn_clearance: float = Field(10.0, ge=0, allow_inf_nan=False)
 
     @model_validator(mode="after")
@@ -135,8 +135,9 @@ class TrafficConfig(_Section):
             return ["none"]
         return [self.strategy] if isinstance(self.strategy, str) else list(self.strategy)
 
-    def kernel_params(self):
-        """The float parameter vector of :mod:`enn_traffic.traffic.kinematic`."""
+    def kernel_params(self, centre):
+        """The float parameter vector of :mod:`enn_traffic.traffic.kinematic`; ``centre`` is
+        the point circling vehicles orbit (the centroid of the drivable area)."""
         import numpy as np
 
         from enn_traffic.traffic import kinematic as k
@@ -151,6 +152,7 @@ class TrafficConfig(_Section):
         params[k.P_WANDER_MAX] = math.radians(self.wander_max_deg)
         params[k.P_CLEARANCE] = self.respawn_clearance
         params[k.P_HEADING_LOW], params[k.P_HEADING_HIGH] = np.radians(self.start_heading_deg)
+        params[k.P_CENTRE_X], params[k.P_CENTRE_Y] = centre.x, centre.y
         return params
 
 

@@ -32,3 +32,16 @@ def test_initial_population_seeds_a_fresh_run(small, tmp_path):
     assert len(first) == 3
     with pytest.raises(ValueError, match="initial population has shape"):
         evolve(small, tmp_path / "d", progress=False, initial_population=np.zeros((3, 3)))
+
+
+def test_stop_hook_sees_the_evaluated_population(small, tmp_path):
+    seen = []
+
+    def stop(population, fitness):
+        seen.append((population.copy(), fitness.copy()))
+        return len(seen) == 3
+
+    table = evolve(small, tmp_path, progress=False, stop=stop)
+    assert len(table) == 3
+    assert all(p.shape == (30, 68) and f.shape == (30,) for p, f in seen)
+    assert [f.max() for _, f in seen] == table["best_fitness"].tolist()

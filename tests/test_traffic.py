@@ -137,3 +137,21 @@ def test_process_pool_matches_local_with_traffic(root):
         pool.close()
     np.testing.assert_array_equal(local.steps, spread.steps)
     np.testing.assert_array_equal(local.suffered, spread.suffered)
+
+
+@pytest.mark.parametrize("start", [(80.0, 50.0, 1.0), (70.0, 45.0, -2.5), (50.0, 90.0, 0.3)])
+def test_ring_steering_orbits_the_centre_counter_clockwise(start):
+    """From any heading, a circling vehicle settles on the ring through its start point."""
+    from enn_traffic.sim.kinematics import bicycle_step
+    from enn_traffic.traffic.kinematic import ring_steering
+
+    x, y, heading = start
+    radius = math.hypot(x - 50.0, y - 50.0)
+    angles, distances = [], []
+    for _ in range(400):
+        steering = ring_steering(x, y, heading, 50.0, 50.0, radius)
+        x, y, heading = bicycle_step(x, y, heading, steering, 1.0, 2.6)
+        angles.append(math.atan2(y - 50.0, x - 50.0))
+        distances.append(math.hypot(x - 50.0, y - 50.0))
+    assert np.allclose(distances[200:], radius, atol=1.0)
+    assert np.unwrap(angles)[-1] - np.unwrap(angles)[200] > 2.0  # counter-clockwise

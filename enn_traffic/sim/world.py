@@ -40,8 +40,9 @@ from enn_traffic.traffic.kinematic import (
     P_CLEARANCE,
     RANDOM_NETWORK,
     STRAIGHT,
-    initial_memory,
+    WANDER,
     next_uniform,
+    reset_memory,
     scripted_steering,
 )
 
@@ -160,8 +161,9 @@ def run_episode(
     corners = np.empty((count, 4, 2))
     previous = np.empty((count, 4, 2))
     centres = np.empty((count, 2))
+    previous_centres = np.empty((count, 2))
     fresh = np.zeros(count, dtype=np.bool_)  # respawned: no earlier body to blame against
-    memory = np.zeros((count, 1))
+    memory = np.zeros((count, 2))
     steering = np.zeros(count)
     rng = np.full(1, seed, dtype=np.uint64)
     radius = 0.5 * math.hypot(length, width)
@@ -171,11 +173,13 @@ def run_episode(
     scratch = np.empty(width_max)
     recent = np.empty((spin_window, 2))
     for v in range(count):
-        memory[v, 0] = initial_memory(kinds[v], params, wheelbase, rng)
+        reset_memory(kinds[v], params, rng, memory[v])
         body_corners(pose[v, 0], pose[v, 1], pose[v, 2], length, width, corners[v])
         centres[v, 0] = 0.5 * (corners[v, 0, 0] + corners[v, 2, 0])
         centres[v, 1] = 0.5 * (corners[v, 0, 1] + corners[v, 2, 1])
     previous[:] = corners
+    previous_centres[:] = centres
+    near = 4.0 * radius * radius  # bodies whose centres are farther apart cannot touch
     suffered = 0
     steps = 0
     while True:
@@ -187,7 +191,8 @@ def run_episode(
         if box_hits_walls(corners[0], walls, candidates, candidates.shape[0]):
             return steps, COLLIDED, suffered
         for other in range(1, count):
-            if not fresh[other] and boxes_overlap(corners[0], previous[other]):
+            if (not fresh[other] and _close(centres, 0, previous_centres, other, near)
+                    and boxes_overlap(corners[0], previous[other])):
                 return steps, COLLIDED, suffered
         for v in range(1, count):
             candidates = nearby_walls(pose[v, 0], pose[v, 1], origin, cell_size, nx, ny,
@@ -196,15 +201,18 @@ def run_episode(
             for other in range(count):
                 if hit:
                     break
-                if other != v and not fresh[other] and boxes_overlap(corners[v], previous[other]):
+                if (other != v and not fresh[other]
+                        and _close(centres, v, previous_centres, other, near)
+                        and boxes_overlap(corners[v], previous[other])):
                     hit = True
                     if other == 0:
                         suffered += 1
             if hit and _respawn(v, pose, corners, centres, length, width, walls, grid_args,
                                 bounds, params[P_CLEARANCE], rng):
                 previous[v] = corners[v]
+                previous_centres[v] = centres[v]
                 fresh[v] = True
-                memory[v, 0] = initial_memory(kinds[v], params, wheelbase, rng)
+                reset_memory(kinds[v], params, rng, memory[v])
         # 2. spin test and step cap for the learner
         slot = steps % spin_window
         recent[slot, 0], recent[slot, 1] = pose[0, 0], pose[0, 1]
@@ -215,12 +223,12 @@ def run_episode(
         # 3. sense and decide
         for v in range(count):
             kind = kinds[v]
-            if v == 0 or kind in (RANDOM_NETWORK, STRAIGHT):
+            if v == 0 or kind in (RANDOM_NETWORK, STRAIGHT, WANDER):
                 candidates = nearby_walls(pose[v, 0], pose[v, 1], origin, cell_size, nx, ny,
                                           cell_start, cell_walls, all_walls)
                 sense_walls(pose[v, 0], pose[v, 1], pose[v, 2], beam_cos, beam_sin, max_range,
                             walls, candidates, readings)
-                if count > 1 and kind != STRAIGHT:  # straight drivers react to walls only
+                if count > 1 and (v == 0 or kind == RANDOM_NETWORK):  # scripted: walls only
                     _sense_bodies(v, pose[v, 0], pose[v, 1], pose[v, 2], beam_cos, beam_sin,
                                   corners, centres, radius, readings)
             if v == 0:
@@ -230,10 +238,12 @@ def run_episode(
                 steering[v] = network_steering(traffic_genes[v], layer_sizes, readings,
                                                activation, scratch, gain)
             elif kind != NONE:
-                steering[v] = scripted_steering(kind, readings, beam_cos, beam_sin, max_range,
-                                                params, memory[v], rng)
+                steering[v] = scripted_steering(kind, pose[v, 0], pose[v, 1], pose[v, 2], readings,
+                                                beam_cos, beam_sin, max_range, params,
+                                                memory[v], rng)
         # 4. move
         previous[:] = corners
+        previous_centres[:] = centres
         fresh[:] = False
         for v in range(count):
             x, y, heading = bicycle_step(pose[v, 0], pose[v, 1], pose[v, 2], steering[v],
@@ -243,6 +253,14 @@ def run_episode(
             centres[v, 0] = 0.5 * (corners[v, 0, 0] + corners[v, 2, 0])
             centres[v, 1] = 0.5 * (corners[v, 0, 1] + corners[v, 2, 1])
         steps += 1
+
+
+@njit(cache=True)
+def _close(centres, a, other_centres, b, limit) -> bool:
+    """Are the centres of body ``a`` and (earlier) body ``b`` within sqrt(limit)?"""
+    dx = centres[a, 0] - other_centres[b, 0]
+    dy = centres[a, 1] - other_centres[b, 1]
+    return dx * dx + dy * dy <= limit
 
 
 @njit(cache=True)
@@ -347,7 +365,7 @@ class World:
             self.grid.walls,
             self.grid.kernel_args()[1:],
             np.asarray(self.track.bounds, dtype=np.float64),
-            traffic.kernel_params(),
+            traffic.kernel_params(self.track.area.centroid),
         )
         episode = scenario.episode
         self._limits = (episode.max_steps, episode.spin_window, episode.spin_variance)

@@ -8,8 +8,11 @@ from its strategy:
 2. ``straight`` — drives straight; when a wall is closer than ``turn_distance`` within
    ±``turn_cone_deg`` ahead, it turns towards the more open side until that cone is clear
    (``turn_distance = 0``: it never turns, and respawns at the wall). It does not see vehicles.
-3. ``circling`` — constant steering, a radius per vehicle drawn from ``circle_radius``.
-4. ``wander`` — steering follows a random process: δ ← decay·δ + Normal(0, σ).
+3. ``circling`` — every vehicle orbits the centre of the area counter-clockwise on a ring of
+   its own, the radius drawn from ``circle_radius`` each life: rings of different radii, one
+   flow.
+4. ``wander`` — steering follows a random process, δ ← decay·δ + Normal(0, σ); near a wall it
+   turns away as ``straight`` does.
 
 An uncontrolled vehicle responsible for a collision respawns at a free spot. All randomness
 comes from one counter-based generator per world (:func:`next_uniform`), seeded the same for
@@ -36,7 +39,11 @@ P_TURN_DISTANCE, P_TURN_STEERING, P_TURN_CONE, P_RADIUS_MIN, P_RADIUS_MAX = 0, 1
 P_WANDER_SIGMA, P_WANDER_DECAY, P_WANDER_MAX, P_CLEARANCE, P_HEADING_LOW, P_HEADING_HIGH = (
     5, 6, 7, 8, 9, 10,
 )  # fmt: skip
-N_PARAMS = 11
+P_CENTRE_X, P_CENTRE_Y = 11, 12
+N_PARAMS = 13
+# Ring following (circling): aim along the tangent, corrected towards the ring by this many
+# radians per metre of radial error, steering up to the largest angle below.
+RING_GAIN, RING_STEERING = 0.15, math.radians(45.0)
 
 _GOLDEN = np.uint64(0x9E3779B97F4A7C15)
 _MIX1 = np.uint64(0xBF58476D1CE4E5B9)
@@ -63,44 +70,60 @@ def next_normal(state) -> float:
 
 
 @njit(cache=True)
-def initial_memory(kind, params, wheelbase, rng) -> float:
-    """A vehicle's per-life strategy state: its circling steering, or the wander steering."""
+def reset_memory(kind, params, rng, memory) -> None:
+    """A vehicle's per-life strategy state: ``memory[0]`` is its ring radius (circling) or its
+    wander steering, ``memory[1]`` its current turn away from a wall (0: none)."""
+    memory[0] = 0.0
+    memory[1] = 0.0
     if kind == CIRCLING:
         low, high = params[P_RADIUS_MIN], params[P_RADIUS_MAX]
-        radius = low + (high - low) * next_uniform(rng)
-        side = 1.0 if next_uniform(rng) < 0.5 else -1.0
-        return side * math.atan(wheelbase / radius)
-    return 0.0
+        memory[0] = low + (high - low) * next_uniform(rng)
 
 
 @njit(cache=True)
-def scripted_steering(kind, readings, beam_cos, beam_sin, max_range, params, memory,
-                      rng) -> float:
+def ring_steering(x, y, heading, centre_x, centre_y, radius) -> float:
+    """Steer along the counter-clockwise circle of ``radius`` about the centre."""
+    dx, dy = x - centre_x, y - centre_y
+    error = math.hypot(dx, dy) - radius  # > 0: outside the ring, turn inwards (left)
+    wanted = math.atan2(dy, dx) + 0.5 * math.pi + min(max(RING_GAIN * error, -1.0), 1.0)
+    turn = (wanted - heading + math.pi) % (2.0 * math.pi) - math.pi
+    return min(max(2.0 * turn, -RING_STEERING), RING_STEERING)
+
+
+@njit(cache=True)
+def scripted_steering(kind, x, y, heading, readings, beam_cos, beam_sin, max_range, params,
+                      memory, rng) -> float:
     """Steering of a scripted (non-network) strategy; updates ``memory[0]`` in place."""
     if kind == STRAIGHT:
-        # Start turning when something is nearer than turn_distance in the cone ahead; keep
-        # turning the same way until nothing at all is in range there (so the vehicle heads
-        # back across the area instead of running along the wall).
-        cone = math.cos(params[P_TURN_CONE])
-        nearest = np.inf
-        left, right = 0.0, 0.0
-        for b in range(readings.shape[0]):
-            if beam_cos[b] >= cone:
-                nearest = min(nearest, readings[b])
-            if beam_sin[b] > 0.0:
-                left += readings[b]
-            elif beam_sin[b] < 0.0:
-                right += readings[b]
-        if memory[0] == 0.0 and nearest < params[P_TURN_DISTANCE]:
-            memory[0] = params[P_TURN_STEERING] if left >= right else -params[P_TURN_STEERING]
-        elif memory[0] != 0.0 and nearest >= max_range:
-            memory[0] = 0.0
-        return memory[0]
+        return wall_turn(readings, beam_cos, beam_sin, max_range, params, memory)
     if kind == CIRCLING:
-        return memory[0]
+        return ring_steering(x, y, heading, params[P_CENTRE_X], params[P_CENTRE_Y], memory[0])
     if kind == WANDER:
         limit = params[P_WANDER_MAX]
         value = params[P_WANDER_DECAY] * memory[0] + params[P_WANDER_SIGMA] * next_normal(rng)
         memory[0] = min(max(value, -limit), limit)
-        return memory[0]
+        turn = wall_turn(readings, beam_cos, beam_sin, max_range, params, memory)
+        return turn if turn != 0.0 else memory[0]
     return 0.0
+
+
+@njit(cache=True)
+def wall_turn(readings, beam_cos, beam_sin, max_range, params, memory) -> float:
+    """Turn away from what is ahead: start when something is nearer than ``turn_distance`` in
+    the cone ahead, keep turning the same way until nothing at all is in range there (so the
+    vehicle heads back across the area instead of running along the wall). 0: no turn."""
+    cone = math.cos(params[P_TURN_CONE])
+    nearest = np.inf
+    left, right = 0.0, 0.0
+    for b in range(readings.shape[0]):
+        if beam_cos[b] >= cone:
+            nearest = min(nearest, readings[b])
+        if beam_sin[b] > 0.0:
+            left += readings[b]
+        elif beam_sin[b] < 0.0:
+            right += readings[b]
+    if memory[1] == 0.0 and nearest < params[P_TURN_DISTANCE]:
+        memory[1] = params[P_TURN_STEERING] if left >= right else -params[P_TURN_STEERING]
+    elif memory[1] != 0.0 and nearest >= max_range:
+        memory[1] = 0.0
+    return memory[1]
