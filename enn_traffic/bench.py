@@ -31,8 +31,9 @@ def _timed_batches(world: World, populations: list[np.ndarray]) -> tuple[int, fl
     return steps, seconds
 
 
-def navigation_bench(generations: int = 30, reference_seconds: float = 10.0) -> pd.DataFrame:
-    scenario = shipped_scenario("navigation_narrow")
+def _workload(name: str):
+    """A shipped scenario's world, GA settings, generator and first population, compiled."""
+    scenario = shipped_scenario(name)
     world = World(scenario)
     rng = np.random.default_rng(scenario.seed)
     params = ga_params(scenario)
@@ -40,6 +41,11 @@ def navigation_bench(generations: int = 30, reference_seconds: float = 10.0) -> 
         rng, params.population_size, world.spec.chromosome_length, params.init_range
     )
     world.evaluate(population[:2])  # compile outside the timing
+    return world, params, rng, population
+
+
+def navigation_bench(generations: int = 30, reference_seconds: float = 10.0) -> pd.DataFrame:
+    world, params, rng, population = _workload("navigation_narrow")
     populations = []
     for _ in range(generations):
         populations.append(population)
@@ -83,14 +89,7 @@ def navigation_bench(generations: int = 30, reference_seconds: float = 10.0) -> 
 def arena_bench(generations: int = 10) -> pd.DataFrame:
     """The arena workload: P = 200 worlds × 8 vehicles (strategy 1, random-network traffic),
     over the generations of a real GA run; every vehicle's steps count."""
-    scenario = shipped_scenario("arena_strategy1")
-    world = World(scenario)
-    rng = np.random.default_rng(scenario.seed)
-    params = ga_params(scenario)
-    population = ga.initial_population(
-        rng, params.population_size, world.spec.chromosome_length, params.init_range
-    )
-    world.evaluate(population[:2])  # compile outside the timing
+    world, params, rng, population = _workload("arena_strategy1")
     threads = numba.get_num_threads()
     steps, seconds = 0, 0.0
     for generation in range(generations):
