@@ -188,6 +188,9 @@ def main(argv: list[str] | None = None) -> int:
     except InputError as exc:
         print(f"enn-traffic: error: {exc}", file=sys.stderr)
         return 2
+    except BrokenPipeError:  # output piped into a reader that stopped early (e.g. head)
+        sys.stderr.close()
+        return 0
     except KeyboardInterrupt:
         print(f"\nenn-traffic: interrupted after {time.perf_counter() - started:.0f} s; "
               "finished generations are checkpointed (continue with --resume)", file=sys.stderr)

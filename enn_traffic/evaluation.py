@@ -4,7 +4,6 @@ from __future__ import annotations
 
 from pathlib import Path
 
-import numpy as np
 import pandas as pd
 
 from enn_traffic.controller import Controller
@@ -90,7 +89,3 @@ def render(
         )
     return {"steps": steps, "outcome": OUTCOMES[outcome], "file": str(out)}
 
-
-def mean_lifetime(table: pd.DataFrame) -> float:
-    """Mean fitness over the rows of an evaluation table."""
-    return float(np.mean(table["fitness"]))

@@ -12,6 +12,7 @@ import tomllib
 from pathlib import Path
 from typing import Annotated, Literal
 
+import numpy as np
 import tomli_w
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_validator
 
@@ -138,8 +139,6 @@ class TrafficConfig(_Section):
     def kernel_params(self, centre):
         """The float parameter vector of :mod:`enn_traffic.traffic.kinematic`; ``centre`` is
         the point circling vehicles orbit (the centroid of the drivable area)."""
-        import numpy as np
-
         from enn_traffic.traffic import kinematic as k
 
         params = np.zeros(k.N_PARAMS)
@@ -151,7 +150,6 @@ class TrafficConfig(_Section):
         params[k.P_WANDER_DECAY] = self.wander_decay
         params[k.P_WANDER_MAX] = math.radians(self.wander_max_deg)
         params[k.P_CLEARANCE] = self.respawn_clearance
-        params[k.P_HEADING_LOW], params[k.P_HEADING_HIGH] = np.radians(self.start_heading_deg)
         params[k.P_CENTRE_X], params[k.P_CENTRE_Y] = centre.x, centre.y
         return params
 

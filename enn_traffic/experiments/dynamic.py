@@ -15,7 +15,7 @@ from enn_traffic.evolution.ga import GAState
 from enn_traffic.experiments.common import run_or_reuse, scenario, seed_runs
 from enn_traffic.io import write_csv
 from enn_traffic.report.plots import learning_curves, save_figure
-from enn_traffic.scenario import Scenario
+from enn_traffic.scenario import Scenario, load_scenario
 from enn_traffic.sim.world import World
 
 STRATEGIES = [1, 2, 3, 4]
@@ -49,17 +49,11 @@ def _with_episodes(sc: Scenario, episodes: int) -> Scenario:
 def _candidates(run_dir: Path) -> np.ndarray:
     """A run's best chromosome and the elites at the head of its final population."""
     state = GAState.load(run_dir / "checkpoint.npz")
-    sc = scenario_of(run_dir)
-    rows = [state.population[: max(sc.ga.elite_count, 1)]]
+    elites = load_scenario(run_dir / "scenario.toml").ga.elite_count
+    rows = [state.population[: max(elites, 1)]]
     if state.best_chromosome is not None:
         rows.insert(0, state.best_chromosome[None, :])
     return np.concatenate(rows)
-
-
-def scenario_of(run_dir: Path) -> Scenario:
-    from enn_traffic.scenario import load_scenario
-
-    return load_scenario(run_dir / "scenario.toml")
 
 
 def _validation(candidates: np.ndarray, scenarios: list[Scenario]) -> np.ndarray:

@@ -36,11 +36,10 @@ STRATEGIES = {
 
 # Layout of the float parameter vector the kernel takes.
 P_TURN_DISTANCE, P_TURN_STEERING, P_TURN_CONE, P_RADIUS_MIN, P_RADIUS_MAX = 0, 1, 2, 3, 4
-P_WANDER_SIGMA, P_WANDER_DECAY, P_WANDER_MAX, P_CLEARANCE, P_HEADING_LOW, P_HEADING_HIGH = (
+P_WANDER_SIGMA, P_WANDER_DECAY, P_WANDER_MAX, P_CLEARANCE, P_CENTRE_X, P_CENTRE_Y = (
     5, 6, 7, 8, 9, 10,
 )  # fmt: skip
-P_CENTRE_X, P_CENTRE_Y = 11, 12
-N_PARAMS = 13
+N_PARAMS = 11
 # Ring following (circling): aim along the tangent, corrected towards the ring by this many
 # radians per metre of radial error, steering up to the largest angle below.
 RING_GAIN, RING_STEERING = 0.15, math.radians(45.0)
