@@ -8,42 +8,41 @@ import pandas as pd
 
 from enn_traffic.controller import Controller
 from enn_traffic.scenario import Scenario
-from enn_traffic.sim.world import OUTCOMES, World
+from enn_traffic.sim.world import CAPPED, OUTCOMES, EpisodeResults, World
 
 # Evaluation episodes draw their traffic from generation keys far past any training run, so
 # a controller is never deployed on the traffic it was trained on.
 EVALUATION_KEY = 1_000_000_000
 
 
-def evaluate_controller(
-    controller: Controller, scenario: Scenario, episodes: int = 1, world: World | None = None
-) -> pd.DataFrame:
+def evaluate_controller(controller: Controller, scenario: Scenario, episodes: int = 1
+                        ) -> pd.DataFrame:
     """One row per traffic strategy and episode: lifetime in steps and seconds, distance, how
     it ended, and the collisions the controller suffered without causing them.
 
     Episodes draw their traffic from the evaluation stream, never from training's; scenarios
     without traffic are deterministic, so their episodes repeat one another.
     """
-    world = world or World(evaluation_scenario(controller, scenario, episodes))
+    world = World(evaluation_scenario(controller, scenario, episodes))
     vehicle = scenario.vehicle
     results = world.evaluate(controller.chromosome[None, :], EVALUATION_KEY)
+    steps, outcome = results.steps[0], results.outcome[0]
+    fitness = EpisodeResults.lifetime_fitness(steps, outcome)
     rows = []
     for column, strategy in enumerate(world.episode_labels()):
-        steps = int(results.steps[0, column])
-        outcome = int(results.outcome[0, column])
         rows.append({
-                "scenario": scenario.name,
-                "track": world.track.name,
-                "strategy": strategy,
-                "episode": column % episodes,
-                "lifetime_steps": steps,
-                "lifetime_s": steps * vehicle.dt,
-                "distance_m": steps * vehicle.speed * vehicle.dt,
-                "fitness": 0 if outcome == 2 else steps,
-                "outcome": OUTCOMES[outcome],
-                "capped": outcome == 0,
-                "suffered_collisions": int(results.suffered[0, column]),
-            })  # fmt: skip
+            "scenario": scenario.name,
+            "track": world.track.name,
+            "strategy": strategy,
+            "episode": column % episodes,
+            "lifetime_steps": int(steps[column]),
+            "lifetime_s": steps[column] * vehicle.dt,
+            "distance_m": steps[column] * vehicle.speed * vehicle.dt,
+            "fitness": fitness[column],
+            "outcome": OUTCOMES[int(outcome[column])],
+            "capped": bool(outcome[column] == CAPPED),
+            "suffered_collisions": int(results.suffered[0, column]),
+        })  # fmt: skip
     return pd.DataFrame(rows)
 
 

@@ -58,18 +58,11 @@ class WallGrid:
             all_walls=np.arange(len(walls), dtype=np.int64),
         )
 
-    def kernel_args(self) -> tuple:
-        """The arrays the compiled kernels take, in their order."""
-        return (
-            self.walls,
-            self.origin,
-            self.cell_size,
-            self.shape[0],
-            self.shape[1],
-            self.cell_start,
-            self.cell_walls,
-            self.all_walls,
-        )
+    @property
+    def lookup(self) -> tuple:
+        """The cell lookup as the compiled kernels take it (see :func:`nearby_walls`)."""
+        return (self.origin, self.cell_size, self.shape[0], self.shape[1], self.cell_start,
+                self.cell_walls, self.all_walls)
 
 
 def point_segment_distance(points: np.ndarray, walls: np.ndarray) -> np.ndarray:
@@ -83,8 +76,9 @@ def point_segment_distance(points: np.ndarray, walls: np.ndarray) -> np.ndarray:
 
 
 @njit(cache=True)
-def nearby_walls(x, y, origin, cell_size, nx, ny, cell_start, cell_walls, all_walls):
-    """The wall indices to test for a vehicle at (x, y)."""
+def nearby_walls(x, y, lookup):
+    """The wall indices to test for a vehicle at (x, y); ``lookup`` is :attr:`WallGrid.lookup`."""
+    origin, cell_size, nx, ny, cell_start, cell_walls, all_walls = lookup
     i = int(math.floor((x - origin[0]) / cell_size))
     j = int(math.floor((y - origin[1]) / cell_size))
     if i < 0 or j < 0 or i >= nx or j >= ny:

@@ -111,10 +111,18 @@ def _inside(x, y, walls) -> bool:
 
 
 @njit(cache=True)
-def _respawn(v, pose, corners, centres, length, width, walls, grid_args, bounds, clearance, rng):
+def _place(v, x, y, heading, length, width, pose, corners, centres):
+    """Put vehicle ``v`` at (x, y, heading): its pose, body corners and body centre."""
+    pose[v, 0], pose[v, 1], pose[v, 2] = x, y, heading
+    body_corners(x, y, heading, length, width, corners[v])
+    centres[v, 0] = 0.5 * (corners[v, 0, 0] + corners[v, 2, 0])
+    centres[v, 1] = 0.5 * (corners[v, 0, 1] + corners[v, 2, 1])
+
+
+@njit(cache=True)
+def _respawn(v, pose, corners, centres, length, width, walls, lookup, bounds, clearance, rng):
     """Move vehicle ``v`` to a random free pose: on the drivable area, touching no wall, and at
     least ``clearance`` from every other vehicle. Returns False if none was found."""
-    origin, cell_size, nx, ny, cell_start, cell_walls, all_walls = grid_args
     trial = np.empty((4, 2))
     for _ in range(200):
         x = bounds[0] + (bounds[2] - bounds[0]) * next_uniform(rng)
@@ -123,8 +131,7 @@ def _respawn(v, pose, corners, centres, length, width, walls, grid_args, bounds,
         if not _inside(x, y, walls):
             continue
         body_corners(x, y, heading, length, width, trial)
-        candidates = nearby_walls(x, y, origin, cell_size, nx, ny, cell_start, cell_walls,
-                                  all_walls)
+        candidates = nearby_walls(x, y, lookup)
         if box_hits_walls(trial, walls, candidates, candidates.shape[0]):
             continue
         if not _inside(trial[2, 0], trial[2, 1], walls):
@@ -135,10 +142,7 @@ def _respawn(v, pose, corners, centres, length, width, walls, grid_args, bounds,
                 free = False
                 break
         if free:
-            pose[v, 0], pose[v, 1], pose[v, 2] = x, y, heading
-            corners[v] = trial
-            centres[v, 0] = 0.5 * (trial[0, 0] + trial[2, 0])
-            centres[v, 1] = 0.5 * (trial[0, 1] + trial[2, 1])
+            _place(v, x, y, heading, length, width, pose, corners, centres)
             return True
     return False
 
@@ -147,7 +151,7 @@ def _respawn(v, pose, corners, centres, length, width, walls, grid_args, bounds,
 def run_episode(
     genes, layer_sizes, gain, start, kinds, traffic_genes,
     length, width, wheelbase, distance, beam_cos, beam_sin, max_range,
-    walls, grid_args, bounds, params, seed,
+    walls, lookup, bounds, params, seed,
     max_steps, spin_window, spin_variance, trace,
 ):  # fmt: skip
     """Drive one chromosome as vehicle 0 among ``start.shape[0] - 1`` uncontrolled vehicles.
@@ -155,9 +159,8 @@ def run_episode(
     Returns (steps moved, outcome, collisions suffered). ``trace`` (n, V, 3) receives the poses
     of steps 0..n-1 when n > 0.
     """
-    origin, cell_size, nx, ny, cell_start, cell_walls, all_walls = grid_args
     count = start.shape[0]
-    pose = start.copy()
+    pose = np.empty((count, 3))
     corners = np.empty((count, 4, 2))
     previous = np.empty((count, 4, 2))
     centres = np.empty((count, 2))
@@ -174,9 +177,7 @@ def run_episode(
     recent = np.empty((spin_window, 2))
     for v in range(count):
         reset_memory(kinds[v], params, rng, memory[v])
-        body_corners(pose[v, 0], pose[v, 1], pose[v, 2], length, width, corners[v])
-        centres[v, 0] = 0.5 * (corners[v, 0, 0] + corners[v, 2, 0])
-        centres[v, 1] = 0.5 * (corners[v, 0, 1] + corners[v, 2, 1])
+        _place(v, start[v, 0], start[v, 1], start[v, 2], length, width, pose, corners, centres)
     previous[:] = corners
     previous_centres[:] = centres
     near = 4.0 * radius * radius  # bodies whose centres are farther apart cannot touch
@@ -186,8 +187,7 @@ def run_episode(
         if steps < trace.shape[0]:
             trace[steps] = pose
         # 1. collisions by the blame rule
-        candidates = nearby_walls(pose[0, 0], pose[0, 1], origin, cell_size, nx, ny,
-                                  cell_start, cell_walls, all_walls)
+        candidates = nearby_walls(pose[0, 0], pose[0, 1], lookup)
         if box_hits_walls(corners[0], walls, candidates, candidates.shape[0]):
             return steps, COLLIDED, suffered
         for other in range(1, count):
@@ -195,8 +195,7 @@ def run_episode(
                     and boxes_overlap(corners[0], previous[other])):
                 return steps, COLLIDED, suffered
         for v in range(1, count):
-            candidates = nearby_walls(pose[v, 0], pose[v, 1], origin, cell_size, nx, ny,
-                                      cell_start, cell_walls, all_walls)
+            candidates = nearby_walls(pose[v, 0], pose[v, 1], lookup)
             hit = box_hits_walls(corners[v], walls, candidates, candidates.shape[0])
             for other in range(count):
                 if hit:
@@ -207,7 +206,7 @@ def run_episode(
                     hit = True
                     if other == 0:
                         suffered += 1
-            if hit and _respawn(v, pose, corners, centres, length, width, walls, grid_args,
+            if hit and _respawn(v, pose, corners, centres, length, width, walls, lookup,
                                 bounds, params[P_CLEARANCE], rng):
                 previous[v] = corners[v]
                 previous_centres[v] = centres[v]
@@ -224,8 +223,7 @@ def run_episode(
         for v in range(count):
             kind = kinds[v]
             if v == 0 or kind in (RANDOM_NETWORK, STRAIGHT, WANDER):
-                candidates = nearby_walls(pose[v, 0], pose[v, 1], origin, cell_size, nx, ny,
-                                          cell_start, cell_walls, all_walls)
+                candidates = nearby_walls(pose[v, 0], pose[v, 1], lookup)
                 sense_walls(pose[v, 0], pose[v, 1], pose[v, 2], beam_cos, beam_sin, max_range,
                             walls, candidates, readings)
                 if count > 1 and (v == 0 or kind == RANDOM_NETWORK):  # scripted: walls only
@@ -248,10 +246,7 @@ def run_episode(
         for v in range(count):
             x, y, heading = bicycle_step(pose[v, 0], pose[v, 1], pose[v, 2], steering[v],
                                          distance, wheelbase)
-            pose[v, 0], pose[v, 1], pose[v, 2] = x, y, heading
-            body_corners(x, y, heading, length, width, corners[v])
-            centres[v, 0] = 0.5 * (corners[v, 0, 0] + corners[v, 2, 0])
-            centres[v, 1] = 0.5 * (corners[v, 0, 1] + corners[v, 2, 1])
+            _place(v, x, y, heading, length, width, pose, corners, centres)
         steps += 1
 
 
@@ -278,7 +273,7 @@ def _small_spread(points, limit) -> bool:
 def run_population(
     population, layer_sizes, gain, start, kinds, traffic_genes,
     length, width, wheelbase, distance, beam_cos, beam_sin, max_range,
-    walls, grid_args, bounds, params, seed,
+    walls, lookup, bounds, params, seed,
     max_steps, spin_window, spin_variance,
 ):  # fmt: skip
     """Run every chromosome of ``population`` (P, G) in its own world; per world
@@ -292,7 +287,7 @@ def run_population(
         steps[p], outcome[p], suffered[p] = run_episode(
             population[p], layer_sizes, gain, start, kinds, traffic_genes,
             length, width, wheelbase, distance, beam_cos, beam_sin, max_range,
-            walls, grid_args, bounds, params, seed,
+            walls, lookup, bounds, params, seed,
             max_steps, spin_window, spin_variance, no_trace,
         )  # fmt: skip
     return steps, outcome, suffered
@@ -308,6 +303,11 @@ class EpisodeResults:
     outcome: np.ndarray
     suffered: np.ndarray
     vehicles: int = 1
+
+    @staticmethod
+    def lifetime_fitness(steps: np.ndarray, outcome: np.ndarray) -> np.ndarray:
+        """Fitness of each episode (paper §5, §5.3): steps survived, 0 for a spin."""
+        return np.where(outcome == SPUN, 0, steps).astype(np.float64)
 
     @property
     def vehicle_steps(self) -> int:
@@ -363,7 +363,7 @@ class World:
             np.sin(scenario.beam_angles),
             sensor.range,
             self.grid.walls,
-            self.grid.kernel_args()[1:],
+            self.grid.lookup,
             np.asarray(self.track.bounds, dtype=np.float64),
             traffic.kernel_params(self.track.area.centroid),
         )
@@ -415,7 +415,7 @@ class World:
                     genes, *self._shape, episode.start, episode.kinds, episode.traffic_genes,
                     *self._physics, episode.seed, *self._limits))  # fmt: skip
         steps, outcome, suffered = (np.stack([r[i] for r in runs], axis=1) for i in range(3))
-        fitness = np.where(outcome == SPUN, 0, steps).mean(axis=1).astype(np.float64)
+        fitness = EpisodeResults.lifetime_fitness(steps, outcome).mean(axis=1)
         return EpisodeResults(fitness, steps, outcome, suffered, self.vehicles)
 
     def trace(self, chromosome: np.ndarray, generation: int = 0, episode: int = 0,
