@@ -4,6 +4,7 @@ incremental evolution over strategies (Table 2)."""
 
 from __future__ import annotations
 
+from functools import cache
 from pathlib import Path
 
 import matplotlib.pyplot as plt
@@ -14,8 +15,8 @@ from enn_traffic.evaluation import EVALUATION_KEY
 from enn_traffic.evolution.ga import GAState
 from enn_traffic.experiments.common import run_or_reuse, scenario, seed_runs
 from enn_traffic.io import write_csv
-from enn_traffic.report.plots import learning_curves, save_figure
-from enn_traffic.scenario import Scenario, load_scenario
+from enn_traffic.report.plots import draw_paths, learning_curves, save_figure
+from enn_traffic.scenario import load_scenario
 from enn_traffic.sim.world import World
 
 STRATEGIES = [1, 2, 3, 4]
@@ -25,7 +26,7 @@ TEST_EPISODES = 40
 # Candidates are chosen on validation traffic, never on the test traffic of Tables 1 and 2.
 VALIDATION_KEY = 2_000_000_000
 # Table 2 (§5.4.1): a strategy is added once the fitness on every strategy included so far
-# exceeds 80% of the accepted fitness, judged on validation traffic (VALIDATION_EPISODES per
+# exceeds 80% of the accepted fitness, judged on validation traffic (TEST_EPISODES per
 # strategy) for the TOP_CANDIDATES fittest of a generation, since a generation's best fitness
 # alone is mostly luck.
 ACCEPTED_FITNESS = 750.0
@@ -37,13 +38,23 @@ def _name(strategy: int) -> str:
     return f"arena_strategy{strategy}"
 
 
+def _seeds(quick: bool) -> list[int]:
+    return SEEDS[:2] if quick else SEEDS
+
+
 def _strategy_runs(strategy: int, out: Path, quick: bool, progress: bool):
-    seeds = SEEDS[:2] if quick else SEEDS
-    return seed_runs(_name(strategy), out, seeds, QUICK if quick else {}, progress)
+    return seed_runs(_name(strategy), out, _seeds(quick), QUICK if quick else {}, progress)
 
 
-def _with_episodes(sc: Scenario, episodes: int) -> Scenario:
-    return sc.with_overrides(traffic={"episodes": episodes})
+@cache
+def _test_world(strategy: int) -> World:
+    """The world of a strategy with ``TEST_EPISODES`` traffic situations, built once."""
+    return World(scenario(_name(strategy)).with_overrides(traffic={"episodes": TEST_EPISODES}))
+
+
+def _mean_fitness(candidates: np.ndarray, strategy: int, key: int) -> np.ndarray:
+    """Mean fitness of each candidate over the test episodes drawn from ``key``."""
+    return _test_world(strategy).evaluate(np.atleast_2d(candidates), key).fitness
 
 
 def _candidates(run_dir: Path) -> np.ndarray:
@@ -56,21 +67,19 @@ def _candidates(run_dir: Path) -> np.ndarray:
     return np.concatenate(rows)
 
 
-def _validation(candidates: np.ndarray, scenarios: list[Scenario]) -> np.ndarray:
-    """Mean fitness (candidates, scenarios) on validation traffic."""
-    return np.stack([World(_with_episodes(sc, TEST_EPISODES)).evaluate(
-        candidates, VALIDATION_KEY).fitness for sc in scenarios], axis=1)
+def _validation(candidates: np.ndarray, strategies: list[int]) -> np.ndarray:
+    """Mean fitness (candidates, strategies) on validation traffic."""
+    return np.stack([_mean_fitness(candidates, s, VALIDATION_KEY) for s in strategies], axis=1)
 
 
-def _pick(candidates: np.ndarray, scenarios: list[Scenario]) -> np.ndarray:
-    """The candidate with the best mean validation fitness over ``scenarios``."""
-    return candidates[int(np.argmax(_validation(candidates, scenarios).mean(axis=1)))]
+def _pick(candidates: np.ndarray, strategies: list[int]) -> np.ndarray:
+    """The candidate with the best mean validation fitness over ``strategies``."""
+    return candidates[int(np.argmax(_validation(candidates, strategies).mean(axis=1)))]
 
 
-def _test_fitness(chromosome: np.ndarray, sc: Scenario) -> float:
-    """Mean fitness over ``TEST_EPISODES`` test episodes of traffic."""
-    world = World(_with_episodes(sc, TEST_EPISODES))
-    return float(world.evaluate(chromosome[None, :], EVALUATION_KEY).fitness[0])
+def _test_fitness(chromosome: np.ndarray, strategy: int) -> float:
+    """Mean fitness over ``TEST_EPISODES`` test episodes of a strategy's traffic."""
+    return float(_mean_fitness(chromosome, strategy, EVALUATION_KEY)[0])
 
 
 def fig11(out: Path, quick: bool = False, progress: bool = True) -> list[str]:
@@ -106,29 +115,21 @@ def _trained_controllers(out: Path, quick: bool, progress: bool) -> dict[int, np
     chosen = {}
     for strategy in STRATEGIES:
         _strategy_runs(strategy, out, quick, progress)
-        seeds = SEEDS[:2] if quick else SEEDS
         candidates = np.concatenate([
-            _candidates(out / "runs" / _name(strategy) / f"seed{seed}") for seed in seeds])
-        chosen[strategy] = _pick(candidates, [scenario(_name(strategy))])
+            _candidates(out / "runs" / _name(strategy) / f"seed{seed}") for seed in _seeds(quick)])
+        chosen[strategy] = _pick(candidates, [strategy])
     return chosen
 
 
 def _draw_specialists(controllers: dict[int, np.ndarray], path: Path, steps: int = 400) -> None:
     """Each strategy's chosen controller among its own traffic (first test episode)."""
-    from enn_traffic.report.plots import break_at_jumps
-
     figure, axes = plt.subplots(1, 4, figsize=(16, 4.4))
     for strategy, ax in zip(STRATEGIES, axes, strict=True):
-        world = World(_with_episodes(scenario(_name(strategy)), 1))
-        poses, outcome = world.trace(controllers[strategy], EVALUATION_KEY, max_steps=steps)
-        for x1, y1, x2, y2 in world.track.walls:
-            ax.plot([x1, x2], [y1, y2], color="black", lw=0.8)
-        for v in range(1, poses.shape[1]):
-            xy = break_at_jumps(poses[:, v, :2])
-            ax.plot(xy[:, 0], xy[:, 1], color="0.6", lw=0.7)
-        ax.plot(poses[:, 0, 0], poses[:, 0, 1], color="C3", lw=1.4)
-        ax.plot(*poses[-1, 0, :2], "x", color="C3")
-        ax.set_aspect("equal")
+        world = _test_world(strategy)
+        poses, _ = world.trace(controllers[strategy], EVALUATION_KEY, max_steps=steps)
+        traffic = [poses[:, v] for v in range(1, poses.shape[1])]
+        draw_paths(ax, world.track.walls, [*traffic, poses[:, 0]],
+                   colors=["0.6"] * len(traffic) + ["C3"])
         ax.set_xticks([])
         ax.set_yticks([])
         ax.set_title(f"strategy {strategy}: {len(poses) - 1} steps", fontsize=9)
@@ -141,7 +142,7 @@ def _draw_specialists(controllers: dict[int, np.ndarray], path: Path, steps: int
 def table1(out: Path, quick: bool = False, progress: bool = True) -> list[str]:
     """Train on each strategy, deploy on each (Table 1), and the colour map (Fig. 12)."""
     controllers = _trained_controllers(out, quick, progress)
-    matrix = np.array([[_test_fitness(controllers[trained], scenario(_name(deployed)))
+    matrix = np.array([[_test_fitness(controllers[trained], deployed)
                         for deployed in STRATEGIES] for trained in STRATEGIES])
     table = pd.DataFrame(matrix.round(1), columns=[f"deploy_{s}" for s in STRATEGIES])
     table.insert(0, "training_strategy", STRATEGIES)
@@ -179,7 +180,7 @@ def table2(out: Path, quick: bool = False, progress: bool = True) -> list[str]:
         ga = {"generations": INCREMENTAL_MAX_GENERATIONS, **(QUICK if quick else {})}
         sc = base.with_overrides(name=f"incremental_{iteration}", ga=ga,
                                  traffic={"strategy": names[:iteration]})
-        included = [scenario(_name(s)) for s in STRATEGIES[:iteration]]
+        included = STRATEGIES[:iteration]
 
         def accepted(population, fitness, included=included):
             top = population[np.argsort(-fitness, kind="stable")[:TOP_CANDIDATES]]
@@ -194,8 +195,7 @@ def table2(out: Path, quick: bool = False, progress: bool = True) -> list[str]:
                "reached_threshold": bool(state.extra.get("target_reached", False))}
         per_strategy = []
         for strategy in STRATEGIES:
-            value = (_test_fitness(chosen, scenario(_name(strategy)))
-                     if strategy <= iteration else np.nan)
+            value = _test_fitness(chosen, strategy) if strategy <= iteration else np.nan
             row[f"strategy_{strategy}"] = value
             per_strategy.append(value)
         row["average"] = float(np.nanmean(per_strategy))

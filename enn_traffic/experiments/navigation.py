@@ -13,7 +13,7 @@ from enn_traffic.controller import Controller
 from enn_traffic.evaluation import controller_trace, evaluate_controller
 from enn_traffic.experiments.common import first_generation, scenario, seed_runs
 from enn_traffic.io import write_csv
-from enn_traffic.report.plots import learning_curves, save_figure
+from enn_traffic.report.plots import draw_paths, learning_curves, save_figure
 
 # Best fitness at which the vehicle has reached the far dead end of the narrow track
 # (location B, ≈1.3 km of corridor; reference-implementation.md §8.19).
@@ -148,11 +148,8 @@ def generalization(out: Path, quick: bool = False, progress: bool = True) -> lis
     figure, axes = plt.subplots(1, len(tracks), figsize=(4 * len(tracks), 4.2))
     for ax, name in zip(axes, tracks, strict=True):
         world, poses, _ = controller_trace(controllers[shown], scenario(name), max_steps=3000)
-        for x1, y1, x2, y2 in world.track.walls:
-            ax.plot([x1, x2], [y1, y2], color="black", lw=0.6)
-        ax.plot(poses[:, 0, 0], poses[:, 0, 1], lw=0.8, color="C0")
-        ax.plot(*world.start[:2], "o", color="C2")
-        ax.set_aspect("equal")
+        draw_paths(ax, world.track.walls, [poses[:, 0]], colors=["C0"], start=world.start,
+                   width=0.8)
         ax.set_title(name, fontsize=9)
         ax.set_xticks([])
         ax.set_yticks([])

@@ -71,6 +71,22 @@ def break_at_jumps(xy: np.ndarray, jump: float = 5.0) -> np.ndarray:
     return np.insert(xy.astype(float), gaps, np.nan, axis=0)
 
 
+def draw_paths(axes, walls: np.ndarray, paths: Sequence[np.ndarray], labels=None,
+               colors=None, start=None, width: float = 1.0) -> None:
+    """Walls in black and each path (n, 2+) as a line broken at respawns, ending in an x (red,
+    or the path's own colour when ``colors`` are given)."""
+    for x1, y1, x2, y2 in walls:
+        axes.plot([x1, x2], [y1, y2], color="black", lw=0.8)
+    for index, poses in enumerate(paths):
+        xy = break_at_jumps(poses[:, :2])
+        axes.plot(xy[:, 0], xy[:, 1], lw=width, label=labels[index] if labels else None,
+                  color=colors[index] if colors else None)
+        axes.plot(poses[-1, 0], poses[-1, 1], "x", color=colors[index] if colors else "C3")
+    if start is not None:
+        axes.plot(start[0], start[1], "o", color="C2", label="start")
+    axes.set_aspect("equal")
+
+
 def trajectories(
     walls: np.ndarray,
     paths: Sequence[np.ndarray],
@@ -81,16 +97,7 @@ def trajectories(
 ) -> None:
     """Walls in black and each trajectory (n, 2+) as a coloured line, broken at respawns."""
     figure, axes = plt.subplots(figsize=(6.4, 6.4))
-    for x1, y1, x2, y2 in walls:
-        axes.plot([x1, x2], [y1, y2], color="black", lw=0.8)
-    for index, poses in enumerate(paths):
-        label = labels[index] if labels else None
-        xy = break_at_jumps(poses[:, :2])
-        axes.plot(xy[:, 0], xy[:, 1], lw=1.0, label=label)
-        axes.plot(poses[-1, 0], poses[-1, 1], "x", color="C3")
-    if start is not None:
-        axes.plot(start[0], start[1], "o", color="C2", label="start")
-    axes.set_aspect("equal")
+    draw_paths(axes, walls, paths, labels=labels, start=start)
     axes.set_title(title)
     axes.set_xlabel("x [m]")
     axes.set_ylabel("y [m]")
