@@ -8,7 +8,8 @@ import pandas as pd
 
 from enn_traffic.controller import Controller
 from enn_traffic.scenario import Scenario
-from enn_traffic.sim.world import CAPPED, OUTCOMES, EpisodeResults, World
+from enn_traffic.sim import make_world
+from enn_traffic.sim.world import CAPPED, OUTCOMES, EpisodeResults
 
 # Evaluation episodes draw their traffic from generation keys far past any training run, so
 # a controller is never deployed on the traffic it was trained on.
@@ -23,7 +24,7 @@ def evaluate_controller(controller: Controller, scenario: Scenario, episodes: in
     Episodes draw their traffic from the evaluation stream, never from training's; scenarios
     without traffic are deterministic, so their episodes repeat one another.
     """
-    world = World(evaluation_scenario(controller, scenario, episodes))
+    world = make_world(evaluation_scenario(controller, scenario, episodes))
     vehicle = scenario.vehicle
     results = world.evaluate(controller.chromosome[None, :], EVALUATION_KEY)
     steps, outcome = results.steps[0], results.outcome[0]
@@ -55,7 +56,7 @@ def controller_trace(
     controller: Controller, scenario: Scenario, max_steps: int | None = None, episode: int = 0
 ):
     """The world, every vehicle's poses (n, V, 3) in one episode, and the learner's outcome."""
-    world = World(evaluation_scenario(controller, scenario, episode + 1))
+    world = make_world(evaluation_scenario(controller, scenario, episode + 1))
     poses, outcome = world.trace(
         controller.chromosome, EVALUATION_KEY, episode, max_steps=max_steps
     )

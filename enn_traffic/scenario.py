@@ -99,12 +99,13 @@ class EpisodeConfig(_Section):
     spin_variance: float = Field(64.0, ge=0, allow_inf_nan=False)
 
 
-Strategy = Literal["random_network", "straight", "circling", "wander"]
+Strategy = Literal["random_network", "straight", "circling", "wander", "sumo"]
 
 
 class TrafficConfig(_Section):
     """Uncontrolled vehicles around the learner (paper §5.3): one vehicle per start, all
-    driving by ``strategy`` (a list: the fitness averages over the strategies, §5.4.1)."""
+    driving by ``strategy`` (a list: the fitness averages over the strategies, §5.4.1), or
+    SUMO traffic from ``routes`` / ``sumocfg`` (strategy ``"sumo"``, DESIGN.md "SUMO")."""
 
     strategy: Strategy | list[Strategy] = "random_network"
     starts_xy: list[tuple[float, float]] = []
@@ -120,6 +121,29 @@ class TrafficConfig(_Section):
     wander_max_deg: float = Field(45.0, gt=0, le=90, allow_inf_nan=False)
     circle_radius: tuple[PositiveFloat, PositiveFloat] = (15.0, 46.0)
     respawn_clearance: float = Field(10.0, ge=0, allow_inf_nan=False)
+    routes: list[Path] = []
+    sumocfg: Path | None = None
+    mode: Literal["replay", "closed-loop"] = "replay"
+    warmup_s: float = Field(60.0, ge=0, le=86_400, allow_inf_nan=False)
+
+    @model_validator(mode="after")
+    def _sumo_sources(self) -> TrafficConfig:
+        names = [self.strategy] if isinstance(self.strategy, str) else self.strategy
+        if "sumo" in names:
+            if names != ["sumo"]:
+                raise ValueError('"sumo" cannot be mixed with other strategies in one scenario')
+            if not self.routes and self.sumocfg is None:
+                raise ValueError('strategy "sumo" needs routes (route files) or a sumocfg')
+            if self.starts_xy:
+                raise ValueError('strategy "sumo" takes its vehicles from SUMO; '
+                                 "leave starts_xy empty")
+        elif self.routes or self.sumocfg is not None:
+            raise ValueError('routes and sumocfg are for strategy = "sumo"')
+        return self
+
+    @property
+    def is_sumo(self) -> bool:
+        return self.strategy == "sumo"
 
     @model_validator(mode="after")
     def _ordered_ranges(self) -> TrafficConfig:
@@ -132,6 +156,8 @@ class TrafficConfig(_Section):
     @property
     def strategy_list(self) -> list[str]:
         """The strategies to average over; ``["none"]`` when there are no vehicles."""
+        if self.is_sumo:
+            return ["sumo"]
         if not self.starts_xy:
             return ["none"]
         return [self.strategy] if isinstance(self.strategy, str) else list(self.strategy)
@@ -215,8 +241,22 @@ def _validate(data: dict, source: Path | None) -> Scenario:
     return scenario.model_copy(update={"source": source})
 
 
+def _resolve(path: Path, section, key: str) -> None:
+    """Make ``section[key]`` (a path or a list of paths) absolute, relative to ``path``'s
+    folder."""
+    if not isinstance(section, dict):
+        return
+    value = section.get(key)
+    if isinstance(value, str):
+        section[key] = str((path.parent / value).resolve())
+    elif isinstance(value, list):
+        section[key] = [str((path.parent / v).resolve()) if isinstance(v, str) else v
+                        for v in value]
+
+
 def load_scenario(path: str | Path) -> Scenario:
-    """Read and validate a scenario; network paths resolve relative to the scenario file."""
+    """Read and validate a scenario; network, route and SUMO configuration paths resolve
+    relative to the scenario file."""
     path = Path(path)
     if not path.is_file():
         raise InputError("scenario file not found", path)
@@ -224,10 +264,17 @@ def load_scenario(path: str | Path) -> Scenario:
         data = tomllib.loads(path.read_text())
     except (tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
         raise InputError(f"not valid TOML: {exc}", path) from None
-    track = data.get("track")
-    if isinstance(track, dict) and isinstance(track.get("net"), str):
-        track["net"] = str((path.parent / track["net"]).resolve())
+    _resolve(path, data.get("track"), "net")
+    _resolve(path, data.get("traffic"), "routes")
+    _resolve(path, data.get("traffic"), "sumocfg")
     scenario = _validate(data, path.resolve())
     if not scenario.track.net.is_file():
         raise InputError(f"network file not found: {scenario.track.net}", path, "track.net")
+    traffic = scenario.traffic
+    for index, route in enumerate(traffic.routes):
+        if not route.is_file():
+            raise InputError(f"route file not found: {route}", path, f"traffic.routes[{index}]")
+    if traffic.sumocfg is not None and not traffic.sumocfg.is_file():
+        raise InputError(f"SUMO configuration not found: {traffic.sumocfg}", path,
+                         "traffic.sumocfg")
     return scenario

@@ -94,14 +94,15 @@ def corridor_xml(points, width, square_corners, closed=False) -> tuple[str, str]
 
 
 def grid_xml(blocks: int = 3, block_length: float = 120.0, lanes: int = 3,
-             lane_width: float = 5.0) -> tuple[str, str]:
-    """Plain XML of a town grid: (blocks+1)^2 junctions, two-way roads, ``lanes`` lanes each way."""
+             lane_width: float = 5.0, junction: str = "priority") -> tuple[str, str]:
+    """Plain XML of a town grid: (blocks+1)^2 junctions of type ``junction``, two-way roads,
+    ``lanes`` lanes each way."""
     nodes = ["<nodes>"]
     for i in range(blocks + 1):
         for j in range(blocks + 1):
             nodes.append(
                 f'    <node id="g{i}_{j}" x="{_fmt(i * block_length)}" y="{_fmt(j * block_length)}"'
-                ' type="priority"/>'
+                f' type="{junction}"/>'
             )
     nodes.append("</nodes>")
     edges = ["<edges>"]
@@ -122,7 +123,9 @@ def grid_xml(blocks: int = 3, block_length: float = 120.0, lanes: int = 3,
 
 
 def netconvert_command(name: str) -> list[str]:
-    """The netconvert call that builds ``name.net.xml`` from its plain XML."""
+    """The netconvert call that builds ``name.net.xml`` from its plain XML. Networks that SUMO
+    traffic drives on keep their internal (junction) lanes, so that vehicles drive through
+    junctions instead of jumping across them."""
     exe = shutil.which("netconvert")
     if exe is None:
         import sumo  # the eclipse-sumo wheel
@@ -135,13 +138,23 @@ def netconvert_command(name: str) -> list[str]:
         "--output-file", f"{name}.net.xml",
         "--offset.disable-normalization",  # keep the authors' coordinates
         "--no-turnarounds",
-        "--no-internal-links",
+        *([] if name in TRAFFIC_NETS else ["--no-internal-links"]),
     ]
+
+
+# Networks for SUMO traffic (scenarios/sumo_strategy*.toml): a square two-way ring road and a
+# two-block grid whose centre is an unsignalised crossroads where drivers yield to the right.
+# Three 5 m lanes each way (30 m roads), the width class the learner handles (track_wide).
+TRAFFIC_NETS = {
+    "sumo_ring": dict(blocks=1, block_length=160.0),
+    "sumo_grid": dict(blocks=2, block_length=120.0, junction="right_before_left"),
+}
 
 
 def main() -> int:
     sources = {name: corridor_xml(**spec) for name, spec in TRACKS.items()}
     sources["track_grid"] = grid_xml()
+    sources.update({name: grid_xml(**spec) for name, spec in TRAFFIC_NETS.items()})
     for name, (nod, edg) in sources.items():
         (HERE / f"{name}.nod.xml").write_text(nod)
         (HERE / f"{name}.edg.xml").write_text(edg)

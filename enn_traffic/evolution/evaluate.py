@@ -18,6 +18,7 @@ import numpy as np
 
 from enn_traffic.errors import InputError
 from enn_traffic.scenario import Scenario
+from enn_traffic.sim import make_world
 from enn_traffic.sim.world import EpisodeResults, World
 
 
@@ -25,11 +26,6 @@ class Evaluator(Protocol):
     def evaluate(self, population: np.ndarray, generation: int = 0) -> EpisodeResults: ...
 
     def close(self) -> None: ...
-
-
-def make_world(scenario: Scenario) -> World:
-    """The world a scenario describes."""
-    return World(scenario)
 
 
 class LocalEvaluator:

@@ -1,1 +1,21 @@
 """Batched simulation: kinematics, sensors, collisions and the episode loop."""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:
+    from enn_traffic.roads import Track
+    from enn_traffic.scenario import Scenario
+    from enn_traffic.sim.world import World
+
+
+def make_world(scenario: Scenario, track: Track | None = None) -> World:
+    """The world a scenario describes: arena/navigation worlds, or SUMO traffic worlds."""
+    if scenario.traffic.is_sumo:
+        from enn_traffic.sim.sumo_world import SumoWorld
+
+        return SumoWorld(scenario, track)
+    from enn_traffic.sim.world import World
+
+    return World(scenario, track)

@@ -1,1 +1,1 @@
-"""Background traffic: free-moving kinematic strategies (and, later, SUMO through libsumo)."""
+"""Background traffic: free-moving kinematic strategies, and SUMO through libsumo."""

@@ -1,0 +1,194 @@
+"""Worlds with SUMO traffic: the learner on a SUMO network among SUMO's vehicles, in replay or
+closed-loop mode (DESIGN.md "SUMO").
+
+- replay: SUMO runs once per traffic situation without the learner; the recording is replayed
+  to all P worlds of a generation in one compiled call (the traffic ignores the learner, as in
+  the paper: "the dynamic objects do not cooperate").
+- closed-loop: one SUMO per chromosome and situation, with the learner in it every step, so
+  SUMO's drivers brake and change lanes for it. Sequential and slower: for validation.
+
+A traffic situation is a SUMO seed drawn from (traffic seed, generation, episode), so every
+chromosome of a generation meets the same traffic, whatever the number of workers.
+"""
+
+from __future__ import annotations
+
+import math
+from collections import OrderedDict
+
+import numba
+import numpy as np
+
+from enn_traffic.roads import Track
+from enn_traffic.scenario import Scenario
+from enn_traffic.sim.replay import (
+    CLEARANCE,
+    RUNNING,
+    clear_start,
+    learner_state,
+    learner_step,
+    physics_vector,
+    run_replay_episode,
+    run_replay_population,
+)
+from enn_traffic.sim.world import EpisodeResults, World
+from enn_traffic.traffic import sumo
+
+RECORDINGS_KEPT = 16
+
+
+class SumoWorld(World):
+    """A scenario whose traffic is SUMO's: evaluate populations, trace one episode."""
+
+    def __init__(self, scenario: Scenario, track: Track | None = None):
+        super().__init__(scenario, track)
+        self._recordings: OrderedDict[int, sumo.Recording] = OrderedDict()
+        self.vehicles = 1
+
+    def seeds(self, generation: int) -> list[int]:
+        """The SUMO seed of each traffic situation of a generation."""
+        traffic = self.scenario.traffic
+        key = generation if traffic.vary == "generation" else 0
+        return [int(np.random.SeedSequence([traffic.seed, key, 0, e]).generate_state(1)[0]
+                    % 2**31) for e in range(traffic.episodes)]
+
+    def episode_labels(self) -> list[str]:
+        return ["sumo"] * self.scenario.traffic.episodes
+
+    def recording(self, seed: int) -> sumo.Recording:
+        """The SUMO run of ``seed`` without the learner (recorded once, then kept)."""
+        if seed not in self._recordings:
+            self._recordings[seed] = sumo.record(self.scenario, seed, self._limits[0])
+            while len(self._recordings) > RECORDINGS_KEPT:
+                self._recordings.popitem(last=False)
+        self._recordings.move_to_end(seed)
+        return self._recordings[seed]
+
+    def _learner_physics(self, radius: float) -> np.ndarray:
+        length, width, wheelbase, distance, _, _, max_range = self._physics[:7]
+        learner_radius = 0.5 * math.hypot(length, width)
+        return physics_vector(length, width, wheelbase, distance, max_range, self._shape[1],
+                              max(radius, learner_radius), self._limits[2],
+                              self.scenario.traffic.respawn_clearance)
+
+    def _sensor_and_walls(self) -> tuple:
+        _, _, _, _, beam_cos, beam_sin, _, walls, lookup = self._physics[:9]
+        return beam_cos, beam_sin, walls, lookup
+
+    def evaluate(self, population: np.ndarray, generation: int = 0) -> EpisodeResults:
+        """Fitness of every chromosome: steps survived (0 for a spin), averaged over the
+        generation's traffic situations."""
+        genes = self._genes(population)
+        closed = self.scenario.traffic.mode == "closed-loop"
+        runs, vehicles = [], []
+        for seed in self.seeds(generation):
+            if closed:
+                runs.append(self._closed_loop_population(genes, seed))
+                continue
+            record = self.recording(seed)
+            vehicles.append(record.mean_vehicles)
+            with numba.parallel_chunksize(1):
+                runs.append(run_replay_population(
+                    genes, self._shape[0], self._learner_physics(record.radius),
+                    np.asarray(self.start, dtype=np.float64), *self._sensor_and_walls(),
+                    record.ids, record.corners, record.centres, *self._limits[:2]))
+        self.vehicles = 1 + round(float(np.mean(vehicles))) if vehicles else self.vehicles
+        steps, outcome, suffered = (np.stack([r[i] for r in runs], axis=1) for i in range(3))
+        fitness = EpisodeResults.lifetime_fitness(steps, outcome).mean(axis=1)
+        return EpisodeResults(fitness, steps, outcome, suffered, self.vehicles)
+
+    def _closed_loop_population(self, genes: np.ndarray, seed: int) -> tuple:
+        results = np.array([self.closed_loop(row, seed) for row in genes], dtype=np.int64)
+        return results[:, 0], results[:, 1], results[:, 2]
+
+    def closed_loop(self, genes: np.ndarray, seed: int, max_steps: int | None = None,
+                    frames: list | None = None) -> tuple[int, int, int]:
+        """One chromosome (source-layout genes) in a live SUMO with the learner in it.
+        Returns (steps moved, outcome, collisions suffered); ``frames`` receives (learner
+        pose, ids, corners) of every step when given. A vehicle that leaves the learner's
+        world (``gone``) stays in SUMO, unseen by the learner, as it does in a replay."""
+        limit = self._limits[0] if max_steps is None else max_steps
+        vehicle = self.scenario.vehicle
+        simulation = sumo.Simulation(self.scenario, seed)
+        try:
+            simulation.step(sumo.warmup_steps(self.scenario))
+            physics = self._learner_physics(simulation.largest_radius())
+            ids, corners, centres = sumo.slot_arrays(2, 64)  # rows: before the step, now
+            state = learner_state(np.asarray(self.start, dtype=np.float64), physics,
+                                  self._shape[0], len(self.scenario.beam_angles), ids.shape[1],
+                                  self._limits[1])
+            pose, body, body_before, recent, gone, suffered, *scratch = state
+            ids, corners, centres, gone, scratch = self._read(simulation, ids, corners, centres,
+                                                              gone, scratch)
+            clear_start(body, ids[1], centres[1], gone, physics[CLEARANCE])
+            sumo.add_learner(vehicle.length, vehicle.width, vehicle.speed)
+            t = 0
+            while True:
+                if frames is not None:
+                    frames.append((pose.copy(), ids[1].copy(), corners[1].copy()))
+                outcome = learner_step(
+                    t, genes, self._shape[0], physics, *self._sensor_and_walls(),
+                    ids[0], corners[0], centres[0], ids[1], corners[1], centres[1],
+                    limit, self._limits[1], pose, body, body_before, recent, gone, suffered,
+                    *scratch,
+                )  # fmt: skip
+                if outcome != RUNNING:
+                    return t, int(outcome), int(suffered[0])
+                sumo.move_learner(pose[0], pose[1], pose[2], vehicle.speed)
+                simulation.step()
+                ids[0], corners[0], centres[0] = ids[1], corners[1], centres[1]
+                ids, corners, centres, gone, scratch = self._read(simulation, ids, corners,
+                                                                  centres, gone, scratch)
+                t += 1
+        finally:
+            simulation.close()
+
+    @staticmethod
+    def _read(simulation: sumo.Simulation, ids, corners, centres, gone, scratch):
+        """Read SUMO's vehicles into row 1 of the slot arrays, doubling the number of slots
+        when a vehicle's slot lies beyond them."""
+        slots, numbers, frame_corners, frame_centres = simulation.read()
+        while len(slots) and slots.max() >= ids.shape[1]:
+            size = 2 * ids.shape[1]
+            grown = sumo.slot_arrays(2, size)
+            for new, old in zip(grown, (ids, corners, centres), strict=True):
+                new[:, : old.shape[1]] = old
+            ids, corners, centres = grown
+            gone = np.concatenate([gone, np.full(size - gone.shape[0], -1, dtype=np.int64)])
+            scratch = [*scratch[:-1], np.empty((size, 2))]
+        ids[1], corners[1], centres[1] = -1, 0.0, 1e12
+        ids[1, slots], corners[1, slots], centres[1, slots] = (numbers, frame_corners,
+                                                                frame_centres)
+        return ids, corners, centres, gone, scratch
+
+    def trace(self, chromosome: np.ndarray, generation: int = 0, episode: int = 0,
+              max_steps: int | None = None) -> tuple[np.ndarray, int]:
+        """Poses (n, 1 + S, 3) of the learner and of every SUMO vehicle slot (NaN where a
+        slot is empty) in one episode, and the learner's outcome code."""
+        limit = self._limits[0] if max_steps is None else max_steps
+        seed = self.seeds(generation)[episode]
+        genes = self._genes(chromosome)[0]
+        if self.scenario.traffic.mode == "closed-loop":
+            frames: list = []
+            steps, outcome, _ = self.closed_loop(genes, seed, limit, frames)
+            slots = max(len(f[1]) for f in frames)
+            ids = np.full((len(frames), slots), -1, dtype=np.int64)
+            corners = np.zeros((len(frames), slots, 4, 2))
+            learner = np.array([f[0] for f in frames])
+            for t, (_, frame_ids, frame_corners) in enumerate(frames):
+                ids[t, : len(frame_ids)], corners[t, : len(frame_ids)] = frame_ids, frame_corners
+        else:
+            record = self.recording(seed)
+            learner = np.full((limit + 1, 3), np.nan)
+            steps, outcome, _ = run_replay_episode(
+                genes, self._shape[0], self._learner_physics(record.radius),
+                np.asarray(self.start, dtype=np.float64), *self._sensor_and_walls(),
+                record.ids, record.corners, record.centres, limit, self._limits[1], learner)
+            ids, corners = record.ids[: steps + 1], record.corners[: steps + 1]
+            learner = learner[: steps + 1]
+        front = 0.5 * (corners[:, :, 0] + corners[:, :, 1])
+        rear = 0.5 * (corners[:, :, 2] + corners[:, :, 3])
+        heading = np.arctan2(front[..., 1] - rear[..., 1], front[..., 0] - rear[..., 0])
+        traffic = np.where((ids >= 0)[..., None], np.dstack([front, heading[..., None]]),
+                           np.nan)
+        return np.concatenate([learner[:, None, :], traffic], axis=1), int(outcome)

@@ -1,0 +1,165 @@
+"""SUMO traffic through a real libsumo: the pose conversion, replay against closed loop, SUMO
+drivers braking for the learner, and bad SUMO input."""
+
+import math
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+from enn_traffic.errors import InputError
+from enn_traffic.scenario import load_scenario
+from enn_traffic.sim import make_world
+from enn_traffic.sim.sumo_world import SumoWorld
+from enn_traffic.traffic import sumo
+
+SCENARIO = """
+name = "sumo_test"
+[track]
+net = "{net}"
+start_lane = "{lane}"
+start_offset = {offset}
+[episode]
+max_steps = {steps}
+[traffic]
+strategy = "sumo"
+routes = ["routes.rou.xml"]
+mode = "{mode}"
+warmup_s = {warmup}
+episodes = {episodes}
+"""
+# Clockwise laps of the ring road (its inner lanes), no driver randomness.
+CLOCKWISE = """<routes>
+    <vType id="car" length="4.5" width="1.8" sigma="0" speedFactor="1" maxSpeed="13"/>
+    <route id="cw" edges="g1_0to0_0 g0_0to0_1 g0_1to1_1 g1_1to1_0" repeat="10"/>
+    <flow id="cw" type="car" route="cw" begin="0" end="1" number="60" departPos="random_free"
+          departLane="random" departSpeed="max"/>
+</routes>
+"""
+# One fast car behind the learner's start, in its lane, that does not change lanes.
+FOLLOWER = """<routes>
+    <vType id="fast" length="4.5" width="1.8" sigma="0" speedFactor="1" maxSpeed="20"
+           lcStrategic="-1" lcSpeedGain="0" lcKeepRight="0"/>
+    <vehicle id="follower" type="fast" depart="0" departLane="0" departPos="0"
+             departSpeed="20">
+        <route edges="g0_0to1_0"/>
+    </vehicle>
+</routes>
+"""
+
+
+def sumo_scenario(tmp_path, root, routes, mode="replay", lane="g0_0to1_0_2", offset=30.0,
+                  steps=300, warmup=20.0, episodes=2):
+    (tmp_path / "routes.rou.xml").write_text(routes)
+    path = tmp_path / "scenario.toml"
+    path.write_text(SCENARIO.format(net=root / "sumo_nets" / "sumo_ring.net.xml", lane=lane,
+                                    offset=offset, steps=steps, mode=mode, warmup=warmup,
+                                    episodes=episodes))
+    return load_scenario(path)
+
+
+def test_heading_conversion_by_hand():
+    """SUMO's navigation angle: 0 = north, clockwise, degrees; ours: 0 = east, anticlockwise."""
+    assert np.allclose(sumo.to_heading([90.0, 0.0, 180.0, 45.0]),
+                       [0.0, math.pi / 2, -math.pi / 2, math.pi / 4])
+    assert sumo.to_angle(math.pi / 2) == pytest.approx(0.0)
+    assert sumo.to_angle(-math.pi / 2) == pytest.approx(180.0)
+
+
+def test_body_of_a_real_sumo_vehicle(tmp_path, root):
+    """A car on the eastbound outer lane of the ring's south side (y from -15 to 0, lanes 5 m):
+    its front bumper is SUMO's position, its rear 4.5 m to the west, its sides 0.9 m either
+    side of the lane centre y = -12.5."""
+    scenario = sumo_scenario(tmp_path, root, FOLLOWER, warmup=0.0)
+    simulation = sumo.Simulation(scenario, seed=1)
+    try:
+        simulation.step(30)  # 60 m along: the whole body on the straight edge
+        slots, numbers, corners, centres = simulation.read()
+        import libsumo
+
+        x, y = libsumo.vehicle.getPosition("follower")
+    finally:
+        simulation.close()
+    assert len(slots) == 1
+    assert y == pytest.approx(-12.5)
+    front_right, front_left, rear_left, rear_right = corners[0]
+    assert front_right == pytest.approx([x, -13.4])
+    assert front_left == pytest.approx([x, -11.6])
+    assert rear_left == pytest.approx([x - 4.5, -11.6])
+    assert rear_right == pytest.approx([x - 4.5, -13.4])
+    assert centres[0] == pytest.approx([x - 2.25, -12.5])
+
+
+def test_replay_and_closed_loop_agree_where_traffic_does_not_react(tmp_path, root):
+    """Clockwise traffic on the inner lanes; the learner starts next to it in an anticlockwise
+    lane. While the learner stays on its own side of the road (y < 0 on the south side), no
+    SUMO driver has it ahead, and it lives exactly as long in both modes; the traffic it sees
+    changes some of those lifetimes."""
+    rng = np.random.default_rng(5)
+    replay = make_world(sumo_scenario(tmp_path, root, CLOCKWISE))
+    population = rng.uniform(-1, 1, (40, replay.spec.chromosome_length))
+    replayed = replay.evaluate(population, generation=3)
+    closed = make_world(sumo_scenario(tmp_path, root, CLOCKWISE, mode="closed-loop"))
+    live = closed.evaluate(population, generation=3)
+    alone = make_world(sumo_scenario(tmp_path, root, "<routes/>")).evaluate(population, 3)
+    own_side = np.array([[np.nanmax(replay.trace(chromosome, 3, episode)[0][:, 0, 1]) < -1.0
+                          for episode in range(2)] for chromosome in population])
+    assert own_side.sum() >= 20
+    assert np.array_equal(replayed.steps[own_side], live.steps[own_side])
+    assert np.array_equal(replayed.outcome[own_side], live.outcome[own_side])
+    assert (alone.steps[own_side] != replayed.steps[own_side]).any()
+
+
+def test_closed_loop_driver_brakes_for_the_learner(tmp_path, root):
+    """A 20 m/s car starts 30 m behind the learner (10 m/s, steering straight). Replayed, it
+    drives into the learner (a collision the learner suffers); in closed loop it brakes and
+    stays behind."""
+    straight = np.zeros(SumoWorld(sumo_scenario(tmp_path, root, FOLLOWER)).spec.chromosome_length)
+    results = {}
+    for mode in ("replay", "closed-loop"):
+        scenario = sumo_scenario(tmp_path, root, FOLLOWER, mode=mode, lane="g0_0to1_0_0",
+                                 offset=30.0, steps=90, warmup=0.0, episodes=1)
+        world = make_world(scenario)
+        results[mode] = world.evaluate(straight[None, :])
+        poses, _ = world.trace(straight)
+        results[mode + " poses"] = poses
+    assert results["replay"].suffered[0, 0] == 1
+    assert results["closed-loop"].suffered[0, 0] == 0
+    poses = results["closed-loop poses"]
+    learner_rear = poses[-1, 0, 0] - 4.3
+    follower_front = np.nanmax(poses[-1, 1:, 0])
+    assert follower_front < learner_rear
+    follower_speed = (np.nanmax(poses[-1, 1:, 0]) - np.nanmax(poses[-11, 1:, 0])) / 1.0
+    assert follower_speed == pytest.approx(10.0, abs=1.5)
+
+
+@pytest.mark.parametrize("routes, needle", [
+    ("<routes><vehicle id='a' depart='0'", "SUMO failed to start"),
+    ("<routes><vehicle id='a' type='no_such_type' depart='0'><route edges='g0_0to1_0'/>"
+     "</vehicle></routes>", "no_such_type"),
+    ("<routes><vehicle id='a' depart='0'><route edges='no_such_edge'/></vehicle></routes>",
+     "no_such_edge"),
+])
+def test_bad_sumo_input_is_one_clear_message(tmp_path, root, routes, needle):
+    scenario = sumo_scenario(tmp_path, root, routes)
+    with pytest.raises(InputError, match=needle) as error:
+        world = make_world(scenario)
+        world.evaluate(np.zeros((1, world.spec.chromosome_length)))
+    assert error.value.key == "traffic.routes"
+    result = subprocess.run(
+        [sys.executable, "-m", "enn_traffic", "run", str(tmp_path / "scenario.toml"),
+         "--generations", "1", "--population", "10", "--out", str(tmp_path / "out")],
+        capture_output=True, text=True)
+    assert result.returncode == 2
+    assert "traffic.routes" in result.stderr and "Traceback" not in result.stderr
+
+
+def test_missing_route_file_names_the_key(tmp_path, root):
+    scenario_path = tmp_path / "s.toml"
+    scenario_path.write_text(SCENARIO.format(
+        net=root / "sumo_nets" / "sumo_ring.net.xml", lane="g0_0to1_0_1", offset=10, steps=10,
+        mode="replay", warmup=0, episodes=1))
+    with pytest.raises(InputError, match="route file not found") as error:
+        load_scenario(scenario_path)
+    assert error.value.key == "traffic.routes[0]"
