@@ -4,6 +4,9 @@ The navigation workload is the real one: the generations of a GA run on the narr
 (19 beams, P = 200). It is timed with the compiled batch on all cores and on one core, and
 against the plain per-vehicle Python loop of :mod:`enn_traffic.sim.reference` on chromosomes
 of the same generations, in the same process, so machine drift cancels out of the ratio.
+The arena and SUMO workloads are timed on the generations of GA runs too; SUMO replay counts
+the time SUMO takes to record each generation's traffic, and SUMO closed loop is timed on one
+process for an evolved controller, without SUMO's start and warm-up.
 """
 
 from __future__ import annotations
@@ -17,8 +20,10 @@ import pandas as pd
 from enn_traffic.evolution import ga
 from enn_traffic.experiments.common import scenario as shipped_scenario
 from enn_traffic.runner import ga_params
+from enn_traffic.sim import make_world
 from enn_traffic.sim.reference import reference_episode
 from enn_traffic.sim.world import World
+from enn_traffic.traffic import sumo
 
 
 def _timed_batches(world: World, populations: list[np.ndarray]) -> tuple[int, float]:
@@ -34,7 +39,7 @@ def _timed_batches(world: World, populations: list[np.ndarray]) -> tuple[int, fl
 def _workload(name: str):
     """A shipped scenario's world, GA settings, generator and first population, compiled."""
     scenario = shipped_scenario(name)
-    world = World(scenario)
+    world = make_world(scenario)
     rng = np.random.default_rng(scenario.seed)
     params = ga_params(scenario)
     population = ga.initial_population(
@@ -106,10 +111,51 @@ def arena_bench(generations: int = 10) -> pd.DataFrame:
     return table
 
 
+def sumo_bench(generations: int = 10, closed_loop_episodes: int = 2) -> pd.DataFrame:
+    """SUMO strategy 1 (steady ring traffic): replay mode over the generations of a GA run,
+    recording included; then the run's best controller in closed loop, one process."""
+    world, params, rng, population = _workload("sumo_strategy1")
+    threads = numba.get_num_threads()
+    steps, learner_steps, seconds = 0, 0, 0.0
+    best, best_fitness = population[0], -1.0
+    for generation in range(1, generations + 1):  # generation 0's traffic was recorded above
+        started = time.perf_counter()
+        results = world.evaluate(population, generation)
+        seconds += time.perf_counter() - started
+        steps += results.vehicle_steps
+        learner_steps += int(results.steps.sum())
+        if results.fitness.max() > best_fitness:
+            best, best_fitness = population[int(np.argmax(results.fitness))], results.fitness.max()
+        population = ga.next_generation(rng, population, results.fitness, params)
+    rows = [(f"sumo replay: P=200 worlds x {world.vehicles} vehicles, strategy 1",
+             "compiled batch + SUMO recording", threads, steps, learner_steps, seconds)]
+    closed = make_world(world.scenario.with_overrides(traffic={"mode": "closed-loop"}))
+    genes = closed._genes(best)[0]
+    steps, seconds = 0, 0.0
+    for seed in closed.seeds(generations + 1)[:closed_loop_episodes]:
+        started = time.perf_counter()
+        steps += closed.closed_loop(genes, seed)[0]
+        total = time.perf_counter() - started
+        started = time.perf_counter()
+        simulation = sumo.Simulation(closed.scenario, seed)
+        simulation.step(sumo.warmup_steps(closed.scenario))
+        simulation.close()
+        seconds += total - (time.perf_counter() - started)
+    rows.append(("sumo closed loop: the best controller, strategy 1",
+                 "libsumo step by step, 1 process", 1, steps, steps, seconds))
+    table = pd.DataFrame(rows, columns=["workload", "implementation", "threads",
+                                        "vehicle_steps", "learner_steps", "seconds"])
+    table["vehicle_steps_per_s"] = table["vehicle_steps"] / table["seconds"]
+    table["learner_steps_per_s"] = table["learner_steps"] / table["seconds"]
+    table["speedup_vs_reference"] = np.nan
+    return table
+
+
 def run_bench(quick: bool = False) -> pd.DataFrame:
     """Every workload's throughput table."""
     return pd.concat([
         navigation_bench(generations=10 if quick else 30,
                          reference_seconds=3.0 if quick else 10.0),
         arena_bench(generations=3 if quick else 10),
+        sumo_bench(generations=3 if quick else 10, closed_loop_episodes=1 if quick else 2),
     ], ignore_index=True)

@@ -67,6 +67,9 @@ def build_parser() -> argparse.ArgumentParser:
     evaluate.add_argument("scenario", type=Path, metavar="SCENARIO.toml")
     evaluate.add_argument("--episodes", type=_positive, default=1)
     evaluate.add_argument("--out", type=Path, metavar="FILE.csv", help="write the lifetimes")
+    evaluate.add_argument("--mode", choices=["replay", "closed-loop"],
+                          help="SUMO traffic: replayed, or reacting to the controller "
+                               "(default: the scenario's traffic.mode)")
 
     render = commands.add_parser("render", help="draw a controller's path (PNG) or animate it "
                                  "(GIF)", epilog=EPILOG)
@@ -129,6 +132,11 @@ def _cmd_evaluate(args) -> int:
 
     controller = Controller.load(args.controller)
     scenario = load_scenario(args.scenario)
+    if args.mode:
+        if not scenario.traffic.is_sumo:
+            raise InputError('--mode applies to SUMO traffic (traffic.strategy = "sumo")',
+                             args.scenario, "traffic.strategy")
+        scenario = scenario.with_overrides(traffic={"mode": args.mode})
     table = evaluate_controller(controller, scenario, args.episodes)
     print(table.to_string(index=False))
     if args.out:
@@ -166,7 +174,9 @@ def _cmd_bench(args) -> int:
 
     table = run_bench(quick=args.quick)
     shown = table.copy()
-    shown["vehicle_steps_per_s"] = shown["vehicle_steps_per_s"].map("{:,.0f}".format)
+    for column in ("vehicle_steps_per_s", "learner_steps_per_s"):
+        shown[column] = shown[column].map(lambda v: "" if np.isnan(v) else f"{v:,.0f}")
+    shown = shown.drop(columns=["learner_steps"])
     shown["speedup_vs_reference"] = shown["speedup_vs_reference"].map(
         lambda ratio: "" if np.isnan(ratio) else f"{ratio:.1f}x")
     shown["seconds"] = shown["seconds"].map("{:.2f}".format)

@@ -82,6 +82,25 @@ class ProcessEvaluator:
         self.pool.shutdown()
 
 
+class MeanOverWorlds:
+    """Fitness averaged over the episodes of several worlds, one per traffic strategy:
+    incremental evolution (§5.4.1) over strategies that may differ in network and traffic."""
+
+    def __init__(self, worlds: list[World]):
+        self.worlds = worlds
+
+    def evaluate(self, population: np.ndarray, generation: int = 0) -> EpisodeResults:
+        parts = [world.evaluate(population, generation) for world in self.worlds]
+        steps, outcome, suffered = (np.concatenate([getattr(p, f) for p in parts], axis=1)
+                                    for f in ("steps", "outcome", "suffered"))
+        fitness = EpisodeResults.lifetime_fitness(steps, outcome).mean(axis=1)
+        vehicles = round(float(np.mean([p.vehicles for p in parts])))
+        return EpisodeResults(fitness, steps, outcome, suffered, vehicles)
+
+    def close(self) -> None:
+        pass
+
+
 def make_evaluator(
     scenario: Scenario, executor: str = "local", address: str | None = None
 ) -> Evaluator:

@@ -14,4 +14,5 @@ EXPERIMENTS = {
     "fig11": dynamic.fig11,
     "table1": dynamic.table1,
     "table2": dynamic.table2,
+    "sumo": dynamic.sumo,
 }

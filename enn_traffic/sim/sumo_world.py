@@ -53,7 +53,7 @@ class SumoWorld(World):
                     % 2**31) for e in range(traffic.episodes)]
 
     def episode_labels(self) -> list[str]:
-        return ["sumo"] * self.scenario.traffic.episodes
+        return [f"sumo ({self.scenario.traffic.mode})"] * self.scenario.traffic.episodes
 
     def recording(self, seed: int) -> sumo.Recording:
         """The SUMO run of ``seed`` without the learner (recorded once, then kept)."""

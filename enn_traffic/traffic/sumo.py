@@ -26,12 +26,16 @@ from pathlib import Path
 
 import libsumo
 import numpy as np
+from numba import njit
 
 from enn_traffic.errors import InputError
 from enn_traffic.scenario import Scenario
+from enn_traffic.sim.collide import body_corners
 
 LEARNER = "enn_learner"
-_VARIABLES = [libsumo.VAR_POSITION, libsumo.VAR_ANGLE, libsumo.VAR_LENGTH, libsumo.VAR_WIDTH]
+_POSITION, _ANGLE = libsumo.VAR_POSITION, libsumo.VAR_ANGLE
+_LENGTH, _WIDTH = libsumo.VAR_LENGTH, libsumo.VAR_WIDTH
+_VARIABLES = [_POSITION, _ANGLE, _LENGTH, _WIDTH]
 MAX_SLOTS = 4096  # vehicles on the network at once
 
 
@@ -47,19 +51,16 @@ def to_angle(heading: float) -> float:
     return (90.0 - math.degrees(heading)) % 360.0
 
 
-def bodies(x, y, angle_deg, length, width) -> tuple[np.ndarray, np.ndarray]:
+@njit(cache=True)
+def _bodies(values, corners, centres) -> None:
     """Body corners (n, 4, 2: front-right, front-left, rear-left, rear-right) and centres
-    (n, 2) of SUMO vehicles, from their front-bumper positions and navigation angles."""
-    x, y = np.asarray(x, dtype=np.float64), np.asarray(y, dtype=np.float64)
-    heading = to_heading(angle_deg)
-    cos_h, sin_h = np.cos(heading), np.sin(heading)
-    nx, ny = -sin_h * 0.5 * np.asarray(width), cos_h * 0.5 * np.asarray(width)
-    rx, ry = x - length * cos_h, y - length * sin_h
-    corners = np.stack([
-        np.stack([x - nx, y - ny], axis=-1), np.stack([x + nx, y + ny], axis=-1),
-        np.stack([rx + nx, ry + ny], axis=-1), np.stack([rx - nx, ry - ny], axis=-1),
-    ], axis=-2)  # fmt: skip
-    return corners, 0.5 * (corners[..., 0, :] + corners[..., 2, :])
+    (n, 2) of SUMO vehicles from rows (x, y, navigation angle, length, width), where (x, y)
+    is the front bumper's middle."""
+    for i in range(values.shape[0]):
+        heading = math.radians(90.0 - values[i, 2])
+        body_corners(values[i, 0], values[i, 1], heading, values[i, 3], values[i, 4], corners[i])
+        centres[i, 0] = 0.5 * (corners[i, 0, 0] + corners[i, 2, 0])
+        centres[i, 1] = 0.5 * (corners[i, 0, 1] + corners[i, 2, 1])
 
 
 def sumo_command(scenario: Scenario, seed: int, error_log: Path) -> list[str]:
@@ -117,24 +118,27 @@ class Simulation:
         within the run), body corners (n, 4, 2) and centres (n, 2)."""
         results = libsumo.vehicle.getAllSubscriptionResults()
         results.pop(LEARNER, None)
-        for vehicle in [v for v in self.slots if v not in results]:
+        if len(results) != len(self.slots) or any(v not in self.slots for v in results):
+            self._assign_slots(results)
+        slots = np.fromiter((self.slots[v] for v in results), np.int64, len(results))
+        numbers = np.fromiter((self.numbers[v] for v in results), np.int64, len(results))
+        values = np.array([(*value[_POSITION], value[_ANGLE], value[_LENGTH], value[_WIDTH])
+                           for value in results.values()], dtype=np.float64).reshape(-1, 5)
+        corners, centres = np.empty((len(values), 4, 2)), np.empty((len(values), 2))
+        _bodies(values, corners, centres)
+        return slots, numbers, corners, centres
+
+    def _assign_slots(self, present) -> None:
+        """Free the slots of vehicles that left; give arriving vehicles a slot and a number."""
+        for vehicle in [v for v in self.slots if v not in present]:
             self._free.append(self.slots.pop(vehicle))
-        slots = np.empty(len(results), dtype=np.int64)
-        numbers = np.empty(len(results), dtype=np.int64)
-        values = np.empty((len(results), 5))
-        for row, (vehicle, value) in enumerate(results.items()):
-            slot = self.slots.get(vehicle)
-            if slot is None:
+        for vehicle in present:
+            if vehicle not in self.slots:
                 if not self._free:
                     self._fail(f"more than {MAX_SLOTS} vehicles on the network at once")
                 slot = self.slots[vehicle] = self._free.pop()
                 self.numbers[vehicle] = len(self.numbers)
                 self.sumo_ids[slot] = vehicle
-            slots[row], numbers[row] = slot, self.numbers[vehicle]
-            position = value[libsumo.VAR_POSITION]
-            values[row] = (position[0], position[1], value[libsumo.VAR_ANGLE],
-                           value[libsumo.VAR_LENGTH], value[libsumo.VAR_WIDTH])
-        return slots, numbers, *bodies(*values.T)
 
     @staticmethod
     def largest_radius() -> float:
