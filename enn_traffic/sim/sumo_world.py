@@ -23,6 +23,7 @@ from enn_traffic.roads import Track
 from enn_traffic.scenario import Scenario
 from enn_traffic.sim.replay import (
     CLEARANCE,
+    RADIUS,
     RUNNING,
     clear_start,
     learner_state,
@@ -34,7 +35,8 @@ from enn_traffic.sim.replay import (
 from enn_traffic.sim.world import EpisodeResults, World
 from enn_traffic.traffic import sumo
 
-RECORDINGS_KEPT = 16
+MAX_SPEED = 70.0  # m/s, above any road vehicle's; bounds how far a vehicle moves in a step
+RECORDINGS_KEPT = 24  # a test world holds 10 test and 10 validation situations
 
 
 class SumoWorld(World):
@@ -122,6 +124,10 @@ class SumoWorld(World):
                                                               gone, scratch)
             clear_start(body, ids[1], centres[1], gone, physics[CLEARANCE])
             sumo.add_learner(vehicle.length, vehicle.width, vehicle.speed)
+            # Vehicles farther than this from the learner's front bumper can neither be seen
+            # nor be hit within a step: the sensor's range, two bodies and two steps' travel.
+            simulation.follow_learner(self.scenario.sensor.range + 4.0 * physics[RADIUS]
+                                      + 2.0 * MAX_SPEED * vehicle.dt)
             t = 0
             while True:
                 if frames is not None:

@@ -96,6 +96,7 @@ class Simulation:
             self._fail("SUMO failed to start", exc)
         self.slots: dict[str, int] = {}
         self.numbers: dict[str, int] = {}
+        self.following = False
         self.sumo_ids = [""] * MAX_SLOTS
         self._free = list(range(MAX_SLOTS - 1, -1, -1))
 
@@ -108,15 +109,20 @@ class Simulation:
         try:
             for _ in range(count):
                 libsumo.simulationStep()
-                for vehicle in libsumo.simulation.getDepartedIDList():
-                    libsumo.vehicle.subscribe(vehicle, _VARIABLES)
+                if not self.following:
+                    for vehicle in libsumo.simulation.getDepartedIDList():
+                        libsumo.vehicle.subscribe(vehicle, _VARIABLES)
         except Exception as exc:
             self._fail("SUMO stopped", exc)
 
     def read(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         """The vehicles on the network now, the learner excepted: their slots, numbers (unique
-        within the run), body corners (n, 4, 2) and centres (n, 2)."""
-        results = libsumo.vehicle.getAllSubscriptionResults()
+        within the run), body corners (n, 4, 2) and centres (n, 2). Once :meth:`follow_learner`
+        was called, only the vehicles within its reach of the learner."""
+        if self.following:
+            results = libsumo.vehicle.getContextSubscriptionResults(LEARNER)
+        else:
+            results = libsumo.vehicle.getAllSubscriptionResults()
         results.pop(LEARNER, None)
         if len(results) != len(self.slots) or any(v not in self.slots for v in results):
             self._assign_slots(results)
@@ -139,6 +145,15 @@ class Simulation:
                 slot = self.slots[vehicle] = self._free.pop()
                 self.numbers[vehicle] = len(self.numbers)
                 self.sumo_ids[slot] = vehicle
+
+    def follow_learner(self, reach: float) -> None:
+        """From now on read only the vehicles within ``reach`` of the learner (a context
+        subscription: SUMO then reports a few vehicles per step instead of all of them)."""
+        for vehicle in libsumo.vehicle.getIDList():
+            libsumo.vehicle.unsubscribe(vehicle)
+        libsumo.vehicle.subscribeContext(LEARNER, libsumo.CMD_GET_VEHICLE_VARIABLE, reach,
+                                         _VARIABLES)
+        self.following = True
 
     @staticmethod
     def largest_radius() -> float:
