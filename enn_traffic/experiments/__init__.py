@@ -4,7 +4,7 @@
 ``(out: Path, quick: bool, progress: bool) -> list[str]`` that return summary lines.
 """
 
-from enn_traffic.experiments import dynamic, navigation
+from enn_traffic.experiments import dynamic, navigation, simultaneous
 
 EXPERIMENTS = {
     "fig7": navigation.fig7,
@@ -14,5 +14,7 @@ EXPERIMENTS = {
     "fig11": dynamic.fig11,
     "table1": dynamic.table1,
     "table2": dynamic.table2,
+    "table3": simultaneous.table3,
+    "table4": simultaneous.table4,
     "sumo": dynamic.sumo,
 }

@@ -165,6 +165,24 @@ def _trained_controllers(family: Family, out: Path, quick: bool, progress: bool
     return chosen
 
 
+def evolved_population(family: Family, out: Path, strategy: int, chosen: np.ndarray,
+                       quick: bool) -> np.ndarray:
+    """The final population of the run that produced ``chosen``, with ``chosen`` first."""
+    out = out / family.folder
+    for seed in family.seeds_for(quick):
+        run_dir = out / "runs" / family.name(strategy) / f"seed{seed}"
+        if any(np.array_equal(row, chosen) for row in _candidates(run_dir)):
+            population = GAState.load(run_dir / "checkpoint.npz").population
+            return np.concatenate([chosen[None, :], population[:-1]])
+    raise ValueError(f"no run of {family.name(strategy)} produced the chosen controller")
+
+
+def trained_controllers(out: Path, quick: bool, progress: bool, family: Family = ARENA
+                        ) -> dict[int, np.ndarray]:
+    """Per strategy: the controller Table 1 deploys (trained on that strategy alone)."""
+    return _trained_controllers(family, out / family.folder, quick, progress)
+
+
 def _draw_specialists(family: Family, controllers: dict[int, np.ndarray], path: Path,
                       steps: int = 400) -> None:
     """Each strategy's chosen controller among its own traffic (first test episode)."""

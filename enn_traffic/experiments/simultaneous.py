@@ -1,0 +1,147 @@
+"""Paper §5.5: simultaneous collision avoidance — every vehicle of the arena driven by an
+evolved network, spreading what individual learning (§5.3) found to all of them.
+
+For each arena strategy and each of ``SITUATIONS`` traffic situations (the 8 start poses of
+``scenarios/arena_strategyN``, headings drawn per situation), over ``SECONDS`` of simulated
+time each:
+
+- initial behaviour: all 8 vehicles driven by the strategy's own drivers;
+- Table 3 (§5.5.1, broadcasting the winning chromosome): all 8 driven by the controller Table 1
+  deploys for that strategy;
+- Table 4 (§5.5.2, broadcasting the evolved population): every vehicle starts from a copy of the
+  evolved population (the winner first) and all learn at once for ``SECONDS`` (each its own GA,
+  sharing the best chromosomes across vehicles, reference-implementation.md §7.4); then each
+  drives the best chromosome it found, and the rate is measured over the ``SECONDS`` that follow.
+
+The metric is :attr:`enn_traffic.sim.shared.SharedRun.collision_rate`.
+"""
+
+from __future__ import annotations
+
+import time
+from functools import cache
+from pathlib import Path
+
+import matplotlib.pyplot as plt
+import numpy as np
+import pandas as pd
+
+from enn_traffic.experiments import dynamic
+from enn_traffic.experiments.common import scenario
+from enn_traffic.io import write_csv
+from enn_traffic.report.plots import draw_paths, save_figure
+from enn_traffic.runner import ga_params
+from enn_traffic.sim.shared import SharedArena, VehicleGA
+from enn_traffic.sim.world import World
+from enn_traffic.traffic.kinematic import RANDOM_NETWORK, STRATEGIES
+
+SECONDS = 100.0  # the paper's training time, and each measuring period
+SITUATIONS = 5
+SITUATION_KEY = 3_000_000_000  # traffic situations apart from training, validation and tests
+DRAWN_SECONDS = 20.0
+# Mean reduction of the collision rate over the four strategies in the paper's Tables 3 and 4.
+PAPER_REDUCTION = {"table3": 0.54, "table4": 0.89}
+
+
+def _arena(world: World, situation: int, kinds=None) -> tuple[SharedArena, np.ndarray]:
+    """The arena of one traffic situation: 8 start poses; ``kinds`` default to the strategy's
+    own drivers; and the drivers' random genes (random-network strategy)."""
+    episode = world.episodes(SITUATION_KEY + situation)[0]
+    strategy = STRATEGIES[world.scenario.traffic.strategy_list[0]]
+    kinds = np.full(world.vehicles, strategy) if kinds is None else kinds
+    return SharedArena(world, episode.start, kinds, int(episode.seed)), episode.traffic_genes.copy()
+
+
+def _strategy_rows(strategy: int, winner: np.ndarray, population: np.ndarray,
+                   paths: dict) -> dict:
+    world = World(scenario(dynamic.ARENA.name(strategy)))
+    sc = world.scenario
+    params = ga_params(sc)
+    winner_genes = world._genes(winner)[0]
+    evolved = world._genes(population)
+    network = np.full(world.vehicles, RANDOM_NETWORK)
+    rates = {"initial": [], "winner": [], "learning": [], "population": []}
+    started = time.perf_counter()
+    for situation in range(SITUATIONS):
+        arena, genes = _arena(world, situation)
+        initial = arena.run(SECONDS, genes)
+        rates["initial"].append(initial.collision_rate)
+        arena, _ = _arena(world, situation, network)
+        broadcast = arena.run(SECONDS, np.tile(winner_genes, (world.vehicles, 1)))
+        rates["winner"].append(broadcast.collision_rate)
+        arena, _ = _arena(world, situation, network)
+        learners = [VehicleGA(evolved.copy(), np.random.default_rng([sc.seed, situation, v]))
+                    for v in range(world.vehicles)]
+        genes = np.tile(winner_genes, (world.vehicles, 1))
+        learning = arena.run(SECONDS, genes, learners, params, share_elites=True,
+                             elite_count=sc.ga.elite_count)
+        rates["learning"].append(learning.collision_rate)
+        after = arena.run(SECONDS, np.stack([learner.best for learner in learners]))
+        rates["population"].append(after.collision_rate)
+        if situation == 0:
+            paths[strategy] = (initial.trace, broadcast.trace, after.trace, world.track.walls)
+    wall = time.perf_counter() - started
+    simulated = SITUATIONS * SECONDS * 4  # initial, winner, learning, after
+    return {"strategy": strategy, **{k: float(np.mean(v)) for k, v in rates.items()},
+            "simulated_s": simulated, "wall_s": round(wall, 1)}
+
+
+@cache
+def _measure(out: Path, quick: bool, progress: bool) -> pd.DataFrame:
+    """Every strategy's rates, once per process (Tables 3 and 4 share them), also written to
+    ``simultaneous.csv`` with the simulated and wall time they took."""
+    controllers = dynamic.trained_controllers(out, quick, progress)
+    rows, paths = [], {}
+    for strategy in dynamic.STRATEGIES:
+        population = dynamic.evolved_population(dynamic.ARENA, out, strategy,
+                                                controllers[strategy], quick)
+        rows.append(_strategy_rows(strategy, controllers[strategy], population, paths))
+    table = pd.DataFrame(rows)
+    write_csv(out / "simultaneous.csv", table)
+    _draw(paths, out / "simultaneous_paths.png")
+    return table
+
+
+def _draw(paths: dict, path: Path) -> None:
+    """Each strategy: the first seconds of its initial drivers, the broadcast winner and the
+    vehicles after simultaneous learning."""
+    figure, axes = plt.subplots(3, 4, figsize=(16, 12))
+    steps = round(DRAWN_SECONDS * 10)
+    titles = ["initial drivers", "winning chromosome (Table 3)", "after learning (Table 4)"]
+    for column, (strategy, traces) in enumerate(sorted(paths.items())):
+        walls = traces[-1]
+        for row, trace in enumerate(traces[:3]):
+            ax = axes[row, column]
+            draw_paths(ax, walls, [trace[:steps, v] for v in range(trace.shape[1])],
+                       colors=[f"C{v}" for v in range(trace.shape[1])])
+            ax.set_xticks([])
+            ax.set_yticks([])
+            ax.set_title(f"strategy {strategy}: {titles[row]}", fontsize=9)
+    figure.suptitle(f"All 8 vehicles, first {DRAWN_SECONDS:g} s of simulated time")
+    figure.tight_layout()
+    save_figure(figure, path)
+
+
+def _table(out: Path, quick: bool, progress: bool, after: str, name: str, label: str
+           ) -> list[str]:
+    measured = _measure(out, quick, progress)
+    table = pd.DataFrame({"strategy": measured["strategy"],
+                          "initial_collisions_per_s": measured["initial"].round(4),
+                          "after_collisions_per_s": measured[after].round(4)})
+    write_csv(out / f"{name}.csv", table)
+    reduction = 1 - table["after_collisions_per_s"] / table["initial_collisions_per_s"]
+    return [f"{name} ({label}): collisions per second per vehicle, initial -> after: "
+            + ", ".join(f"strategy {s}: {i:.3f} -> {a:.3f}" for s, i, a in table.itertuples(
+                index=False))
+            + f"; mean reduction {reduction.mean():.0%} (paper: {PAPER_REDUCTION[name]:.0%}); "
+            f"{measured['simulated_s'].sum():.0f} s simulated in {measured['wall_s'].sum():.0f} s"]
+
+
+def table3(out: Path, quick: bool = False, progress: bool = True) -> list[str]:
+    """§5.5.1: the winning chromosome drives every vehicle."""
+    return _table(out, quick, progress, "winner", "table3", "winner")
+
+
+def table4(out: Path, quick: bool = False, progress: bool = True) -> list[str]:
+    """§5.5.2: the evolved population, all vehicles learning at once."""
+    return _table(out, quick, progress, "population", "table4", "population")

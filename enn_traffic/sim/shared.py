@@ -1,0 +1,268 @@
+"""One arena where every vehicle drives by its own controller, and may learn while it drives
+(paper §5.5; reference-implementation.md §7).
+
+Unlike :mod:`enn_traffic.sim.world`, which runs one learner per world and P worlds at once,
+this is one world of V vehicles run for a stretch of simulated time. Each step:
+
+1. :func:`detect` — collisions by the blame rule (a vehicle is responsible if its body touches
+   a wall or another vehicle's body from before the step), and the spin test for learning
+   vehicles;
+2. the caller ends those lives: a learning vehicle records the fitness of its chromosome and
+   takes the next one (its own GA when its population is used up, :class:`VehicleGA`); every
+   vehicle whose life ended respawns at a free spot (the arena's respawn rule);
+3. :func:`drive` — every vehicle senses walls and the other bodies, decides and moves.
+
+Collision rate (the metric of Tables 3–4): responsible collisions per second of simulated time,
+per vehicle — all responsible collisions, each counted once for each vehicle responsible,
+divided by the number of vehicles and the simulated time.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+from numba import njit
+
+from enn_traffic.evolution import ga
+from enn_traffic.sim.collide import box_hits_walls, boxes_overlap
+from enn_traffic.sim.kinematics import bicycle_step
+from enn_traffic.sim.sensors import nearby_walls, sense_walls
+from enn_traffic.sim.world import (
+    COLLIDED,
+    SPUN,
+    World,
+    _close,
+    _place,
+    _respawn,
+    _sense_bodies,
+    _small_spread,
+    network_steering,
+)
+from enn_traffic.traffic.kinematic import (
+    NONE,
+    P_CLEARANCE,
+    RANDOM_NETWORK,
+    reset_memory,
+    scripted_steering,
+)
+
+ALIVE = -1
+
+
+@njit(cache=True)
+def detect(pose, corners, centres, previous, previous_centres, fresh, learning, life, recent,
+           walls, lookup, radius, spin_variance, events) -> None:
+    """Fill ``events`` (V,): ``COLLIDED`` for a responsible collision, ``SPUN`` for a learning
+    vehicle spinning in place, else ``ALIVE``; record this step's positions for the spin test."""
+    count = pose.shape[0]
+    near = 4.0 * radius * radius
+    window = recent.shape[1]
+    for v in range(count):
+        events[v] = ALIVE
+        candidates = nearby_walls(pose[v, 0], pose[v, 1], lookup)
+        if box_hits_walls(corners[v], walls, candidates, candidates.shape[0]):
+            events[v] = COLLIDED
+            continue
+        for other in range(count):
+            if (other != v and not fresh[other]
+                    and _close(centres, v, previous_centres, other, near)
+                    and boxes_overlap(corners[v], previous[other])):
+                events[v] = COLLIDED
+                break
+        if events[v] == ALIVE and learning[v]:
+            slot = life[v] % window
+            recent[v, slot, 0], recent[v, slot, 1] = pose[v, 0], pose[v, 1]
+            if life[v] + 1 >= window and _small_spread(recent[v], spin_variance):
+                events[v] = SPUN
+
+
+@njit(cache=True)
+def respawn(v, kind, pose, corners, centres, previous, previous_centres, fresh, memory, life,
+            length, width, walls, lookup, bounds, params, rng) -> None:
+    """Put vehicle ``v`` at a random free spot with a fresh life."""
+    _respawn(v, pose, corners, centres, length, width, walls, lookup, bounds, params[P_CLEARANCE],
+             rng)
+    previous[v] = corners[v]
+    previous_centres[v] = centres[v]
+    fresh[v] = True
+    life[v] = 0
+    reset_memory(kind, params, rng, memory[v])
+
+
+@njit(cache=True)
+def drive(pose, corners, centres, previous, previous_centres, fresh, kinds, genes, layer_sizes,
+          gain, length, width, wheelbase, distance, beam_cos, beam_sin, max_range, walls, lookup,
+          params, memory, rng, radius, life) -> None:
+    """Every vehicle senses, decides (its own genes, or its scripted strategy) and moves."""
+    count = pose.shape[0]
+    readings = np.empty(beam_cos.shape[0])
+    width_max = max(layer_sizes.max(), 2)
+    activation = np.empty(width_max)
+    scratch = np.empty(width_max)
+    steering = np.zeros(count)
+    for v in range(count):
+        kind = kinds[v]
+        candidates = nearby_walls(pose[v, 0], pose[v, 1], lookup)
+        sense_walls(pose[v, 0], pose[v, 1], pose[v, 2], beam_cos, beam_sin, max_range, walls,
+                    candidates, readings)
+        if kind == RANDOM_NETWORK:
+            _sense_bodies(v, pose[v, 0], pose[v, 1], pose[v, 2], beam_cos, beam_sin, corners,
+                          centres, radius, readings)
+            steering[v] = network_steering(genes[v], layer_sizes, readings, activation, scratch,
+                                           gain)
+        elif kind != NONE:
+            steering[v] = scripted_steering(kind, pose[v, 0], pose[v, 1], pose[v, 2], readings,
+                                            beam_cos, beam_sin, max_range, params, memory[v], rng)
+    previous[:] = corners
+    previous_centres[:] = centres
+    fresh[:] = False
+    for v in range(count):
+        x, y, heading = bicycle_step(pose[v, 0], pose[v, 1], pose[v, 2], steering[v], distance,
+                                     wheelbase)
+        _place(v, x, y, heading, length, width, pose, corners, centres)
+        life[v] += 1
+
+
+@dataclass
+class VehicleGA:
+    """One vehicle's own population, evaluated a chromosome per life (reference §7.1)."""
+
+    population: np.ndarray  # (P, G), the world's gene layout
+    rng: np.random.Generator
+    fitness: np.ndarray = field(init=False)
+    index: int = 0
+    generation: int = 0
+    best: np.ndarray = field(init=False)
+    best_fitness: float = -1.0
+
+    def __post_init__(self):
+        self.fitness = np.zeros(len(self.population))
+        self.best = self.population[0].copy()
+
+    @property
+    def current(self) -> np.ndarray:
+        return self.population[self.index]
+
+    def record(self, fitness: float) -> None:
+        """The current chromosome's life ended with ``fitness``."""
+        self.fitness[self.index] = fitness
+        if fitness > self.best_fitness:
+            self.best, self.best_fitness = self.current.copy(), fitness
+        self.index += 1
+
+    @property
+    def exhausted(self) -> bool:
+        return self.index >= len(self.population)
+
+    def advance(self, params: ga.GAParams, global_elites: np.ndarray | None = None) -> None:
+        """The next generation; ``global_elites`` (the best chromosomes of all vehicles,
+        reference §7.4) replace its own elites when given."""
+        population = ga.next_generation(self.rng, self.population, self.fitness, params)
+        if global_elites is not None and len(global_elites):
+            population[: len(global_elites)] = global_elites
+        self.population, self.index, self.generation = population, 0, self.generation + 1
+        self.fitness = np.zeros(len(population))
+
+
+@dataclass
+class SharedRun:
+    """What a stretch of simulated time produced."""
+
+    collisions: np.ndarray  # (V,) responsible collisions per vehicle
+    spins: np.ndarray  # (V,)
+    seconds: float
+    trace: np.ndarray  # (steps + 1, V, 3)
+
+    @property
+    def collision_rate(self) -> float:
+        """Responsible collisions per second of simulated time, per vehicle."""
+        return float(self.collisions.sum()) / (len(self.collisions) * self.seconds)
+
+
+class SharedArena:
+    """V vehicles in one arena: the scenario's learner start and traffic starts, each vehicle
+    driven by genes of its own or by a scripted strategy (``kinds``)."""
+
+    def __init__(self, world: World, starts: np.ndarray, kinds: np.ndarray, seed: int):
+        self.world = world
+        self.kinds = np.asarray(kinds, dtype=np.int64)
+        count = len(self.kinds)
+        physics = world._physics
+        self.length, self.width, self.wheelbase, self.distance = physics[:4]
+        self.beam_cos, self.beam_sin, self.max_range, self.walls, self.lookup = physics[4:9]
+        self.bounds, self.params = physics[9], physics[10]
+        self.radius = 0.5 * math.hypot(self.length, self.width)
+        self.pose = np.empty((count, 3))
+        self.corners = np.empty((count, 4, 2))
+        self.centres = np.empty((count, 2))
+        self.memory = np.zeros((count, 2))
+        self.rng = np.full(1, np.uint64(seed), dtype=np.uint64)
+        for v in range(count):
+            _place(v, *starts[v], self.length, self.width, self.pose, self.corners, self.centres)
+            reset_memory(self.kinds[v], self.params, self.rng, self.memory[v])
+        self.previous, self.previous_centres = self.corners.copy(), self.centres.copy()
+        self.fresh = np.zeros(count, dtype=np.bool_)
+        self.life = np.zeros(count, dtype=np.int64)
+        episode = world.scenario.episode
+        self.recent = np.zeros((count, episode.spin_window, 2))
+        self.spin_variance = episode.spin_variance
+        self.events = np.empty(count, dtype=np.int64)
+
+    def run(self, seconds: float, genes: np.ndarray, learners: list[VehicleGA | None] | None = None,
+            params: ga.GAParams | None = None, share_elites: bool = False,
+            elite_count: int = 0) -> SharedRun:
+        """Drive for ``seconds`` of simulated time. ``genes`` (V, G, world layout) drive the
+        network vehicles; a vehicle with a :class:`VehicleGA` in ``learners`` learns: its
+        genes row follows its current chromosome."""
+        count = len(self.kinds)
+        learners = learners or [None] * count
+        learning = np.array([g is not None for g in learners])
+        for v, learner in enumerate(learners):
+            if learner is not None:
+                genes[v] = learner.current
+        steps = round(seconds / self.world.scenario.vehicle.dt)
+        collisions, spins = np.zeros(count, dtype=np.int64), np.zeros(count, dtype=np.int64)
+        trace = np.empty((steps + 1, count, 3))
+        layer_sizes, gain = self.world._shape
+        for t in range(steps + 1):
+            trace[t] = self.pose
+            detect(self.pose, self.corners, self.centres, self.previous, self.previous_centres,
+                   self.fresh, learning, self.life, self.recent, self.walls, self.lookup,
+                   self.radius, self.spin_variance, self.events)
+            for v in np.nonzero(self.events != ALIVE)[0]:
+                spun = self.events[v] == SPUN
+                spins[v] += spun
+                collisions[v] += not spun
+                learner = learners[v]
+                if learner is not None:
+                    learner.record(0.0 if spun else float(self.life[v]))
+                    if learner.exhausted:
+                        elites = (_global_elites(learners, elite_count) if share_elites
+                                  else None)
+                        learner.advance(params, elites)
+                    genes[v] = learner.current
+                respawn(v, self.kinds[v], self.pose, self.corners, self.centres, self.previous,
+                        self.previous_centres, self.fresh, self.memory, self.life, self.length,
+                        self.width, self.walls, self.lookup, self.bounds, self.params, self.rng)
+            if t == steps:
+                break
+            drive(self.pose, self.corners, self.centres, self.previous, self.previous_centres,
+                  self.fresh, self.kinds, genes, layer_sizes, gain, self.length, self.width,
+                  self.wheelbase, self.distance, self.beam_cos, self.beam_sin, self.max_range,
+                  self.walls, self.lookup, self.params, self.memory, self.rng, self.radius,
+                  self.life)
+        for v, learner in enumerate(learners):  # a life still going counts what it has shown
+            if learner is not None and self.life[v] > learner.best_fitness:
+                learner.best, learner.best_fitness = learner.current.copy(), float(self.life[v])
+        return SharedRun(collisions, spins, steps * self.world.scenario.vehicle.dt, trace)
+
+
+def _global_elites(learners: list[VehicleGA | None], count: int) -> np.ndarray:
+    """The ``count`` fittest chromosomes over every learning vehicle's current population
+    (unevaluated chromosomes count as fitness 0, as in the authors' code)."""
+    pools = [g for g in learners if g is not None]
+    population = np.concatenate([g.population for g in pools])
+    fitness = np.concatenate([g.fitness for g in pools])
+    return population[np.argsort(-fitness, kind="stable")[:count]]

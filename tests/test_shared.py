@@ -1,0 +1,76 @@
+"""Every vehicle driving and learning at once in one arena (paper §5.5)."""
+
+import numpy as np
+import pytest
+
+from enn_traffic.evolution import ga
+from enn_traffic.scenario import load_scenario
+from enn_traffic.sim.shared import SharedArena, VehicleGA, _global_elites
+from enn_traffic.sim.world import World
+from enn_traffic.traffic.kinematic import RANDOM_NETWORK, STRAIGHT
+
+ARENA = """
+name = "shared"
+[track]
+net = "{net}"
+start_xy = [20.0, 50.0]
+[vehicle]
+width = 2.5
+[sensor]
+beams = 3
+[traffic]
+strategy = "straight"
+turn_distance = 0.0
+starts_xy = [[40.0, 50.0]]
+"""
+
+
+@pytest.fixture
+def world(tmp_path, root):
+    path = tmp_path / "arena.toml"
+    path.write_text(ARENA.format(net=root / "sumo_nets" / "arena.net.xml"))
+    return World(load_scenario(path))
+
+
+def test_head_on_counts_one_collision_for_each_responsible_vehicle(world):
+    """Two straight drivers 20 m apart, nose to nose, closing at 2 m per step: at step 11 each
+    new body reaches into the other's old one, so both are responsible (two collisions); both
+    respawn elsewhere and, with turning off, later hit walls."""
+    starts = np.array([[20.0, 50.0, 0.0], [40.0, 50.0, np.pi]])
+    arena = SharedArena(world, starts, np.array([STRAIGHT, STRAIGHT]), seed=3)
+    first = arena.run(1.0, np.zeros((2, world.spec.chromosome_length)))  # 10 steps: no contact
+    assert first.collisions.tolist() == [0, 0]
+    second = arena.run(0.1, np.zeros((2, world.spec.chromosome_length)))
+    assert second.collisions.tolist() == [1, 1]
+    assert second.collision_rate == pytest.approx(2 / (2 * 0.1))
+    assert np.hypot(*(arena.pose[0, :2] - [31.0, 50.0])) > 1.0  # respawned
+
+
+def test_learning_vehicle_moves_through_its_population(world):
+    """A learner's chromosome that drives into the wall ends its life: its fitness is the
+    steps it lived, and the next chromosome takes over."""
+    length = world.spec.chromosome_length
+    population = np.zeros((3, length))
+    learner = VehicleGA(population.copy(), np.random.default_rng(0))
+    starts = np.array([[80.0, 50.0, 0.0], [20.0, 20.0, np.pi / 2]])
+    arena = SharedArena(world, starts, np.array([RANDOM_NETWORK, STRAIGHT]), seed=1)
+    arena.run(3.0, np.zeros((2, length)), [learner, None], ga.GAParams(population_size=3,
+              tournament_size=2))
+    assert learner.index >= 1
+    assert learner.fitness[0] == pytest.approx(20.0, abs=1.0)  # 20 m to the wall at x = 100
+
+
+def test_exhausted_population_breeds_with_the_global_elites(world):
+    rng = np.random.default_rng(4)
+    length = world.spec.chromosome_length
+    learners = [VehicleGA(rng.uniform(-1, 1, (6, length)), np.random.default_rng(v))
+                for v in range(2)]
+    learners[0].fitness[:] = [1, 2, 3, 4, 5, 6]
+    learners[1].fitness[:] = [10, 0, 0, 0, 0, 0]
+    elites = _global_elites(learners, 2)
+    np.testing.assert_array_equal(elites[0], learners[1].population[0])
+    np.testing.assert_array_equal(elites[1], learners[0].population[5])
+    learners[0].index = 6
+    learners[0].advance(ga.GAParams(population_size=6, tournament_size=2, elite_count=2), elites)
+    np.testing.assert_array_equal(learners[0].population[:2], elites)
+    assert learners[0].generation == 1 and learners[0].index == 0
