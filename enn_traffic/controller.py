@@ -95,7 +95,12 @@ class Controller:
     def fit(self, scenario: Scenario, path: str | Path | None = None) -> Scenario:
         """``scenario`` with this controller's network and sensor; a clear error if the
         scenario's rangefinder has another number of beams than the network has inputs."""
-        if self.layer_sizes[0] != scenario.sensor.beams:
+        if scenario.lane_keeping is not None:
+            if self.layer_sizes[0] != scenario.inputs:
+                raise InputError(
+                    f"the controller's network takes {self.layer_sizes[0]} inputs, the "
+                    f"scenario's camera gives {scenario.inputs}", path, "lane_keeping.lookahead_m")
+        elif self.layer_sizes[0] != scenario.sensor.beams:
             raise InputError(
                 f"the controller's network takes {self.layer_sizes[0]} beams, the scenario's "
                 f"sensor has {scenario.sensor.beams}", path, "sensor.beams"

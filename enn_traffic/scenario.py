@@ -180,13 +180,31 @@ class TrafficConfig(_Section):
         return params
 
 
+class LaneKeepingConfig(_Section):
+    """Lane keeping on a highway-env road, steered from a camera's lane markings (paper §5.6):
+    the lateral offsets of both markings at each look-ahead distance, in the vehicle frame."""
+
+    road: Literal["sine", "circle"] = "sine"
+    amplitude: float = Field(5.0, ge=0, allow_inf_nan=False)
+    period: PositiveFloat = 100.0
+    length: PositiveFloat = 1000.0
+    radius: PositiveFloat = 60.0
+    lane_width: PositiveFloat = 4.0
+    lookahead_m: list[PositiveFloat] = Field([5.0, 10.0, 15.0, 20.0], min_length=1)
+    noise_m: float = Field(0.0, ge=0, allow_inf_nan=False)
+    episodes: int = Field(1, ge=1, le=1000)
+    seed: int = Field(0, ge=0)
+
+
 class Scenario(_Section):
-    """A whole scenario file."""
+    """A whole scenario file: a SUMO ``[track]`` (navigation, arena, SUMO traffic) or a
+    highway-env ``[lane_keeping]`` road."""
 
     name: str = Field(min_length=1, pattern=r"^[A-Za-z0-9_.-]+$")
     description: str = ""
     seed: int = Field(0, ge=0)
-    track: TrackConfig
+    track: TrackConfig | None = None
+    lane_keeping: LaneKeepingConfig | None = None
     vehicle: VehicleConfig = VehicleConfig()
     sensor: SensorConfig = SensorConfig()
     network: NetworkConfig = NetworkConfig()
@@ -194,6 +212,12 @@ class Scenario(_Section):
     episode: EpisodeConfig = EpisodeConfig()
     traffic: TrafficConfig = TrafficConfig()
     source: Path | None = Field(None, exclude=True)
+
+    @model_validator(mode="after")
+    def _one_task(self) -> Scenario:
+        if (self.track is None) == (self.lane_keeping is None):
+            raise ValueError("give exactly one of [track] (a SUMO network) or [lane_keeping]")
+        return self
 
     @property
     def beam_angles(self) -> list[float]:
@@ -205,7 +229,14 @@ class Scenario(_Section):
 
     @property
     def layer_sizes(self) -> tuple[int, ...]:
-        return (self.sensor.beams, *self.network.hidden, 2)
+        return (self.inputs, *self.network.hidden, 2)
+
+    @property
+    def inputs(self) -> int:
+        """Network inputs: one per beam, or two marking offsets per look-ahead distance."""
+        if self.lane_keeping is not None:
+            return 2 * len(self.lane_keeping.lookahead_m)
+        return self.sensor.beams
 
     def with_overrides(self, **sections: dict) -> Scenario:
         """A copy with some section fields replaced, validated again."""
@@ -268,7 +299,7 @@ def load_scenario(path: str | Path) -> Scenario:
     _resolve(path, data.get("traffic"), "routes")
     _resolve(path, data.get("traffic"), "sumocfg")
     scenario = _validate(data, path.resolve())
-    if not scenario.track.net.is_file():
+    if scenario.track is not None and not scenario.track.net.is_file():
         raise InputError(f"network file not found: {scenario.track.net}", path, "track.net")
     traffic = scenario.traffic
     for index, route in enumerate(traffic.routes):

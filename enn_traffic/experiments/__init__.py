@@ -4,7 +4,7 @@
 ``(out: Path, quick: bool, progress: bool) -> list[str]`` that return summary lines.
 """
 
-from enn_traffic.experiments import dynamic, navigation, simultaneous
+from enn_traffic.experiments import dynamic, lanekeeping, navigation, simultaneous
 
 EXPERIMENTS = {
     "fig7": navigation.fig7,
@@ -17,4 +17,5 @@ EXPERIMENTS = {
     "table3": simultaneous.table3,
     "table4": simultaneous.table4,
     "sumo": dynamic.sumo,
+    "lane_keeping": lanekeeping.lane_keeping,
 }

@@ -11,7 +11,12 @@ if TYPE_CHECKING:
 
 
 def make_world(scenario: Scenario, track: Track | None = None) -> World:
-    """The world a scenario describes: arena/navigation worlds, or SUMO traffic worlds."""
+    """The world a scenario describes: arena/navigation worlds, SUMO traffic worlds, or a
+    highway-env lane-keeping road."""
+    if scenario.lane_keeping is not None:
+        from enn_traffic.lanekeeping.world import LaneKeepingWorld
+
+        return LaneKeepingWorld(scenario)
     if scenario.traffic.is_sumo:
         from enn_traffic.sim.sumo_world import SumoWorld
 

@@ -1,0 +1,1 @@
+"""Lane keeping with highway-env and a camera lane-marking input (paper §5.6)."""
