@@ -18,6 +18,7 @@ import numpy as np
 import pandas as pd
 
 from enn_traffic.evolution import ga
+from enn_traffic.evolution.evaluate import Evaluator
 from enn_traffic.experiments.common import scenario as shipped_scenario
 from enn_traffic.runner import ga_params
 from enn_traffic.sim import make_world
@@ -26,7 +27,7 @@ from enn_traffic.sim.world import World
 from enn_traffic.traffic import sumo
 
 
-def _timed_batches(world: World, populations: list[np.ndarray]) -> tuple[int, float]:
+def _timed_batches(world: World | Evaluator, populations: list[np.ndarray]) -> tuple[int, float]:
     steps, seconds = 0, 0.0
     for population in populations:
         started = time.perf_counter()
@@ -151,6 +152,35 @@ def sumo_bench(generations: int = 10, closed_loop_episodes: int = 2) -> pd.DataF
     return table
 
 
+def lane_keeping_bench(generations: int = 3) -> pd.DataFrame:
+    """highway-env lane keeping: environment steps per second, in this process and over a
+    process pool (one environment per worker), on the generations of a GA run."""
+    from enn_traffic.evolution.evaluate import LocalEvaluator, ProcessEvaluator
+
+    world, params, rng, population = _workload("lane_keeping")
+    populations = []
+    for _ in range(generations):
+        populations.append(population)
+        population = ga.next_generation(rng, population, world.evaluate(population).fitness,
+                                        params)
+    rows = []
+    for name, evaluator in (("one process", LocalEvaluator(world.scenario)),
+                            ("process pool", ProcessEvaluator(world.scenario))):
+        try:
+            evaluator.evaluate(populations[0][:2])  # start the workers outside the timing
+            steps, seconds = _timed_batches(evaluator, populations)
+        finally:
+            evaluator.close()
+        workers = getattr(evaluator, "workers", 1)
+        rows.append(("lane keeping: highway-env, P=40", name, workers, steps, steps, seconds))
+    table = pd.DataFrame(rows, columns=["workload", "implementation", "threads",
+                                        "vehicle_steps", "learner_steps", "seconds"])
+    table["vehicle_steps_per_s"] = table["vehicle_steps"] / table["seconds"]
+    table["learner_steps_per_s"] = table["learner_steps"] / table["seconds"]
+    table["speedup_vs_reference"] = np.nan
+    return table
+
+
 def run_bench(quick: bool = False) -> pd.DataFrame:
     """Every workload's throughput table."""
     return pd.concat([
@@ -158,4 +188,5 @@ def run_bench(quick: bool = False) -> pd.DataFrame:
                          reference_seconds=3.0 if quick else 10.0),
         arena_bench(generations=3 if quick else 10),
         sumo_bench(generations=3 if quick else 10, closed_loop_episodes=1 if quick else 2),
+        lane_keeping_bench(generations=2 if quick else 4),
     ], ignore_index=True)
