@@ -82,6 +82,57 @@ class ProcessEvaluator:
         self.pool.shutdown()
 
 
+class _WorldActor:
+    """A Ray worker: one world (and, for SUMO traffic, one libsumo), single-threaded."""
+
+    def __init__(self, scenario: Scenario):
+        import numba
+
+        numba.set_num_threads(1)
+        self.world = make_world(scenario)
+
+    def evaluate(self, chunk: np.ndarray, generation: int) -> EpisodeResults:
+        return self.world.evaluate(chunk, generation)
+
+
+class RayEvaluator:
+    """Population chunks over Ray actors, each holding its own world (DESIGN.md, Scale-out).
+
+    ``address=None`` starts a local Ray; otherwise it joins the running cluster there. A
+    chromosome's fitness depends only on it and the generation's traffic, never on the chunk
+    it was in, so results are identical with any number of workers.
+    """
+
+    def __init__(self, scenario: Scenario, address: str | None = None,
+                 workers: int | None = None):
+        try:
+            import ray
+        except ImportError:
+            raise InputError("the Ray executor needs Ray: pip install -e .[ray]",
+                             key="--executor") from None
+        self.ray = ray
+        if not ray.is_initialized():
+            try:
+                ray.init(address=address, include_dashboard=False, log_to_driver=False,
+                         configure_logging=False)
+            except (ConnectionError, RuntimeError, ValueError) as exc:
+                raise InputError(f"cannot reach Ray at {address}: {exc}", key="--address") from None
+        self.workers = workers or max(int(ray.cluster_resources().get("CPU", 1)), 1)
+        actor = ray.remote(num_cpus=1)(_WorldActor)
+        self.actors = [actor.remote(scenario) for _ in range(self.workers)]
+
+    def evaluate(self, population: np.ndarray, generation: int = 0) -> EpisodeResults:
+        chunks = np.array_split(population, min(self.workers, len(population)))
+        futures = [actor.evaluate.remote(chunk, generation)
+                   for actor, chunk in zip(self.actors, chunks, strict=False)]
+        return EpisodeResults.concatenate(self.ray.get(futures))
+
+    def close(self) -> None:
+        for actor in self.actors:
+            self.ray.kill(actor)
+        self.actors = []
+
+
 class MeanOverWorlds:
     """Fitness averaged over the episodes of several worlds, one per traffic strategy:
     incremental evolution (§5.4.1) over strategies that may differ in network and traffic."""
@@ -110,6 +161,5 @@ def make_evaluator(
     if executor == "process":
         return ProcessEvaluator(scenario)
     if executor == "ray":
-        raise InputError("the Ray executor is not available yet (issue 7); use local or process",
-                         key="--executor")
+        return RayEvaluator(scenario, address)
     raise InputError(f"unknown executor {executor!r}; use local, process or ray", key="--executor")

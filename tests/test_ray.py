@@ -1,0 +1,46 @@
+"""The Ray executor with a real local Ray: the same results as the local evaluator."""
+
+import numpy as np
+import pytest
+
+from enn_traffic.evolution.evaluate import LocalEvaluator, RayEvaluator
+from enn_traffic.runner import evolve
+from enn_traffic.scenario import load_scenario
+
+ray = pytest.importorskip("ray")
+
+
+@pytest.fixture(scope="module")
+def local_ray():
+    ray.init(num_cpus=2, include_dashboard=False, log_to_driver=False,
+             configure_logging=False)
+    yield
+    ray.shutdown()
+
+
+@pytest.mark.parametrize("workers", [1, 2])
+def test_ray_workers_give_the_local_results(local_ray, root, workers):
+    scenario = load_scenario(root / "scenarios" / "arena_strategy2.toml")
+    population = np.random.default_rng(3).uniform(-1, 1, (11, 68))
+    local = LocalEvaluator(scenario).evaluate(population, 5)
+    evaluator = RayEvaluator(scenario, workers=workers)
+    try:
+        spread = evaluator.evaluate(population, 5)
+    finally:
+        evaluator.close()
+    np.testing.assert_array_equal(local.steps, spread.steps)
+    np.testing.assert_array_equal(local.suffered, spread.suffered)
+    np.testing.assert_array_equal(local.fitness, spread.fitness)
+
+
+def test_a_run_on_ray_is_the_local_run(local_ray, root, tmp_path):
+    scenario = load_scenario(root / "scenarios" / "navigation_narrow.toml").with_overrides(
+        ga={"population_size": 30, "generations": 3})
+    on_local = evolve(scenario, tmp_path / "local", progress=False)
+    evaluator = RayEvaluator(scenario, workers=2)
+    try:
+        on_ray = evolve(scenario, tmp_path / "ray", evaluator=evaluator, progress=False)
+    finally:
+        evaluator.close()
+    columns = ["best_fitness", "mean_fitness", "min_fitness", "vehicle_steps"]
+    assert on_local[columns].equals(on_ray[columns])
