@@ -10,6 +10,8 @@ import json
 import time
 from pathlib import Path
 
+from tqdm import tqdm
+
 from enn_traffic.errors import InputError
 from enn_traffic.io import write_text
 
@@ -27,13 +29,15 @@ def reproduce(out: Path, quick: bool = False, only: list[str] | None = None,
     out.mkdir(parents=True, exist_ok=True)
     record_path = out / "summary.json"
     records = json.loads(record_path.read_text()) if record_path.exists() else {}
-    for name in names:
+    bar = tqdm(names, desc="reproduce", unit="experiment", disable=not progress, position=0)
+    for name in bar:
+        bar.set_postfix_str(name)
         started = time.perf_counter()
         lines = EXPERIMENTS[name](out, quick=quick, progress=progress)
         records[name] = {"lines": lines, "seconds": round(time.perf_counter() - started, 1),
                          "settings": "quick" if quick else "full"}
         write_text(record_path, json.dumps(records, indent=1))
-        print("\n".join(lines), flush=True)
+        tqdm.write("\n".join(lines))
     done = [n for n in EXPERIMENTS if n in records]
     summary = ["# enn-traffic: reproduction of Eraqi et al. (2016)", ""]
     summary += [f"- {line}" for n in done for line in records[n]["lines"]]
