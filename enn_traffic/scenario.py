@@ -258,6 +258,13 @@ def _key_of(error: dict) -> str:
 
 
 def _validate(data: dict, source: Path | None) -> Scenario:
+    tasks = [key for key in ("track", "lane_keeping")
+             if isinstance(data, dict) and data.get(key) is not None]
+    if isinstance(data, dict) and len(tasks) != 1:
+        both = len(tasks) == 2
+        raise InputError("give exactly one of [track] (a SUMO network) or [lane_keeping]"
+                         if both else "required key is missing: [track] (a SUMO network) or "
+                         "[lane_keeping]", source, "lane_keeping" if both else "track")
     try:
         scenario = Scenario.model_validate(data)
     except ValidationError as exc:

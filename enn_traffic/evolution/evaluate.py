@@ -95,6 +95,18 @@ class _WorldActor:
         return self.world.evaluate(chunk, generation)
 
 
+def _check_reachable(address: str, timeout: float = 3.0) -> None:
+    """Fail fast on a ``host:port`` nobody listens at (Ray itself retries for minutes)."""
+    import socket
+
+    host, _, port = address.rpartition(":")
+    try:
+        with socket.create_connection((host, int(port)), timeout=timeout):
+            pass
+    except (OSError, ValueError) as exc:
+        raise InputError(f"cannot reach Ray at {address}: {exc}", key="--address") from None
+
+
 class RayEvaluator:
     """Population chunks over Ray actors, each holding its own world (DESIGN.md, Scale-out).
 
@@ -111,6 +123,8 @@ class RayEvaluator:
             raise InputError("the Ray executor needs Ray: pip install -e .[ray]",
                              key="--executor") from None
         self.ray = ray
+        if address and ":" in address and "://" not in address:
+            _check_reachable(address)
         if not ray.is_initialized():
             try:
                 ray.init(address=address, include_dashboard=False, log_to_driver=False,
