@@ -52,11 +52,7 @@ def _workload(name: str):
 
 def navigation_bench(generations: int = 30, reference_seconds: float = 10.0) -> pd.DataFrame:
     world, params, rng, population = _workload("navigation_narrow")
-    populations = []
-    for _ in range(generations):
-        populations.append(population)
-        population = ga.next_generation(rng, population, world.evaluate(population).fitness,
-                                        params)
+    populations = _ga_generations(world, params, rng, population, generations)
     threads = numba.get_num_threads()
     rows = []
     steps, seconds = _timed_batches(world, populations)
@@ -145,6 +141,12 @@ def sumo_bench(generations: int = 10, closed_loop_episodes: int = 2) -> pd.DataF
         seconds += total - (time.perf_counter() - started)
     rows.append(("sumo closed loop: the best controller, strategy 1",
                  "libsumo step by step, 1 process", 1, steps, steps, seconds))
+    return _rate_table(rows)
+
+
+def _rate_table(rows: list[tuple]) -> pd.DataFrame:
+    """Rows (workload, implementation, threads, vehicle steps, learner steps, seconds), with
+    steps per second."""
     table = pd.DataFrame(rows, columns=["workload", "implementation", "threads",
                                         "vehicle_steps", "learner_steps", "seconds"])
     table["vehicle_steps_per_s"] = table["vehicle_steps"] / table["seconds"]
@@ -153,17 +155,23 @@ def sumo_bench(generations: int = 10, closed_loop_episodes: int = 2) -> pd.DataF
     return table
 
 
+def _ga_generations(world, params, rng, population, generations: int) -> list[np.ndarray]:
+    """The populations of the first ``generations`` generations of a GA run."""
+    populations = []
+    for _ in range(generations):
+        populations.append(population)
+        population = ga.next_generation(rng, population, world.evaluate(population).fitness,
+                                        params)
+    return populations
+
+
 def lane_keeping_bench(generations: int = 3) -> pd.DataFrame:
     """highway-env lane keeping: environment steps per second, in this process and over a
     process pool (one environment per worker), on the generations of a GA run."""
     from enn_traffic.evolution.evaluate import LocalEvaluator, ProcessEvaluator
 
     world, params, rng, population = _workload("lane_keeping")
-    populations = []
-    for _ in range(generations):
-        populations.append(population)
-        population = ga.next_generation(rng, population, world.evaluate(population).fitness,
-                                        params)
+    populations = _ga_generations(world, params, rng, population, generations)
     rows = []
     for name, evaluator in (("one process", LocalEvaluator(world.scenario)),
                             ("process pool", ProcessEvaluator(world.scenario))):
@@ -174,12 +182,7 @@ def lane_keeping_bench(generations: int = 3) -> pd.DataFrame:
             evaluator.close()
         workers = getattr(evaluator, "workers", 1)
         rows.append(("lane keeping: highway-env, P=40", name, workers, steps, steps, seconds))
-    table = pd.DataFrame(rows, columns=["workload", "implementation", "threads",
-                                        "vehicle_steps", "learner_steps", "seconds"])
-    table["vehicle_steps_per_s"] = table["vehicle_steps"] / table["seconds"]
-    table["learner_steps_per_s"] = table["learner_steps"] / table["seconds"]
-    table["speedup_vs_reference"] = np.nan
-    return table
+    return _rate_table(rows)
 
 
 def run_bench(quick: bool = False) -> pd.DataFrame:

@@ -4,6 +4,7 @@ import math
 
 import numpy as np
 import pytest
+from conftest import local_and_spread
 
 from enn_traffic.errors import InputError
 from enn_traffic.evolution import ga
@@ -82,16 +83,11 @@ def test_evolution_learns_to_keep_the_lane(tmp_path):
 
 
 def test_process_pool_gives_the_local_lane_keeping_results(tmp_path):
-    from enn_traffic.evolution.evaluate import LocalEvaluator, ProcessEvaluator
+    from enn_traffic.evolution.evaluate import ProcessEvaluator
 
     sc = scenario(tmp_path)
     population = np.random.default_rng(0).uniform(-1, 1, (6, make_world(sc).spec.chromosome_length))
-    local = LocalEvaluator(sc).evaluate(population)
-    pool = ProcessEvaluator(sc, workers=2)
-    try:
-        spread = pool.evaluate(population)
-    finally:
-        pool.close()
+    local, spread = local_and_spread(sc, population, 0, ProcessEvaluator(sc, 2))
     np.testing.assert_array_equal(local.steps, spread.steps)
 
 

@@ -2,8 +2,9 @@
 
 import numpy as np
 import pytest
+from conftest import local_and_spread
 
-from enn_traffic.evolution.evaluate import LocalEvaluator, RayEvaluator
+from enn_traffic.evolution.evaluate import RayEvaluator
 from enn_traffic.runner import evolve
 from enn_traffic.scenario import load_scenario
 
@@ -22,12 +23,8 @@ def local_ray():
 def test_ray_workers_give_the_local_results(local_ray, root, workers):
     scenario = load_scenario(root / "scenarios" / "arena_strategy2.toml")
     population = np.random.default_rng(3).uniform(-1, 1, (11, 68))
-    local = LocalEvaluator(scenario).evaluate(population, 5)
-    evaluator = RayEvaluator(scenario, workers=workers)
-    try:
-        spread = evaluator.evaluate(population, 5)
-    finally:
-        evaluator.close()
+    local, spread = local_and_spread(scenario, population, 5,
+                                     RayEvaluator(scenario, workers=workers))
     np.testing.assert_array_equal(local.steps, spread.steps)
     np.testing.assert_array_equal(local.suffered, spread.suffered)
     np.testing.assert_array_equal(local.fitness, spread.fitness)

@@ -7,6 +7,7 @@ import sys
 
 import numpy as np
 import pytest
+from conftest import local_and_spread
 
 from enn_traffic.errors import InputError
 from enn_traffic.scenario import load_scenario
@@ -167,15 +168,10 @@ def test_missing_route_file_names_the_key(tmp_path, root):
 
 def test_process_pool_with_one_libsumo_per_worker_gives_the_local_results(tmp_path, root):
     """Each worker process runs its own libsumo and records the same traffic."""
-    from enn_traffic.evolution.evaluate import LocalEvaluator, ProcessEvaluator
+    from enn_traffic.evolution.evaluate import ProcessEvaluator
 
     scenario = sumo_scenario(tmp_path, root, CLOCKWISE, steps=150, episodes=1)
     population = np.random.default_rng(2).uniform(-1, 1, (9, 68))
-    local = LocalEvaluator(scenario).evaluate(population, 4)
-    pool = ProcessEvaluator(scenario, workers=2)
-    try:
-        spread = pool.evaluate(population, 4)
-    finally:
-        pool.close()
+    local, spread = local_and_spread(scenario, population, 4, ProcessEvaluator(scenario, 2))
     np.testing.assert_array_equal(local.steps, spread.steps)
     np.testing.assert_array_equal(local.outcome, spread.outcome)

@@ -4,6 +4,7 @@ import math
 
 import numpy as np
 import pytest
+from conftest import local_and_spread
 
 from enn_traffic.errors import InputError
 from enn_traffic.scenario import load_scenario
@@ -125,16 +126,11 @@ def test_traffic_start_off_the_area_is_refused(tmp_path, root):
 
 
 def test_process_pool_matches_local_with_traffic(root):
-    from enn_traffic.evolution.evaluate import LocalEvaluator, ProcessEvaluator
+    from enn_traffic.evolution.evaluate import ProcessEvaluator
 
     scenario = load_scenario(root / "scenarios" / "arena_strategy4.toml")
     population = np.random.default_rng(1).uniform(-1, 1, (9, 68))
-    local = LocalEvaluator(scenario).evaluate(population, 7)
-    pool = ProcessEvaluator(scenario, workers=2)
-    try:
-        spread = pool.evaluate(population, 7)
-    finally:
-        pool.close()
+    local, spread = local_and_spread(scenario, population, 7, ProcessEvaluator(scenario, 2))
     np.testing.assert_array_equal(local.steps, spread.steps)
     np.testing.assert_array_equal(local.suffered, spread.suffered)
 

@@ -1,5 +1,6 @@
 import numpy as np
 import pytest
+from conftest import local_and_spread
 
 from enn_traffic.scenario import load_scenario
 from enn_traffic.sim.reference import reference_episode
@@ -102,15 +103,10 @@ def test_learning_on_the_narrow_track_improves_fitness(root):
 
 
 def test_process_pool_gives_the_local_results(root):
-    from enn_traffic.evolution.evaluate import LocalEvaluator, ProcessEvaluator
+    from enn_traffic.evolution.evaluate import ProcessEvaluator
 
     scenario = load_scenario(root / "scenarios" / "navigation_narrow.toml")
     population = np.random.default_rng(5).uniform(-1, 1, (37, 68))
-    local = LocalEvaluator(scenario).evaluate(population)
-    pool = ProcessEvaluator(scenario, workers=2)
-    try:
-        spread = pool.evaluate(population)
-    finally:
-        pool.close()
+    local, spread = local_and_spread(scenario, population, 0, ProcessEvaluator(scenario, 2))
     np.testing.assert_array_equal(local.fitness, spread.fitness)
     np.testing.assert_array_equal(local.outcome, spread.outcome)
