@@ -62,8 +62,8 @@ def sumo_scenario(tmp_path, root, routes, mode="replay", lane="g0_0to1_0_2", off
 
 def test_heading_conversion_by_hand():
     """SUMO's navigation angle: 0 = north, clockwise, degrees; ours: 0 = east, anticlockwise."""
-    assert np.allclose(sumo.to_heading([90.0, 0.0, 180.0, 45.0]),
-                       [0.0, math.pi / 2, -math.pi / 2, math.pi / 4])
+    headings = [sumo.to_heading(angle) for angle in (90.0, 0.0, 180.0, 45.0, 270.0)]
+    assert np.allclose(headings, [0.0, math.pi / 2, -math.pi / 2, math.pi / 4, math.pi])
     assert sumo.to_angle(math.pi / 2) == pytest.approx(0.0)
     assert sumo.to_angle(-math.pi / 2) == pytest.approx(180.0)
 

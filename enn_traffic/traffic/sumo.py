@@ -39,11 +39,12 @@ _VARIABLES = [_POSITION, _ANGLE, _LENGTH, _WIDTH]
 MAX_SLOTS = 4096  # vehicles on the network at once
 
 
-def to_heading(angle_deg):
+@njit(cache=True)
+def to_heading(angle_deg: float) -> float:
     """SUMO navigation angle (degrees, 0 = north, clockwise) to our heading (radians, 0 = east,
     counter-clockwise), wrapped to (-pi, pi]."""
-    heading = np.radians(90.0 - np.asarray(angle_deg, dtype=np.float64))
-    return np.pi - np.mod(np.pi - heading, 2.0 * np.pi)
+    heading = math.radians(90.0 - angle_deg)
+    return math.pi - (math.pi - heading) % (2.0 * math.pi)
 
 
 def to_angle(heading: float) -> float:
@@ -57,7 +58,7 @@ def _bodies(values, corners, centres) -> None:
     (n, 2) of SUMO vehicles from rows (x, y, navigation angle, length, width), where (x, y)
     is the front bumper's middle."""
     for i in range(values.shape[0]):
-        heading = math.radians(90.0 - values[i, 2])
+        heading = to_heading(values[i, 2])
         body_corners(values[i, 0], values[i, 1], heading, values[i, 3], values[i, 4], corners[i])
         centres[i, 0] = 0.5 * (corners[i, 0, 0] + corners[i, 2, 0])
         centres[i, 1] = 0.5 * (corners[i, 0, 1] + corners[i, 2, 1])
