@@ -14,6 +14,7 @@ from tqdm import tqdm
 
 from enn_traffic.errors import InputError
 from enn_traffic.io import write_text
+from enn_traffic.report.paper_tables import paper_tables
 
 
 def reproduce(out: Path, quick: bool = False, only: list[str] | None = None,
@@ -43,7 +44,8 @@ def reproduce(out: Path, quick: bool = False, only: list[str] | None = None,
     summary += [f"- {line}" for n in done for line in records[n]["lines"]]
     summary += ["", "| experiment | settings | wall time of its last call [s] |", "|---|---|---|"]
     summary += [f"| {n} | {records[n]['settings']} | {records[n]['seconds']} |" for n in done]
-    summary += ["", "A call reuses finished runs: its wall time can be far below the compute."]
+    summary += ["", "A call reuses finished runs: its wall time can be far below the compute.", ""]
+    summary += paper_tables(out)
     write_text(out / "summary.md", "\n".join(summary) + "\n")
     for name in names:
         print(f"{name:>16}: {records[name]['seconds']:7.1f} s")

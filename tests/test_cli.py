@@ -145,3 +145,15 @@ def test_scenario_with_a_broken_network(tmp_path, root):
     assert result.returncode == 2
     assert "broken.net.xml" in result.stderr and "not a readable SUMO network" in result.stderr
     assert "Traceback" not in result.stderr
+
+
+def test_summary_sets_the_papers_tables_beside_ours(tmp_path):
+    from enn_traffic.report.paper_tables import paper_tables
+
+    (tmp_path / "table1.csv").write_text(
+        "training_strategy,deploy_1,deploy_2,deploy_3,deploy_4\n"
+        "1,100,2,3,4\n2,5,600,7,8\n3,9,10,700,12\n4,13,14,15,800\n")
+    text = "\n".join(paper_tables(tmp_path))
+    assert "| 1 | 2115 / 100 | 544 / 2 | 558 / 3 | 432 / 4 |" in text
+    assert "| 4 | 559 / 13 | 334 / 14 | 1080 / 15 | 2560 / 800 |" in text
+    assert paper_tables(tmp_path / "empty") == []

@@ -8,7 +8,7 @@ Two families of strategies run the same experiments: the arena's kinematic strat
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from functools import cache
 from pathlib import Path
 
@@ -22,7 +22,7 @@ from enn_traffic.evolution.ga import GAState
 from enn_traffic.experiments.common import run_or_reuse, scenario, seed_runs
 from enn_traffic.io import write_csv
 from enn_traffic.report.plots import draw_paths, learning_curves, save_figure
-from enn_traffic.scenario import load_scenario
+from enn_traffic.scenario import Scenario, load_scenario
 from enn_traffic.sim import make_world
 from enn_traffic.sim.world import World
 
@@ -48,12 +48,30 @@ class Family:
     accepted_fitness: float
     incremental_max_generations: int
     quick: tuple = (("population_size", 40), ("generations", 12), ("elite_count", 4))
+    # --quick: the first seeds, fewer test situations, and scenario overrides (section, items)
+    quick_seeds: int = 2
+    quick_test_episodes: int = 10
+    quick_scenario: tuple = ()
+    quick_mode: bool = False
 
     def name(self, strategy: int) -> str:
         return f"{self.prefix}{strategy}"
 
-    def seeds_for(self, quick: bool) -> tuple[int, ...]:
-        return self.seeds[:2] if quick else self.seeds
+    def settings(self, quick: bool) -> Family:
+        """This family as ``--quick`` runs it, or unchanged."""
+        if not quick or self.quick_mode:
+            return self
+        return replace(self, seeds=self.seeds[: self.quick_seeds],
+                       test_episodes=self.quick_test_episodes, quick_mode=True)
+
+    def overrides(self) -> dict:
+        return {section: dict(items) for section, items in self.quick_scenario} \
+            if self.quick_mode else {}
+
+    def scenario(self, strategy: int) -> Scenario:
+        """A strategy's scenario, with the quick overrides in quick mode."""
+        sc = scenario(self.name(strategy))
+        return sc.with_overrides(**self.overrides()) if self.quick_mode else sc
 
     def ga(self, quick: bool) -> dict:
         return dict(self.quick) if quick else {}
@@ -63,18 +81,21 @@ ARENA = Family("arena_strategy", "", (1, 2, 3, 4), test_episodes=40, accepted_fi
                incremental_max_generations=40)
 SUMO = Family("sumo_strategy", "sumo", (1, 2), test_episodes=10, accepted_fitness=2000.0,
               incremental_max_generations=20,
-              quick=(("population_size", 40), ("generations", 6), ("elite_count", 4)))
+              quick=(("population_size", 40), ("generations", 6), ("elite_count", 4)),
+              quick_seeds=1, quick_test_episodes=3,
+              quick_scenario=(("episode", (("max_steps", 1000),)),
+                              ("traffic", (("warmup_s", 20.0),))))
 
 
 def _strategy_runs(family: Family, strategy: int, out: Path, quick: bool, progress: bool):
-    return seed_runs(family.name(strategy), out, family.seeds_for(quick), family.ga(quick),
-                     progress)
+    return seed_runs(family.name(strategy), out, family.seeds, family.ga(quick), progress,
+                     **family.overrides())
 
 
 @cache
 def _test_world(family: Family, strategy: int) -> World:
     """The world of a strategy with ``test_episodes`` traffic situations, built once."""
-    sc = scenario(family.name(strategy))
+    sc = family.scenario(strategy)
     return make_world(sc.with_overrides(traffic={"episodes": family.test_episodes}))
 
 
@@ -110,7 +131,7 @@ def _test_fitness(family: Family, chromosome: np.ndarray, strategy: int) -> floa
 
 
 def _title(family: Family, strategy: int) -> str:
-    sc = scenario(family.name(strategy))
+    sc = family.scenario(strategy)
     kind = sc.traffic.strategy if family is ARENA else sc.description.rstrip(".")
     return f"strategy {strategy}: {kind}"
 
@@ -118,6 +139,7 @@ def _title(family: Family, strategy: int) -> str:
 def fig11(out: Path, quick: bool = False, progress: bool = True,
           family: Family = ARENA) -> list[str]:
     """Learning curves, one run per seed and strategy, one panel per strategy."""
+    family = family.settings(quick)
     out = out / family.folder
     figure, axes = plt.subplots(2, 2, figsize=(10, 7), sharex=True)
     rows = []
@@ -135,7 +157,7 @@ def fig11(out: Path, quick: bool = False, progress: bool = True,
                 "first_mean": mean.iloc[0], "last5_mean_mean": mean.tail(5).mean(),
                 "mean_rise": mean.tail(5).mean() / max(mean.iloc[0], 1.0),
             })  # fmt: skip
-    runs_each = len(family.seeds_for(quick))
+    runs_each = len(family.seeds)
     figure.suptitle(f"Fig. 11 ({family.prefix}1-4): the learner among traffic, "
                     f"{runs_each} runs per strategy")
     figure.tight_layout()
@@ -160,7 +182,7 @@ def _trained_controllers(family: Family, out: Path, quick: bool, progress: bool
         _strategy_runs(family, strategy, out, quick, progress)
         candidates = np.concatenate([
             _candidates(out / "runs" / family.name(strategy) / f"seed{seed}")
-            for seed in family.seeds_for(quick)])  # fmt: skip
+            for seed in family.seeds])  # fmt: skip
         chosen[strategy] = _pick(family, candidates, [strategy])
     return chosen
 
@@ -168,8 +190,9 @@ def _trained_controllers(family: Family, out: Path, quick: bool, progress: bool
 def evolved_population(family: Family, out: Path, strategy: int, chosen: np.ndarray,
                        quick: bool) -> np.ndarray:
     """The final population of the run that produced ``chosen``, with ``chosen`` first."""
+    family = family.settings(quick)
     out = out / family.folder
-    for seed in family.seeds_for(quick):
+    for seed in family.seeds:
         run_dir = out / "runs" / family.name(strategy) / f"seed{seed}"
         if any(np.array_equal(row, chosen) for row in _candidates(run_dir)):
             population = GAState.load(run_dir / "checkpoint.npz").population
@@ -180,6 +203,7 @@ def evolved_population(family: Family, out: Path, strategy: int, chosen: np.ndar
 def trained_controllers(out: Path, quick: bool, progress: bool, family: Family = ARENA
                         ) -> dict[int, np.ndarray]:
     """Per strategy: the controller Table 1 deploys (trained on that strategy alone)."""
+    family = family.settings(quick)
     return _trained_controllers(family, out / family.folder, quick, progress)
 
 
@@ -205,6 +229,7 @@ def _draw_specialists(family: Family, controllers: dict[int, np.ndarray], path: 
 def table1(out: Path, quick: bool = False, progress: bool = True,
            family: Family = ARENA) -> list[str]:
     """Train on each strategy, deploy on each (Table 1), and the colour map (Fig. 12)."""
+    family = family.settings(quick)
     out = out / family.folder
     controllers = _trained_controllers(family, out, quick, progress)
     matrix = np.array([[_test_fitness(family, controllers[trained], deployed)
@@ -240,15 +265,16 @@ def table2(out: Path, quick: bool = False, progress: bool = True,
            family: Family = ARENA) -> list[str]:
     """Incremental evolution: add a strategy each time the fitness passes 80% of the accepted
     fitness; the fitness is averaged over the strategies included so far (§5.4.1)."""
+    family = family.settings(quick)
     out = out / family.folder
     threshold = 0.8 * family.accepted_fitness
-    base = scenario(family.name(1))
+    base = family.scenario(1)
     population, rows = None, []
     for iteration in range(1, len(STRATEGIES) + 1):
         ga = {"generations": family.incremental_max_generations, **family.ga(quick)}
         sc = base.with_overrides(name=f"incremental_{iteration}", ga=ga)
         included = STRATEGIES[:iteration]
-        worlds = [make_world(scenario(family.name(s))) for s in included]
+        worlds = [make_world(family.scenario(s)) for s in included]
 
         def accepted(population, fitness, included=included):
             top = population[np.argsort(-fitness, kind="stable")[:TOP_CANDIDATES]]
@@ -288,7 +314,7 @@ def replay_against_closed_loop(out: Path, quick: bool = False, progress: bool = 
     controllers = trained_controllers(out, quick, progress, SUMO)
     rows = []
     for strategy in STRATEGIES:
-        test = _test_world(SUMO, strategy).scenario
+        test = _test_world(SUMO.settings(quick), strategy).scenario
         lifetimes = {}
         for mode in ("replay", "closed-loop"):
             world = make_world(test.with_overrides(traffic={"mode": mode}))

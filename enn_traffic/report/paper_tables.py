@@ -1,0 +1,75 @@
+"""The paper's Tables 1–4 beside the reproduced ones, as Markdown for summary.md."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pandas as pd
+
+# Eraqi et al. (2016), §5.4–5.5.
+PAPER_TABLE1 = [[2115, 544, 558, 432], [595, 2305, 136, 931], [159, 351, 3050, 460],
+                [559, 334, 1080, 2560]]
+PAPER_TABLE2 = [[1936], [2380, 1452], [1970, 2123, 1467]]
+PAPER_TABLE3 = [(16.33, 3.90), (20.05, 4.59), (16.82, 8.00), (13.49, 12.27)]
+PAPER_TABLE4 = [(16.33, 2.11), (20.05, 1.58), (16.82, 1.76), (13.49, 1.90)]
+
+
+def _pair(paper, here) -> str:
+    return f"{paper:g} / {here:g}"
+
+
+def _table1(path: Path, title: str) -> list[str]:
+    table = pd.read_csv(path)
+    lines = [f"### {title}: paper / here (fitness, steps)", "",
+             "| trained \\ deployed | 1 | 2 | 3 | 4 |", "|---|---|---|---|---|"]
+    for i, row in table.iterrows():
+        cells = [_pair(PAPER_TABLE1[i][j], round(row[f"deploy_{j + 1}"])) for j in range(4)]
+        lines.append(f"| {int(row['training_strategy'])} | " + " | ".join(cells) + " |")
+    return [*lines, ""]
+
+
+def _table2(path: Path, title: str) -> list[str]:
+    table = pd.read_csv(path)
+    lines = [f"### {title}: paper / here (fitness, steps; the paper has 3 iterations)", "",
+             "| iteration | 1 | 2 | 3 | 4 | average |", "|---|---|---|---|---|---|"]
+    for i, row in table.iterrows():
+        paper = PAPER_TABLE2[i] if i < len(PAPER_TABLE2) else []
+        cells = []
+        for j in range(4):
+            here = row[f"strategy_{j + 1}"]
+            if pd.isna(here):
+                cells.append("")
+            else:
+                cells.append(_pair(paper[j], round(here)) if j < len(paper)
+                             else f"– / {round(here)}")
+        average = sum(paper) / len(paper) if paper else None
+        cells.append(_pair(round(average, 1), round(row["average"])) if average
+                     else f"– / {round(row['average'])}")
+        lines.append(f"| {int(row['iteration'])} | " + " | ".join(cells) + " |")
+    return [*lines, ""]
+
+
+def _rates(path: Path, title: str, paper) -> list[str]:
+    table = pd.read_csv(path)
+    lines = [f"### {title}: collisions per second, paper (its count) / here (per vehicle)", "",
+             "| strategy | initial | after |", "|---|---|---|"]
+    for i, row in table.iterrows():
+        lines.append(f"| {int(row['strategy'])} | {_pair(paper[i][0], row.iloc[1])} | "
+                     f"{_pair(paper[i][1], row.iloc[2])} |")
+    return [*lines, ""]
+
+
+def paper_tables(out: Path) -> list[str]:
+    """Markdown for every reproduced table found in ``out``."""
+    sections = []
+    for folder, label in (("", "arena"), ("sumo", "SUMO traffic")):
+        base = out / folder
+        if (base / "table1.csv").exists():
+            sections += _table1(base / "table1.csv", f"Table 1, {label}")
+        if (base / "table2.csv").exists():
+            sections += _table2(base / "table2.csv", f"Table 2, {label}")
+    if (out / "table3.csv").exists():
+        sections += _rates(out / "table3.csv", "Table 3", PAPER_TABLE3)
+    if (out / "table4.csv").exists():
+        sections += _rates(out / "table4.csv", "Table 4", PAPER_TABLE4)
+    return ["## The paper's tables beside these", "", *sections] if sections else []
