@@ -1,0 +1,149 @@
+"""Faults and bad input: a killed run resumes without loss, a broken scenario never gives a
+traceback."""
+
+import math
+import signal
+import subprocess
+import sys
+import time
+
+import numpy as np
+import pandas as pd
+import tomli_w
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+
+from enn_traffic.errors import InputError
+from enn_traffic.scenario import load_scenario
+
+RUN = ("--population", 40, "--generations", 12, "--seed", 5, "--quiet")
+
+
+def _run(*args, wait=True):
+    command = [sys.executable, "-m", "enn_traffic", *map(str, args)]
+    if wait:
+        return subprocess.run(command, capture_output=True, text=True)
+    return subprocess.Popen(command, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)
+
+
+def _generation_done(out) -> int:
+    try:
+        return len(pd.read_csv(out / "generations.csv"))
+    except (FileNotFoundError, pd.errors.EmptyDataError):
+        return 0
+
+
+def test_run_killed_mid_run_resumes_to_the_uninterrupted_result(tmp_path, root):
+    """SIGKILL while a run is between generations 2 and 12, then --resume: the same
+    generations.csv (but elapsed time) and the same final population as a run never killed."""
+    scenario = root / "scenarios" / "arena_strategy1.toml"
+    whole = tmp_path / "whole"
+    assert _run("run", scenario, "--out", whole, *RUN).returncode == 0
+    killed = tmp_path / "killed"
+    process = _run("run", scenario, "--out", killed, *RUN, wait=False)
+    deadline = time.monotonic() + 120
+    while _generation_done(killed) < 2 and process.poll() is None:
+        assert time.monotonic() < deadline, "the run never got going"
+        time.sleep(0.01)
+    process.send_signal(signal.SIGKILL)
+    process.wait()
+    assert _generation_done(killed) < 12, "the run finished before it could be killed"
+    resumed = _run("run", scenario, "--out", killed, "--resume", *RUN)
+    assert resumed.returncode == 0, resumed.stderr
+    expected = pd.read_csv(whole / "generations.csv").drop(columns="elapsed_s")
+    got = pd.read_csv(killed / "generations.csv").drop(columns="elapsed_s")
+    pd.testing.assert_frame_equal(expected, got)
+    with np.load(whole / "checkpoint.npz") as a, np.load(killed / "checkpoint.npz") as b:
+        np.testing.assert_array_equal(a["population"], b["population"])
+    assert not list(killed.glob("*.tmp")), "a half-written file was left behind"
+
+
+def test_truncated_checkpoint_is_reported_not_loaded(tmp_path, root):
+    scenario = root / "scenarios" / "navigation_narrow.toml"
+    out = tmp_path / "run"
+    assert _run("run", scenario, "--out", out, "--population", 20, "--generations", 2,
+                "--quiet").returncode == 0
+    data = (out / "checkpoint.npz").read_bytes()
+    (out / "checkpoint.npz").write_bytes(data[: len(data) // 2])
+    result = _run("run", scenario, "--out", out, "--population", 20, "--generations", 4,
+                  "--resume", "--quiet")
+    assert result.returncode == 2
+    assert "checkpoint" in result.stderr and "Traceback" not in result.stderr
+
+
+def test_network_without_drivable_area_is_a_clear_error(tmp_path, root):
+    net = tmp_path / "empty.net.xml"
+    net.write_text('<net version="1.20"><location netOffset="0.00,0.00" '
+                   'convBoundary="0,0,1,1" origBoundary="0,0,1,1" projParameter="!"/></net>')
+    scenario = tmp_path / "s.toml"
+    scenario.write_text(f'name = "empty"\n[track]\nnet = "{net}"\nstart_xy = [0.0, 0.0]\n')
+    result = _run("run", scenario, "--generations", 1, "--out", tmp_path / "out")
+    assert result.returncode == 2
+    assert "empty.net.xml" in result.stderr and "no drivable area" in result.stderr
+    assert "Traceback" not in result.stderr
+
+
+# Hypothesis: a valid scenario with one value replaced by anything TOML can hold.
+VALID = {
+    "name": "prop", "seed": 1,
+    "track": {"net": "NET", "start_xy": [20.0, 50.0], "start_heading_deg": 0.0},
+    "vehicle": {"length": 4.3, "width": 2.5, "wheelbase": 2.6, "speed": 10.0, "dt": 0.1},
+    "sensor": {"beams": 5, "span_deg": 180.0, "range": 25.0},
+    "network": {"hidden": [3], "steering_gain_deg": 90.0, "layout": "source"},
+    "ga": {"population_size": 10, "generations": 2, "tournament_size": 3,
+           "mutation_probability": 0.1, "elite_count": 1},
+    "episode": {"max_steps": 100, "spin_window": 49, "spin_variance": 64.0},
+    "traffic": {"strategy": "straight", "starts_xy": [[40.0, 50.0]], "episodes": 1,
+                "circle_radius": [15.0, 46.0]},
+}
+PLACES = [(section, key) for section, values in VALID.items() if isinstance(values, dict)
+          for key in values] + [("", "name"), ("", "seed"), ("", "no_such_key"),
+                                ("ga", "no_such_key")]
+VALUES = st.one_of(
+    st.none(), st.booleans(), st.integers(-10**12, 10**12),
+    st.floats(allow_nan=True, allow_infinity=True), st.text(max_size=12),
+    st.lists(st.floats(-1e3, 1e3), max_size=3), st.dictionaries(st.text(max_size=4),
+                                                                st.integers(), max_size=2))
+
+
+@settings(max_examples=150, deadline=None,
+          suppress_health_check=[HealthCheck.function_scoped_fixture])
+@given(place=st.sampled_from(PLACES), value=VALUES)
+def test_any_edited_value_loads_or_names_file_and_key(tmp_path, root, place, value):
+    data = {k: dict(v) if isinstance(v, dict) else v for k, v in VALID.items()}
+    data["track"]["net"] = str(root / "sumo_nets" / "arena.net.xml")
+    section, key = place
+    target = data if not section else data[section]
+    if value is None:
+        target.pop(key, None)
+    else:
+        target[key] = value
+    path = tmp_path / "prop.toml"
+    try:
+        path.write_text(tomli_w.dumps(data))
+    except (TypeError, ValueError):
+        return  # not writable as TOML (NaN keys and the like): nothing a user could save
+    try:
+        scenario = load_scenario(path)
+    except InputError as error:
+        assert error.file == str(path.resolve()) or error.file == str(path)
+        assert error.key, error
+        return
+    assert scenario.name  # loaded: the edited value was a valid one
+    assert not (isinstance(value, float) and not math.isfinite(value)), f"{place}: {value}"
+
+
+def test_bad_scenarios_from_the_command_line_exit_2_without_traceback(tmp_path, root):
+    """A sample of the broken files the property test tries, through the real command line."""
+    cases = {"beams": ("sensor", "beams", -1), "speed": ("vehicle", "speed", "fast"),
+             "nan": ("sensor", "range", float("nan")), "extra": ("ga", "colour", 3),
+             "strategy": ("traffic", "strategy", "teleport")}
+    for name, (section, key, value) in cases.items():
+        data = {k: dict(v) if isinstance(v, dict) else v for k, v in VALID.items()}
+        data["track"]["net"] = str(root / "sumo_nets" / "arena.net.xml")
+        data[section][key] = value
+        path = tmp_path / f"{name}.toml"
+        path.write_text(tomli_w.dumps(data))
+        result = _run("run", path, "--out", tmp_path / name)
+        assert result.returncode == 2, name
+        assert f"{section}.{key}" in result.stderr and "Traceback" not in result.stderr, name
