@@ -21,3 +21,15 @@ def local_and_spread(scenario, population, generation, evaluator):
     finally:
         evaluator.close()
     return local, spread
+
+
+def assert_same_run(expected, got) -> None:
+    """Two run folders hold the same generations.csv (but elapsed time) and final population."""
+    import numpy as np
+    import pandas as pd
+
+    pd.testing.assert_frame_equal(
+        pd.read_csv(expected / "generations.csv").drop(columns="elapsed_s"),
+        pd.read_csv(got / "generations.csv").drop(columns="elapsed_s"))
+    with np.load(expected / "checkpoint.npz") as a, np.load(got / "checkpoint.npz") as b:
+        np.testing.assert_array_equal(a["population"], b["population"])

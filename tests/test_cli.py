@@ -6,6 +6,7 @@ import sys
 import numpy as np
 import pandas as pd
 import pytest
+from conftest import assert_same_run
 
 
 def cli(*args, cwd=None):
@@ -45,11 +46,7 @@ def test_resume_gives_the_uninterrupted_result(small_run, tmp_path, root):
     assert refused.returncode == 2 and "--resume" in refused.stderr
     resumed = cli("run", scenario, "--out", part, "--generations", 6, "--resume", *common)
     assert resumed.returncode == 0, resumed.stderr
-    whole = pd.read_csv(small_run / "generations.csv").drop(columns="elapsed_s")
-    parts = pd.read_csv(part / "generations.csv").drop(columns="elapsed_s")
-    pd.testing.assert_frame_equal(whole, parts)
-    with np.load(small_run / "checkpoint.npz") as a, np.load(part / "checkpoint.npz") as b:
-        np.testing.assert_array_equal(a["population"], b["population"])
+    assert_same_run(small_run, part)
 
 
 def test_resume_refuses_other_settings(small_run, root):
