@@ -14,6 +14,7 @@ from enn_traffic.sim.world import CAPPED, OUTCOMES, EpisodeResults
 # Evaluation episodes draw their traffic from generation keys far past any training run, so
 # a controller is never deployed on the traffic it was trained on.
 EVALUATION_KEY = 1_000_000_000
+MAX_LABELLED = 9  # vehicles drawn with a legend entry each
 
 
 def evaluate_controller(controller: Controller, scenario: Scenario, episodes: int = 1
@@ -78,14 +79,11 @@ def render(
         animate_run(world, poses, out, title)
     else:
         paths = [poses[:, v] for v in range(poses.shape[1])]
-        labels = ["learner"] + [f"vehicle {v}" for v in range(1, len(paths))]
-        trajectories(
-            world.track.walls,
-            paths,
-            out,
-            title=title,
-            start=world.start,
-            labels=labels if len(paths) > 1 else None,
-        )
+        labels, colors = ["learner"] + [f"vehicle {v}" for v in range(1, len(paths))], None
+        if len(paths) > MAX_LABELLED:  # SUMO traffic: the learner in red among grey traffic
+            labels = ["learner", "traffic"] + [None] * (len(paths) - 2)
+            colors = ["C3"] + ["0.6"] * (len(paths) - 1)
+        trajectories(world.track.walls, paths, out, title=title, start=world.start,
+                     labels=labels if len(paths) > 1 else None, colors=colors)
     return {"steps": steps, "outcome": OUTCOMES[outcome], "file": str(out)}
 

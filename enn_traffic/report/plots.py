@@ -92,12 +92,13 @@ def trajectories(
     paths: Sequence[np.ndarray],
     path: str | Path,
     title: str = "",
-    labels: Sequence[str] | None = None,
+    labels: Sequence[str | None] | None = None,
     start: tuple[float, float, float] | None = None,
+    colors: Sequence[str] | None = None,
 ) -> None:
     """Walls in black and each trajectory (n, 2+) as a coloured line, broken at respawns."""
     figure, axes = plt.subplots(figsize=(6.4, 6.4))
-    draw_paths(axes, walls, paths, labels=labels, start=start)
+    draw_paths(axes, walls, paths, labels=labels, colors=colors, start=start)
     axes.set_title(title)
     axes.set_xlabel("x [m]")
     axes.set_ylabel("y [m]")
