@@ -127,7 +127,7 @@ def sumo_bench(generations: int = 10, closed_loop_episodes: int = 2) -> pd.DataF
     rows = [(f"sumo replay: P=200 worlds x {world.vehicles} vehicles, strategy 1",
              "compiled batch + SUMO recording", threads, steps, learner_steps, seconds)]
     closed = make_world(world.scenario.with_overrides(traffic={"mode": "closed-loop"}))
-    genes = closed._genes(best)[0]
+    genes = closed.spec.in_source_layout(best)[0]
     closed.closed_loop(genes, 0, max_steps=2)  # load the compiled step outside the timing
     steps, seconds = 0, 0.0
     for seed in closed.seeds(generations + 1)[:closed_loop_episodes]:

@@ -52,9 +52,18 @@ class NetworkSpec:
             offset += rows * cols
         return np.concatenate(order)
 
+    def in_source_layout(self, population: np.ndarray) -> np.ndarray:
+        """Chromosomes (P, G) of this layout as contiguous float rows in the source layout,
+        the order the compiled simulators read; a clear error for the wrong length."""
+        population = np.atleast_2d(np.asarray(population, dtype=np.float64))
+        if population.shape[1] != self.chromosome_length:
+            raise ValueError(f"chromosomes have {population.shape[1]} genes; the network "
+                             f"{self.layer_sizes} needs {self.chromosome_length}")
+        return np.ascontiguousarray(population[:, self.source_order()])
+
     def weights(self, population: np.ndarray) -> list[np.ndarray]:
         """Per-layer weight arrays of shape (P, sources + 1, targets)."""
-        population = np.atleast_2d(population)[:, self.source_order()]
+        population = self.in_source_layout(population)
         matrices, offset = [], 0
         for rows, cols in self.layer_shapes:
             block = population[:, offset : offset + rows * cols]

@@ -57,8 +57,8 @@ def _strategy_rows(strategy: int, winner: np.ndarray, population: np.ndarray,
     world = World(scenario(dynamic.ARENA.name(strategy)))
     sc = world.scenario
     params = ga_params(sc)
-    winner_genes = world._genes(winner)[0]
-    evolved = world._genes(population)
+    winner_genes = world.spec.in_source_layout(winner)[0]
+    evolved = world.spec.in_source_layout(population)
     network = np.full(world.vehicles, RANDOM_NETWORK)
     rates = {"initial": [], "winner": [], "learning": [], "population": []}
     started = time.perf_counter()

@@ -39,7 +39,6 @@ class LaneKeepingWorld:
         self.scenario = scenario
         self.config = scenario.lane_keeping
         self.spec = NetworkSpec(scenario.layer_sizes, scenario.network.layout)
-        self._order = self.spec.source_order()
         self._layers = np.asarray(scenario.layer_sizes, dtype=np.int64)
         self.env = make_env(self.config)
         self._track: Road | None = None
@@ -50,13 +49,6 @@ class LaneKeepingWorld:
         if self._track is None:
             self._track = Road(marking_segments(self.config), f"{self.config.road} road")
         return self._track
-
-    def _genes(self, population: np.ndarray) -> np.ndarray:
-        population = np.atleast_2d(np.asarray(population, dtype=np.float64))
-        if population.shape[1] != self.spec.chromosome_length:
-            raise ValueError(f"chromosomes have {population.shape[1]} genes; the network "
-                             f"{self.spec.layer_sizes} needs {self.spec.chromosome_length}")
-        return np.ascontiguousarray(population[:, self._order])
 
     def episode_labels(self) -> list[str]:
         return [f"{self.config.road} road"] * self.config.episodes
@@ -91,7 +83,7 @@ class LaneKeepingWorld:
 
     def evaluate(self, population: np.ndarray, generation: int = 0) -> EpisodeResults:
         """Fitness of every chromosome: steps kept in the lane, averaged over episodes."""
-        genes = self._genes(population)
+        genes = self.spec.in_source_layout(population)
         episodes = self.config.episodes
         steps = np.zeros((len(genes), episodes), dtype=np.int64)
         outcome = np.zeros((len(genes), episodes), dtype=np.int64)
@@ -104,7 +96,7 @@ class LaneKeepingWorld:
 
     def offsets(self, chromosome: np.ndarray, generation: int = 0) -> list[tuple[int, int, float]]:
         """Per episode: (steps, outcome, mean |lateral offset|) of one chromosome."""
-        genes = self._genes(chromosome)[0]
+        genes = self.spec.in_source_layout(chromosome)[0]
         return [self.episode(genes, self._rng(generation, e), self.scenario.episode.max_steps)
                 for e in range(self.config.episodes)]
 
@@ -113,6 +105,6 @@ class LaneKeepingWorld:
         """The vehicle's poses (n, 1, 3) in one episode and the outcome code."""
         poses: list = []
         limit = self.scenario.episode.max_steps if max_steps is None else max_steps
-        _, outcome, _ = self.episode(self._genes(chromosome)[0], self._rng(generation, episode),
-                                     limit, poses)
+        genes = self.spec.in_source_layout(chromosome)[0]
+        _, outcome, _ = self.episode(genes, self._rng(generation, episode), limit, poses)
         return np.array(poses)[:, None, :], int(outcome)

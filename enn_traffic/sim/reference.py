@@ -36,7 +36,7 @@ def _inside(px, py, corners):
 def reference_episode(world: World, chromosome: np.ndarray) -> tuple[int, int]:
     """(steps moved, outcome) of one chromosome, computed the slow, obvious way."""
     scenario = world.scenario
-    genes = [float(g) for g in world._genes(chromosome)[0]]
+    genes = [float(g) for g in world.spec.in_source_layout(chromosome)[0]]
     sizes = list(scenario.layer_sizes)
     gain = math.radians(scenario.network.steering_gain_deg)
     vehicle, sensor, episode = scenario.vehicle, scenario.sensor, scenario.episode

@@ -189,19 +189,16 @@ class SharedArena:
         self.world = world
         self.kinds = np.asarray(kinds, dtype=np.int64)
         count = len(self.kinds)
-        physics = world._physics
-        self.length, self.width, self.wheelbase, self.distance = physics[:4]
-        self.beam_cos, self.beam_sin, self.max_range, self.walls, self.lookup = physics[4:9]
-        self.bounds, self.params = physics[9], physics[10]
-        self.radius = 0.5 * math.hypot(self.length, self.width)
+        self.physics = p = world._physics
+        self.radius = 0.5 * math.hypot(p.length, p.width)
         self.pose = np.empty((count, 3))
         self.corners = np.empty((count, 4, 2))
         self.centres = np.empty((count, 2))
         self.memory = np.zeros((count, 2))
         self.rng = np.full(1, np.uint64(seed), dtype=np.uint64)
         for v in range(count):
-            _place(v, *starts[v], self.length, self.width, self.pose, self.corners, self.centres)
-            reset_memory(self.kinds[v], self.params, self.rng, self.memory[v])
+            _place(v, *starts[v], p.length, p.width, self.pose, self.corners, self.centres)
+            reset_memory(self.kinds[v], p.params, self.rng, self.memory[v])
         self.previous, self.previous_centres = self.corners.copy(), self.centres.copy()
         self.fresh = np.zeros(count, dtype=np.bool_)
         self.life = np.zeros(count, dtype=np.int64)
@@ -229,8 +226,8 @@ class SharedArena:
         for t in range(steps + 1):
             trace[t] = self.pose
             detect(self.pose, self.corners, self.centres, self.previous, self.previous_centres,
-                   self.fresh, learning, self.life, self.recent, self.walls, self.lookup,
-                   self.radius, self.spin_variance, self.events)
+                   self.fresh, learning, self.life, self.recent, self.physics.walls,
+                   self.physics.lookup, self.radius, self.spin_variance, self.events)
             for v in np.nonzero(self.events != ALIVE)[0]:
                 spun = self.events[v] == SPUN
                 spins[v] += spun
@@ -243,16 +240,17 @@ class SharedArena:
                                   else None)
                         learner.advance(params, elites)
                     genes[v] = learner.current
+                p = self.physics
                 respawn(v, self.kinds[v], self.pose, self.corners, self.centres, self.previous,
-                        self.previous_centres, self.fresh, self.memory, self.life, self.length,
-                        self.width, self.walls, self.lookup, self.bounds, self.params, self.rng)
+                        self.previous_centres, self.fresh, self.memory, self.life, p.length,
+                        p.width, p.walls, p.lookup, p.bounds, p.params, self.rng)
             if t == steps:
                 break
+            p = self.physics
             drive(self.pose, self.corners, self.centres, self.previous, self.previous_centres,
-                  self.fresh, self.kinds, genes, layer_sizes, gain, self.length, self.width,
-                  self.wheelbase, self.distance, self.beam_cos, self.beam_sin, self.max_range,
-                  self.walls, self.lookup, self.params, self.memory, self.rng, self.radius,
-                  self.life)
+                  self.fresh, self.kinds, genes, layer_sizes, gain, p.length, p.width,
+                  p.wheelbase, p.distance, p.beam_cos, p.beam_sin, p.max_range, p.walls,
+                  p.lookup, p.params, self.memory, self.rng, self.radius, self.life)
         for v, learner in enumerate(learners):  # a life still going counts what it has shown
             if learner is not None and self.life[v] > learner.best_fitness:
                 learner.best, learner.best_fitness = learner.current.copy(), float(self.life[v])

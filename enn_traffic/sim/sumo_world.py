@@ -67,20 +67,20 @@ class SumoWorld(World):
         return self._recordings[seed]
 
     def _learner_physics(self, radius: float) -> np.ndarray:
-        length, width, wheelbase, distance, _, _, max_range = self._physics[:7]
-        learner_radius = 0.5 * math.hypot(length, width)
-        return physics_vector(length, width, wheelbase, distance, max_range, self._shape[1],
-                              max(radius, learner_radius), self._limits[2],
+        p = self._physics
+        learner_radius = 0.5 * math.hypot(p.length, p.width)
+        return physics_vector(p.length, p.width, p.wheelbase, p.distance, p.max_range,
+                              self._shape[1], max(radius, learner_radius), self._limits[2],
                               self.scenario.traffic.respawn_clearance)
 
     def _sensor_and_walls(self) -> tuple:
-        _, _, _, _, beam_cos, beam_sin, _, walls, lookup = self._physics[:9]
-        return beam_cos, beam_sin, walls, lookup
+        p = self._physics
+        return p.beam_cos, p.beam_sin, p.walls, p.lookup
 
     def evaluate(self, population: np.ndarray, generation: int = 0) -> EpisodeResults:
         """Fitness of every chromosome: steps survived (0 for a spin), averaged over the
         generation's traffic situations."""
-        genes = self._genes(population)
+        genes = self.spec.in_source_layout(population)
         closed = self.scenario.traffic.mode == "closed-loop"
         runs, vehicles = [], []
         for seed in self.seeds(generation):
@@ -173,7 +173,7 @@ class SumoWorld(World):
         slot is empty) in one episode, and the learner's outcome code."""
         limit = self._limits[0] if max_steps is None else max_steps
         seed = self.seeds(generation)[episode]
-        genes = self._genes(chromosome)[0]
+        genes = self.spec.in_source_layout(chromosome)[0]
         if self.scenario.traffic.mode == "closed-loop":
             frames: list = []
             steps, outcome, _ = self.closed_loop(genes, seed, limit, frames)

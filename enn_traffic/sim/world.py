@@ -22,6 +22,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import NamedTuple
 
 import numba
 import numpy as np
@@ -332,6 +333,22 @@ class Episode:
     seed: np.uint64
 
 
+class Physics(NamedTuple):
+    """The constants every world kernel takes, in their argument order."""
+
+    length: float
+    width: float
+    wheelbase: float
+    distance: float  # metres per step
+    beam_cos: np.ndarray
+    beam_sin: np.ndarray
+    max_range: float
+    walls: np.ndarray
+    lookup: tuple
+    bounds: np.ndarray
+    params: np.ndarray  # traffic strategy parameters (traffic/kinematic.py)
+
+
 class World:
     """A scenario's worlds: its track, learner and traffic, ready to evaluate populations."""
 
@@ -349,12 +366,11 @@ class World:
                 raise InputError(f"start ({x:g}, {y:g}) is off the drivable area",
                                  scenario.source, f"traffic.starts_xy[{index}]")
         self.vehicles = 1 + len(self.traffic_starts)
-        self._order = self.spec.source_order()
         self._shape = (
             np.asarray(scenario.layer_sizes, dtype=np.int64),
             math.radians(scenario.network.steering_gain_deg),
         )
-        self._physics = (
+        self._physics = Physics(
             vehicle.length,
             vehicle.width,
             vehicle.wheelbase,
@@ -369,15 +385,6 @@ class World:
         )
         episode = scenario.episode
         self._limits = (episode.max_steps, episode.spin_window, episode.spin_variance)
-
-    def _genes(self, population: np.ndarray) -> np.ndarray:
-        population = np.atleast_2d(np.asarray(population, dtype=np.float64))
-        if population.shape[1] != self.spec.chromosome_length:
-            raise ValueError(
-                f"chromosomes have {population.shape[1]} genes; the network "
-                f"{self.spec.layer_sizes} needs {self.spec.chromosome_length}"
-            )
-        return np.ascontiguousarray(population[:, self._order])
 
     def episodes(self, generation: int) -> list[Episode]:
         """The traffic situations of a generation: one per (strategy, episode), drawn from
@@ -395,7 +402,7 @@ class World:
                 kind = kinematic.STRATEGIES.get(name, kinematic.NONE)
                 kinds = np.array([kinematic.NONE] + [kind] * len(self.traffic_starts))
                 genes = rng.uniform(-1, 1, size=(self.vehicles, self.spec.chromosome_length))
-                result.append(Episode(start, kinds, np.ascontiguousarray(genes[:, self._order]),
+                result.append(Episode(start, kinds, self.spec.in_source_layout(genes),
                                       np.uint64(sequence.generate_state(1, np.uint64)[0])))
         return result
 
@@ -407,7 +414,7 @@ class World:
     def evaluate(self, population: np.ndarray, generation: int = 0) -> EpisodeResults:
         """Fitness of every chromosome: steps survived (0 for a spin), averaged over the
         generation's traffic situations."""
-        genes = self._genes(population)
+        genes = self.spec.in_source_layout(population)
         runs = []
         with numba.parallel_chunksize(1):
             for episode in self.episodes(generation):
@@ -425,7 +432,7 @@ class World:
         chosen = self.episodes(generation)[episode]
         trace = np.full((limit + 1, self.vehicles, 3), np.nan)
         steps, outcome, _ = run_episode(
-            self._genes(chromosome)[0], *self._shape, chosen.start, chosen.kinds,
+            self.spec.in_source_layout(chromosome)[0], *self._shape, chosen.start, chosen.kinds,
             chosen.traffic_genes, *self._physics, chosen.seed, limit, *self._limits[1:], trace)
         return trace[: steps + 1], int(outcome)
 
