@@ -26,16 +26,16 @@ import numpy as np
 from numba import njit
 
 from enn_traffic.evolution import ga
-from enn_traffic.sim.collide import box_hits_walls, boxes_overlap
 from enn_traffic.sim.kinematics import bicycle_step
 from enn_traffic.sim.sensors import nearby_walls, sense_walls
 from enn_traffic.sim.world import (
     COLLIDED,
+    NO_HIT,
     SPUN,
     World,
-    _close,
     _place,
     _respawn,
+    _responsible,
     _sense_bodies,
     _small_spread,
     network_steering,
@@ -56,22 +56,14 @@ def detect(pose, corners, centres, previous, previous_centres, fresh, learning, 
            walls, lookup, radius, spin_variance, events) -> None:
     """Fill ``events`` (V,): ``COLLIDED`` for a responsible collision, ``SPUN`` for a learning
     vehicle spinning in place, else ``ALIVE``; record this step's positions for the spin test."""
-    count = pose.shape[0]
     near = 4.0 * radius * radius
     window = recent.shape[1]
-    for v in range(count):
+    for v in range(pose.shape[0]):
         events[v] = ALIVE
-        candidates = nearby_walls(pose[v, 0], pose[v, 1], lookup)
-        if box_hits_walls(corners[v], walls, candidates, candidates.shape[0]):
+        if _responsible(v, pose, corners, centres, previous, previous_centres, fresh, walls,
+                        lookup, near) != NO_HIT:
             events[v] = COLLIDED
-            continue
-        for other in range(count):
-            if (other != v and not fresh[other]
-                    and _close(centres, v, previous_centres, other, near)
-                    and boxes_overlap(corners[v], previous[other])):
-                events[v] = COLLIDED
-                break
-        if events[v] == ALIVE and learning[v]:
+        elif learning[v]:
             slot = life[v] % window
             recent[v, slot, 0], recent[v, slot, 1] = pose[v, 0], pose[v, 1]
             if life[v] + 1 >= window and _small_spread(recent[v], spin_variance):

@@ -50,6 +50,8 @@ from enn_traffic.traffic.kinematic import (
 # How an episode ended.
 CAPPED, COLLIDED, SPUN = 0, 1, 2
 OUTCOMES = {CAPPED: "capped", COLLIDED: "collision", SPUN: "spin"}
+# What the blame rule found (:func:`_responsible`), besides the index of a vehicle.
+NO_HIT, HIT_WALL = -1, -2
 
 
 @njit(cache=True)
@@ -188,26 +190,15 @@ def run_episode(
         if steps < trace.shape[0]:
             trace[steps] = pose
         # 1. collisions by the blame rule
-        candidates = nearby_walls(pose[0, 0], pose[0, 1], lookup)
-        if box_hits_walls(corners[0], walls, candidates, candidates.shape[0]):
+        if _responsible(0, pose, corners, centres, previous, previous_centres, fresh, walls,
+                        lookup, near) != NO_HIT:
             return steps, COLLIDED, suffered
-        for other in range(1, count):
-            if (not fresh[other] and _close(centres, 0, previous_centres, other, near)
-                    and boxes_overlap(corners[0], previous[other])):
-                return steps, COLLIDED, suffered
         for v in range(1, count):
-            candidates = nearby_walls(pose[v, 0], pose[v, 1], lookup)
-            hit = box_hits_walls(corners[v], walls, candidates, candidates.shape[0])
-            for other in range(count):
-                if hit:
-                    break
-                if (other != v and not fresh[other]
-                        and _close(centres, v, previous_centres, other, near)
-                        and boxes_overlap(corners[v], previous[other])):
-                    hit = True
-                    if other == 0:
-                        suffered += 1
-            if hit and _respawn(v, pose, corners, centres, length, width, walls, lookup,
+            hit = _responsible(v, pose, corners, centres, previous, previous_centres, fresh,
+                               walls, lookup, near)
+            if hit == 0:
+                suffered += 1
+            if hit != NO_HIT and _respawn(v, pose, corners, centres, length, width, walls, lookup,
                                 bounds, params[P_CLEARANCE], rng):
                 previous[v] = corners[v]
                 previous_centres[v] = centres[v]
@@ -249,6 +240,23 @@ def run_episode(
                                          distance, wheelbase)
             _place(v, x, y, heading, length, width, pose, corners, centres)
         steps += 1
+
+
+@njit(cache=True)
+def _responsible(v, pose, corners, centres, previous, previous_centres, fresh, walls, lookup,
+                 near) -> int:
+    """The blame rule (DESIGN.md) for vehicle ``v``: ``HIT_WALL`` if its body touches a wall,
+    else the first other vehicle whose body from before the step it touches (a vehicle that
+    just respawned has no such body), else ``NO_HIT``. ``near``: the squared distance of body
+    centres beyond which bodies cannot touch."""
+    candidates = nearby_walls(pose[v, 0], pose[v, 1], lookup)
+    if box_hits_walls(corners[v], walls, candidates, candidates.shape[0]):
+        return HIT_WALL
+    for other in range(corners.shape[0]):
+        if (other != v and not fresh[other] and _close(centres, v, previous_centres, other, near)
+                and boxes_overlap(corners[v], previous[other])):
+            return other
+    return NO_HIT
 
 
 @njit(cache=True)
