@@ -44,12 +44,17 @@ class LocalEvaluator:
 _worker_world: World | None = None
 
 
-def _init_worker(scenario: Scenario) -> None:
-    global _worker_world
+def _single_threaded_world(scenario: Scenario) -> World:
+    """A worker's world (and, for SUMO traffic, its libsumo): one core per worker."""
     import numba
 
     numba.set_num_threads(1)
-    _worker_world = make_world(scenario)
+    return make_world(scenario)
+
+
+def _init_worker(scenario: Scenario) -> None:
+    global _worker_world
+    _worker_world = _single_threaded_world(scenario)
 
 
 def _evaluate_chunk(chunk: np.ndarray, generation: int) -> EpisodeResults:
@@ -83,13 +88,10 @@ class ProcessEvaluator:
 
 
 class _WorldActor:
-    """A Ray worker: one world (and, for SUMO traffic, one libsumo), single-threaded."""
+    """A Ray worker holding its own world."""
 
     def __init__(self, scenario: Scenario):
-        import numba
-
-        numba.set_num_threads(1)
-        self.world = make_world(scenario)
+        self.world = _single_threaded_world(scenario)
 
     def evaluate(self, chunk: np.ndarray, generation: int) -> EpisodeResults:
         return self.world.evaluate(chunk, generation)

@@ -23,6 +23,7 @@ from enn_traffic.roads import Track
 from enn_traffic.scenario import Scenario
 from enn_traffic.sim.replay import (
     CLEARANCE,
+    FAR,
     RADIUS,
     RUNNING,
     clear_start,
@@ -162,7 +163,7 @@ class SumoWorld(World):
             ids, corners, centres = grown
             gone = np.concatenate([gone, np.full(size - gone.shape[0], -1, dtype=np.int64)])
             scratch = [*scratch[:-1], np.empty((size, 2))]
-        ids[1], corners[1], centres[1] = -1, 0.0, 1e12
+        ids[1], corners[1], centres[1] = -1, 0.0, FAR
         ids[1, slots], corners[1, slots], centres[1, slots] = (numbers, frame_corners,
                                                                 frame_centres)
         return ids, corners, centres, gone, scratch

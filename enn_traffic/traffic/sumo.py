@@ -31,6 +31,7 @@ from numba import njit
 from enn_traffic.errors import InputError
 from enn_traffic.scenario import Scenario
 from enn_traffic.sim.collide import body_corners
+from enn_traffic.sim.replay import FAR
 
 LEARNER = "enn_learner"
 _POSITION, _ANGLE = libsumo.VAR_POSITION, libsumo.VAR_ANGLE
@@ -98,7 +99,6 @@ class Simulation:
         self.slots: dict[str, int] = {}
         self.numbers: dict[str, int] = {}
         self.following = False
-        self.sumo_ids = [""] * MAX_SLOTS
         self._free = list(range(MAX_SLOTS - 1, -1, -1))
 
     def _fail(self, what: str, exc: Exception | None = None) -> None:
@@ -143,9 +143,8 @@ class Simulation:
             if vehicle not in self.slots:
                 if not self._free:
                     self._fail(f"more than {MAX_SLOTS} vehicles on the network at once")
-                slot = self.slots[vehicle] = self._free.pop()
+                self.slots[vehicle] = self._free.pop()
                 self.numbers[vehicle] = len(self.numbers)
-                self.sumo_ids[slot] = vehicle
 
     def follow_learner(self, reach: float) -> None:
         """From now on read only the vehicles within ``reach`` of the learner (a context
@@ -189,7 +188,7 @@ def warmup_steps(scenario: Scenario) -> int:
 def slot_arrays(steps: int, slots: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Empty slot arrays: ids (steps, slots) all -1, corners, and centres far out of range."""
     return (np.full((steps, slots), -1, dtype=np.int64), np.zeros((steps, slots, 4, 2)),
-            np.full((steps, slots, 2), 1e12))
+            np.full((steps, slots, 2), FAR))
 
 
 def record(scenario: Scenario, seed: int, steps: int) -> Recording:
