@@ -2,6 +2,9 @@ from pathlib import Path
 
 import pytest
 
+from enn_traffic.scenario import load_scenario
+from enn_traffic.sim.world import World
+
 ROOT = Path(__file__).resolve().parents[1]
 
 
@@ -33,3 +36,29 @@ def assert_same_run(expected, got) -> None:
         pd.read_csv(got / "generations.csv").drop(columns="elapsed_s"))
     with np.load(expected / "checkpoint.npz") as a, np.load(got / "checkpoint.npz") as b:
         np.testing.assert_array_equal(a["population"], b["population"])
+
+
+TWO_CARS = """
+name = "two_cars"
+[track]
+net = "{net}"
+start_xy = [{lx}, {ly}]
+start_heading_deg = 0.0
+[vehicle]
+width = 2.5
+[sensor]
+beams = 3
+[traffic]
+strategy = "straight"
+turn_distance = 0.0
+starts_xy = [[{tx}, {ty}]]
+start_heading_deg = [{th}, {th}]
+"""
+
+
+def two_cars(tmp_path, root, learner, other, heading):
+    """The arena with the learner and one straight driver (no wall turns), width 2.5 m."""
+    path = tmp_path / "two.toml"
+    path.write_text(TWO_CARS.format(net=root / "sumo_nets" / "arena.net.xml", lx=learner[0],
+                                    ly=learner[1], tx=other[0], ty=other[1], th=heading))
+    return World(load_scenario(path))

@@ -2,34 +2,16 @@
 
 import numpy as np
 import pytest
+from conftest import two_cars
 
 from enn_traffic.evolution import ga
-from enn_traffic.scenario import load_scenario
 from enn_traffic.sim.shared import SharedArena, VehicleGA, _global_elites
-from enn_traffic.sim.world import World
 from enn_traffic.traffic.kinematic import RANDOM_NETWORK, STRAIGHT
-
-ARENA = """
-name = "shared"
-[track]
-net = "{net}"
-start_xy = [20.0, 50.0]
-[vehicle]
-width = 2.5
-[sensor]
-beams = 3
-[traffic]
-strategy = "straight"
-turn_distance = 0.0
-starts_xy = [[40.0, 50.0]]
-"""
 
 
 @pytest.fixture
 def world(tmp_path, root):
-    path = tmp_path / "arena.toml"
-    path.write_text(ARENA.format(net=root / "sumo_nets" / "arena.net.xml"))
-    return World(load_scenario(path))
+    return two_cars(tmp_path, root, (20.0, 50.0), (40.0, 50.0), 180.0)
 
 
 def test_head_on_counts_one_collision_for_each_responsible_vehicle(world):

@@ -4,36 +4,12 @@ import math
 
 import numpy as np
 import pytest
-from conftest import local_and_spread
+from conftest import TWO_CARS, local_and_spread, two_cars
 
 from enn_traffic.errors import InputError
 from enn_traffic.scenario import load_scenario
 from enn_traffic.sim.collide import body_polygon
 from enn_traffic.sim.world import COLLIDED, World, _sense_bodies
-
-TWO_CARS = """
-name = "two_cars"
-[track]
-net = "{net}"
-start_xy = [{lx}, {ly}]
-start_heading_deg = 0.0
-[vehicle]
-width = 2.5
-[sensor]
-beams = 3
-[traffic]
-strategy = "straight"
-turn_distance = 0.0
-starts_xy = [[{tx}, {ty}]]
-start_heading_deg = [{th}, {th}]
-"""
-
-
-def two_cars(tmp_path, root, learner, other, heading):
-    path = tmp_path / "two.toml"
-    path.write_text(TWO_CARS.format(net=root / "sumo_nets" / "arena.net.xml", lx=learner[0],
-                                    ly=learner[1], tx=other[0], ty=other[1], th=heading))
-    return World(load_scenario(path))
 
 
 def test_head_on_both_responsible_learner_dies_at_the_expected_step(tmp_path, root):
