@@ -73,8 +73,9 @@ class Family:
         sc = scenario(self.name(strategy))
         return sc.with_overrides(**self.overrides()) if self.quick_mode else sc
 
-    def ga(self, quick: bool) -> dict:
-        return dict(self.quick) if quick else {}
+    def ga(self) -> dict:
+        """GA overrides: the small quick settings in quick mode."""
+        return dict(self.quick) if self.quick_mode else {}
 
 
 ARENA = Family("arena_strategy", "", (1, 2, 3, 4), test_episodes=40, accepted_fitness=750.0,
@@ -87,8 +88,8 @@ SUMO = Family("sumo_strategy", "sumo", (1, 2), test_episodes=10, accepted_fitnes
                               ("traffic", (("warmup_s", 20.0),))))
 
 
-def _strategy_runs(family: Family, strategy: int, out: Path, quick: bool, progress: bool):
-    return seed_runs(family.name(strategy), out, family.seeds, family.ga(quick), progress,
+def _strategy_runs(family: Family, strategy: int, out: Path, progress: bool):
+    return seed_runs(family.name(strategy), out, family.seeds, family.ga(), progress,
                      **family.overrides())
 
 
@@ -144,7 +145,7 @@ def fig11(out: Path, quick: bool = False, progress: bool = True,
     figure, axes = plt.subplots(2, 2, figsize=(10, 7), sharex=True)
     rows = []
     for strategy, ax in zip(STRATEGIES, axes.ravel(), strict=True):
-        runs = _strategy_runs(family, strategy, out, quick, progress)
+        runs = _strategy_runs(family, strategy, out, progress)
         learning_curves({f"seed {s}": t for s, t in runs.items()}, None, axes=ax,
                         title=_title(family, strategy))
         for seed, table in runs.items():
@@ -173,13 +174,12 @@ def fig11(out: Path, quick: bool = False, progress: bool = True,
             + ", ".join(f"{r.mean_rise:.1f}x" for _, r in rise.iterrows())]
 
 
-def _trained_controllers(family: Family, out: Path, quick: bool, progress: bool
-                         ) -> dict[int, np.ndarray]:
+def _trained_controllers(family: Family, out: Path, progress: bool) -> dict[int, np.ndarray]:
     """Per strategy: the best of its runs' candidates, judged on validation traffic of that
     same strategy."""
     chosen = {}
     for strategy in STRATEGIES:
-        _strategy_runs(family, strategy, out, quick, progress)
+        _strategy_runs(family, strategy, out, progress)
         candidates = np.concatenate([
             _candidates(out / "runs" / family.name(strategy) / f"seed{seed}")
             for seed in family.seeds])  # fmt: skip
@@ -204,7 +204,7 @@ def trained_controllers(out: Path, quick: bool, progress: bool, family: Family =
                         ) -> dict[int, np.ndarray]:
     """Per strategy: the controller Table 1 deploys (trained on that strategy alone)."""
     family = family.settings(quick)
-    return _trained_controllers(family, out / family.folder, quick, progress)
+    return _trained_controllers(family, out / family.folder, progress)
 
 
 def _draw_specialists(family: Family, controllers: dict[int, np.ndarray], path: Path,
@@ -231,7 +231,7 @@ def table1(out: Path, quick: bool = False, progress: bool = True,
     """Train on each strategy, deploy on each (Table 1), and the colour map (Fig. 12)."""
     family = family.settings(quick)
     out = out / family.folder
-    controllers = _trained_controllers(family, out, quick, progress)
+    controllers = _trained_controllers(family, out, progress)
     matrix = np.array([[_test_fitness(family, controllers[trained], deployed)
                         for deployed in STRATEGIES] for trained in STRATEGIES])
     table = pd.DataFrame(matrix.round(1), columns=[f"deploy_{s}" for s in STRATEGIES])
@@ -271,7 +271,7 @@ def table2(out: Path, quick: bool = False, progress: bool = True,
     base = family.scenario(1)
     population, rows = None, []
     for iteration in range(1, len(STRATEGIES) + 1):
-        ga = {"generations": family.incremental_max_generations, **family.ga(quick)}
+        ga = {"generations": family.incremental_max_generations, **family.ga()}
         sc = base.with_overrides(name=f"incremental_{iteration}", ga=ga)
         included = STRATEGIES[:iteration]
         worlds = [make_world(family.scenario(s)) for s in included]
