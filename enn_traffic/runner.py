@@ -75,6 +75,26 @@ def _open_state(scenario: Scenario, out: Path, resume: bool, force: bool,
     return state
 
 
+def _finished_rows(table_path: Path, generation: int) -> list[dict]:
+    """The rows of the generations a checkpoint says are done; a damaged table is an error,
+    never silently shortened."""
+    if generation == 0:
+        return []
+    try:
+        done = pd.read_csv(table_path)
+        rows = done[done["generation"] < generation]
+        complete = list(rows["generation"]) == list(range(generation))
+    except Exception as exc:  # missing, empty, unparsable, or without a generation column
+        raise InputError(f"cannot continue: the generations table is unreadable "
+                         f"({type(exc).__name__}: {exc}); --force starts over",
+                         table_path) from None
+    if not complete:
+        raise InputError(f"cannot continue: the generations table lacks some of the "
+                         f"{generation} generations the checkpoint has done; --force starts over",
+                         table_path)
+    return rows.to_dict("records")
+
+
 def evolve(
     scenario: Scenario,
     out: str | Path,
@@ -94,10 +114,7 @@ def evolve(
     out.mkdir(parents=True, exist_ok=True)
     state = _open_state(scenario, out, resume, force, initial_population)
     table_path = out / "generations.csv"
-    rows = []
-    if state.generation > 0 and table_path.exists():
-        done = pd.read_csv(table_path)
-        rows = done[done["generation"] < state.generation].to_dict("records")
+    rows = _finished_rows(table_path, state.generation)
     write_text(out / "scenario.toml", scenario.to_toml())
     params = ga_params(scenario)
     own_evaluator = evaluator is None

@@ -7,13 +7,16 @@ import subprocess
 import sys
 import time
 
+import numpy as np
 import pandas as pd
 import tomli_w
 from conftest import assert_same_run
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
+from enn_traffic.controller import Controller
 from enn_traffic.errors import InputError
+from enn_traffic.evolution.ga import GAState
 from enn_traffic.scenario import load_scenario
 
 RUN = ("--population", 40, "--generations", 12, "--seed", 5, "--quiet")
@@ -65,6 +68,89 @@ def test_truncated_checkpoint_is_reported_not_loaded(tmp_path, root):
                   "--resume", "--quiet")
     assert result.returncode == 2
     assert "checkpoint" in result.stderr and "Traceback" not in result.stderr
+
+
+def _flipped_copies(path):
+    """``path`` with each of its bytes inverted in turn (one damaged file per byte)."""
+    data = path.read_bytes()
+    damaged = path.with_name("damaged" + path.suffix)
+    for position in range(len(data)):
+        copy = bytearray(data)
+        copy[position] ^= 0xFF
+        damaged.write_bytes(bytes(copy))
+        yield damaged
+
+
+def test_every_flipped_byte_in_a_checkpoint_is_reported_or_harmless(tmp_path):
+    """Corruption, not only truncation: a checkpoint with any one byte inverted either loads
+    exactly the saved state (the byte was zip metadata such as a time stamp) or is refused."""
+    rng = np.random.default_rng(3)
+    saved = GAState(generation=3, population=rng.random((4, 5)), rng=rng,
+                    best_chromosome=np.ones(5), best_fitness=2.0, fingerprint="f",
+                    extra={"elapsed_s": 1.5})
+    path = tmp_path / "checkpoint.npz"
+    saved.save(path)
+    refused = 0
+    for damaged in _flipped_copies(path):
+        try:
+            state = GAState.load(damaged)
+        except InputError:
+            refused += 1
+            continue
+        assert (state.generation, state.fingerprint, state.best_fitness, state.extra) == \
+            (3, "f", 2.0, {"elapsed_s": 1.5})
+        np.testing.assert_array_equal(state.population, saved.population)
+        np.testing.assert_array_equal(state.best_chromosome, saved.best_chromosome)
+        assert state.rng.bit_generator.state == saved.rng.bit_generator.state
+    assert refused > len(path.read_bytes()) // 2
+
+
+def test_every_flipped_byte_in_a_controller_is_reported_or_harmless(tmp_path):
+    saved = Controller(chromosome=np.linspace(-1, 1, 8 * 3 + 4 * 2), layer_sizes=(7, 3, 2),
+                       layout="source", steering_gain_deg=90.0, span_deg=180.0, range=25.0,
+                       fitness=10.0, scenario_name="s", generation=2)
+    path = tmp_path / "best.npz"
+    saved.save(path)
+    for damaged in _flipped_copies(path):
+        try:
+            controller = Controller.load(damaged)
+        except InputError:
+            continue
+        np.testing.assert_array_equal(controller.chromosome, saved.chromosome)
+        assert controller.layer_sizes == saved.layer_sizes and controller.range == saved.range
+
+
+def test_damaged_generations_table_stops_a_resume_without_touching_the_run(tmp_path, root):
+    scenario = root / "scenarios" / "navigation_narrow.toml"
+    out = tmp_path / "run"
+    common = ("--population", 20, "--quiet")
+    assert _run("run", scenario, "--out", out, "--generations", 3, *common).returncode == 0
+    checkpoint = (out / "checkpoint.npz").read_bytes()
+    table = out / "generations.csv"
+    rows = table.read_text().splitlines()
+    for damage in ("\x00\x01 not a table", "\n".join(rows[:2]) + "\n"):
+        table.write_text(damage)
+        result = _run("run", scenario, "--out", out, "--generations", 5, "--resume", *common)
+        assert result.returncode == 2, result.stderr
+        assert "generations.csv" in result.stderr and "--force" in result.stderr
+        assert "Traceback" not in result.stderr
+        assert (out / "checkpoint.npz").read_bytes() == checkpoint
+
+
+def test_folder_of_another_scenario_is_never_overwritten_without_force(tmp_path, root):
+    out = tmp_path / "run"
+    narrow, arena = (root / "scenarios" / f"{name}.toml"
+                     for name in ("navigation_narrow", "arena_strategy1"))
+    common = ("--population", 30, "--generations", 2, "--quiet")
+    assert _run("run", narrow, "--out", out, *common).returncode == 0
+    before = {path.name: path.read_bytes() for path in out.iterdir()}
+    for flags in ((), ("--resume",)):
+        refused = _run("run", arena, "--out", out, *flags, *common)
+        assert refused.returncode == 2 and "--force" in refused.stderr, flags
+        assert "Traceback" not in refused.stderr
+        assert {path.name: path.read_bytes() for path in out.iterdir()} == before, flags
+    assert _run("run", arena, "--out", out, "--force", *common).returncode == 0
+    assert 'name = "arena_strategy1"' in (out / "scenario.toml").read_text()
 
 
 def test_network_without_drivable_area_is_a_clear_error(tmp_path, root):

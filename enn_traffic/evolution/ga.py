@@ -11,15 +11,15 @@ checkpoints to one ``.npz`` file.
 
 from __future__ import annotations
 
+import io
 import json
-import os
-import zipfile
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 
 from enn_traffic.errors import InputError
+from enn_traffic.io import write_atomic
 
 
 @dataclass(frozen=True)
@@ -120,23 +120,19 @@ class GAState:
 
     def save(self, path: Path) -> None:
         """Write atomically: a crash never leaves a half-written checkpoint in place."""
-        path = Path(path)
-        tmp = path.with_name(path.name + ".tmp")
         best = self.best_chromosome if self.best_chromosome is not None else np.empty(0)
-        with open(tmp, "wb") as handle:
-            np.savez(
-                handle,
-                generation=self.generation,
-                population=self.population,
-                rng_state=json.dumps(self.rng.bit_generator.state),
-                best_chromosome=best,
-                best_fitness=self.best_fitness,
-                fingerprint=self.fingerprint,
-                extra=json.dumps(self.extra),
-            )
-            handle.flush()
-            os.fsync(handle.fileno())
-        os.replace(tmp, path)
+        buffer = io.BytesIO()
+        np.savez(
+            buffer,
+            generation=self.generation,
+            population=self.population,
+            rng_state=json.dumps(self.rng.bit_generator.state),
+            best_chromosome=best,
+            best_fitness=self.best_fitness,
+            fingerprint=self.fingerprint,
+            extra=json.dumps(self.extra),
+        )
+        write_atomic(path, lambda handle: handle.write(buffer.getvalue()), binary=True)
 
     @classmethod
     def load(cls, path: Path) -> GAState:
@@ -154,8 +150,9 @@ class GAState:
                     fingerprint=str(data["fingerprint"]),
                     extra=json.loads(str(data["extra"])),
                 )
-        except (OSError, ValueError, KeyError, EOFError, zipfile.BadZipFile) as exc:
-            raise InputError(f"checkpoint is unreadable or corrupted ({exc})", path) from None
+        except Exception as exc:  # a damaged archive raises many types (zipfile, numpy, json)
+            raise InputError(f"checkpoint is unreadable or corrupted ({type(exc).__name__}: "
+                             f"{exc})", path) from None
         if not np.all(np.isfinite(state.population)):
             raise InputError("checkpoint population holds NaN or inf", path)
         return state
