@@ -85,6 +85,11 @@ def build_parser() -> argparse.ArgumentParser:
     reproduce.add_argument("--quick", action="store_true",
                            help="small populations and few generations (minutes)")
     reproduce.add_argument("--only", help="comma-separated experiment names (default: all)")
+    reproduce.add_argument("--executor", choices=["local", "ray"], default="local",
+                           help="where independent whole runs go: one after another here "
+                                "(default) or side by side as Ray tasks")
+    reproduce.add_argument("--address", help="Ray cluster address (with --executor ray; "
+                                             "default: start a local Ray)")
     reproduce.add_argument("--quiet", action="store_true", help="no progress bars")
 
     bench = commands.add_parser("bench", help="throughput table (vehicle-steps per second)")
@@ -162,7 +167,8 @@ def _cmd_reproduce(args) -> int:
     from enn_traffic.reproduce import reproduce
 
     names = [n.strip() for n in args.only.split(",") if n.strip()] if args.only else None
-    reproduce(args.out, quick=args.quick, only=names, progress=not args.quiet)
+    reproduce(args.out, quick=args.quick, only=names, progress=not args.quiet,
+              executor=args.executor, address=args.address)
     return 0
 
 

@@ -18,8 +18,12 @@ from enn_traffic.report.paper_tables import paper_tables
 
 
 def reproduce(out: Path, quick: bool = False, only: list[str] | None = None,
-              progress: bool = True) -> dict:
+              progress: bool = True, executor: str = "local", address: str | None = None
+              ) -> dict:
+    """Run the experiments ``only`` (default: all) into ``out``; their independent runs go to
+    ``executor`` (local, or ray at ``address``)."""
     from enn_traffic.experiments import EXPERIMENTS
+    from enn_traffic.experiments.common import whole_runs_on
 
     names = only or list(EXPERIMENTS)
     unknown = [n for n in names if n not in EXPERIMENTS]
@@ -31,14 +35,15 @@ def reproduce(out: Path, quick: bool = False, only: list[str] | None = None,
     record_path = out / "summary.json"
     records = json.loads(record_path.read_text()) if record_path.exists() else {}
     bar = tqdm(names, desc="reproduce", unit="experiment", disable=not progress, position=0)
-    for name in bar:
-        bar.set_postfix_str(name)
-        started = time.perf_counter()
-        lines = EXPERIMENTS[name](out, quick=quick, progress=progress)
-        records[name] = {"lines": lines, "seconds": round(time.perf_counter() - started, 1),
-                         "settings": "quick" if quick else "full"}
-        write_text(record_path, json.dumps(records, indent=1))
-        tqdm.write("\n".join(lines))
+    with whole_runs_on(executor, address):
+        for name in bar:
+            bar.set_postfix_str(name)
+            started = time.perf_counter()
+            lines = EXPERIMENTS[name](out, quick=quick, progress=progress)
+            records[name] = {"lines": lines, "seconds": round(time.perf_counter() - started, 1),
+                             "settings": "quick" if quick else "full"}
+            write_text(record_path, json.dumps(records, indent=1))
+            tqdm.write("\n".join(lines))
     done = [n for n in EXPERIMENTS if n in records]
     summary = ["# enn-traffic: reproduction of Eraqi et al. (2016)", ""]
     summary += [f"- {line}" for n in done for line in records[n]["lines"]]

@@ -115,11 +115,13 @@ def evolve(
     state = _open_state(scenario, out, resume, force, initial_population)
     table_path = out / "generations.csv"
     rows = _finished_rows(table_path, state.generation)
+    total = scenario.ga.generations
+    if state.generation >= total or state.extra.get("target_reached", False):
+        return _finished_table(scenario, out)  # nothing to compute, nothing rewritten
     write_text(out / "scenario.toml", scenario.to_toml())
     params = ga_params(scenario)
     own_evaluator = evaluator is None
     evaluator = evaluator or make_evaluator(scenario)
-    total = scenario.ga.generations
     bar = tqdm(total=total, initial=min(state.generation, total), desc=scenario.name,
                unit="gen", disable=not progress, leave=False)
     try:
@@ -164,6 +166,13 @@ def evolve(
         bar.close()
         if own_evaluator:
             evaluator.close()
-    table = pd.read_csv(table_path)  # the same types whether the run was resumed or not
-    learning_curve(table, out / "learning_curve.png", title=scenario.name)
+    return _finished_table(scenario, out, draw=True)
+
+
+def _finished_table(scenario: Scenario, out: Path, draw: bool = False) -> pd.DataFrame:
+    """The generations table read back (the same types whether a run was resumed or not),
+    and its learning curve, drawn when it changed or is missing."""
+    table = pd.read_csv(out / "generations.csv")
+    if draw or not (out / "learning_curve.png").exists():
+        learning_curve(table, out / "learning_curve.png", title=scenario.name)
     return table

@@ -13,6 +13,23 @@ def root() -> Path:
     return ROOT
 
 
+@pytest.fixture(scope="session")
+def quick_fig7(tmp_path_factory) -> Path:
+    """``reproduce --quick --only fig7`` run once, uninterrupted, through the command line."""
+    import subprocess
+    import sys
+
+    out = tmp_path_factory.mktemp("reproduce") / "fig7"
+    result = subprocess.run([sys.executable, "-m", "enn_traffic", "reproduce", "--quick",
+                             "--only", "fig7", "--out", str(out), "--quiet"],
+                            capture_output=True, text=True)
+    assert result.returncode == 0, result.stderr
+    return out
+
+
+FIG7_RUNS = ("runs/navigation_narrow/seed1", "runs/navigation_narrow/seed2")
+
+
 def local_and_spread(scenario, population, generation, evaluator):
     """The results of the local evaluator and of ``evaluator`` (closed afterwards) on the
     same population and generation."""

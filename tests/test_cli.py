@@ -121,16 +121,19 @@ def test_nan_controller_is_refused(small_run, tmp_path, root):
     assert result.returncode == 2 and "NaN" in result.stderr
 
 
-def test_reproduce_quick_fig7(tmp_path):
-    result = cli("reproduce", "--quick", "--only", "fig7", "--out", tmp_path, "--quiet")
-    assert result.returncode == 0, result.stderr
-    table = pd.read_csv(tmp_path / "fig7.csv")
+def test_reproduce_quick_fig7_and_a_second_call_does_no_work(quick_fig7):
+    table = pd.read_csv(quick_fig7 / "fig7.csv")
     assert list(table["seed"]) == [1, 2]
-    assert (tmp_path / "fig7.png").is_file() and (tmp_path / "summary.md").is_file()
-    # a second call reuses the finished runs
-    again = cli("reproduce", "--quick", "--only", "fig7", "--out", tmp_path, "--quiet")
-    assert again.returncode == 0
-    pd.testing.assert_frame_equal(table, pd.read_csv(tmp_path / "fig7.csv"))
+    assert (quick_fig7 / "fig7.png").is_file() and (quick_fig7 / "summary.md").is_file()
+    runs = sorted((quick_fig7 / "runs").rglob("*"))
+    before = {path: (path.stat().st_mtime_ns, path.read_bytes()) for path in runs
+              if path.is_file()}
+    again = cli("reproduce", "--quick", "--only", "fig7", "--out", quick_fig7, "--quiet")
+    assert again.returncode == 0, again.stderr
+    after = {path: (path.stat().st_mtime_ns, path.read_bytes())
+             for path in sorted((quick_fig7 / "runs").rglob("*")) if path.is_file()}
+    assert after == before  # no run file was written again, let alone recomputed
+    pd.testing.assert_frame_equal(table, pd.read_csv(quick_fig7 / "fig7.csv"))
 
 
 def test_scenario_with_a_broken_network(tmp_path, root):

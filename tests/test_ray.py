@@ -1,8 +1,9 @@
 """The Ray executor with a real local Ray: the same results as the local evaluator."""
 
 import numpy as np
+import pandas as pd
 import pytest
-from conftest import local_and_spread
+from conftest import FIG7_RUNS, assert_same_run, local_and_spread
 
 from enn_traffic.evolution.evaluate import RayEvaluator
 from enn_traffic.runner import evolve
@@ -41,3 +42,16 @@ def test_a_run_on_ray_is_the_local_run(local_ray, root, tmp_path):
         evaluator.close()
     columns = ["best_fitness", "mean_fitness", "min_fitness", "vehicle_steps"]
     assert on_local[columns].equals(on_ray[columns])
+
+
+def test_reproduce_with_whole_runs_on_ray_gives_the_local_runs(local_ray, quick_fig7, tmp_path):
+    """``reproduce --executor ray``: each seed's run is a Ray task; the runs and the table are
+    those of the local, one-after-another call."""
+    from enn_traffic.reproduce import reproduce
+
+    out = tmp_path / "ray"
+    reproduce(out, quick=True, only=["fig7"], progress=False, executor="ray")
+    for run in FIG7_RUNS:
+        assert_same_run(quick_fig7 / run, out / run)
+    pd.testing.assert_frame_equal(pd.read_csv(quick_fig7 / "fig7.csv"),
+                                  pd.read_csv(out / "fig7.csv"))

@@ -10,7 +10,7 @@ import time
 import numpy as np
 import pandas as pd
 import tomli_w
-from conftest import assert_same_run
+from conftest import FIG7_RUNS, assert_same_run
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
@@ -55,6 +55,28 @@ def test_run_killed_mid_run_resumes_to_the_uninterrupted_result(tmp_path, root):
     assert resumed.returncode == 0, resumed.stderr
     assert_same_run(whole, killed)
     assert not list(killed.glob("*.tmp")), "a half-written file was left behind"
+
+
+def test_reproduce_killed_mid_run_resumes_to_the_uninterrupted_result(tmp_path, quick_fig7):
+    """SIGKILL ``reproduce`` while its first run is under way; the next call finishes every
+    run as if never interrupted and writes the same table."""
+    out = tmp_path / "killed"
+    process = _run("reproduce", "--quick", "--only", "fig7", "--out", out, "--quiet",
+                   wait=False)
+    first = out / FIG7_RUNS[0]
+    deadline = time.monotonic() + 120
+    while _generation_done(first) < 3 and process.poll() is None:
+        assert time.monotonic() < deadline, "reproduce never got going"
+        time.sleep(0.01)
+    process.send_signal(signal.SIGKILL)
+    process.wait()
+    assert _generation_done(first) < 20 and not (out / "fig7.csv").exists()
+    resumed = _run("reproduce", "--quick", "--only", "fig7", "--out", out, "--quiet")
+    assert resumed.returncode == 0, resumed.stderr
+    for run in FIG7_RUNS:
+        assert_same_run(quick_fig7 / run, out / run)
+    pd.testing.assert_frame_equal(pd.read_csv(quick_fig7 / "fig7.csv"),
+                                  pd.read_csv(out / "fig7.csv"))
 
 
 def test_truncated_checkpoint_is_reported_not_loaded(tmp_path, root):

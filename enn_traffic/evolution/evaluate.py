@@ -109,6 +109,25 @@ def _check_reachable(address: str, timeout: float = 3.0) -> None:
         raise InputError(f"cannot reach Ray at {address}: {exc}", key="--address") from None
 
 
+def connect_ray(address: str | None = None):
+    """The ``ray`` module, initialised: a local Ray for ``address=None``, else the running
+    cluster there (a Ray already initialised in this process is used as it is)."""
+    try:
+        import ray
+    except ImportError:
+        raise InputError("the Ray executor needs Ray: pip install -e .[ray]",
+                         key="--executor") from None
+    if address and ":" in address and "://" not in address:
+        _check_reachable(address)
+    if not ray.is_initialized():
+        try:
+            ray.init(address=address, include_dashboard=False, log_to_driver=False,
+                     configure_logging=False)
+        except (ConnectionError, RuntimeError, ValueError) as exc:
+            raise InputError(f"cannot reach Ray at {address}: {exc}", key="--address") from None
+    return ray
+
+
 class RayEvaluator:
     """Population chunks over Ray actors, each holding its own world (DESIGN.md, Scale-out).
 
@@ -119,20 +138,7 @@ class RayEvaluator:
 
     def __init__(self, scenario: Scenario, address: str | None = None,
                  workers: int | None = None):
-        try:
-            import ray
-        except ImportError:
-            raise InputError("the Ray executor needs Ray: pip install -e .[ray]",
-                             key="--executor") from None
-        self.ray = ray
-        if address and ":" in address and "://" not in address:
-            _check_reachable(address)
-        if not ray.is_initialized():
-            try:
-                ray.init(address=address, include_dashboard=False, log_to_driver=False,
-                         configure_logging=False)
-            except (ConnectionError, RuntimeError, ValueError) as exc:
-                raise InputError(f"cannot reach Ray at {address}: {exc}", key="--address") from None
+        self.ray = ray = connect_ray(address)
         self.workers = workers or max(int(ray.cluster_resources().get("CPU", 1)), 1)
         actor = ray.remote(num_cpus=1)(_WorldActor)
         self.actors = [actor.remote(scenario) for _ in range(self.workers)]

@@ -2,12 +2,17 @@
 
 from __future__ import annotations
 
+import tempfile
+from collections.abc import Hashable, Iterator
+from contextlib import contextmanager
 from pathlib import Path
 
 import pandas as pd
+from tqdm import tqdm
 
 from enn_traffic.errors import InputError
-from enn_traffic.runner import evolve
+from enn_traffic.io import write_atomic
+from enn_traffic.runner import CHECKPOINT, evolve
 from enn_traffic.scenario import Scenario, load_scenario
 
 SCENARIOS = Path(__file__).resolve().parents[2] / "scenarios"
@@ -27,16 +32,96 @@ def run_or_reuse(scenario: Scenario, out: Path, progress: bool, **options) -> pd
         return evolve(scenario, out, force=True, progress=progress, **options)
 
 
-def seed_runs(name: str, out: Path, seeds, ga: dict, progress: bool, label: str = "",
-              **overrides) -> dict[int, pd.DataFrame]:
-    """One run of scenario ``name`` per seed under ``out/runs/LABEL/seedN`` (LABEL defaults to
-    the name); runs of equal settings share a folder, so they are done once."""
+Jobs = dict[Hashable, tuple[Scenario, Path]]
+
+
+class LocalRuns:
+    """Whole runs one after another in this process (each uses every core)."""
+
+    def map(self, jobs: Jobs, progress: bool) -> dict[Hashable, pd.DataFrame]:
+        return {key: run_or_reuse(sc, out, progress) for key, (sc, out) in jobs.items()}
+
+
+def _run_in_folder_files(scenario: Scenario, files: dict[str, bytes]
+                         ) -> tuple[pd.DataFrame, dict[str, bytes]]:
+    """A Ray task: continue the run whose folder held ``files`` in a scratch folder of this
+    worker, one core, and send the folder back (no file system shared with the driver)."""
+    import numba
+
+    numba.set_num_threads(1)
+    with tempfile.TemporaryDirectory() as scratch:
+        folder = Path(scratch)
+        for name, data in files.items():
+            (folder / name).write_bytes(data)
+        table = run_or_reuse(scenario, folder, progress=False)
+        return table, {path.name: path.read_bytes() for path in folder.iterdir()
+                       if path.is_file()}
+
+
+class RayRuns:
+    """Whole runs as Ray tasks, one core each (DESIGN.md, Scale-out). A run's folder travels to
+    the task and back, so an interrupted run resumes there and workers need no shared disk;
+    a run's result depends on its scenario only, never on where it ran."""
+
+    def __init__(self, address: str | None = None):
+        from enn_traffic.evolution.evaluate import connect_ray
+
+        self.ray = connect_ray(address)
+        self.task = self.ray.remote(num_cpus=1)(_run_in_folder_files)
+
+    def map(self, jobs: Jobs, progress: bool) -> dict[Hashable, pd.DataFrame]:
+        pending = {}
+        for key, (sc, out) in jobs.items():
+            files = ({path.name: path.read_bytes() for path in out.iterdir() if path.is_file()}
+                     if out.is_dir() else {})
+            pending[self.task.remote(sc, files)] = key
+        tables = {}
+        with tqdm(total=len(pending), desc="runs on Ray", unit="run", disable=not progress,
+                  leave=False) as bar:
+            while pending:
+                [done], _ = self.ray.wait(list(pending))
+                key = pending.pop(done)
+                tables[key], files = self.ray.get(done)
+                out = jobs[key][1]
+                # the checkpoint last: a crash in between leaves a run that resumes cleanly
+                for name in sorted(files, key=lambda name: name == CHECKPOINT):
+                    write_atomic(out / name, lambda handle, data=files[name]: handle.write(data),
+                                 binary=True)
+                bar.update(1)
+        return {key: tables[key] for key in jobs}
+
+
+_runs: LocalRuns | RayRuns = LocalRuns()
+
+
+@contextmanager
+def whole_runs_on(executor: str = "local", address: str | None = None) -> Iterator[None]:
+    """Within this block the experiments' independent runs go to ``executor`` (local or ray)."""
+    global _runs
+    if executor not in ("local", "ray"):
+        raise InputError(f"unknown executor {executor!r} for whole runs; use local or ray",
+                         key="--executor")
+    previous, _runs = _runs, RayRuns(address) if executor == "ray" else LocalRuns()
+    try:
+        yield
+    finally:
+        _runs = previous
+
+
+def run_all(jobs: Jobs, progress: bool) -> dict[Hashable, pd.DataFrame]:
+    """Independent runs (``key -> (scenario, folder)``), each reused, resumed or done; on Ray
+    within ``whole_runs_on("ray")``."""
+    return _runs.map(jobs, progress)
+
+
+def seed_runs(name: str, out: Path, seeds, ga: dict, progress: bool
+              ) -> dict[int, pd.DataFrame]:
+    """One run of scenario ``name`` per seed under ``out/runs/NAME/seedN``; experiments that
+    share runs (Fig. 7 and Fig. 9's 19 beams) find them done."""
     base = scenario(name)
-    runs = {}
-    for seed in seeds:
-        sc = base.with_overrides(seed=seed, ga=ga, **overrides)
-        runs[seed] = run_or_reuse(sc, out / "runs" / (label or name) / f"seed{seed}", progress)
-    return runs
+    jobs = {seed: (base.with_overrides(seed=seed, ga=ga), out / "runs" / name / f"seed{seed}")
+            for seed in seeds}
+    return run_all(jobs, progress)
 
 
 def first_generation(table: pd.DataFrame, threshold: float) -> float:

@@ -19,7 +19,7 @@ import pandas as pd
 from enn_traffic.evaluation import EVALUATION_KEY
 from enn_traffic.evolution.evaluate import MeanOverWorlds
 from enn_traffic.evolution.ga import GAState
-from enn_traffic.experiments.common import run_or_reuse, scenario, seed_runs
+from enn_traffic.experiments.common import run_all, run_or_reuse, scenario
 from enn_traffic.io import write_csv
 from enn_traffic.report.plots import draw_paths, learning_curves, save_figure
 from enn_traffic.scenario import Scenario, load_scenario
@@ -88,9 +88,18 @@ SUMO = Family("sumo_strategy", "sumo", (1, 2), test_episodes=10, accepted_fitnes
                               ("traffic", (("warmup_s", 20.0),))))
 
 
-def _strategy_runs(family: Family, strategy: int, out: Path, progress: bool):
-    return seed_runs(family.name(strategy), out, family.seeds, family.ga(), progress,
-                     **family.overrides())
+def _family_runs(family: Family, out: Path, progress: bool) -> dict[int, dict[int, pd.DataFrame]]:
+    """Every strategy's runs, one per seed (all submitted at once, so on Ray they run side by
+    side): ``{strategy: {seed: generations table}}``."""
+    jobs = {}
+    for strategy in STRATEGIES:
+        base = family.scenario(strategy)
+        for seed in family.seeds:
+            jobs[strategy, seed] = (base.with_overrides(seed=seed, ga=family.ga()),
+                                    out / "runs" / family.name(strategy) / f"seed{seed}")
+    tables = run_all(jobs, progress)
+    return {strategy: {seed: tables[strategy, seed] for seed in family.seeds}
+            for strategy in STRATEGIES}
 
 
 @cache
@@ -144,8 +153,9 @@ def fig11(out: Path, quick: bool = False, progress: bool = True,
     out = out / family.folder
     figure, axes = plt.subplots(2, 2, figsize=(10, 7), sharex=True)
     rows = []
+    family_runs = _family_runs(family, out, progress)
     for strategy, ax in zip(STRATEGIES, axes.ravel(), strict=True):
-        runs = _strategy_runs(family, strategy, out, progress)
+        runs = family_runs[strategy]
         learning_curves({f"seed {s}": t for s, t in runs.items()}, None, axes=ax,
                         title=_title(family, strategy))
         for seed, table in runs.items():
@@ -178,8 +188,8 @@ def _trained_controllers(family: Family, out: Path, progress: bool) -> dict[int,
     """Per strategy: the best of its runs' candidates, judged on validation traffic of that
     same strategy."""
     chosen = {}
+    _family_runs(family, out, progress)
     for strategy in STRATEGIES:
-        _strategy_runs(family, strategy, out, progress)
         candidates = np.concatenate([
             _candidates(out / "runs" / family.name(strategy) / f"seed{seed}")
             for seed in family.seeds])  # fmt: skip

@@ -11,7 +11,7 @@ import pandas as pd
 
 from enn_traffic.controller import Controller
 from enn_traffic.evaluation import controller_trace, evaluate_controller
-from enn_traffic.experiments.common import first_generation, scenario, seed_runs
+from enn_traffic.experiments.common import first_generation, run_all, scenario, seed_runs
 from enn_traffic.io import write_csv
 from enn_traffic.report.plots import draw_paths, learning_curves, save_figure
 
@@ -23,9 +23,8 @@ QUICK = {"population_size": 60, "generations": 20}
 UNSEEN_TRACKS = ["unseen_narrow", "unseen_loop", "unseen_zigzag", "unseen_grid"]
 
 
-def _seed_runs(name: str, out: Path, seeds, quick: bool, progress: bool, label: str = "",
-               **overrides):
-    return seed_runs(name, out, seeds, QUICK if quick else {}, progress, label, **overrides)
+def _seed_runs(name: str, out: Path, seeds, quick: bool, progress: bool):
+    return seed_runs(name, out, seeds, QUICK if quick else {}, progress)
 
 
 def fig7(out: Path, quick: bool = False, progress: bool = True) -> list[str]:
@@ -87,12 +86,20 @@ SENSORS = [(1, 180.0), (3, 180.0), (5, 180.0), (10, 180.0), (19, 180.0), (3, 90.
 def fig9(out: Path, quick: bool = False, progress: bool = True) -> list[str]:
     """Sensor resolution: 1, 3, 5, 10, 19 beams over 180° on the narrow track."""
     seeds = SEEDS[:1] if quick else SEEDS
-    rows, curves = [], {}
+    base = scenario("navigation_narrow")
+    jobs = {}  # every sensor's runs at once: side by side on Ray
     for beams, span in SENSORS:
         label = "navigation_narrow" if beams == 19 else f"navigation_narrow_{beams}beams"
         label += "" if span == 180.0 else f"_{span:g}deg"
-        runs = _seed_runs("navigation_narrow", out, seeds, quick, progress, label=label,
-                          sensor={"beams": beams, "span_deg": span})
+        for seed in seeds:
+            jobs[beams, span, seed] = (
+                base.with_overrides(seed=seed, ga=QUICK if quick else {},
+                                    sensor={"beams": beams, "span_deg": span}),
+                out / "runs" / label / f"seed{seed}")
+    tables = run_all(jobs, progress)
+    rows, curves = [], {}
+    for beams, span in SENSORS:
+        runs = {seed: tables[beams, span, seed] for seed in seeds}
         for seed, table in runs.items():
             rows.append({"beams": beams, "span_deg": span, "seed": seed,
                          "generations_to_accepted": first_generation(table, REACHED_B),
