@@ -92,6 +92,33 @@ def test_body_of_a_real_sumo_vehicle(tmp_path, root):
     assert centres[0] == pytest.approx([x - 2.25, -12.5])
 
 
+def test_vehicles_keep_their_slots_while_out_of_the_learners_reach(tmp_path, root):
+    """In closed loop only the vehicles near the learner are read (a context subscription).
+    Clockwise cars lap the ring past a learner parked beside their lanes: each comes back into
+    reach, with the slot and number it had, so one that left the learner's world stays out of
+    it. SUMO's built-in 135 m train type does not count as traffic."""
+    scenario = sumo_scenario(tmp_path, root, CLOCKWISE, warmup=0.0)
+    simulation = sumo.Simulation(scenario, seed=1)
+    slot_of, entries, present = {}, {}, set()
+    try:
+        simulation.step(10)
+        assert simulation.largest_radius() == pytest.approx(0.5 * math.hypot(5.0, 1.8))
+        sumo.add_learner(4.3, 2.5, 0.0)
+        simulation.follow_learner(15.0)
+        for _ in range(900):  # a lap takes about 50 s
+            sumo.move_learner(80.0, -2.5, 0.0)
+            simulation.step()
+            slots, numbers, _, _ = simulation.read()
+            for slot, number in zip(slots.tolist(), numbers.tolist(), strict=True):
+                assert slot_of.setdefault(number, slot) == slot
+                entries[number] = entries.get(number, 0) + (number not in present)
+            present = set(numbers.tolist())
+    finally:
+        simulation.close()
+    assert 10 <= len(slot_of) <= 60  # numbers: at most one per car of the flow
+    assert sum(count >= 2 for count in entries.values()) >= 10  # cars that came back
+
+
 def test_replay_and_closed_loop_agree_where_traffic_does_not_react(tmp_path, root):
     """Clockwise traffic on the inner lanes; the learner starts next to it in an anticlockwise
     lane. While the learner stays on its own side of the road (y < 0 on the south side), no

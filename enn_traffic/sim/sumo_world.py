@@ -23,7 +23,6 @@ from enn_traffic.roads import Track
 from enn_traffic.scenario import Scenario
 from enn_traffic.sim.replay import (
     CLEARANCE,
-    FAR,
     RADIUS,
     RUNNING,
     clear_start,
@@ -36,7 +35,6 @@ from enn_traffic.sim.replay import (
 from enn_traffic.sim.world import EpisodeResults, World
 from enn_traffic.traffic import sumo
 
-MAX_SPEED = 70.0  # m/s, above any road vehicle's; bounds how far a vehicle moves in a step
 RECORDINGS_KEPT = 24  # a test world holds 10 test and 10 validation situations
 
 
@@ -116,44 +114,52 @@ class SumoWorld(World):
         try:
             simulation.step(sumo.warmup_steps(self.scenario))
             physics = self._learner_physics(simulation.largest_radius())
-            ids, corners, centres = sumo.slot_arrays(2, 64)  # rows: before the step, now
+            ids, corners, centres = sumo.slot_arrays(2, 64)  # rows: the step before, now
+            before, now = 0, 1  # they swap roles every step, instead of copying
             state = learner_state(np.asarray(self.start, dtype=np.float64), physics,
                                   self._shape[0], len(self.scenario.beam_angles), ids.shape[1],
                                   self._limits[1])
             pose, body, body_before, recent, gone, suffered, *scratch = state
-            ids, corners, centres, gone, scratch = self._read(simulation, ids, corners, centres,
-                                                              gone, scratch)
-            clear_start(body, ids[1], centres[1], gone, physics[CLEARANCE])
+            ids, corners, centres, gone, scratch = self._read(simulation, now, ids, corners,
+                                                              centres, gone, scratch)
+            clear_start(body, ids[now], centres[now], gone, physics[CLEARANCE])
             sumo.add_learner(vehicle.length, vehicle.width, vehicle.speed)
             # Vehicles farther than this from the learner's front bumper can neither be seen
-            # nor be hit within a step: the sensor's range, two bodies and two steps' travel.
-            simulation.follow_learner(self.scenario.sensor.range + 4.0 * physics[RADIUS]
-                                      + 2.0 * MAX_SPEED * vehicle.dt)
+            # nor be hit within a step: the sensor's range, two bodies and two steps of both
+            # vehicles' travel.
+            travel = (simulation.largest_speed() + vehicle.speed) * vehicle.dt
+            reach = self.scenario.sensor.range + 2.0 * travel
+            simulation.follow_learner(reach + 4.0 * physics[RADIUS])
+            sensor_and_walls = self._sensor_and_walls()
             t = 0
             while True:
                 if frames is not None:
-                    frames.append((pose.copy(), ids[1].copy(), corners[1].copy()))
+                    frames.append((pose.copy(), ids[now].copy(), corners[now].copy()))
                 outcome = learner_step(
-                    t, genes, self._shape[0], physics, *self._sensor_and_walls(),
-                    ids[0], corners[0], centres[0], ids[1], corners[1], centres[1],
+                    t, genes, self._shape[0], physics, *sensor_and_walls,
+                    ids[before], corners[before], centres[before],
+                    ids[now], corners[now], centres[now],
                     limit, self._limits[1], pose, body, body_before, recent, gone, suffered,
                     *scratch,
                 )  # fmt: skip
                 if outcome != RUNNING:
                     return t, int(outcome), int(suffered[0])
-                sumo.move_learner(pose[0], pose[1], pose[2], vehicle.speed)
+                sumo.move_learner(pose[0], pose[1], pose[2])
                 simulation.step()
-                ids[0], corners[0], centres[0] = ids[1], corners[1], centres[1]
-                ids, corners, centres, gone, scratch = self._read(simulation, ids, corners,
+                before, now = now, before
+                ids, corners, centres, gone, scratch = self._read(simulation, now, ids, corners,
                                                                   centres, gone, scratch)
+                if simulation.radius > physics[RADIUS]:  # a body larger than its type said
+                    physics[RADIUS] = simulation.radius
+                    simulation.follow_learner(reach + 4.0 * physics[RADIUS])
                 t += 1
         finally:
             simulation.close()
 
     @staticmethod
-    def _read(simulation: sumo.Simulation, ids, corners, centres, gone, scratch):
-        """Read SUMO's vehicles into row 1 of the slot arrays, doubling the number of slots
-        when a vehicle's slot lies beyond them."""
+    def _read(simulation: sumo.Simulation, row: int, ids, corners, centres, gone, scratch):
+        """Read SUMO's vehicles into row ``row`` of the slot arrays, doubling the number of
+        slots when a vehicle's slot lies beyond them."""
         slots, numbers, frame_corners, frame_centres = simulation.read()
         while len(slots) and slots.max() >= ids.shape[1]:
             size = 2 * ids.shape[1]
@@ -163,9 +169,8 @@ class SumoWorld(World):
             ids, corners, centres = grown
             gone = np.concatenate([gone, np.full(size - gone.shape[0], -1, dtype=np.int64)])
             scratch = [*scratch[:-1], np.empty((size, 2))]
-        ids[1], corners[1], centres[1] = -1, 0.0, FAR
-        ids[1, slots], corners[1, slots], centres[1, slots] = (numbers, frame_corners,
-                                                                frame_centres)
+        sumo.fill_frame(ids[row], corners[row], centres[row], slots, numbers, frame_corners,
+                        frame_centres)
         return ids, corners, centres, gone, scratch
 
     def trace(self, chromosome: np.ndarray, generation: int = 0, episode: int = 0,

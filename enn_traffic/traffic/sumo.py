@@ -38,6 +38,7 @@ _POSITION, _ANGLE = libsumo.VAR_POSITION, libsumo.VAR_ANGLE
 _LENGTH, _WIDTH = libsumo.VAR_LENGTH, libsumo.VAR_WIDTH
 _VARIABLES = [_POSITION, _ANGLE, _LENGTH, _WIDTH]
 MAX_SLOTS = 4096  # vehicles on the network at once
+MATCH_M = 20.0  # first radius in which SUMO maps the learner's position to a lane
 
 
 @njit(cache=True)
@@ -54,15 +55,31 @@ def to_angle(heading: float) -> float:
 
 
 @njit(cache=True)
-def _bodies(values, corners, centres) -> None:
+def _bodies(values, corners, centres) -> float:
     """Body corners (n, 4, 2: front-right, front-left, rear-left, rear-right) and centres
     (n, 2) of SUMO vehicles from rows (x, y, navigation angle, length, width), where (x, y)
-    is the front bumper's middle."""
+    is the front bumper's middle; returns the largest body's half diagonal."""
+    radius = 0.0
     for i in range(values.shape[0]):
         heading = to_heading(values[i, 2])
         body_corners(values[i, 0], values[i, 1], heading, values[i, 3], values[i, 4], corners[i])
         centres[i, 0] = 0.5 * (corners[i, 0, 0] + corners[i, 2, 0])
         centres[i, 1] = 0.5 * (corners[i, 0, 1] + corners[i, 2, 1])
+        radius = max(radius, 0.5 * math.hypot(values[i, 3], values[i, 4]))
+    return radius
+
+
+@njit(cache=True)
+def fill_frame(ids, corners, centres, slots, numbers, frame_corners, frame_centres) -> None:
+    """One step's slot arrays from a :meth:`Simulation.read`: every slot empty, then the
+    vehicles read in theirs."""
+    ids[:] = -1
+    corners[:] = 0.0
+    centres[:] = FAR
+    for i in range(slots.shape[0]):
+        ids[slots[i]] = numbers[i]
+        corners[slots[i]] = frame_corners[i]
+        centres[slots[i]] = frame_centres[i]
 
 
 def sumo_command(scenario: Scenario, seed: int, error_log: Path) -> list[str]:
@@ -99,6 +116,7 @@ class Simulation:
         self.slots: dict[str, int] = {}
         self.numbers: dict[str, int] = {}
         self.following = False
+        self.radius = 0.0  # half the largest body diagonal read so far
         self._free = list(range(MAX_SLOTS - 1, -1, -1))
 
     def _fail(self, what: str, exc: Exception | None = None) -> None:
@@ -110,7 +128,11 @@ class Simulation:
         try:
             for _ in range(count):
                 libsumo.simulationStep()
-                if not self.following:
+                if self.following:  # unseen vehicles keep their slots until they arrive
+                    for vehicle in libsumo.simulation.getArrivedIDList():
+                        if vehicle in self.slots:
+                            self._free.append(self.slots.pop(vehicle))
+                else:
                     for vehicle in libsumo.simulation.getDepartedIDList():
                         libsumo.vehicle.subscribe(vehicle, _VARIABLES)
         except Exception as exc:
@@ -119,26 +141,29 @@ class Simulation:
     def read(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         """The vehicles on the network now, the learner excepted: their slots, numbers (unique
         within the run), body corners (n, 4, 2) and centres (n, 2). Once :meth:`follow_learner`
-        was called, only the vehicles within its reach of the learner."""
+        was called, only the vehicles within its reach of the learner; a vehicle keeps its
+        slot and number while it is on the network, in reach or not, so that one that left
+        the learner's world (``gone`` in :mod:`enn_traffic.sim.replay`) stays out of it."""
         if self.following:
             results = libsumo.vehicle.getContextSubscriptionResults(LEARNER)
         else:
             results = libsumo.vehicle.getAllSubscriptionResults()
         results.pop(LEARNER, None)
-        if len(results) != len(self.slots) or any(v not in self.slots for v in results):
+        if not self.following and len(results) != len(self.slots):
+            for vehicle in [v for v in self.slots if v not in results]:  # left the network
+                self._free.append(self.slots.pop(vehicle))
+        if any(v not in self.slots for v in results):
             self._assign_slots(results)
-        slots = np.fromiter((self.slots[v] for v in results), np.int64, len(results))
-        numbers = np.fromiter((self.numbers[v] for v in results), np.int64, len(results))
-        values = np.array([(*value[_POSITION], value[_ANGLE], value[_LENGTH], value[_WIDTH])
-                           for value in results.values()], dtype=np.float64).reshape(-1, 5)
-        corners, centres = np.empty((len(values), 4, 2)), np.empty((len(values), 2))
-        _bodies(values, corners, centres)
-        return slots, numbers, corners, centres
+        slots, numbers = self.slots, self.numbers
+        rows = np.array([(slots[v], numbers[v], *value[_POSITION], value[_ANGLE],
+                          value[_LENGTH], value[_WIDTH]) for v, value in results.items()],
+                        dtype=np.float64).reshape(-1, 7)
+        corners, centres = np.empty((len(rows), 4, 2)), np.empty((len(rows), 2))
+        self.radius = max(self.radius, _bodies(rows[:, 2:], corners, centres))
+        return rows[:, 0].astype(np.int64), rows[:, 1].astype(np.int64), corners, centres
 
     def _assign_slots(self, present) -> None:
-        """Free the slots of vehicles that left; give arriving vehicles a slot and a number."""
-        for vehicle in [v for v in self.slots if v not in present]:
-            self._free.append(self.slots.pop(vehicle))
+        """Give the vehicles new to the learner a slot and a number."""
         for vehicle in present:
             if vehicle not in self.slots:
                 if not self._free:
@@ -156,11 +181,22 @@ class Simulation:
         self.following = True
 
     @staticmethod
-    def largest_radius() -> float:
-        """Half the diagonal of the largest vehicle type SUMO knows (a bounding radius)."""
-        return max(0.5 * math.hypot(libsumo.vehicletype.getLength(kind),
-                                    libsumo.vehicletype.getWidth(kind))
-                   for kind in libsumo.vehicletype.getIDList())
+    def _traffic_types() -> list[str]:
+        """The vehicle types the traffic may use: the scenario's and DEFAULT_VEHTYPE, not
+        SUMO's other built-in defaults (a 135 m train would make every vehicle "near")."""
+        return [kind for kind in libsumo.vehicletype.getIDList()
+                if not kind.startswith("DEFAULT_") or kind == "DEFAULT_VEHTYPE"]
+
+    def largest_radius(self) -> float:
+        """A bounding radius: half the diagonal of the largest traffic vehicle type, or of a
+        larger body read since."""
+        return max(self.radius, *(0.5 * math.hypot(libsumo.vehicletype.getLength(kind),
+                                                   libsumo.vehicletype.getWidth(kind))
+                                  for kind in self._traffic_types()))
+
+    def largest_speed(self) -> float:
+        """The top speed of the fastest traffic vehicle type (SUMO never exceeds it)."""
+        return max(libsumo.vehicletype.getMaxSpeed(kind) for kind in self._traffic_types())
 
     def close(self) -> None:
         with contextlib.suppress(Exception):  # not started, or already closed
@@ -205,12 +241,10 @@ def record(scenario: Scenario, seed: int, steps: int) -> Recording:
         simulation.close()
     used = max((int(f[0].max()) + 1 for f in frames if len(f[0])), default=0)
     ids, corners, centres = slot_arrays(steps + 1, used)
-    for t, (slots, numbers, frame_corners, frame_centres) in enumerate(frames):
-        ids[t, slots], corners[t, slots], centres[t, slots] = numbers, frame_corners, frame_centres
-    present = ids >= 0
-    sizes = np.linalg.norm(corners[:, :, 0] - corners[:, :, 2], axis=-1)
-    radius = 0.5 * float(sizes[present].max()) if present.any() else 0.0
-    return Recording(ids, corners, centres, radius, float(present.sum(axis=1).mean()))
+    for t, frame in enumerate(frames):
+        fill_frame(ids[t], corners[t], centres[t], *frame)
+    mean_vehicles = float((ids >= 0).sum(axis=1).mean())
+    return Recording(ids, corners, centres, simulation.radius, mean_vehicles)
 
 
 def add_learner(length: float, width: float, speed: float) -> None:
@@ -226,9 +260,17 @@ def add_learner(length: float, width: float, speed: float) -> None:
     libsumo.vehicle.add(LEARNER, "", typeID=kind)
     libsumo.vehicle.setSpeedMode(LEARNER, 0)
     libsumo.vehicle.setLaneChangeMode(LEARNER, 0)
+    libsumo.vehicle.setSpeed(LEARNER, speed)  # for its first step; then SUMO derives it
 
 
-def move_learner(x: float, y: float, heading: float, speed: float) -> None:
-    """Place the learner for SUMO's next step (keepRoute=2: anywhere, on a lane or not)."""
-    libsumo.vehicle.moveToXY(LEARNER, "", -1, x, y, to_angle(heading), keepRoute=2)
-    libsumo.vehicle.setSpeed(LEARNER, speed)
+def move_learner(x: float, y: float, heading: float) -> None:
+    """Place the learner for SUMO's next step (keepRoute=2: anywhere, on a lane or not); SUMO
+    takes its speed from the distance moved. Lanes are looked for within MATCH_M first (the
+    learner is on the drivable area, so one is that near; a wider search costs twice as
+    much), then anywhere."""
+    try:
+        libsumo.vehicle.moveToXY(LEARNER, "", -1, x, y, to_angle(heading), keepRoute=2,
+                                 matchThreshold=MATCH_M)
+    except libsumo.TraCIException:
+        libsumo.vehicle.moveToXY(LEARNER, "", -1, x, y, to_angle(heading), keepRoute=2,
+                                 matchThreshold=1e6)
