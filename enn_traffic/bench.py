@@ -108,9 +108,11 @@ def arena_bench(generations: int = 10) -> pd.DataFrame:
     return table
 
 
-def sumo_bench(generations: int = 10, closed_loop_episodes: int = 2) -> pd.DataFrame:
+def sumo_bench(generations: int = 10, closed_loop_steps: int = 10_000) -> pd.DataFrame:
     """SUMO strategy 1 (steady ring traffic): replay mode over the generations of a GA run,
-    recording included; then the run's best controller in closed loop, one process."""
+    recording included; then the run's best controller in closed loop, one process, over
+    episodes of new traffic until ``closed_loop_steps`` learner steps (SUMO's start and
+    warm-up of each episode, timed apart, not counted)."""
     world, params, rng, population = _workload("sumo_strategy1")
     threads = numba.get_num_threads()
     steps, learner_steps, seconds = 0, 0, 0.0
@@ -129,8 +131,13 @@ def sumo_bench(generations: int = 10, closed_loop_episodes: int = 2) -> pd.DataF
     closed = make_world(world.scenario.with_overrides(traffic={"mode": "closed-loop"}))
     genes = closed.spec.in_source_layout(best)[0]
     closed.closed_loop(genes, 0, max_steps=2)  # load the compiled step outside the timing
-    steps, seconds = 0, 0.0
-    for seed in closed.seeds(generations + 1)[:closed_loop_episodes]:
+    steps, seconds, generation = 0, 0.0, generations
+    seeds: list[int] = []
+    while steps < closed_loop_steps and generation < generations + 100:
+        if not seeds:
+            generation += 1
+            seeds = list(closed.seeds(generation))
+        seed = seeds.pop()
         started = time.perf_counter()
         steps += closed.closed_loop(genes, seed)[0]
         total = time.perf_counter() - started
@@ -191,6 +198,6 @@ def run_bench(quick: bool = False) -> pd.DataFrame:
         navigation_bench(generations=10 if quick else 30,
                          reference_seconds=3.0 if quick else 10.0),
         arena_bench(generations=3 if quick else 10),
-        sumo_bench(generations=3 if quick else 10, closed_loop_episodes=1 if quick else 2),
+        sumo_bench(generations=3 if quick else 10, closed_loop_steps=2_000 if quick else 10_000),
         lane_keeping_bench(generations=2 if quick else 4),
     ], ignore_index=True)

@@ -161,7 +161,7 @@ class SumoWorld(World):
         """Read SUMO's vehicles into row ``row`` of the slot arrays, doubling the number of
         slots when a vehicle's slot lies beyond them."""
         slots, numbers, frame_corners, frame_centres = simulation.read()
-        while len(slots) and slots.max() >= ids.shape[1]:
+        while simulation.slots_used > ids.shape[1]:
             size = 2 * ids.shape[1]
             grown = sumo.slot_arrays(2, size)
             for new, old in zip(grown, (ids, corners, centres), strict=True):

@@ -117,6 +117,7 @@ class Simulation:
         self.numbers: dict[str, int] = {}
         self.following = False
         self.radius = 0.0  # half the largest body diagonal read so far
+        self.slots_used = 0  # one more than the highest slot given so far
         self._free = list(range(MAX_SLOTS - 1, -1, -1))
 
     def _fail(self, what: str, exc: Exception | None = None) -> None:
@@ -169,6 +170,7 @@ class Simulation:
                 if not self._free:
                     self._fail(f"more than {MAX_SLOTS} vehicles on the network at once")
                 self.slots[vehicle] = self._free.pop()
+                self.slots_used = max(self.slots_used, self.slots[vehicle] + 1)
                 self.numbers[vehicle] = len(self.numbers)
 
     def follow_learner(self, reach: float) -> None:
