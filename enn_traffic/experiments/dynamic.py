@@ -187,14 +187,26 @@ def fig11(out: Path, quick: bool = False, progress: bool = True,
 def _trained_controllers(family: Family, out: Path, progress: bool) -> dict[int, np.ndarray]:
     """Per strategy: the best of its runs' candidates, judged on validation traffic of that
     same strategy."""
-    chosen = {}
+    candidates = _evolved_candidates(family, out, progress)
+    return {strategy: _pick(family, candidates[strategy], [strategy])
+            for strategy in STRATEGIES}
+
+
+def _evolved_candidates(family: Family, out: Path, progress: bool) -> dict[int, np.ndarray]:
+    """Per strategy: every run's best chromosome and elites (the runs done first if need be)."""
     _family_runs(family, out, progress)
-    for strategy in STRATEGIES:
-        candidates = np.concatenate([
-            _candidates(out / "runs" / family.name(strategy) / f"seed{seed}")
-            for seed in family.seeds])  # fmt: skip
-        chosen[strategy] = _pick(family, candidates, [strategy])
-    return chosen
+    return {strategy: np.concatenate([
+                _candidates(out / "runs" / family.name(strategy) / f"seed{seed}")
+                for seed in family.seeds])
+            for strategy in STRATEGIES}  # fmt: skip
+
+
+def evolved_candidates(out: Path, quick: bool, progress: bool, family: Family = ARENA
+                       ) -> dict[int, np.ndarray]:
+    """Per strategy: the controllers individual learning evolved on it (§5.3), from which
+    Table 1 and §5.5 choose."""
+    family = family.settings(quick)
+    return _evolved_candidates(family, out / family.folder, progress)
 
 
 def evolved_population(family: Family, out: Path, strategy: int, chosen: np.ndarray,

@@ -6,8 +6,10 @@ For each arena strategy and each of ``SITUATIONS`` traffic situations (the 8 sta
 time each:
 
 - initial behaviour: all 8 vehicles driven by the strategy's own drivers;
-- Table 3 (§5.5.1, broadcasting the winning chromosome): all 8 driven by the controller Table 1
-  deploys for that strategy;
+- Table 3 (§5.5.1, broadcasting the winning chromosome): all 8 driven by the winning
+  chromosome — of the controllers individual learning evolved on the strategy (every run's
+  best and elites), the one with the fewest collisions when it drives all 8 vehicles, judged
+  on ``VALIDATION_SITUATIONS`` situations apart from the measured ones;
 - Table 4 (§5.5.2, broadcasting the evolved population): every vehicle starts from a copy of the
   evolved population (the winner first) and all learn at once for ``SECONDS`` (each its own GA,
   sharing the best chromosomes across vehicles, reference-implementation.md §7.4); then each
@@ -38,18 +40,40 @@ from enn_traffic.traffic.kinematic import RANDOM_NETWORK, STRATEGIES
 SECONDS = 100.0  # the paper's training time, and each measuring period
 SITUATIONS = 5
 SITUATION_KEY = 3_000_000_000  # traffic situations apart from training, validation and tests
+VALIDATION_KEY = 4_000_000_000  # the situations that choose the winning chromosome
+VALIDATION_SITUATIONS = 20
 DRAWN_SECONDS = 20.0
 # Mean reduction of the collision rate over the four strategies in the paper's Tables 3 and 4.
 PAPER_REDUCTION = {"table3": 0.54, "table4": 0.89}
 
 
-def _arena(world: World, situation: int, kinds=None) -> tuple[SharedArena, np.ndarray]:
+def _arena(world: World, situation: int, kinds=None, key: int = SITUATION_KEY
+           ) -> tuple[SharedArena, np.ndarray]:
     """The arena of one traffic situation: 8 start poses; ``kinds`` default to the strategy's
     own drivers; and the drivers' random genes (random-network strategy)."""
-    episode = world.episodes(SITUATION_KEY + situation)[0]
+    episode = world.episodes(key + situation)[0]
     strategy = STRATEGIES[world.scenario.traffic.strategy_list[0]]
     kinds = np.full(world.vehicles, strategy) if kinds is None else kinds
     return SharedArena(world, episode.start, kinds, int(episode.seed)), episode.traffic_genes.copy()
+
+
+def _broadcast_rate(world: World, genes: np.ndarray, key: int, situations: int) -> float:
+    """The collision rate with ``genes`` (world layout) driving all vehicles, mean over the
+    situations drawn from ``key``."""
+    network = np.full(world.vehicles, RANDOM_NETWORK)
+    return float(np.mean([
+        _arena(world, situation, network, key)[0].run(
+            SECONDS, np.tile(genes, (world.vehicles, 1))).collision_rate
+        for situation in range(situations)]))  # fmt: skip
+
+
+def _winner(strategy: int, candidates: np.ndarray) -> np.ndarray:
+    """§5.5.1's winning chromosome: the candidate with the fewest collisions when it drives
+    every vehicle, on validation situations."""
+    world = World(scenario(dynamic.ARENA.name(strategy)))
+    genes = world.spec.in_source_layout(candidates)
+    rates = [_broadcast_rate(world, g, VALIDATION_KEY, VALIDATION_SITUATIONS) for g in genes]
+    return candidates[int(np.argmin(rates))]
 
 
 def _strategy_rows(strategy: int, winner: np.ndarray, population: np.ndarray,
@@ -90,12 +114,12 @@ def _strategy_rows(strategy: int, winner: np.ndarray, population: np.ndarray,
 def _measure(out: Path, quick: bool, progress: bool) -> pd.DataFrame:
     """Every strategy's rates, once per process (Tables 3 and 4 share them), also written to
     ``simultaneous.csv`` with the simulated and wall time they took."""
-    controllers = dynamic.trained_controllers(out, quick, progress)
+    candidates = dynamic.evolved_candidates(out, quick, progress)
     rows, paths = [], {}
     for strategy in dynamic.STRATEGIES:
-        population = dynamic.evolved_population(dynamic.ARENA, out, strategy,
-                                                controllers[strategy], quick)
-        rows.append(_strategy_rows(strategy, controllers[strategy], population, paths))
+        winner = _winner(strategy, candidates[strategy])
+        population = dynamic.evolved_population(dynamic.ARENA, out, strategy, winner, quick)
+        rows.append(_strategy_rows(strategy, winner, population, paths))
     table = pd.DataFrame(rows)
     write_csv(out / "simultaneous.csv", table)
     _draw(paths, out / "simultaneous_paths.png")
