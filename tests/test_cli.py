@@ -91,6 +91,8 @@ def test_evaluate_reproduces_the_recorded_best_fitness(small_run, root):
         (("run", "scenarios/navigation_narrow.toml", "--population", "-3"), "integer >= 1"),
         (("run", "scenarios/navigation_narrow.toml", "--executor", "ray", "--address",
           "127.0.0.1:9"), "cannot reach Ray"),
+        (("reproduce", "--only", "fig7", "--executor", "ray", "--address", "127.0.0.1:9",
+          "--out", "/nonexistent/never-written"), "cannot reach Ray"),
     ],
 )
 def test_bad_input_is_one_clear_message_and_exit_2(args, needle, root):

@@ -36,6 +36,18 @@ def _generation_done(out) -> int:
         return 0
 
 
+def _kill_after(*args, watch, generations: int) -> None:
+    """Start the command line ``args`` and SIGKILL it once the run in ``watch`` has finished
+    ``generations`` generations (or it ended by itself)."""
+    process = _run(*args, wait=False)
+    deadline = time.monotonic() + 120
+    while _generation_done(watch) < generations and process.poll() is None:
+        assert time.monotonic() < deadline, "the command never got going"
+        time.sleep(0.01)
+    process.send_signal(signal.SIGKILL)
+    process.wait()
+
+
 def test_run_killed_mid_run_resumes_to_the_uninterrupted_result(tmp_path, root):
     """SIGKILL while a run is between generations 2 and 12, then --resume: the same
     generations.csv (but elapsed time) and the same final population as a run never killed."""
@@ -43,13 +55,7 @@ def test_run_killed_mid_run_resumes_to_the_uninterrupted_result(tmp_path, root):
     whole = tmp_path / "whole"
     assert _run("run", scenario, "--out", whole, *RUN).returncode == 0
     killed = tmp_path / "killed"
-    process = _run("run", scenario, "--out", killed, *RUN, wait=False)
-    deadline = time.monotonic() + 120
-    while _generation_done(killed) < 2 and process.poll() is None:
-        assert time.monotonic() < deadline, "the run never got going"
-        time.sleep(0.01)
-    process.send_signal(signal.SIGKILL)
-    process.wait()
+    _kill_after("run", scenario, "--out", killed, *RUN, watch=killed, generations=2)
     assert _generation_done(killed) < 12, "the run finished before it could be killed"
     resumed = _run("run", scenario, "--out", killed, "--resume", *RUN)
     assert resumed.returncode == 0, resumed.stderr
@@ -61,15 +67,9 @@ def test_reproduce_killed_mid_run_resumes_to_the_uninterrupted_result(tmp_path, 
     """SIGKILL ``reproduce`` while its first run is under way; the next call finishes every
     run as if never interrupted and writes the same table."""
     out = tmp_path / "killed"
-    process = _run("reproduce", "--quick", "--only", "fig7", "--out", out, "--quiet",
-                   wait=False)
     first = out / FIG7_RUNS[0]
-    deadline = time.monotonic() + 120
-    while _generation_done(first) < 3 and process.poll() is None:
-        assert time.monotonic() < deadline, "reproduce never got going"
-        time.sleep(0.01)
-    process.send_signal(signal.SIGKILL)
-    process.wait()
+    _kill_after("reproduce", "--quick", "--only", "fig7", "--out", out, "--quiet", watch=first,
+                generations=3)
     assert _generation_done(first) < 20 and not (out / "fig7.csv").exists()
     resumed = _run("reproduce", "--quick", "--only", "fig7", "--out", out, "--quiet")
     assert resumed.returncode == 0, resumed.stderr
