@@ -35,10 +35,9 @@ from enn_traffic.sim.replay import FAR
 
 LEARNER = "enn_learner"
 _POSITION, _ANGLE = libsumo.VAR_POSITION, libsumo.VAR_ANGLE
-_LENGTH, _WIDTH = libsumo.VAR_LENGTH, libsumo.VAR_WIDTH
-_VARIABLES = [_POSITION, _ANGLE, _LENGTH, _WIDTH]
+_VARIABLES = [_POSITION, _ANGLE]  # a vehicle's length and width are read once
 MAX_SLOTS = 4096  # vehicles on the network at once
-MATCH_M = 20.0  # first radius in which SUMO maps the learner's position to a lane
+MATCH_M = 10.0  # first radius in which SUMO maps the learner's position to a lane
 
 
 @njit(cache=True)
@@ -57,15 +56,15 @@ def to_angle(heading: float) -> float:
 @njit(cache=True)
 def _bodies(values, corners, centres) -> float:
     """Body corners (n, 4, 2: front-right, front-left, rear-left, rear-right) and centres
-    (n, 2) of SUMO vehicles from rows (x, y, navigation angle, length, width), where (x, y)
+    (n, 2) of SUMO vehicles from rows (length, width, x, y, navigation angle), where (x, y)
     is the front bumper's middle; returns the largest body's half diagonal."""
     radius = 0.0
     for i in range(values.shape[0]):
-        heading = to_heading(values[i, 2])
-        body_corners(values[i, 0], values[i, 1], heading, values[i, 3], values[i, 4], corners[i])
+        length, width, x, y = values[i, 0], values[i, 1], values[i, 2], values[i, 3]
+        body_corners(x, y, to_heading(values[i, 4]), length, width, corners[i])
         centres[i, 0] = 0.5 * (corners[i, 0, 0] + corners[i, 2, 0])
         centres[i, 1] = 0.5 * (corners[i, 0, 1] + corners[i, 2, 1])
-        radius = max(radius, 0.5 * math.hypot(values[i, 3], values[i, 4]))
+        radius = max(radius, 0.5 * math.hypot(length, width))
     return radius
 
 
@@ -115,6 +114,7 @@ class Simulation:
             self._fail("SUMO failed to start", exc)
         self.slots: dict[str, int] = {}
         self.numbers: dict[str, int] = {}
+        self.static: dict[str, tuple] = {}  # vehicle -> (slot, number, length, width)
         self.following = False
         self.radius = 0.0  # half the largest body diagonal read so far
         self.slots_used = 0  # one more than the highest slot given so far
@@ -133,6 +133,7 @@ class Simulation:
                     for vehicle in libsumo.simulation.getArrivedIDList():
                         if vehicle in self.slots:
                             self._free.append(self.slots.pop(vehicle))
+                            del self.static[vehicle]
                 else:
                     for vehicle in libsumo.simulation.getDepartedIDList():
                         libsumo.vehicle.subscribe(vehicle, _VARIABLES)
@@ -153,18 +154,18 @@ class Simulation:
         if not self.following and len(results) != len(self.slots):
             for vehicle in [v for v in self.slots if v not in results]:  # left the network
                 self._free.append(self.slots.pop(vehicle))
+                del self.static[vehicle]
         if any(v not in self.slots for v in results):
             self._assign_slots(results)
-        slots, numbers = self.slots, self.numbers
-        rows = np.array([(slots[v], numbers[v], *value[_POSITION], value[_ANGLE],
-                          value[_LENGTH], value[_WIDTH]) for v, value in results.items()],
-                        dtype=np.float64).reshape(-1, 7)
+        static = self.static
+        rows = np.array([(*static[v], *value[_POSITION], value[_ANGLE])
+                         for v, value in results.items()], dtype=np.float64).reshape(-1, 7)
         corners, centres = np.empty((len(rows), 4, 2)), np.empty((len(rows), 2))
         self.radius = max(self.radius, _bodies(rows[:, 2:], corners, centres))
         return rows[:, 0].astype(np.int64), rows[:, 1].astype(np.int64), corners, centres
 
     def _assign_slots(self, present) -> None:
-        """Give the vehicles new to the learner a slot and a number."""
+        """Give the vehicles new to the learner a slot, a number, and their (static) size."""
         for vehicle in present:
             if vehicle not in self.slots:
                 if not self._free:
@@ -172,6 +173,9 @@ class Simulation:
                 self.slots[vehicle] = self._free.pop()
                 self.slots_used = max(self.slots_used, self.slots[vehicle] + 1)
                 self.numbers[vehicle] = len(self.numbers)
+                self.static[vehicle] = (self.slots[vehicle], self.numbers[vehicle],
+                                        libsumo.vehicle.getLength(vehicle),
+                                        libsumo.vehicle.getWidth(vehicle))
 
     def follow_learner(self, reach: float) -> None:
         """From now on read only the vehicles within ``reach`` of the learner (a context
