@@ -76,20 +76,25 @@ def test_body_of_a_real_sumo_vehicle(tmp_path, root):
     simulation = sumo.Simulation(scenario, seed=1)
     try:
         simulation.step(30)  # 60 m along: the whole body on the straight edge
-        slots, numbers, corners, centres = simulation.read()
+        rows = simulation.read()
         import libsumo
 
         x, y = libsumo.vehicle.getPosition("follower")
     finally:
         simulation.close()
-    assert len(slots) == 1
+    assert len(rows) == 1
+    ids, corners, centres = (array[0] for array in sumo.slot_arrays(1, 2))
+    radius = sumo.fill_frame(rows, ids, corners, centres)
+    slot = int(rows[0, sumo.ROW_SLOT])
+    assert ids[slot] == rows[0, sumo.ROW_NUMBER] and ids[1 - slot] == -1
+    assert radius == pytest.approx(0.5 * math.hypot(4.5, 1.8))
     assert y == pytest.approx(-12.5)
-    front_right, front_left, rear_left, rear_right = corners[0]
+    front_right, front_left, rear_left, rear_right = corners[slot]
     assert front_right == pytest.approx([x, -13.4])
     assert front_left == pytest.approx([x, -11.6])
     assert rear_left == pytest.approx([x - 4.5, -11.6])
     assert rear_right == pytest.approx([x - 4.5, -13.4])
-    assert centres[0] == pytest.approx([x - 2.25, -12.5])
+    assert centres[slot] == pytest.approx([x - 2.25, -12.5])
 
 
 def test_vehicles_keep_their_slots_while_out_of_the_learners_reach(tmp_path, root):
@@ -108,7 +113,8 @@ def test_vehicles_keep_their_slots_while_out_of_the_learners_reach(tmp_path, roo
         for _ in range(900):  # a lap takes about 50 s
             sumo.move_learner(80.0, -2.5, 0.0)
             simulation.step()
-            slots, numbers, _, _ = simulation.read()
+            rows = simulation.read()
+            slots, numbers = rows[:, sumo.ROW_SLOT], rows[:, sumo.ROW_NUMBER]
             for slot, number in zip(slots.tolist(), numbers.tolist(), strict=True):
                 assert slot_of.setdefault(number, slot) == slot
                 entries[number] = entries.get(number, 0) + (number not in present)

@@ -120,8 +120,9 @@ class SumoWorld(World):
                                   self._shape[0], len(self.scenario.beam_angles), ids.shape[1],
                                   self._limits[1])
             pose, body, body_before, recent, gone, suffered, *scratch = state
-            ids, corners, centres, gone, scratch = self._read(simulation, now, ids, corners,
-                                                              centres, gone, scratch)
+            ids, corners, centres, gone, scratch, radius = self._read(
+                simulation, now, ids, corners, centres, gone, scratch)
+            physics[RADIUS] = max(physics[RADIUS], radius)  # a body larger than its type said
             clear_start(body, ids[now], centres[now], gone, physics[CLEARANCE])
             sumo.add_learner(vehicle.length, vehicle.width, vehicle.speed)
             # Vehicles farther than this from the learner's front bumper can neither be seen
@@ -147,10 +148,10 @@ class SumoWorld(World):
                 sumo.move_learner(pose[0], pose[1], pose[2])
                 simulation.step()
                 before, now = now, before
-                ids, corners, centres, gone, scratch = self._read(simulation, now, ids, corners,
-                                                                  centres, gone, scratch)
-                if simulation.radius > physics[RADIUS]:  # a body larger than its type said
-                    physics[RADIUS] = simulation.radius
+                ids, corners, centres, gone, scratch, radius = self._read(
+                    simulation, now, ids, corners, centres, gone, scratch)
+                if radius > physics[RADIUS]:  # a body larger than its type said
+                    physics[RADIUS] = radius
                     simulation.follow_learner(reach + 4.0 * physics[RADIUS])
                 t += 1
         finally:
@@ -159,8 +160,8 @@ class SumoWorld(World):
     @staticmethod
     def _read(simulation: sumo.Simulation, row: int, ids, corners, centres, gone, scratch):
         """Read SUMO's vehicles into row ``row`` of the slot arrays, doubling the number of
-        slots when a vehicle's slot lies beyond them."""
-        slots, numbers, frame_corners, frame_centres = simulation.read()
+        slots when a vehicle's slot lies beyond them; also the largest body's half diagonal."""
+        rows = simulation.read()
         while simulation.slots_used > ids.shape[1]:
             size = 2 * ids.shape[1]
             grown = sumo.slot_arrays(2, size)
@@ -169,9 +170,8 @@ class SumoWorld(World):
             ids, corners, centres = grown
             gone = np.concatenate([gone, np.full(size - gone.shape[0], -1, dtype=np.int64)])
             scratch = [*scratch[:-1], np.empty((size, 2))]
-        sumo.fill_frame(ids[row], corners[row], centres[row], slots, numbers, frame_corners,
-                        frame_centres)
-        return ids, corners, centres, gone, scratch
+        radius = sumo.fill_frame(rows, ids[row], corners[row], centres[row])
+        return ids, corners, centres, gone, scratch, radius
 
     def trace(self, chromosome: np.ndarray, generation: int = 0, episode: int = 0,
               max_steps: int | None = None) -> tuple[np.ndarray, int]:

@@ -37,6 +37,8 @@ LEARNER = "enn_learner"
 _POSITION, _ANGLE = libsumo.VAR_POSITION, libsumo.VAR_ANGLE
 _VARIABLES = [_POSITION, _ANGLE]  # a vehicle's length and width are read once
 MAX_SLOTS = 4096  # vehicles on the network at once
+# Columns of the rows :meth:`Simulation.read` gives.
+ROW_SLOT, ROW_NUMBER, ROW_LENGTH, ROW_WIDTH, ROW_X, ROW_Y, ROW_ANGLE = range(7)
 MATCH_M = 10.0  # first radius in which SUMO maps the learner's position to a lane
 
 
@@ -54,31 +56,25 @@ def to_angle(heading: float) -> float:
 
 
 @njit(cache=True)
-def _bodies(values, corners, centres) -> float:
-    """Body corners (n, 4, 2: front-right, front-left, rear-left, rear-right) and centres
-    (n, 2) of SUMO vehicles from rows (length, width, x, y, navigation angle), where (x, y)
-    is the front bumper's middle; returns the largest body's half diagonal."""
-    radius = 0.0
-    for i in range(values.shape[0]):
-        length, width, x, y = values[i, 0], values[i, 1], values[i, 2], values[i, 3]
-        body_corners(x, y, to_heading(values[i, 4]), length, width, corners[i])
-        centres[i, 0] = 0.5 * (corners[i, 0, 0] + corners[i, 2, 0])
-        centres[i, 1] = 0.5 * (corners[i, 0, 1] + corners[i, 2, 1])
-        radius = max(radius, 0.5 * math.hypot(length, width))
-    return radius
-
-
-@njit(cache=True)
-def fill_frame(ids, corners, centres, slots, numbers, frame_corners, frame_centres) -> None:
-    """One step's slot arrays from a :meth:`Simulation.read`: every slot empty, then the
-    vehicles read in theirs."""
+def fill_frame(rows, ids, corners, centres) -> float:
+    """One step's slot arrays (ids (S,), corners (S, 4, 2: front-right, front-left, rear-left,
+    rear-right), centres (S, 2)) from the rows of :meth:`Simulation.read`: every slot empty,
+    then each vehicle's body in its slot, from its front bumper's middle, navigation angle,
+    length and width. Returns the largest body's half diagonal."""
     ids[:] = -1
     corners[:] = 0.0
     centres[:] = FAR
-    for i in range(slots.shape[0]):
-        ids[slots[i]] = numbers[i]
-        corners[slots[i]] = frame_corners[i]
-        centres[slots[i]] = frame_centres[i]
+    radius = 0.0
+    for i in range(rows.shape[0]):
+        slot = int(rows[i, ROW_SLOT])
+        length, width = rows[i, ROW_LENGTH], rows[i, ROW_WIDTH]
+        ids[slot] = int(rows[i, ROW_NUMBER])
+        body_corners(rows[i, ROW_X], rows[i, ROW_Y], to_heading(rows[i, ROW_ANGLE]), length,
+                     width, corners[slot])
+        centres[slot, 0] = 0.5 * (corners[slot, 0, 0] + corners[slot, 2, 0])
+        centres[slot, 1] = 0.5 * (corners[slot, 0, 1] + corners[slot, 2, 1])
+        radius = max(radius, 0.5 * math.hypot(length, width))
+    return radius
 
 
 def sumo_command(scenario: Scenario, seed: int, error_log: Path) -> list[str]:
@@ -116,7 +112,6 @@ class Simulation:
         self.numbers: dict[str, int] = {}
         self.static: dict[str, tuple] = {}  # vehicle -> (slot, number, length, width)
         self.following = False
-        self.radius = 0.0  # half the largest body diagonal read so far
         self.slots_used = 0  # one more than the highest slot given so far
         self._free = list(range(MAX_SLOTS - 1, -1, -1))
 
@@ -140,12 +135,14 @@ class Simulation:
         except Exception as exc:
             self._fail("SUMO stopped", exc)
 
-    def read(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-        """The vehicles on the network now, the learner excepted: their slots, numbers (unique
-        within the run), body corners (n, 4, 2) and centres (n, 2). Once :meth:`follow_learner`
-        was called, only the vehicles within its reach of the learner; a vehicle keeps its
-        slot and number while it is on the network, in reach or not, so that one that left
-        the learner's world (``gone`` in :mod:`enn_traffic.sim.replay`) stays out of it."""
+    def read(self) -> np.ndarray:
+        """The vehicles on the network now, the learner excepted, a row each (columns
+        ``ROW_*``): slot, number (unique within the run), length, width, front bumper's x and
+        y, navigation angle; :func:`fill_frame` makes bodies of them. Once
+        :meth:`follow_learner` was called, only the vehicles within its reach of the learner;
+        a vehicle keeps its slot and number while it is on the network, in reach or not, so
+        that one that left the learner's world (``gone`` in :mod:`enn_traffic.sim.replay`)
+        stays out of it."""
         if self.following:
             results = libsumo.vehicle.getContextSubscriptionResults(LEARNER)
         else:
@@ -158,11 +155,8 @@ class Simulation:
         if any(v not in self.slots for v in results):
             self._assign_slots(results)
         static = self.static
-        rows = np.array([(*static[v], *value[_POSITION], value[_ANGLE])
+        return np.array([(*static[v], *value[_POSITION], value[_ANGLE])
                          for v, value in results.items()], dtype=np.float64).reshape(-1, 7)
-        corners, centres = np.empty((len(rows), 4, 2)), np.empty((len(rows), 2))
-        self.radius = max(self.radius, _bodies(rows[:, 2:], corners, centres))
-        return rows[:, 0].astype(np.int64), rows[:, 1].astype(np.int64), corners, centres
 
     def _assign_slots(self, present) -> None:
         """Give the vehicles new to the learner a slot, a number, and their (static) size."""
@@ -194,11 +188,10 @@ class Simulation:
                 if not kind.startswith("DEFAULT_") or kind == "DEFAULT_VEHTYPE"]
 
     def largest_radius(self) -> float:
-        """A bounding radius: half the diagonal of the largest traffic vehicle type, or of a
-        larger body read since."""
-        return max(self.radius, *(0.5 * math.hypot(libsumo.vehicletype.getLength(kind),
-                                                   libsumo.vehicletype.getWidth(kind))
-                                  for kind in self._traffic_types()))
+        """A bounding radius: half the diagonal of the largest traffic vehicle type."""
+        return max(0.5 * math.hypot(libsumo.vehicletype.getLength(kind),
+                                    libsumo.vehicletype.getWidth(kind))
+                   for kind in self._traffic_types())
 
     def largest_speed(self) -> float:
         """The top speed of the fastest traffic vehicle type (SUMO never exceeds it)."""
@@ -245,12 +238,11 @@ def record(scenario: Scenario, seed: int, steps: int) -> Recording:
             frames.append(simulation.read())
     finally:
         simulation.close()
-    used = max((int(f[0].max()) + 1 for f in frames if len(f[0])), default=0)
-    ids, corners, centres = slot_arrays(steps + 1, used)
-    for t, frame in enumerate(frames):
-        fill_frame(ids[t], corners[t], centres[t], *frame)
+    ids, corners, centres = slot_arrays(steps + 1, simulation.slots_used)
+    radius = max((fill_frame(rows, ids[t], corners[t], centres[t])
+                  for t, rows in enumerate(frames)), default=0.0)
     mean_vehicles = float((ids >= 0).sum(axis=1).mean())
-    return Recording(ids, corners, centres, simulation.radius, mean_vehicles)
+    return Recording(ids, corners, centres, radius, mean_vehicles)
 
 
 def add_learner(length: float, width: float, speed: float) -> None:
