@@ -148,11 +148,11 @@ class Simulation:
         else:
             results = libsumo.vehicle.getAllSubscriptionResults()
         results.pop(LEARNER, None)
-        if not self.following and len(results) != len(self.slots):
-            for vehicle in [v for v in self.slots if v not in results]:  # left the network
-                self._free.append(self.slots.pop(vehicle))
-                del self.static[vehicle]
-        if any(v not in self.slots for v in results):
+        if len(results) != len(self.slots) or any(v not in self.slots for v in results):
+            if not self.following:  # every vehicle on the network is read: absent ones left
+                for vehicle in [v for v in self.slots if v not in results]:
+                    self._free.append(self.slots.pop(vehicle))
+                    del self.static[vehicle]
             self._assign_slots(results)
         static = self.static
         return np.array([(*static[v], *value[_POSITION], value[_ANGLE])
