@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import hashlib
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from pathlib import Path
 
 import numpy as np
@@ -39,13 +39,20 @@ def ga_params(scenario: Scenario) -> ga.GAParams:
     return ga.GAParams(**settings)
 
 
-def fingerprint(scenario: Scenario) -> str:
-    """Identifies a run's settings (everything but the number of generations)."""
-    settings = scenario.with_overrides(ga={"generations": 1}).to_toml()
-    return hashlib.sha256(settings.encode()).hexdigest()[:16]
+def fingerprint(scenario: Scenario, others: Sequence[Scenario] = (),
+                population: np.ndarray | None = None) -> str:
+    """Identifies a run's settings (everything but the number of generations), with the other
+    scenarios its evaluator runs and the population it started from, where there are such."""
+    digest = hashlib.sha256(scenario.with_overrides(ga={"generations": 1}).to_toml().encode())
+    for other in others:
+        digest.update(other.to_toml().encode())
+    if population is not None:
+        digest.update(np.ascontiguousarray(population, dtype=np.float64).tobytes())
+    return digest.hexdigest()[:16]
 
 
-def _fresh_state(scenario: Scenario, population: np.ndarray | None = None) -> ga.GAState:
+def _fresh_state(scenario: Scenario, key: str, population: np.ndarray | None = None
+                 ) -> ga.GAState:
     rng = np.random.default_rng(scenario.seed)
     length = NetworkSpec(scenario.layer_sizes, scenario.network.layout).chromosome_length
     if population is None:
@@ -55,21 +62,21 @@ def _fresh_state(scenario: Scenario, population: np.ndarray | None = None) -> ga
     elif population.shape != (scenario.ga.population_size, length):
         raise ValueError(f"initial population has shape {population.shape}, the scenario "
                          f"needs ({scenario.ga.population_size}, {length})")
-    return ga.GAState(generation=0, population=population, rng=rng,
-                      fingerprint=fingerprint(scenario), extra={"elapsed_s": 0.0})
+    return ga.GAState(generation=0, population=population, rng=rng, fingerprint=key,
+                      extra={"elapsed_s": 0.0})
 
 
 def _open_state(scenario: Scenario, out: Path, resume: bool, force: bool,
-                population: np.ndarray | None) -> ga.GAState:
+                population: np.ndarray | None, key: str) -> ga.GAState:
     checkpoint = out / CHECKPOINT
     if not checkpoint.exists() or force:
-        return _fresh_state(scenario, population)
+        return _fresh_state(scenario, key, population)
     if not resume:
         raise InputError(
             "the folder already holds a run; pass --resume to continue it or --force to "
             "start over", out)
     state = ga.GAState.load(checkpoint)
-    if state.fingerprint != fingerprint(scenario):
+    if state.fingerprint != key:
         raise InputError(
             "the folder holds a run of different settings; use another --out or --force", out)
     return state
@@ -104,15 +111,19 @@ def evolve(
     progress: bool = True,
     initial_population: np.ndarray | None = None,
     stop: Callable[[np.ndarray, np.ndarray], bool] | None = None,
+    others: Sequence[Scenario] = (),
 ) -> pd.DataFrame:
     """Run the GA for ``scenario.ga.generations`` generations (or until a generation's best
     reaches ``ga.target_fitness``); return the generations table. ``initial_population``
     replaces the random first generation of a fresh run (incremental evolution, §5.4.1);
-    ``stop(population, fitness)``, asked after every generation, ends the run when it says so.
+    ``stop(population, fitness)``, asked after every generation, ends the run when it says so;
+    ``others``: the scenarios of the other worlds ``evaluator`` runs, which a resumed run must
+    share as it shares ``scenario`` and the initial population.
     """
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
-    state = _open_state(scenario, out, resume, force, initial_population)
+    key = fingerprint(scenario, others, initial_population)
+    state = _open_state(scenario, out, resume, force, initial_population, key)
     table_path = out / "generations.csv"
     rows = _finished_rows(table_path, state.generation)
     total = scenario.ga.generations

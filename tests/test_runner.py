@@ -2,6 +2,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
+from enn_traffic.errors import InputError
 from enn_traffic.evolution.ga import GAState
 from enn_traffic.runner import evolve
 from enn_traffic.scenario import load_scenario
@@ -45,3 +46,22 @@ def test_stop_hook_sees_the_evaluated_population(small, tmp_path):
     assert len(table) == 3
     assert all(p.shape == (30, 68) and f.shape == (30,) for p, f in seen)
     assert [f.max() for _, f in seen] == table["best_fitness"].tolist()
+
+
+def test_a_run_is_resumed_only_from_the_same_start_and_other_worlds(small, tmp_path, root):
+    """Incremental evolution's runs depend on the population they start from and on the other
+    worlds they are judged in: a resume with either changed is refused, not silently reused."""
+    scenario = small.with_overrides(ga={"generations": 2})
+    population = np.random.default_rng(1).uniform(-1, 1, (30, 68))
+    wide = load_scenario(root / "scenarios" / "navigation_wide.toml")
+    evolve(scenario, tmp_path, progress=False, initial_population=population, others=[wide])
+    again = evolve(scenario, tmp_path, resume=True, progress=False,
+                   initial_population=population, others=[wide])
+    assert len(again) == 2
+    changes = [{"initial_population": population * 0.5, "others": [wide]},
+               {"initial_population": population, "others": []},
+               {"initial_population": population,
+                "others": [wide.with_overrides(sensor={"range": 20.0})]}]
+    for change in changes:
+        with pytest.raises(InputError, match="different settings"):
+            evolve(scenario, tmp_path, resume=True, progress=False, **change)

@@ -296,7 +296,8 @@ def table2(out: Path, quick: bool = False, progress: bool = True,
         ga = {"generations": family.incremental_max_generations, **family.ga()}
         sc = base.with_overrides(name=f"incremental_{iteration}", ga=ga)
         included = STRATEGIES[:iteration]
-        worlds = [make_world(family.scenario(s)) for s in included]
+        scenarios = [family.scenario(s) for s in included]
+        worlds = [make_world(sc) for sc in scenarios]
 
         def accepted(population, fitness, included=included):
             top = population[np.argsort(-fitness, kind="stable")[:TOP_CANDIDATES]]
@@ -304,7 +305,7 @@ def table2(out: Path, quick: bool = False, progress: bool = True,
 
         run_dir = out / "runs" / "incremental" / f"iteration{iteration}"
         table = run_or_reuse(sc, run_dir, progress, evaluator=MeanOverWorlds(worlds),
-                             initial_population=population, stop=accepted)
+                             initial_population=population, stop=accepted, others=scenarios)
         state = GAState.load(run_dir / "checkpoint.npz")
         population = state.population
         chosen = _pick(family, _candidates(run_dir), included)
