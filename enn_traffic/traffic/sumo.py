@@ -108,9 +108,9 @@ class Simulation:
             libsumo.start(command)
         except Exception as exc:  # libsumo raises its own exception types
             self._fail("SUMO failed to start", exc)
-        self.slots: dict[str, int] = {}
-        self.numbers: dict[str, int] = {}
-        self.static: dict[str, tuple] = {}  # vehicle -> (slot, number, length, width)
+        # vehicle -> (slot, number, length, width): the first row columns of :meth:`read`
+        self.vehicles: dict[str, tuple[int, int, float, float]] = {}
+        self.numbered = 0  # vehicles given a number so far
         self.following = False
         self.slots_used = 0  # one more than the highest slot given so far
         self._free = list(range(MAX_SLOTS - 1, -1, -1))
@@ -126,9 +126,8 @@ class Simulation:
                 libsumo.simulationStep()
                 if self.following:  # unseen vehicles keep their slots until they arrive
                     for vehicle in libsumo.simulation.getArrivedIDList():
-                        if vehicle in self.slots:
-                            self._free.append(self.slots.pop(vehicle))
-                            del self.static[vehicle]
+                        if vehicle in self.vehicles:
+                            self._free.append(self.vehicles.pop(vehicle)[ROW_SLOT])
                 else:
                     for vehicle in libsumo.simulation.getDepartedIDList():
                         libsumo.vehicle.subscribe(vehicle, _VARIABLES)
@@ -148,28 +147,26 @@ class Simulation:
         else:
             results = libsumo.vehicle.getAllSubscriptionResults()
         results.pop(LEARNER, None)
-        if len(results) != len(self.slots) or any(v not in self.slots for v in results):
+        vehicles = self.vehicles
+        if len(results) != len(vehicles) or any(v not in vehicles for v in results):
             if not self.following:  # every vehicle on the network is read: absent ones left
-                for vehicle in [v for v in self.slots if v not in results]:
-                    self._free.append(self.slots.pop(vehicle))
-                    del self.static[vehicle]
+                for vehicle in [v for v in vehicles if v not in results]:
+                    self._free.append(vehicles.pop(vehicle)[ROW_SLOT])
             self._assign_slots(results)
-        static = self.static
-        return np.array([(*static[v], *value[_POSITION], value[_ANGLE])
+        return np.array([(*vehicles[v], *value[_POSITION], value[_ANGLE])
                          for v, value in results.items()], dtype=np.float64).reshape(-1, 7)
 
     def _assign_slots(self, present) -> None:
         """Give the vehicles new to the learner a slot, a number, and their (static) size."""
         for vehicle in present:
-            if vehicle not in self.slots:
+            if vehicle not in self.vehicles:
                 if not self._free:
                     self._fail(f"more than {MAX_SLOTS} vehicles on the network at once")
-                self.slots[vehicle] = self._free.pop()
-                self.slots_used = max(self.slots_used, self.slots[vehicle] + 1)
-                self.numbers[vehicle] = len(self.numbers)
-                self.static[vehicle] = (self.slots[vehicle], self.numbers[vehicle],
-                                        libsumo.vehicle.getLength(vehicle),
-                                        libsumo.vehicle.getWidth(vehicle))
+                slot = self._free.pop()
+                self.slots_used = max(self.slots_used, slot + 1)
+                self.vehicles[vehicle] = (slot, self.numbered, libsumo.vehicle.getLength(vehicle),
+                                          libsumo.vehicle.getWidth(vehicle))
+                self.numbered += 1
 
     def follow_learner(self, reach: float) -> None:
         """From now on read only the vehicles within ``reach`` of the learner (a context
