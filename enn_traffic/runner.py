@@ -82,11 +82,11 @@ def _open_state(scenario: Scenario, out: Path, resume: bool, force: bool,
     return state
 
 
-def _finished_rows(table_path: Path, generation: int) -> list[dict]:
-    """The rows of the generations a checkpoint says are done; a damaged table is an error,
-    never silently shortened."""
+def _finished_rows(table_path: Path, generation: int) -> pd.DataFrame:
+    """The rows of the generations a checkpoint says are done, as written; a damaged table is
+    an error, never silently shortened."""
     if generation == 0:
-        return []
+        return pd.DataFrame(columns=COLUMNS)
     try:
         done = pd.read_csv(table_path)
         rows = done[done["generation"] < generation]
@@ -99,7 +99,7 @@ def _finished_rows(table_path: Path, generation: int) -> list[dict]:
         raise InputError(f"cannot continue: the generations table lacks some of the "
                          f"{generation} generations the checkpoint has done; --force starts over",
                          table_path)
-    return rows.to_dict("records")
+    return rows.reset_index(drop=True)
 
 
 def evolve(
@@ -125,10 +125,13 @@ def evolve(
     key = fingerprint(scenario, others, initial_population)
     state = _open_state(scenario, out, resume, force, initial_population, key)
     table_path = out / "generations.csv"
-    rows = _finished_rows(table_path, state.generation)
+    done = _finished_rows(table_path, state.generation)
     total = scenario.ga.generations
     if state.generation >= total or state.extra.get("target_reached", False):
-        return _finished_table(scenario, out)  # nothing to compute, nothing rewritten
+        if not (out / "learning_curve.png").exists():
+            learning_curve(done, out / "learning_curve.png", title=scenario.name)
+        return done  # nothing to compute, nothing rewritten
+    rows = done.to_dict("records")
     write_text(out / "scenario.toml", scenario.to_toml())
     params = ga_params(scenario)
     own_evaluator = evaluator is None
@@ -177,13 +180,6 @@ def evolve(
         bar.close()
         if own_evaluator:
             evaluator.close()
-    return _finished_table(scenario, out, draw=True)
-
-
-def _finished_table(scenario: Scenario, out: Path, draw: bool = False) -> pd.DataFrame:
-    """The generations table read back (the same types whether a run was resumed or not),
-    and its learning curve, drawn when it changed or is missing."""
-    table = pd.read_csv(out / "generations.csv")
-    if draw or not (out / "learning_curve.png").exists():
-        learning_curve(table, out / "learning_curve.png", title=scenario.name)
+    table = pd.read_csv(table_path)  # the same types whether the run was resumed or not
+    learning_curve(table, out / "learning_curve.png", title=scenario.name)
     return table
