@@ -33,7 +33,7 @@ from enn_traffic.experiments.common import scenario
 from enn_traffic.io import write_csv
 from enn_traffic.report.plots import draw_paths, save_figure
 from enn_traffic.runner import ga_params
-from enn_traffic.sim.shared import SharedArena, VehicleGA
+from enn_traffic.sim.shared import SharedArena, SharedRun, VehicleGA
 from enn_traffic.sim.world import World
 from enn_traffic.traffic.kinematic import RANDOM_NETWORK, STRATEGIES
 
@@ -57,28 +57,24 @@ def _arena(world: World, situation: int, kinds=None, key: int = SITUATION_KEY
     return SharedArena(world, episode.start, kinds, int(episode.seed)), episode.traffic_genes.copy()
 
 
-def _broadcast_rate(world: World, genes: np.ndarray, key: int, situations: int) -> float:
-    """The collision rate with ``genes`` (world layout) driving all vehicles, mean over the
-    situations drawn from ``key``."""
-    network = np.full(world.vehicles, RANDOM_NETWORK)
-    return float(np.mean([
-        _arena(world, situation, network, key)[0].run(
-            SECONDS, np.tile(genes, (world.vehicles, 1))).collision_rate
-        for situation in range(situations)]))  # fmt: skip
+def _broadcast(world: World, genes: np.ndarray, situation: int, key: int = SITUATION_KEY
+               ) -> SharedRun:
+    """``SECONDS`` of one situation with ``genes`` (world layout) driving every vehicle."""
+    arena, _ = _arena(world, situation, np.full(world.vehicles, RANDOM_NETWORK), key)
+    return arena.run(SECONDS, np.tile(genes, (world.vehicles, 1)))
 
 
-def _winner(strategy: int, candidates: np.ndarray) -> np.ndarray:
+def _winner(world: World, candidates: np.ndarray) -> np.ndarray:
     """§5.5.1's winning chromosome: the candidate with the fewest collisions when it drives
     every vehicle, on validation situations."""
-    world = World(scenario(dynamic.ARENA.name(strategy)))
-    genes = world.spec.in_source_layout(candidates)
-    rates = [_broadcast_rate(world, g, VALIDATION_KEY, VALIDATION_SITUATIONS) for g in genes]
+    rates = [np.mean([_broadcast(world, genes, situation, VALIDATION_KEY).collision_rate
+                      for situation in range(VALIDATION_SITUATIONS)])
+             for genes in world.spec.in_source_layout(candidates)]
     return candidates[int(np.argmin(rates))]
 
 
-def _strategy_rows(strategy: int, winner: np.ndarray, population: np.ndarray,
+def _strategy_rows(world: World, strategy: int, winner: np.ndarray, population: np.ndarray,
                    paths: dict) -> dict:
-    world = World(scenario(dynamic.ARENA.name(strategy)))
     sc = world.scenario
     params = ga_params(sc)
     winner_genes = world.spec.in_source_layout(winner)[0]
@@ -90,8 +86,7 @@ def _strategy_rows(strategy: int, winner: np.ndarray, population: np.ndarray,
         arena, genes = _arena(world, situation)
         initial = arena.run(SECONDS, genes)
         rates["initial"].append(initial.collision_rate)
-        arena, _ = _arena(world, situation, network)
-        broadcast = arena.run(SECONDS, np.tile(winner_genes, (world.vehicles, 1)))
+        broadcast = _broadcast(world, winner_genes, situation)
         rates["winner"].append(broadcast.collision_rate)
         arena, _ = _arena(world, situation, network)
         learners = [VehicleGA(evolved.copy(), np.random.default_rng([sc.seed, situation, v]))
@@ -117,9 +112,10 @@ def _measure(out: Path, quick: bool, progress: bool) -> pd.DataFrame:
     candidates = dynamic.evolved_candidates(out, quick, progress)
     rows, paths = [], {}
     for strategy in dynamic.STRATEGIES:
-        winner = _winner(strategy, candidates[strategy])
+        world = World(scenario(dynamic.ARENA.name(strategy)))
+        winner = _winner(world, candidates[strategy])
         population = dynamic.evolved_population(dynamic.ARENA, out, strategy, winner, quick)
-        rows.append(_strategy_rows(strategy, winner, population, paths))
+        rows.append(_strategy_rows(world, strategy, winner, population, paths))
     table = pd.DataFrame(rows)
     write_csv(out / "simultaneous.csv", table)
     _draw(paths, out / "simultaneous_paths.png")
