@@ -119,7 +119,7 @@ class TrafficConfig(_Section):
     wander_sigma_deg: float = Field(6.0, ge=0, le=90, allow_inf_nan=False)
     wander_decay: float = Field(0.95, ge=0, le=1)
     wander_max_deg: float = Field(45.0, gt=0, le=90, allow_inf_nan=False)
-    circle_radius: tuple[PositiveFloat, PositiveFloat] = (15.0, 46.0)
+    circle_radius: tuple[PositiveFloat, PositiveFloat] = (10.0, 30.0)
     respawn_clearance: float = Field(10.0, ge=0, allow_inf_nan=False)
     routes: list[Path] = []
     sumocfg: Path | None = None
@@ -162,9 +162,9 @@ class TrafficConfig(_Section):
             return ["none"]
         return [self.strategy] if isinstance(self.strategy, str) else list(self.strategy)
 
-    def kernel_params(self, centre):
-        """The float parameter vector of :mod:`enn_traffic.traffic.kinematic`; ``centre`` is
-        the point circling vehicles orbit (the centroid of the drivable area)."""
+    def kernel_params(self, wheelbase: float) -> np.ndarray:
+        """The float parameter vector of :mod:`enn_traffic.traffic.kinematic` (``wheelbase``
+        sets the steering of a circle)."""
         from enn_traffic.traffic import kinematic as k
 
         params = np.zeros(k.N_PARAMS)
@@ -176,7 +176,7 @@ class TrafficConfig(_Section):
         params[k.P_WANDER_DECAY] = self.wander_decay
         params[k.P_WANDER_MAX] = math.radians(self.wander_max_deg)
         params[k.P_CLEARANCE] = self.respawn_clearance
-        params[k.P_CENTRE_X], params[k.P_CENTRE_Y] = centre.x, centre.y
+        params[k.P_WHEELBASE] = wheelbase
         return params
 
 

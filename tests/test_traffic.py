@@ -111,19 +111,24 @@ def test_process_pool_matches_local_with_traffic(root):
     np.testing.assert_array_equal(local.suffered, spread.suffered)
 
 
-@pytest.mark.parametrize("start", [(80.0, 50.0, 1.0), (70.0, 45.0, -2.5), (50.0, 90.0, 0.3)])
-def test_ring_steering_orbits_the_centre_counter_clockwise(start):
-    """From any heading, a circling vehicle settles on the ring through its start point."""
+@pytest.mark.parametrize("radius", [10.0, 20.0, 30.0])
+def test_circle_steering_drives_the_drawn_radius(radius):
+    """Holding circle_steering(R) and -circle_steering(R), the bicycle model's poses lie on
+    circles of radius R (the circumcircle of three poses), turning left and right."""
     from enn_traffic.sim.kinematics import bicycle_step
-    from enn_traffic.traffic.kinematic import ring_steering
+    from enn_traffic.traffic.kinematic import circle_steering
 
-    x, y, heading = start
-    radius = math.hypot(x - 50.0, y - 50.0)
-    angles, distances = [], []
-    for _ in range(400):
-        steering = ring_steering(x, y, heading, 50.0, 50.0, radius)
-        x, y, heading = bicycle_step(x, y, heading, steering, 1.0, 2.6)
-        angles.append(math.atan2(y - 50.0, x - 50.0))
-        distances.append(math.hypot(x - 50.0, y - 50.0))
-    assert np.allclose(distances[200:], radius, atol=1.0)
-    assert np.unwrap(angles)[-1] - np.unwrap(angles)[200] > 2.0  # counter-clockwise
+    for side in (1.0, -1.0):
+        x, y, heading = 50.0, 50.0, 0.3
+        poses = []
+        for _ in range(30):
+            x, y, heading = bicycle_step(x, y, heading, side * circle_steering(radius, 2.6), 1.0,
+                                         2.6)
+            poses.append((x, y, heading))
+        (ax, ay, _), (bx, by, _), (cx, cy, _) = poses[0], poses[14], poses[29]
+        sides = [math.dist((ax, ay), (bx, by)), math.dist((bx, by), (cx, cy)),
+                 math.dist((cx, cy), (ax, ay))]
+        area = 0.5 * abs((bx - ax) * (cy - ay) - (cx - ax) * (by - ay))
+        circumradius = sides[0] * sides[1] * sides[2] / (4.0 * area)
+        assert circumradius == pytest.approx(radius, rel=0.02)
+        assert np.sign(poses[1][2] - poses[0][2]) == side

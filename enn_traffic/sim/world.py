@@ -40,8 +40,6 @@ from enn_traffic.traffic.kinematic import (
     NONE,
     P_CLEARANCE,
     RANDOM_NETWORK,
-    STRAIGHT,
-    WANDER,
     next_uniform,
     reset_memory,
     scripted_steering,
@@ -214,7 +212,7 @@ def run_episode(
         # 3. sense and decide
         for v in range(count):
             kind = kinds[v]
-            if v == 0 or kind in (RANDOM_NETWORK, STRAIGHT, WANDER):
+            if v == 0 or kind != NONE:
                 candidates = nearby_walls(pose[v, 0], pose[v, 1], lookup)
                 sense_walls(pose[v, 0], pose[v, 1], pose[v, 2], beam_cos, beam_sin, max_range,
                             walls, candidates, readings)
@@ -389,7 +387,7 @@ class World:
             self.grid.walls,
             self.grid.lookup,
             np.asarray(self.track.bounds, dtype=np.float64),
-            traffic.kernel_params(self.track.area.centroid),
+            traffic.kernel_params(vehicle.wheelbase),
         )
         episode = scenario.episode
         self._limits = (episode.max_steps, episode.spin_window, episode.spin_variance)

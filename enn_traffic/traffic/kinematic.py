@@ -8,9 +8,10 @@ from its strategy:
 2. ``straight`` — drives straight; when a wall is closer than ``turn_distance`` within
    ±``turn_cone_deg`` ahead, it turns towards the more open side until that cone is clear
    (``turn_distance = 0``: it never turns, and respawns at the wall). It does not see vehicles.
-3. ``circling`` — every vehicle orbits the centre of the area counter-clockwise on a ring of
-   its own, the radius drawn from ``circle_radius`` each life: rings of different radii, one
-   flow.
+3. ``circling`` — every vehicle drives circles of its own: a radius drawn from
+   ``circle_radius`` and a direction (left or right) drawn each life, so it holds the steering
+   angle of that circle; near a wall it turns away as ``straight`` does, then circles on about
+   a new centre. Circles of different radii, anywhere in the area, crossing each other.
 4. ``wander`` — steering follows a random process, δ ← decay·δ + Normal(0, σ); near a wall it
    turns away as ``straight`` does.
 
@@ -36,13 +37,8 @@ STRATEGIES = {
 
 # Layout of the float parameter vector the kernel takes.
 P_TURN_DISTANCE, P_TURN_STEERING, P_TURN_CONE, P_RADIUS_MIN, P_RADIUS_MAX = 0, 1, 2, 3, 4
-P_WANDER_SIGMA, P_WANDER_DECAY, P_WANDER_MAX, P_CLEARANCE, P_CENTRE_X, P_CENTRE_Y = (
-    5, 6, 7, 8, 9, 10,
-)  # fmt: skip
-N_PARAMS = 11
-# Ring following (circling): aim along the tangent, corrected towards the ring by this many
-# radians per metre of radial error, steering up to the largest angle below.
-RING_GAIN, RING_STEERING = 0.15, math.radians(45.0)
+P_WANDER_SIGMA, P_WANDER_DECAY, P_WANDER_MAX, P_CLEARANCE, P_WHEELBASE = 5, 6, 7, 8, 9
+N_PARAMS = 10
 
 _GOLDEN = np.uint64(0x9E3779B97F4A7C15)
 _MIX1 = np.uint64(0xBF58476D1CE4E5B9)
@@ -70,23 +66,23 @@ def next_normal(state) -> float:
 
 @njit(cache=True)
 def reset_memory(kind, params, rng, memory) -> None:
-    """A vehicle's per-life strategy state: ``memory[0]`` is its ring radius (circling) or its
-    wander steering, ``memory[1]`` its current turn away from a wall (0: none)."""
+    """A vehicle's per-life strategy state: ``memory[0]`` is its circle's steering angle
+    (circling) or its wander steering, ``memory[1]`` its current turn away from a wall (0: none)."""
     memory[0] = 0.0
     memory[1] = 0.0
     if kind == CIRCLING:
         low, high = params[P_RADIUS_MIN], params[P_RADIUS_MAX]
-        memory[0] = low + (high - low) * next_uniform(rng)
+        radius = low + (high - low) * next_uniform(rng)
+        side = 1.0 if next_uniform(rng) < 0.5 else -1.0
+        memory[0] = side * circle_steering(radius, params[P_WHEELBASE])
 
 
 @njit(cache=True)
-def ring_steering(x, y, heading, centre_x, centre_y, radius) -> float:
-    """Steer along the counter-clockwise circle of ``radius`` about the centre."""
-    dx, dy = x - centre_x, y - centre_y
-    error = math.hypot(dx, dy) - radius  # > 0: outside the ring, turn inwards (left)
-    wanted = math.atan2(dy, dx) + 0.5 * math.pi + min(max(RING_GAIN * error, -1.0), 1.0)
-    turn = (wanted - heading + math.pi) % (2.0 * math.pi) - math.pi
-    return min(max(2.0 * turn, -RING_STEERING), RING_STEERING)
+def circle_steering(radius, wheelbase) -> float:
+    """The steering angle that keeps the bicycle model of :mod:`enn_traffic.sim.kinematics` on
+    a circle of ``radius``: its front and rear points move apart by the angle δ, so the pose
+    turns on a circle of wheelbase / (2 sin(δ/2))."""
+    return 2.0 * math.asin(min(0.5 * wheelbase / radius, 1.0))
 
 
 @njit(cache=True)
@@ -95,12 +91,11 @@ def scripted_steering(kind, x, y, heading, readings, beam_cos, beam_sin, max_ran
     """Steering of a scripted (non-network) strategy; updates ``memory[0]`` in place."""
     if kind == STRAIGHT:
         return wall_turn(readings, beam_cos, beam_sin, max_range, params, memory)
-    if kind == CIRCLING:
-        return ring_steering(x, y, heading, params[P_CENTRE_X], params[P_CENTRE_Y], memory[0])
     if kind == WANDER:
         limit = params[P_WANDER_MAX]
         value = params[P_WANDER_DECAY] * memory[0] + params[P_WANDER_SIGMA] * next_normal(rng)
         memory[0] = min(max(value, -limit), limit)
+    if kind in (CIRCLING, WANDER):
         turn = wall_turn(readings, beam_cos, beam_sin, max_range, params, memory)
         return turn if turn != 0.0 else memory[0]
     return 0.0
