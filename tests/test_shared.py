@@ -5,7 +5,7 @@ import pytest
 from conftest import two_cars
 
 from enn_traffic.evolution import ga
-from enn_traffic.sim.shared import SharedArena, VehicleGA, _global_elites
+from enn_traffic.sim.shared import Evidence, SharedArena, VehicleGA, _global_elites
 from enn_traffic.traffic.kinematic import RANDOM_NETWORK, STRAIGHT
 
 
@@ -56,3 +56,37 @@ def test_exhausted_population_breeds_with_the_global_elites(world):
     learners[0].advance(ga.GAParams(population_size=6, tournament_size=2, elite_count=2), elites)
     np.testing.assert_array_equal(learners[0].population[:2], elites)
     assert learners[0].generation == 1 and learners[0].index == 0
+
+
+def test_evidence_trusts_a_chromosome_driven_long_over_one_lucky_life():
+    """Loss rate = (lives lost + 1) / (steps + 1), pooled over every vehicle that drove it."""
+    driven_long, lucky, flawless = np.zeros(3), np.ones(3), np.full(3, 2.0)
+    evidence = Evidence()
+    evidence.record(driven_long, 500, lost=True)
+    evidence.record(driven_long, 400, lost=False)  # another vehicle, life still going
+    evidence.record(lucky, 300, lost=False)
+    assert evidence.loss_rate(driven_long) == pytest.approx(2 / 901)
+    assert evidence.loss_rate(lucky) == pytest.approx(1 / 301)
+    assert evidence.best([lucky, driven_long]) is driven_long
+    evidence.record(flawless, 2000, lost=False)
+    assert evidence.best([lucky, driven_long, flawless]) is flawless
+
+
+def test_learners_record_every_step_they_drove(world):
+    """Two learners for 30 steps: whatever lives they lose, the evidence holds 2 × 30 steps,
+    one loss per life ended, and each learner tried its population in order."""
+    length = world.spec.chromosome_length
+    rng = np.random.default_rng(5)
+    learners = [VehicleGA(rng.uniform(-1, 1, (4, length)), np.random.default_rng(v))
+                for v in range(2)]
+    starts = np.array([[80.0, 50.0, 0.0], [20.0, 50.0, np.pi]])  # both 20 m from a wall
+    arena = SharedArena(world, starts, np.array([RANDOM_NETWORK, RANDOM_NETWORK]), seed=2)
+    evidence = Evidence()
+    run = arena.run(3.0, np.zeros((2, length)), learners,
+                    ga.GAParams(population_size=4, tournament_size=2), evidence=evidence)
+    assert sum(evidence.steps.values()) == 2 * 30
+    assert sum(evidence.losses.values()) == run.collisions.sum() + run.spins.sum() >= 1
+    for learner in learners:
+        assert len(learner.tried) == learner.index + 1
+        for tried, chromosome in zip(learner.tried, learner.population, strict=False):
+            np.testing.assert_array_equal(tried, chromosome)

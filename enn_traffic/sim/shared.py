@@ -126,12 +126,10 @@ class VehicleGA:
     fitness: np.ndarray = field(init=False)
     index: int = 0
     generation: int = 0
-    best: np.ndarray = field(init=False)
-    best_fitness: float = -1.0
+    tried: list[np.ndarray] = field(default_factory=list)  # every chromosome it has driven
 
     def __post_init__(self):
         self.fitness = np.zeros(len(self.population))
-        self.best = self.population[0].copy()
 
     @property
     def current(self) -> np.ndarray:
@@ -140,8 +138,6 @@ class VehicleGA:
     def record(self, fitness: float) -> None:
         """The current chromosome's life ended with ``fitness``."""
         self.fitness[self.index] = fitness
-        if fitness > self.best_fitness:
-            self.best, self.best_fitness = self.current.copy(), fitness
         self.index += 1
 
     @property
@@ -156,6 +152,31 @@ class VehicleGA:
             population[: len(global_elites)] = global_elites
         self.population, self.index, self.generation = population, 0, self.generation + 1
         self.fitness = np.zeros(len(population))
+
+
+@dataclass
+class Evidence:
+    """What every learning vehicle saw of each chromosome, pooled (the vehicles share what they
+    learn, reference §7.4): steps driven with it and lives it lost (a responsible collision or
+    a spin)."""
+
+    steps: dict[bytes, int] = field(default_factory=dict)
+    losses: dict[bytes, int] = field(default_factory=dict)
+
+    def record(self, genes: np.ndarray, steps: int, lost: bool) -> None:
+        key = genes.tobytes()
+        self.steps[key] = self.steps.get(key, 0) + steps
+        self.losses[key] = self.losses.get(key, 0) + lost
+
+    def loss_rate(self, genes: np.ndarray) -> float:
+        """Lives lost per step, counting one loss more than seen: a chromosome driven little
+        is not trusted over one driven long."""
+        key = genes.tobytes()
+        return (self.losses.get(key, 0) + 1) / (self.steps.get(key, 0) + 1)
+
+    def best(self, candidates: list[np.ndarray]) -> np.ndarray:
+        """The candidate with the lowest loss rate (the first of equals)."""
+        return min(candidates, key=self.loss_rate)
 
 
 @dataclass
@@ -201,16 +222,20 @@ class SharedArena:
 
     def run(self, seconds: float, genes: np.ndarray, learners: list[VehicleGA | None] | None = None,
             params: ga.GAParams | None = None, share_elites: bool = False,
-            elite_count: int = 0) -> SharedRun:
+            elite_count: int = 0, evidence: Evidence | None = None) -> SharedRun:
         """Drive for ``seconds`` of simulated time. ``genes`` (V, G, world layout) drive the
         network vehicles; a vehicle with a :class:`VehicleGA` in ``learners`` learns: its
-        genes row follows its current chromosome."""
+        genes row follows its current chromosome, and every life it drives (the last one as
+        far as it went) goes into ``evidence``."""
         count = len(self.kinds)
         learners = learners or [None] * count
         learning = np.array([g is not None for g in learners])
+        evidence = Evidence() if evidence is None else evidence
+        shown = self.life.copy()  # steps of a life going on that an earlier run recorded
         for v, learner in enumerate(learners):
             if learner is not None:
                 genes[v] = learner.current
+                learner.tried.append(learner.current.copy())
         steps = round(seconds / self.world.scenario.vehicle.dt)
         collisions, spins = np.zeros(count, dtype=np.int64), np.zeros(count, dtype=np.int64)
         trace = np.empty((steps + 1, count, 3))
@@ -227,11 +252,14 @@ class SharedArena:
                 learner = learners[v]
                 if learner is not None:
                     learner.record(0.0 if spun else float(self.life[v]))
+                    evidence.record(learner.tried[-1], int(self.life[v] - shown[v]), lost=True)
                     if learner.exhausted:
                         elites = (_global_elites(learners, elite_count) if share_elites
                                   else None)
                         learner.advance(params, elites)
                     genes[v] = learner.current
+                    learner.tried.append(learner.current.copy())
+                shown[v] = 0
                 p = self.physics
                 respawn(v, self.kinds[v], self.pose, self.corners, self.centres, self.previous,
                         self.previous_centres, self.fresh, self.memory, self.life, p.length,
@@ -244,8 +272,8 @@ class SharedArena:
                   p.wheelbase, p.distance, p.beam_cos, p.beam_sin, p.max_range, p.walls,
                   p.lookup, p.params, self.memory, self.rng, self.radius, self.life)
         for v, learner in enumerate(learners):  # a life still going counts what it has shown
-            if learner is not None and self.life[v] > learner.best_fitness:
-                learner.best, learner.best_fitness = learner.current.copy(), float(self.life[v])
+            if learner is not None:
+                evidence.record(learner.tried[-1], int(self.life[v] - shown[v]), lost=False)
         return SharedRun(collisions, spins, steps * self.world.scenario.vehicle.dt, trace)
 
 
