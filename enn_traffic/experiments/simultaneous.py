@@ -7,8 +7,9 @@ time each:
 
 - initial behaviour: all 8 vehicles driven by the strategy's own drivers;
 - Table 3 (§5.5.1, broadcasting the winning chromosome): all 8 driven by the winning
-  chromosome, the controller individual learning evolved on the strategy (§5.3; the one
-  Table 1 deploys);
+  chromosome — of the controllers individual learning evolved on the strategy (every run's
+  best and elites), the one with the fewest collisions when it drives all 8 vehicles, judged
+  on ``VALIDATION_SITUATIONS`` situations apart from the measured ones;
 - Table 4 (§5.5.2, broadcasting the evolved population): every vehicle starts from a copy of the
   evolved population (the winner first) and all learn at once for ``SECONDS`` (each its own GA,
   sharing the best chromosomes across vehicles, reference-implementation.md §7.4); then each
@@ -41,24 +42,37 @@ from enn_traffic.traffic.kinematic import RANDOM_NETWORK, STRATEGIES
 SECONDS = 100.0  # the paper's training time, and each measuring period
 SITUATIONS = 5
 SITUATION_KEY = 3_000_000_000  # traffic situations apart from training, validation and tests
+VALIDATION_KEY = 4_000_000_000  # the situations that choose the winning chromosome
+VALIDATION_SITUATIONS = 20
 DRAWN_SECONDS = 20.0
 # Mean reduction of the collision rate over the four strategies in the paper's Tables 3 and 4.
 PAPER_REDUCTION = {"table3": 0.54, "table4": 0.89}
 
 
-def _arena(world: World, situation: int, kinds=None) -> tuple[SharedArena, np.ndarray]:
+def _arena(world: World, situation: int, kinds=None, key: int = SITUATION_KEY
+           ) -> tuple[SharedArena, np.ndarray]:
     """The arena of one traffic situation: 8 start poses; ``kinds`` default to the strategy's
     own drivers; and the drivers' random genes (random-network strategy)."""
-    episode = world.episodes(SITUATION_KEY + situation)[0]
+    episode = world.episodes(key + situation)[0]
     strategy = STRATEGIES[world.scenario.traffic.strategy_list[0]]
     kinds = np.full(world.vehicles, strategy) if kinds is None else kinds
     return SharedArena(world, episode.start, kinds, int(episode.seed)), episode.traffic_genes.copy()
 
 
-def _broadcast(world: World, genes: np.ndarray, situation: int) -> SharedRun:
+def _broadcast(world: World, genes: np.ndarray, situation: int, key: int = SITUATION_KEY
+               ) -> SharedRun:
     """``SECONDS`` of one situation with ``genes`` (world layout) driving every vehicle."""
-    arena, _ = _arena(world, situation, np.full(world.vehicles, RANDOM_NETWORK))
+    arena, _ = _arena(world, situation, np.full(world.vehicles, RANDOM_NETWORK), key)
     return arena.run(SECONDS, np.tile(genes, (world.vehicles, 1)))
+
+
+def _winner(world: World, candidates: np.ndarray) -> np.ndarray:
+    """§5.5.1's winning chromosome: the candidate with the fewest collisions when it drives
+    every vehicle, on validation situations."""
+    rates = [np.mean([_broadcast(world, genes, situation, VALIDATION_KEY).collision_rate
+                      for situation in range(VALIDATION_SITUATIONS)])
+             for genes in world.spec.in_source_layout(candidates)]
+    return candidates[int(np.argmin(rates))]
 
 
 def _strategy_rows(world: World, strategy: int, winner: np.ndarray, population: np.ndarray,
@@ -98,11 +112,11 @@ def _strategy_rows(world: World, strategy: int, winner: np.ndarray, population: 
 def _measure(out: Path, quick: bool, progress: bool) -> pd.DataFrame:
     """Every strategy's rates, once per process (Tables 3 and 4 share them), also written to
     ``simultaneous.csv`` with the simulated and wall time they took."""
-    winners = dynamic.trained_controllers(out, quick, progress)
+    candidates = dynamic.evolved_candidates(out, quick, progress)
     rows, paths = [], {}
     for strategy in dynamic.STRATEGIES:
         world = World(scenario(dynamic.ARENA.name(strategy)))
-        winner = winners[strategy]
+        winner = _winner(world, candidates[strategy])
         population = dynamic.evolved_population(dynamic.ARENA, out, strategy, winner, quick)
         rows.append(_strategy_rows(world, strategy, winner, population, paths))
     table = pd.DataFrame(rows)
