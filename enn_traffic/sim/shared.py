@@ -105,8 +105,8 @@ def drive(pose, corners, centres, previous, previous_centres, fresh, kinds, gene
             steering[v] = network_steering(genes[v], layer_sizes, readings, activation, scratch,
                                            gain)
         elif kind != NONE:
-            steering[v] = scripted_steering(kind, pose[v, 0], pose[v, 1], pose[v, 2], readings,
-                                            beam_cos, beam_sin, max_range, params, memory[v], rng)
+            steering[v] = scripted_steering(kind, readings, beam_cos, beam_sin, max_range,
+                                            params, memory[v], rng)
     previous[:] = corners
     previous_centres[:] = centres
     fresh[:] = False

@@ -226,9 +226,8 @@ def run_episode(
                 steering[v] = network_steering(traffic_genes[v], layer_sizes, readings,
                                                activation, scratch, gain)
             elif kind != NONE:
-                steering[v] = scripted_steering(kind, pose[v, 0], pose[v, 1], pose[v, 2], readings,
-                                                beam_cos, beam_sin, max_range, params,
-                                                memory[v], rng)
+                steering[v] = scripted_steering(kind, readings, beam_cos, beam_sin, max_range,
+                                                params, memory[v], rng)
         # 4. move
         previous[:] = corners
         previous_centres[:] = centres

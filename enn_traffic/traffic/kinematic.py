@@ -86,16 +86,16 @@ def circle_steering(radius, wheelbase) -> float:
 
 
 @njit(cache=True)
-def scripted_steering(kind, x, y, heading, readings, beam_cos, beam_sin, max_range, params,
-                      memory, rng) -> float:
-    """Steering of a scripted (non-network) strategy; updates ``memory[0]`` in place."""
-    if kind == STRAIGHT:
-        return wall_turn(readings, beam_cos, beam_sin, max_range, params, memory)
+def scripted_steering(kind, readings, beam_cos, beam_sin, max_range, params, memory, rng
+                      ) -> float:
+    """Steering of a scripted (non-network) strategy: a turn away from a wall when there is
+    one, else the strategy's own steering ``memory[0]`` (0 when driving straight, the circle's,
+    or the wander process's, updated here)."""
     if kind == WANDER:
         limit = params[P_WANDER_MAX]
         value = params[P_WANDER_DECAY] * memory[0] + params[P_WANDER_SIGMA] * next_normal(rng)
         memory[0] = min(max(value, -limit), limit)
-    if kind in (CIRCLING, WANDER):
+    if kind in (STRAIGHT, CIRCLING, WANDER):
         turn = wall_turn(readings, beam_cos, beam_sin, max_range, params, memory)
         return turn if turn != 0.0 else memory[0]
     return 0.0
