@@ -9,11 +9,11 @@ import pandas as pd
 from enn_traffic.controller import Controller
 from enn_traffic.scenario import Scenario
 from enn_traffic.sim import make_world
-from enn_traffic.sim.world import CAPPED, OUTCOMES, EpisodeResults
+from enn_traffic.sim.world import CAPPED, HELD_OUT_KEYS, OUTCOMES, EpisodeResults
 
-# Evaluation episodes draw their traffic from generation keys far past any training run, so
-# a controller is never deployed on the traffic it was trained on.
-EVALUATION_KEY = 1_000_000_000
+# Evaluation episodes draw held-out traffic, so a controller is never deployed on the traffic
+# it was trained on, whether its training drew new traffic every generation or kept one set.
+EVALUATION_KEY = HELD_OUT_KEYS
 MAX_LABELLED = 9  # vehicles drawn with a legend entry each
 
 

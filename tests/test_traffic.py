@@ -60,11 +60,25 @@ def test_every_world_of_a_generation_meets_the_same_traffic(arena):
 
 
 def test_traffic_changes_with_the_generation(arena):
-    first = arena.episodes(0)[0]
-    second = arena.episodes(1)[0]
+    varying = World(arena.scenario.with_overrides(traffic={"vary": "generation"}))
+    first = varying.episodes(0)[0]
+    second = varying.episodes(1)[0]
     assert not np.array_equal(first.start, second.start)
     np.testing.assert_array_equal(first.start[0], second.start[0])  # the learner starts alike
-    np.testing.assert_array_equal(first.start, arena.episodes(0)[0].start)
+    np.testing.assert_array_equal(first.start, varying.episodes(0)[0].start)
+
+
+def test_fixed_traffic_holds_for_training_but_never_for_held_out_keys(arena):
+    """vary = "fixed": every training generation meets generation 0's traffic, while the
+    deployment key still draws other traffic, the same as without "fixed"."""
+    from enn_traffic.evaluation import EVALUATION_KEY
+
+    fixed = World(arena.scenario.with_overrides(traffic={"vary": "fixed"}))
+    varying = World(arena.scenario.with_overrides(traffic={"vary": "generation"}))
+    np.testing.assert_array_equal(fixed.episodes(0)[0].start, fixed.episodes(9)[0].start)
+    held_out = fixed.episodes(EVALUATION_KEY)[0].start
+    assert not np.array_equal(held_out, fixed.episodes(0)[0].start)
+    np.testing.assert_array_equal(held_out, varying.episodes(EVALUATION_KEY)[0].start)
 
 
 @pytest.mark.parametrize("strategy", [1, 2, 3, 4])

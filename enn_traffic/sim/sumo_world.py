@@ -49,7 +49,7 @@ class SumoWorld(World):
     def seeds(self, generation: int) -> list[int]:
         """The SUMO seed of each traffic situation of a generation."""
         traffic = self.scenario.traffic
-        key = generation if traffic.vary == "generation" else 0
+        key = self.traffic_key(generation)
         return [int(np.random.SeedSequence([traffic.seed, key, 0, e]).generate_state(1)[0]
                     % 2**31) for e in range(traffic.episodes)]
 

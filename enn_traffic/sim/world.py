@@ -50,6 +50,10 @@ CAPPED, COLLIDED, SPUN = 0, 1, 2
 OUTCOMES = {CAPPED: "capped", COLLIDED: "collision", SPUN: "spin"}
 # What the blame rule found (:func:`_responsible`), besides the index of a vehicle.
 NO_HIT, HIT_WALL = -1, -2
+# Generation keys from here on draw held-out traffic (deployment, validation, the tables'
+# situations): far past any training run, and never folded into the training traffic by
+# ``vary = "fixed"``.
+HELD_OUT_KEYS = 1_000_000_000
 
 
 @njit(cache=True)
@@ -395,7 +399,7 @@ class World:
         """The traffic situations of a generation: one per (strategy, episode), drawn from
         (traffic seed, generation, strategy, episode) alone."""
         traffic = self.scenario.traffic
-        key = generation if traffic.vary == "generation" else 0
+        key = self.traffic_key(generation)
         result = []
         for s, name in enumerate(traffic.strategy_list):
             for e in range(traffic.episodes):
@@ -410,6 +414,12 @@ class World:
                 result.append(Episode(start, kinds, self.spec.in_source_layout(genes),
                                       np.uint64(sequence.generate_state(1, np.uint64)[0])))
         return result
+
+    def traffic_key(self, generation: int) -> int:
+        """The key a generation's traffic is drawn from: its own, or 0 for every training
+        generation when ``traffic.vary = "fixed"`` (held-out keys stay their own)."""
+        fixed = self.scenario.traffic.vary == "fixed" and generation < HELD_OUT_KEYS
+        return 0 if fixed else generation
 
     def episode_labels(self) -> list[str]:
         """The strategy of each column of :meth:`evaluate`'s per-episode arrays."""
