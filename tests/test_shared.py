@@ -90,3 +90,11 @@ def test_learners_record_every_step_they_drove(world):
         assert len(learner.tried) == learner.index + 1
         for tried, chromosome in zip(learner.tried, learner.population, strict=False):
             np.testing.assert_array_equal(tried, chromosome)
+
+
+def test_evolved_population_puts_the_ranked_candidates_first_without_repeats():
+    from enn_traffic.experiments.simultaneous import _evolved_population
+
+    a, b, c, d = (np.full(3, float(k)) for k in range(4))
+    population = _evolved_population(np.stack([a, b]), np.stack([b, c, b, d]), size=3)
+    np.testing.assert_array_equal(population, np.stack([a, b, c]))

@@ -209,16 +209,15 @@ def evolved_candidates(out: Path, quick: bool, progress: bool, family: Family = 
     return _evolved_candidates(family, out / family.folder, progress)
 
 
-def evolved_population(family: Family, out: Path, strategy: int, chosen: np.ndarray,
-                       quick: bool) -> np.ndarray:
-    """The final population of the run that produced ``chosen``, with ``chosen`` first."""
+def final_population(family: Family, out: Path, strategy: int, chosen: np.ndarray,
+                     quick: bool) -> np.ndarray:
+    """The final population of the run that produced ``chosen``."""
     family = family.settings(quick)
     out = out / family.folder
     for seed in family.seeds:
         run_dir = out / "runs" / family.name(strategy) / f"seed{seed}"
         if any(np.array_equal(row, chosen) for row in _candidates(run_dir)):
-            population = GAState.load(run_dir / "checkpoint.npz").population
-            return np.concatenate([chosen[None, :], population[:-1]])
+            return GAState.load(run_dir / "checkpoint.npz").population
     raise ValueError(f"no run of {family.name(strategy)} produced the chosen controller")
 
 

@@ -11,7 +11,8 @@ time each:
   best and elites), the one with the fewest collisions when it drives all 8 vehicles, judged
   on ``VALIDATION_SITUATIONS`` situations apart from the measured ones;
 - Table 4 (§5.5.2, broadcasting the evolved population): every vehicle starts from a copy of the
-  evolved population (the winner first) and all learn at once for ``SECONDS`` (each its own GA,
+  evolved population (the candidates, fewest broadcast collisions first, then the rest of the
+  winner's run's final population) and all learn at once for ``SECONDS`` (each its own GA,
   sharing the best chromosomes across vehicles, reference-implementation.md §7.4); then each
   drives, of the chromosomes it tried, the one that lost fewest lives per step over all
   vehicles (:class:`~enn_traffic.sim.shared.Evidence`), and the rate is measured over the
@@ -66,13 +67,25 @@ def _broadcast(world: World, genes: np.ndarray, situation: int, key: int = SITUA
     return arena.run(SECONDS, np.tile(genes, (world.vehicles, 1)))
 
 
-def _winner(world: World, candidates: np.ndarray) -> np.ndarray:
-    """§5.5.1's winning chromosome: the candidate with the fewest collisions when it drives
-    every vehicle, on validation situations."""
+def _ranked(world: World, candidates: np.ndarray) -> np.ndarray:
+    """The candidates, fewest collisions first when each drives every vehicle on validation
+    situations: the first is §5.5.1's winning chromosome."""
     rates = [np.mean([_broadcast(world, genes, situation, VALIDATION_KEY).collision_rate
                       for situation in range(VALIDATION_SITUATIONS)])
              for genes in world.spec.in_source_layout(candidates)]
-    return candidates[int(np.argmin(rates))]
+    return candidates[np.argsort(rates, kind="stable")]
+
+
+def _evolved_population(ranked: np.ndarray, run_population: np.ndarray, size: int
+                        ) -> np.ndarray:
+    """§5.5.2's evolved population: the ranked candidates, then the rest of the winner's run's
+    final population, ``size`` distinct chromosomes at most."""
+    rows, seen = [], set()
+    for row in np.concatenate([ranked, run_population]):
+        if row.tobytes() not in seen:
+            seen.add(row.tobytes())
+            rows.append(row)
+    return np.stack(rows[:size])
 
 
 def _strategy_rows(world: World, strategy: int, winner: np.ndarray, population: np.ndarray,
@@ -116,8 +129,11 @@ def _measure(out: Path, quick: bool, progress: bool) -> pd.DataFrame:
     rows, paths = [], {}
     for strategy in dynamic.STRATEGIES:
         world = World(scenario(dynamic.ARENA.name(strategy)))
-        winner = _winner(world, candidates[strategy])
-        population = dynamic.evolved_population(dynamic.ARENA, out, strategy, winner, quick)
+        ranked = _ranked(world, candidates[strategy])
+        winner = ranked[0]
+        population = _evolved_population(
+            ranked, dynamic.final_population(dynamic.ARENA, out, strategy, winner, quick),
+            world.scenario.ga.population_size)
         rows.append(_strategy_rows(world, strategy, winner, population, paths))
     table = pd.DataFrame(rows)
     write_csv(out / "simultaneous.csv", table)
