@@ -13,10 +13,10 @@ time each:
 - Table 4 (§5.5.2, broadcasting the evolved population): every vehicle starts from a copy of the
   evolved population (the candidates, fewest broadcast collisions first, then the rest of the
   winner's run's final population) and all learn at once for ``SECONDS`` (each its own GA,
-  sharing the best chromosomes across vehicles, reference-implementation.md §7.4); then each
-  drives, of the chromosomes it tried, the one that lost fewest lives per step over all
-  vehicles (:class:`~enn_traffic.sim.shared.Evidence`), and the rate is measured over the
-  ``SECONDS`` that follow.
+  sharing the best chromosomes across vehicles, reference-implementation.md §7.4); then all
+  drive what they found together: of every chromosome any of them drove, the one that lost
+  fewest lives per step (:class:`~enn_traffic.sim.shared.Evidence`), and the rate is measured
+  over the ``SECONDS`` that follow.
 
 The metric is :attr:`enn_traffic.sim.shared.SharedRun.collision_rate`.
 """
@@ -41,7 +41,7 @@ from enn_traffic.sim.world import World
 from enn_traffic.traffic.kinematic import RANDOM_NETWORK, STRATEGIES
 
 SECONDS = 100.0  # the paper's training time, and each measuring period
-SITUATIONS = 5
+SITUATIONS = 20
 SITUATION_KEY = 3_000_000_000  # traffic situations apart from training, validation and tests
 VALIDATION_KEY = 4_000_000_000  # the situations that choose the winning chromosome
 VALIDATION_SITUATIONS = 20
@@ -111,7 +111,7 @@ def _strategy_rows(world: World, strategy: int, winner: np.ndarray, population: 
         learning = arena.run(SECONDS, genes, learners, params, share_elites=True,
                              elite_count=sc.ga.elite_count, evidence=evidence)
         rates["learning"].append(learning.collision_rate)
-        after = arena.run(SECONDS, np.stack([evidence.best(v.tried) for v in learners]))
+        after = arena.run(SECONDS, np.tile(evidence.best(), (world.vehicles, 1)))
         rates["population"].append(after.collision_rate)
         if situation == 0:
             paths[strategy] = (initial.trace, broadcast.trace, after.trace, world.track.walls)

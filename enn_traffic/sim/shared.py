@@ -126,7 +126,6 @@ class VehicleGA:
     fitness: np.ndarray = field(init=False)
     index: int = 0
     generation: int = 0
-    tried: list[np.ndarray] = field(default_factory=list)  # every chromosome it has driven
 
     def __post_init__(self):
         self.fitness = np.zeros(len(self.population))
@@ -160,23 +159,26 @@ class Evidence:
     learn, reference §7.4): steps driven with it and lives it lost (a responsible collision or
     a spin)."""
 
+    chromosomes: dict[bytes, np.ndarray] = field(default_factory=dict)
     steps: dict[bytes, int] = field(default_factory=dict)
     losses: dict[bytes, int] = field(default_factory=dict)
 
     def record(self, genes: np.ndarray, steps: int, lost: bool) -> None:
         key = genes.tobytes()
+        if key not in self.chromosomes:
+            self.chromosomes[key] = genes.copy()
         self.steps[key] = self.steps.get(key, 0) + steps
         self.losses[key] = self.losses.get(key, 0) + lost
 
-    def loss_rate(self, genes: np.ndarray) -> float:
+    def loss_rate(self, key: bytes) -> float:
         """Lives lost per step, counting one loss more than seen: a chromosome driven little
         is not trusted over one driven long."""
-        key = genes.tobytes()
-        return (self.losses.get(key, 0) + 1) / (self.steps.get(key, 0) + 1)
+        return (self.losses[key] + 1) / (self.steps[key] + 1)
 
-    def best(self, candidates: list[np.ndarray]) -> np.ndarray:
-        """The candidate with the lowest loss rate (the first of equals)."""
-        return min(candidates, key=self.loss_rate)
+    def best(self) -> np.ndarray:
+        """Of every chromosome any vehicle drove, the one with the lowest loss rate (the first
+        seen of equals)."""
+        return self.chromosomes[min(self.chromosomes, key=self.loss_rate)]
 
 
 @dataclass
@@ -235,7 +237,6 @@ class SharedArena:
         for v, learner in enumerate(learners):
             if learner is not None:
                 genes[v] = learner.current
-                learner.tried.append(learner.current.copy())
         steps = round(seconds / self.world.scenario.vehicle.dt)
         collisions, spins = np.zeros(count, dtype=np.int64), np.zeros(count, dtype=np.int64)
         trace = np.empty((steps + 1, count, 3))
@@ -251,14 +252,13 @@ class SharedArena:
                 collisions[v] += not spun
                 learner = learners[v]
                 if learner is not None:
+                    evidence.record(learner.current, int(self.life[v] - shown[v]), lost=True)
                     learner.record(0.0 if spun else float(self.life[v]))
-                    evidence.record(learner.tried[-1], int(self.life[v] - shown[v]), lost=True)
                     if learner.exhausted:
                         elites = (_global_elites(learners, elite_count) if share_elites
                                   else None)
                         learner.advance(params, elites)
                     genes[v] = learner.current
-                    learner.tried.append(learner.current.copy())
                 shown[v] = 0
                 p = self.physics
                 respawn(v, self.kinds[v], self.pose, self.corners, self.centres, self.previous,
@@ -273,7 +273,7 @@ class SharedArena:
                   p.lookup, p.params, self.memory, self.rng, self.radius, self.life)
         for v, learner in enumerate(learners):  # a life still going counts what it has shown
             if learner is not None:
-                evidence.record(learner.tried[-1], int(self.life[v] - shown[v]), lost=False)
+                evidence.record(learner.current, int(self.life[v] - shown[v]), lost=False)
         return SharedRun(collisions, spins, steps * self.world.scenario.vehicle.dt, trace)
 
 
