@@ -8,17 +8,20 @@ time each:
 - initial behaviour: all 8 vehicles driven by the strategy's own drivers;
 - Table 3 (§5.5.1, broadcasting the winning chromosome): all 8 driven by the winning
   chromosome — of the controllers individual learning evolved on the strategy (every run's
-  best and elites), the one with the fewest collisions when it drives all 8 vehicles, judged
-  on ``VALIDATION_SITUATIONS`` situations apart from the measured ones;
+  best and elites), the one that loses fewest lives (collisions and spins) when it drives all
+  8 vehicles, judged on ``VALIDATION_SITUATIONS`` situations apart from the measured ones;
 - Table 4 (§5.5.2, broadcasting the evolved population): every vehicle starts from a copy of the
-  evolved population (the candidates, fewest broadcast collisions first, then the rest of the
+  evolved population (the candidates, fewest broadcast lives lost first, then the rest of the
   winner's run's final population) and all learn at once for ``SECONDS`` (each its own GA,
   sharing the best chromosomes across vehicles, reference-implementation.md §7.4); then all
   drive what they found together: of every chromosome any of them drove, the one that lost
   fewest lives per step (:class:`~enn_traffic.sim.shared.Evidence`), and the rate is measured
   over the ``SECONDS`` that follow.
 
-The metric is :attr:`enn_traffic.sim.shared.SharedRun.collision_rate`.
+The metric is :attr:`enn_traffic.sim.shared.SharedRun.collision_rate`. Evolved drivers are held
+to §5.3's spin rule throughout: rotating in place ends a life (the vehicle respawns), so a
+chromosome cannot avoid collisions by circling on the spot; their spins per second are
+recorded beside the collisions.
 """
 
 from __future__ import annotations
@@ -62,17 +65,20 @@ def _arena(world: World, situation: int, kinds=None, key: int = SITUATION_KEY
 
 def _broadcast(world: World, genes: np.ndarray, situation: int, key: int = SITUATION_KEY
                ) -> SharedRun:
-    """``SECONDS`` of one situation with ``genes`` (world layout) driving every vehicle."""
+    """``SECONDS`` of one situation with ``genes`` (world layout) driving every vehicle, held
+    to the spin rule."""
     arena, _ = _arena(world, situation, np.full(world.vehicles, RANDOM_NETWORK), key)
-    return arena.run(SECONDS, np.tile(genes, (world.vehicles, 1)))
+    return arena.run(SECONDS, np.tile(genes, (world.vehicles, 1)), check_spins=True)
 
 
 def _ranked(world: World, candidates: np.ndarray) -> np.ndarray:
-    """The candidates, fewest collisions first when each drives every vehicle on validation
-    situations: the first is §5.5.1's winning chromosome."""
-    rates = [np.mean([_broadcast(world, genes, situation, VALIDATION_KEY).collision_rate
-                      for situation in range(VALIDATION_SITUATIONS)])
-             for genes in world.spec.in_source_layout(candidates)]
+    """The candidates, fewest lives lost (collisions and spins) first when each drives every
+    vehicle on validation situations: the first is §5.5.1's winning chromosome."""
+    rates = []
+    for genes in world.spec.in_source_layout(candidates):
+        runs = [_broadcast(world, genes, situation, VALIDATION_KEY)
+                for situation in range(VALIDATION_SITUATIONS)]
+        rates.append(np.mean([run.collision_rate + run.spin_rate for run in runs]))
     return candidates[np.argsort(rates, kind="stable")]
 
 
@@ -95,7 +101,8 @@ def _strategy_rows(world: World, strategy: int, winner: np.ndarray, population: 
     winner_genes = world.spec.in_source_layout(winner)[0]
     evolved = world.spec.in_source_layout(population)
     network = np.full(world.vehicles, RANDOM_NETWORK)
-    rates = {"initial": [], "winner": [], "learning": [], "population": []}
+    rates = {"initial": [], "winner": [], "learning": [], "population": [],
+             "winner_spins": [], "population_spins": []}
     started = time.perf_counter()
     for situation in range(SITUATIONS):
         arena, genes = _arena(world, situation)
@@ -103,6 +110,7 @@ def _strategy_rows(world: World, strategy: int, winner: np.ndarray, population: 
         rates["initial"].append(initial.collision_rate)
         broadcast = _broadcast(world, winner_genes, situation)
         rates["winner"].append(broadcast.collision_rate)
+        rates["winner_spins"].append(broadcast.spin_rate)
         arena, _ = _arena(world, situation, network)
         learners = [VehicleGA(evolved.copy(), np.random.default_rng([sc.seed, situation, v]))
                     for v in range(world.vehicles)]
@@ -111,8 +119,10 @@ def _strategy_rows(world: World, strategy: int, winner: np.ndarray, population: 
         learning = arena.run(SECONDS, genes, learners, params, share_elites=True,
                              elite_count=sc.ga.elite_count, evidence=evidence)
         rates["learning"].append(learning.collision_rate)
-        after = arena.run(SECONDS, np.tile(evidence.best(), (world.vehicles, 1)))
+        after = arena.run(SECONDS, np.tile(evidence.best(), (world.vehicles, 1)),
+                          check_spins=True)
         rates["population"].append(after.collision_rate)
+        rates["population_spins"].append(after.spin_rate)
         if situation == 0:
             paths[strategy] = (initial.trace, broadcast.trace, after.trace, world.track.walls)
     wall = time.perf_counter() - started

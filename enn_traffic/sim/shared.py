@@ -6,7 +6,8 @@ this is one world of V vehicles run for a stretch of simulated time. Each step:
 
 1. :func:`detect` — collisions by the blame rule (a vehicle is responsible if its body touches
    a wall or another vehicle's body from before the step), and the spin test for learning
-   vehicles;
+   vehicles (and for every network vehicle when asked: evolved drivers are held to §5.3's
+   rule that rotating in place ends a life);
 2. the caller ends those lives: a learning vehicle records the fitness of its chromosome and
    takes the next one (its own GA when its population is used up, :class:`VehicleGA`); every
    vehicle whose life ended respawns at a free spot (the arena's respawn rule);
@@ -52,10 +53,11 @@ ALIVE = -1
 
 
 @njit(cache=True)
-def detect(pose, corners, centres, previous, previous_centres, fresh, learning, life, recent,
+def detect(pose, corners, centres, previous, previous_centres, fresh, spin_checked, life, recent,
            walls, lookup, radius, spin_variance, events) -> None:
-    """Fill ``events`` (V,): ``COLLIDED`` for a responsible collision, ``SPUN`` for a learning
-    vehicle spinning in place, else ``ALIVE``; record this step's positions for the spin test."""
+    """Fill ``events`` (V,): ``COLLIDED`` for a responsible collision, ``SPUN`` for a
+    ``spin_checked`` vehicle spinning in place, else ``ALIVE``; record this step's positions for
+    the spin test."""
     near = 4.0 * radius * radius
     window = recent.shape[1]
     for v in range(pose.shape[0]):
@@ -63,7 +65,7 @@ def detect(pose, corners, centres, previous, previous_centres, fresh, learning, 
         if _responsible(v, pose, corners, centres, previous, previous_centres, fresh, walls,
                         lookup, near) != NO_HIT:
             events[v] = COLLIDED
-        elif learning[v]:
+        elif spin_checked[v]:
             slot = life[v] % window
             recent[v, slot, 0], recent[v, slot, 1] = pose[v, 0], pose[v, 1]
             if life[v] + 1 >= window and _small_spread(recent[v], spin_variance):
@@ -195,6 +197,11 @@ class SharedRun:
         """Responsible collisions per second of simulated time, per vehicle."""
         return float(self.collisions.sum()) / (len(self.collisions) * self.seconds)
 
+    @property
+    def spin_rate(self) -> float:
+        """Spins in place per second of simulated time, per vehicle."""
+        return float(self.spins.sum()) / (len(self.spins) * self.seconds)
+
 
 class SharedArena:
     """V vehicles in one arena: the scenario's learner start and traffic starts, each vehicle
@@ -224,14 +231,17 @@ class SharedArena:
 
     def run(self, seconds: float, genes: np.ndarray, learners: list[VehicleGA | None] | None = None,
             params: ga.GAParams | None = None, share_elites: bool = False,
-            elite_count: int = 0, evidence: Evidence | None = None) -> SharedRun:
+            elite_count: int = 0, evidence: Evidence | None = None, check_spins: bool = False
+            ) -> SharedRun:
         """Drive for ``seconds`` of simulated time. ``genes`` (V, G, world layout) drive the
         network vehicles; a vehicle with a :class:`VehicleGA` in ``learners`` learns: its
         genes row follows its current chromosome, and every life it drives (the last one as
-        far as it went) goes into ``evidence``."""
+        far as it went) goes into ``evidence``. Learning vehicles, and with ``check_spins``
+        every network vehicle, lose their life when they spin in place."""
         count = len(self.kinds)
         learners = learners or [None] * count
         learning = np.array([g is not None for g in learners])
+        spin_checked = learning | (check_spins & (self.kinds == RANDOM_NETWORK))
         evidence = Evidence() if evidence is None else evidence
         shown = self.life.copy()  # steps of a life going on that an earlier run recorded
         for v, learner in enumerate(learners):
@@ -244,7 +254,7 @@ class SharedArena:
         for t in range(steps + 1):
             trace[t] = self.pose
             detect(self.pose, self.corners, self.centres, self.previous, self.previous_centres,
-                   self.fresh, learning, self.life, self.recent, self.physics.walls,
+                   self.fresh, spin_checked, self.life, self.recent, self.physics.walls,
                    self.physics.lookup, self.radius, self.spin_variance, self.events)
             for v in np.nonzero(self.events != ALIVE)[0]:
                 spun = self.events[v] == SPUN
