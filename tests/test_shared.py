@@ -97,3 +97,17 @@ def test_evolved_population_puts_the_ranked_candidates_first_without_repeats():
     a, b, c, d = (np.full(3, float(k)) for k in range(4))
     population = _evolved_population(np.stack([a, b]), np.stack([b, c, b, d]), size=3)
     np.testing.assert_array_equal(population, np.stack([a, b, c]))
+
+
+def test_evolved_drivers_held_to_the_spin_rule_lose_their_life_circling_on_the_spot(world):
+    """A network whose only gene steers it left drives a ≈ 7 m circle: both position spreads
+    stay under the spin limit, so with check_spins each vehicle spins out (and respawns)."""
+    genes = np.zeros((2, world.spec.chromosome_length))
+    genes[:, -1] = 1.0
+    starts = np.array([[30.0, 50.0, 0.0], [70.0, 50.0, np.pi]])
+    kinds = np.array([RANDOM_NETWORK, RANDOM_NETWORK])
+    free = SharedArena(world, starts, kinds, seed=1).run(10.0, genes.copy())
+    assert free.spins.tolist() == [0, 0] and free.collisions.tolist() == [0, 0]
+    held = SharedArena(world, starts, kinds, seed=1).run(10.0, genes.copy(), check_spins=True)
+    assert held.spins.min() >= 1 and held.collisions.tolist() == [0, 0]
+    assert held.spin_rate == pytest.approx(held.spins.sum() / (2 * 10.0))
