@@ -151,6 +151,9 @@ def evolve(
                 Controller.from_scenario(
                     scenario, state.best_chromosome, state.best_fitness, state.generation
                 ).save(out / "best.npz")
+            champion = state.population[best][None, :]
+            state.champions = champion if state.champions is None else np.concatenate(
+                [state.champions, champion])
             state.population = ga.next_generation(state.rng, state.population, fitness, params)
             state.extra["elapsed_s"] += time.perf_counter() - started
             rows.append({

@@ -91,11 +91,13 @@ def test_checkpoint_round_trip_and_corruption(tmp_path):
 
     rng = np.random.default_rng(9)
     state = ga.GAState(generation=4, population=rng.random((6, 3)), rng=rng,
-                       best_chromosome=np.ones(3), best_fitness=12.0, fingerprint="abc")
+                       best_chromosome=np.ones(3), best_fitness=12.0, fingerprint="abc",
+                       champions=rng.random((4, 3)))
     path = tmp_path / "checkpoint.npz"
     state.save(path)
     loaded = ga.GAState.load(path)
     assert loaded.generation == 4 and loaded.fingerprint == "abc"
+    np.testing.assert_array_equal(loaded.champions, state.champions)
     np.testing.assert_array_equal(loaded.population, state.population)
     assert loaded.rng.random() == rng.random()  # generator continues identically
     path.write_bytes(path.read_bytes()[:100])

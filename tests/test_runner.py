@@ -35,7 +35,7 @@ def test_initial_population_seeds_a_fresh_run(small, tmp_path):
         evolve(small, tmp_path / "d", progress=False, initial_population=np.zeros((3, 3)))
 
 
-def test_stop_hook_sees_the_evaluated_population(small, tmp_path):
+def test_stop_hook_sees_the_evaluated_population_and_champions_are_its_fittest(small, tmp_path):
     seen = []
 
     def stop(population, fitness):
@@ -46,6 +46,10 @@ def test_stop_hook_sees_the_evaluated_population(small, tmp_path):
     assert len(table) == 3
     assert all(p.shape == (30, 68) and f.shape == (30,) for p, f in seen)
     assert [f.max() for _, f in seen] == table["best_fitness"].tolist()
+    champions = GAState.load(tmp_path / "checkpoint.npz").champions
+    assert champions.shape == (3, 68)
+    for champion, (population, fitness) in zip(champions, seen, strict=True):
+        np.testing.assert_array_equal(champion, population[np.argmax(fitness)])
 
 
 def test_a_run_is_resumed_only_from_the_same_start_and_other_worlds(small, tmp_path, root):

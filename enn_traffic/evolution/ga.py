@@ -108,7 +108,8 @@ def next_generation(
 @dataclass
 class GAState:
     """Everything a run needs to continue: the population still to be evaluated, its generation
-    number, the generator state, and the best controller found so far."""
+    number, the generator state, the best controller found so far, and each finished
+    generation's best chromosome (``champions``, one row per generation)."""
 
     generation: int
     population: np.ndarray
@@ -117,6 +118,7 @@ class GAState:
     best_fitness: float = -np.inf
     fingerprint: str = ""
     extra: dict = field(default_factory=dict)
+    champions: np.ndarray | None = None
 
     def save(self, path: Path) -> None:
         """Write atomically: a crash never leaves a half-written checkpoint in place."""
@@ -131,6 +133,7 @@ class GAState:
             best_fitness=self.best_fitness,
             fingerprint=self.fingerprint,
             extra=json.dumps(self.extra),
+            champions=self.champions if self.champions is not None else np.empty(0),
         )
         write_atomic(path, lambda handle: handle.write(buffer.getvalue()), binary=True)
 
@@ -141,6 +144,7 @@ class GAState:
                 rng = np.random.default_rng()
                 rng.bit_generator.state = json.loads(str(data["rng_state"]))
                 best = data["best_chromosome"]
+                champions = data["champions"] if "champions" in data.files else np.empty(0)
                 state = cls(
                     generation=int(data["generation"]),
                     population=data["population"].copy(),
@@ -149,6 +153,7 @@ class GAState:
                     best_fitness=float(data["best_fitness"]),
                     fingerprint=str(data["fingerprint"]),
                     extra=json.loads(str(data["extra"])),
+                    champions=champions.copy() if champions.size else None,
                 )
         except Exception as exc:  # a damaged archive raises many types (zipfile, numpy, json)
             raise InputError(f"checkpoint is unreadable or corrupted ({type(exc).__name__}: "

@@ -146,9 +146,21 @@ def _title(family: Family, strategy: int) -> str:
     return f"strategy {strategy}: {kind}"
 
 
+def _held_out(family: Family, out: Path, strategy: int, seed: int) -> np.ndarray | None:
+    """Each generation's best chromosome of a run, scored again on the strategy's test traffic
+    (None for a run that kept no champions): what the run learned, apart from the luck of its
+    own traffic, which inflates a generation's best training fitness."""
+    champions = GAState.load(out / "runs" / family.name(strategy) / f"seed{seed}"
+                             / "checkpoint.npz").champions
+    return None if champions is None else _mean_fitness(family, champions, strategy,
+                                                         EVALUATION_KEY)
+
+
 def fig11(out: Path, quick: bool = False, progress: bool = True,
           family: Family = ARENA) -> list[str]:
-    """Learning curves, one run per seed and strategy, one panel per strategy."""
+    """Learning curves, one run per seed and strategy, one panel per strategy: each
+    generation's best training fitness (solid) and the same chromosome on test traffic
+    (dashed)."""
     family = family.settings(quick)
     out = out / family.folder
     figure, axes = plt.subplots(2, 2, figsize=(10, 7), sharex=True)
@@ -158,8 +170,13 @@ def fig11(out: Path, quick: bool = False, progress: bool = True,
         runs = family_runs[strategy]
         learning_curves({f"seed {s}": t for s, t in runs.items()}, None, axes=ax,
                         title=_title(family, strategy))
-        for seed, table in runs.items():
+        for index, (seed, table) in enumerate(runs.items()):
             best, mean = table["best_fitness"], table["mean_fitness"]
+            held_out = _held_out(family, out, strategy, seed)
+            if held_out is not None:
+                ax.plot(table["generation"], held_out, color=f"C{index}", ls="--", lw=0.9)
+            else:
+                held_out = np.full(len(table), np.nan)
             rows.append({
                 "strategy": strategy, "seed": seed, "generations": len(table),
                 "first_best": best.iloc[0], "last_best": best.iloc[-1],
@@ -167,21 +184,26 @@ def fig11(out: Path, quick: bool = False, progress: bool = True,
                 "rise": best.tail(5).mean() / max(best.iloc[0], 1.0),
                 "first_mean": mean.iloc[0], "last5_mean_mean": mean.tail(5).mean(),
                 "mean_rise": mean.tail(5).mean() / max(mean.iloc[0], 1.0),
+                "first_held_out": held_out[0], "last5_mean_held_out": held_out[-5:].mean(),
+                "held_out_rise": held_out[-5:].mean() / max(held_out[0], 1.0),
             })  # fmt: skip
     runs_each = len(family.seeds)
     figure.suptitle(f"Fig. 11 ({family.prefix}1-4): the learner among traffic, "
-                    f"{runs_each} runs per strategy")
+                    f"{runs_each} runs per strategy\nsolid: each generation's best fitness; "
+                    f"dashed: the same chromosome on {family.test_episodes} test situations")
     figure.tight_layout()
     save_figure(figure, out / "fig11.png")
     table = pd.DataFrame(rows)
     write_csv(out / "fig11.csv", table)
-    rise = table.groupby("strategy")[["rise", "mean_rise"]].median()
+    rise = table.groupby("strategy")[["rise", "mean_rise", "held_out_rise"]].median()
     label = f"{family.folder}/fig11" if family.folder else "fig11"
     return [f"{label}: best fitness, mean of the last 5 generations over the first generation's "
             "(median of the runs): "
             + ", ".join(f"strategy {s}: {r.rise:.1f}x" for s, r in rise.iterrows())
             + "; population mean fitness: "
-            + ", ".join(f"{r.mean_rise:.1f}x" for _, r in rise.iterrows())]
+            + ", ".join(f"{r.mean_rise:.1f}x" for _, r in rise.iterrows())
+            + "; each generation's best on test traffic: "
+            + ", ".join(f"{r.held_out_rise:.1f}x" for _, r in rise.iterrows())]
 
 
 def _trained_controllers(family: Family, out: Path, progress: bool) -> dict[int, np.ndarray]:
