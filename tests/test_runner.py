@@ -69,3 +69,19 @@ def test_a_run_is_resumed_only_from_the_same_start_and_other_worlds(small, tmp_p
     for change in changes:
         with pytest.raises(InputError, match="different settings"):
             evolve(scenario, tmp_path, resume=True, progress=False, **change)
+
+
+def test_candidates_are_every_generations_best_and_the_final_elites_each_once(small, tmp_path):
+    from enn_traffic.experiments.dynamic import _candidates
+
+    evolve(small.with_overrides(ga={"generations": 4, "elite_count": 3}), tmp_path,
+           progress=False)
+    state = GAState.load(tmp_path / "checkpoint.npz")
+    candidates = _candidates(tmp_path)
+    expected = {row.tobytes() for row in np.concatenate([state.champions,
+                                                         state.population[:3]])}
+    assert {row.tobytes() for row in candidates} == expected
+    assert len(candidates) == len(expected)
+    # the last generation's best is also the first elite, and comes once
+    np.testing.assert_array_equal(state.champions[-1], state.population[0])
+    assert len(candidates) <= 6

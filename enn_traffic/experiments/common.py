@@ -7,6 +7,7 @@ from collections.abc import Hashable, Iterator
 from contextlib import contextmanager
 from pathlib import Path
 
+import numpy as np
 import pandas as pd
 from tqdm import tqdm
 
@@ -21,6 +22,12 @@ SCENARIOS = Path(__file__).resolve().parents[2] / "scenarios"
 def scenario(name: str) -> Scenario:
     """A shipped scenario by name (``scenarios/NAME.toml``)."""
     return load_scenario(SCENARIOS / f"{name}.toml")
+
+
+def distinct(rows: np.ndarray) -> np.ndarray:
+    """The rows of ``rows`` without repeats, in the order they first occur."""
+    first = {row.tobytes(): index for index, row in reversed(list(enumerate(rows)))}
+    return rows[sorted(first.values())]
 
 
 def run_or_reuse(scenario: Scenario, out: Path, progress: bool, **options) -> pd.DataFrame:

@@ -19,7 +19,7 @@ import pandas as pd
 from enn_traffic.evaluation import EVALUATION_KEY
 from enn_traffic.evolution.evaluate import MeanOverWorlds
 from enn_traffic.evolution.ga import GAState
-from enn_traffic.experiments.common import run_all, run_or_reuse, scenario
+from enn_traffic.experiments.common import distinct, run_all, run_or_reuse, scenario
 from enn_traffic.io import write_csv
 from enn_traffic.report.plots import draw_paths, learning_curves, save_figure
 from enn_traffic.scenario import Scenario, load_scenario
@@ -115,13 +115,16 @@ def _mean_fitness(family: Family, candidates: np.ndarray, strategy: int, key: in
 
 
 def _candidates(run_dir: Path) -> np.ndarray:
-    """A run's best chromosome and the elites at the head of its final population."""
+    """A run's controllers to choose from: every generation's best chromosome (the run's best
+    alone for a run that kept none) and the elites at the head of its final population, each
+    once."""
     state = GAState.load(run_dir / "checkpoint.npz")
     elites = load_scenario(run_dir / "scenario.toml").ga.elite_count
-    rows = [state.population[: max(elites, 1)]]
-    if state.best_chromosome is not None:
-        rows.insert(0, state.best_chromosome[None, :])
-    return np.concatenate(rows)
+    champions = state.champions
+    if champions is None:
+        champions = np.empty((0, state.population.shape[1])) if state.best_chromosome is None \
+            else state.best_chromosome[None, :]
+    return distinct(np.concatenate([champions, state.population[: max(elites, 1)]]))
 
 
 def _validation(family: Family, candidates: np.ndarray, strategies: list[int]) -> np.ndarray:
@@ -215,7 +218,8 @@ def _trained_controllers(family: Family, out: Path, progress: bool) -> dict[int,
 
 
 def _evolved_candidates(family: Family, out: Path, progress: bool) -> dict[int, np.ndarray]:
-    """Per strategy: every run's best chromosome and elites (the runs done first if need be)."""
+    """Per strategy: every run's candidates (:func:`_candidates`; the runs done first if need
+    be)."""
     _family_runs(family, out, progress)
     return {strategy: np.concatenate([
                 _candidates(out / "runs" / family.name(strategy) / f"seed{seed}")

@@ -7,9 +7,10 @@ time each:
 
 - initial behaviour: all 8 vehicles driven by the strategy's own drivers;
 - Table 3 (§5.5.1, broadcasting the winning chromosome): all 8 driven by the winning
-  chromosome — of the controllers individual learning evolved on the strategy (every run's
-  best and elites), the one that loses fewest lives (collisions and spins) when it drives all
-  8 vehicles, judged on ``VALIDATION_SITUATIONS`` situations apart from the measured ones;
+  chromosome — of the controllers individual learning evolved on the strategy (every
+  generation's best of every run, and the final elites), the one that loses fewest lives
+  (collisions and spins) when it drives all 8 vehicles, judged on ``VALIDATION_SITUATIONS``
+  situations apart from the measured ones;
 - Table 4 (§5.5.2, broadcasting the evolved population): every vehicle starts from a copy of the
   evolved population (the candidates, fewest broadcast lives lost first, then the rest of the
   winner's run's final population) and all learn at once for ``SECONDS`` (each its own GA,
@@ -35,7 +36,7 @@ import numpy as np
 import pandas as pd
 
 from enn_traffic.experiments import dynamic
-from enn_traffic.experiments.common import scenario
+from enn_traffic.experiments.common import distinct, scenario
 from enn_traffic.io import write_csv
 from enn_traffic.report.plots import draw_paths, save_figure
 from enn_traffic.runner import ga_params
@@ -86,12 +87,7 @@ def _evolved_population(ranked: np.ndarray, run_population: np.ndarray, size: in
                         ) -> np.ndarray:
     """§5.5.2's evolved population: the ranked candidates, then the rest of the winner's run's
     final population, ``size`` distinct chromosomes at most."""
-    rows, seen = [], set()
-    for row in np.concatenate([ranked, run_population]):
-        if row.tobytes() not in seen:
-            seen.add(row.tobytes())
-            rows.append(row)
-    return np.stack(rows[:size])
+    return distinct(np.concatenate([ranked, run_population]))[:size]
 
 
 def _strategy_rows(world: World, strategy: int, winner: np.ndarray, population: np.ndarray,
