@@ -111,3 +111,18 @@ def test_evolved_drivers_held_to_the_spin_rule_lose_their_life_circling_on_the_s
     held = SharedArena(world, starts, kinds, seed=1).run(10.0, genes.copy(), check_spins=True)
     assert held.spins.min() >= 1 and held.collisions.tolist() == [0, 0]
     assert held.spin_rate == pytest.approx(held.spins.sum() / (2 * 10.0))
+
+
+def test_reduction_interval_follows_the_situations():
+    import pandas as pd
+
+    from enn_traffic.experiments.simultaneous import reduction_interval
+
+    rng = np.random.default_rng(0)
+    steady = pd.DataFrame({"strategy": [1, 1, 1, 2, 2], "initial": [1, 1, 1, 2, 2],
+                           "population": [0.5, 0.5, 0.5, 0, 0]})
+    assert reduction_interval(steady, "population", rng) == pytest.approx((0.75, 0.75))
+    varied = pd.DataFrame({"strategy": [1] * 6, "initial": [1.0] * 6,
+                           "population": [0.0, 0.0, 0.0, 0.4, 0.4, 0.4]})  # 80% on average
+    low, high = reduction_interval(varied, "population", rng)
+    assert 0.6 < low < 0.8 < high < 1.0

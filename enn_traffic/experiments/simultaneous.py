@@ -91,7 +91,9 @@ def _evolved_population(ranked: np.ndarray, run_population: np.ndarray, size: in
 
 
 def _strategy_rows(world: World, strategy: int, winner: np.ndarray, population: np.ndarray,
-                   paths: dict) -> dict:
+                   paths: dict) -> tuple[dict, list[dict]]:
+    """The strategy's mean rates (with the simulated and wall time they took) and each
+    situation's."""
     sc = world.scenario
     params = ga_params(sc)
     winner_genes = world.spec.in_source_layout(winner)[0]
@@ -123,16 +125,20 @@ def _strategy_rows(world: World, strategy: int, winner: np.ndarray, population: 
             paths[strategy] = (initial.trace, broadcast.trace, after.trace, world.track.walls)
     wall = time.perf_counter() - started
     simulated = SITUATIONS * SECONDS * 4  # initial, winner, learning, after
-    return {"strategy": strategy, **{k: float(np.mean(v)) for k, v in rates.items()},
-            "simulated_s": simulated, "wall_s": round(wall, 1)}
+    situations = [{"strategy": strategy, "situation": situation,
+                   **{k: v[situation] for k, v in rates.items()}}
+                  for situation in range(SITUATIONS)]
+    return ({"strategy": strategy, **{k: float(np.mean(v)) for k, v in rates.items()},
+             "simulated_s": simulated, "wall_s": round(wall, 1)}, situations)
 
 
 @cache
-def _measure(out: Path, quick: bool, progress: bool) -> pd.DataFrame:
-    """Every strategy's rates, once per process (Tables 3 and 4 share them), also written to
-    ``simultaneous.csv`` with the simulated and wall time they took."""
+def _measure(out: Path, quick: bool, progress: bool) -> tuple[pd.DataFrame, pd.DataFrame]:
+    """Every strategy's rates, once per process (Tables 3 and 4 share them): the means, also
+    written to ``simultaneous.csv`` with the simulated and wall time they took, and each
+    situation's, written to ``simultaneous_situations.csv``."""
     candidates = dynamic.evolved_candidates(out, quick, progress)
-    rows, paths = [], {}
+    rows, situations, paths = [], [], {}
     for strategy in dynamic.STRATEGIES:
         world = World(scenario(dynamic.ARENA.name(strategy)))
         ranked = _ranked(world, candidates[strategy])
@@ -140,11 +146,30 @@ def _measure(out: Path, quick: bool, progress: bool) -> pd.DataFrame:
         population = _evolved_population(
             ranked, dynamic.final_population(dynamic.ARENA, out, strategy, winner, quick),
             world.scenario.ga.population_size)
-        rows.append(_strategy_rows(world, strategy, winner, population, paths))
-    table = pd.DataFrame(rows)
+        means, each = _strategy_rows(world, strategy, winner, population, paths)
+        rows.append(means)
+        situations.extend(each)
+    table, situations = pd.DataFrame(rows), pd.DataFrame(situations)
     write_csv(out / "simultaneous.csv", table)
+    write_csv(out / "simultaneous_situations.csv", situations)
     _draw(paths, out / "simultaneous_paths.png")
-    return table
+    return table, situations
+
+
+def reduction_interval(situations: pd.DataFrame, after: str, rng: np.random.Generator,
+                       draws: int = 2000, level: float = 0.9) -> tuple[float, float]:
+    """How far the mean reduction over the strategies (1 − after / initial, each strategy's
+    rates averaged over its situations) moves with the situations: its central ``level``
+    interval when each strategy's situations are drawn again with replacement (bootstrap)."""
+    groups = [group for _, group in situations.groupby("strategy")]
+    reductions = np.zeros(draws)
+    for group in groups:
+        initial, later = group["initial"].to_numpy(), group[after].to_numpy()
+        picks = rng.integers(0, len(group), (draws, len(group)))
+        reductions += 1 - later[picks].mean(axis=1) / initial[picks].mean(axis=1)
+    reductions /= len(groups)
+    low, high = np.quantile(reductions, [(1 - level) / 2, (1 + level) / 2])
+    return float(low), float(high)
 
 
 def _draw(paths: dict, path: Path) -> None:
@@ -169,16 +194,18 @@ def _draw(paths: dict, path: Path) -> None:
 
 def _table(out: Path, quick: bool, progress: bool, after: str, name: str, label: str
            ) -> list[str]:
-    measured = _measure(out, quick, progress)
+    measured, situations = _measure(out, quick, progress)
     table = pd.DataFrame({"strategy": measured["strategy"],
                           "initial_collisions_per_s": measured["initial"].round(4),
                           "after_collisions_per_s": measured[after].round(4)})
     write_csv(out / f"{name}.csv", table)
     reduction = 1 - table["after_collisions_per_s"] / table["initial_collisions_per_s"]
+    low, high = reduction_interval(situations, after, np.random.default_rng(0))
     return [f"{name} ({label}): collisions per second per vehicle, initial -> after: "
             + ", ".join(f"strategy {s}: {i:.3f} -> {a:.3f}" for s, i, a in table.itertuples(
                 index=False))
-            + f"; mean reduction {reduction.mean():.0%} (paper: {PAPER_REDUCTION[name]:.0%}); "
+            + f"; mean reduction {reduction.mean():.0%} (90% interval over the situations "
+            f"{low:.0%}-{high:.0%}; paper: {PAPER_REDUCTION[name]:.0%}); "
             f"{measured['simulated_s'].sum():.0f} s simulated in {measured['wall_s'].sum():.0f} s"]
 
 
