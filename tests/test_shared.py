@@ -62,13 +62,13 @@ def test_evidence_trusts_a_chromosome_driven_long_over_one_lucky_life():
     """Loss rate = (lives lost + 1) / (steps + 1), pooled over every vehicle that drove it."""
     driven_long, lucky, flawless = np.zeros(3), np.ones(3), np.full(3, 2.0)
     evidence = Evidence()
-    evidence.record(lucky, 300, lost=False)
-    evidence.record(driven_long, 500, lost=True)
-    evidence.record(driven_long, 400, lost=False)  # another vehicle, life still going
+    evidence.record(lucky, 300, losses=0)
+    evidence.record(driven_long, 500, losses=1)
+    evidence.record(driven_long, 400, losses=0)  # another vehicle, life still going
     assert evidence.loss_rate(driven_long.tobytes()) == pytest.approx(2 / 901)
     assert evidence.loss_rate(lucky.tobytes()) == pytest.approx(1 / 301)
     np.testing.assert_array_equal(evidence.best(), driven_long)
-    evidence.record(flawless, 2000, lost=False)
+    evidence.record(flawless, 2000, losses=0)
     np.testing.assert_array_equal(evidence.best(), flawless)
 
 
@@ -126,3 +126,25 @@ def test_reduction_interval_follows_the_situations():
                            "population": [0.0, 0.0, 0.0, 0.4, 0.4, 0.4]})  # 80% on average
     low, high = reduction_interval(varied, "population", rng)
     assert 0.6 < low < 0.8 < high < 1.0
+
+
+def test_ranking_keeps_what_validation_showed_of_each_candidate(world):
+    """The winner of §5.5.1 is the candidate that lost fewest lives on the validation
+    situations; each candidate's steps and lives lost there are kept as evidence for §5.5.2."""
+    from enn_traffic.experiments import simultaneous
+
+    straight = np.zeros(world.spec.chromosome_length)
+    circling = straight.copy()
+    circling[-1] = 1.0  # spins out (see the test above)
+    candidates = np.stack([straight, circling])
+    ranked, evidence = simultaneous._ranked(world, candidates)
+    lost = {}
+    for genes in world.spec.in_source_layout(candidates):  # the layout the arena drives
+        runs = [simultaneous._broadcast(world, genes, s, simultaneous.VALIDATION_KEY)[0]
+                for s in range(simultaneous.VALIDATION_SITUATIONS)]
+        lost[genes.tobytes()] = sum(int(r.collisions.sum() + r.spins.sum()) for r in runs)
+        assert evidence.steps[genes.tobytes()] == sum(r.vehicle_steps for r in runs)
+        assert evidence.losses[genes.tobytes()] == lost[genes.tobytes()]
+    assert len(set(lost.values())) == 2
+    assert [lost[row.tobytes()] for row in world.spec.in_source_layout(ranked)] == sorted(
+        lost.values())

@@ -165,12 +165,13 @@ class Evidence:
     steps: dict[bytes, int] = field(default_factory=dict)
     losses: dict[bytes, int] = field(default_factory=dict)
 
-    def record(self, genes: np.ndarray, steps: int, lost: bool) -> None:
+    def record(self, genes: np.ndarray, steps: int, losses: int) -> None:
+        """``genes`` drove ``steps`` more steps and lost ``losses`` more lives."""
         key = genes.tobytes()
         if key not in self.chromosomes:
             self.chromosomes[key] = genes.copy()
         self.steps[key] = self.steps.get(key, 0) + steps
-        self.losses[key] = self.losses.get(key, 0) + lost
+        self.losses[key] = self.losses.get(key, 0) + losses
 
     def loss_rate(self, key: bytes) -> float:
         """Lives lost per step, counting one loss more than seen: a chromosome driven little
@@ -178,8 +179,8 @@ class Evidence:
         return (self.losses[key] + 1) / (self.steps[key] + 1)
 
     def best(self) -> np.ndarray:
-        """Of every chromosome any vehicle drove, the one with the lowest loss rate (the first
-        seen of equals)."""
+        """Of every chromosome recorded, the one with the lowest loss rate (the first recorded
+        of equals)."""
         return self.chromosomes[min(self.chromosomes, key=self.loss_rate)]
 
 
@@ -191,6 +192,11 @@ class SharedRun:
     spins: np.ndarray  # (V,)
     seconds: float
     trace: np.ndarray  # (steps + 1, V, 3)
+
+    @property
+    def vehicle_steps(self) -> int:
+        """Steps driven, summed over the vehicles."""
+        return (self.trace.shape[0] - 1) * len(self.collisions)
 
     @property
     def collision_rate(self) -> float:
@@ -262,7 +268,7 @@ class SharedArena:
                 collisions[v] += not spun
                 learner = learners[v]
                 if learner is not None:
-                    evidence.record(learner.current, int(self.life[v] - shown[v]), lost=True)
+                    evidence.record(learner.current, int(self.life[v] - shown[v]), losses=1)
                     learner.record(0.0 if spun else float(self.life[v]))
                     if learner.exhausted:
                         elites = (_global_elites(learners, elite_count) if share_elites
@@ -283,7 +289,7 @@ class SharedArena:
                   p.lookup, p.params, self.memory, self.rng, self.radius, self.life)
         for v, learner in enumerate(learners):  # a life still going counts what it has shown
             if learner is not None:
-                evidence.record(learner.current, int(self.life[v] - shown[v]), lost=False)
+                evidence.record(learner.current, int(self.life[v] - shown[v]), losses=0)
         return SharedRun(collisions, spins, steps * self.world.scenario.vehicle.dt, trace)
 
 
