@@ -121,9 +121,9 @@ def _candidates(run_dir: Path) -> np.ndarray:
     state = GAState.load(run_dir / "checkpoint.npz")
     elites = load_scenario(run_dir / "scenario.toml").ga.elite_count
     champions = state.champions
-    if champions is None:
-        champions = np.empty((0, state.population.shape[1])) if state.best_chromosome is None \
-            else state.best_chromosome[None, :]
+    if champions is None:  # a run from before runs kept them
+        champions = (state.population[:0] if state.best_chromosome is None
+                     else state.best_chromosome[None, :])
     return distinct(np.concatenate([champions, state.population[: max(elites, 1)]]))
 
 

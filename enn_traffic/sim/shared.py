@@ -157,9 +157,9 @@ class VehicleGA:
 
 @dataclass
 class Evidence:
-    """What every learning vehicle saw of each chromosome, pooled (the vehicles share what they
-    learn, reference §7.4): steps driven with it and lives it lost (a responsible collision or
-    a spin)."""
+    """What was seen of each chromosome, pooled over every vehicle and run that recorded it
+    (the learning vehicles share what they learn, reference §7.4): steps driven with it and
+    lives it lost (a responsible collision or a spin)."""
 
     chromosomes: dict[bytes, np.ndarray] = field(default_factory=dict)
     steps: dict[bytes, int] = field(default_factory=dict)
