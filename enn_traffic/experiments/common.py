@@ -26,8 +26,8 @@ def scenario(name: str) -> Scenario:
 
 def distinct(rows: np.ndarray) -> np.ndarray:
     """The rows of ``rows`` without repeats, in the order they first occur."""
-    first = {row.tobytes(): index for index, row in reversed(list(enumerate(rows)))}
-    return rows[sorted(first.values())]
+    _, first = np.unique(rows, axis=0, return_index=True)
+    return rows[np.sort(first)]
 
 
 def run_or_reuse(scenario: Scenario, out: Path, progress: bool, **options) -> pd.DataFrame:

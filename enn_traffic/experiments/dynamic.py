@@ -88,6 +88,11 @@ SUMO = Family("sumo_strategy", "sumo", (1, 2), test_episodes=10, accepted_fitnes
                               ("traffic", (("warmup_s", 20.0),))))
 
 
+def _run_dir(family: Family, out: Path, strategy: int, seed: int) -> Path:
+    """Where a strategy's run of one seed lives in the (family's) output folder."""
+    return out / "runs" / family.name(strategy) / f"seed{seed}"
+
+
 def _family_runs(family: Family, out: Path, progress: bool) -> dict[int, dict[int, pd.DataFrame]]:
     """Every strategy's runs, one per seed (all submitted at once, so on Ray they run side by
     side): ``{strategy: {seed: generations table}}``."""
@@ -96,7 +101,7 @@ def _family_runs(family: Family, out: Path, progress: bool) -> dict[int, dict[in
         base = family.scenario(strategy)
         for seed in family.seeds:
             jobs[strategy, seed] = (base.with_overrides(seed=seed, ga=family.ga()),
-                                    out / "runs" / family.name(strategy) / f"seed{seed}")
+                                    _run_dir(family, out, strategy, seed))
     tables = run_all(jobs, progress)
     return {strategy: {seed: tables[strategy, seed] for seed in family.seeds}
             for strategy in STRATEGIES}
@@ -153,8 +158,7 @@ def _held_out(family: Family, out: Path, strategy: int, seed: int) -> np.ndarray
     """Each generation's best chromosome of a run, scored again on the strategy's test traffic
     (None for a run that kept no champions): what the run learned, apart from the luck of its
     own traffic, which inflates a generation's best training fitness."""
-    champions = GAState.load(out / "runs" / family.name(strategy) / f"seed{seed}"
-                             / "checkpoint.npz").champions
+    champions = GAState.load(_run_dir(family, out, strategy, seed) / "checkpoint.npz").champions
     return None if champions is None else _mean_fitness(family, champions, strategy,
                                                          EVALUATION_KEY)
 
@@ -222,7 +226,7 @@ def _evolved_candidates(family: Family, out: Path, progress: bool) -> dict[int, 
     be)."""
     _family_runs(family, out, progress)
     return {strategy: np.concatenate([
-                _candidates(out / "runs" / family.name(strategy) / f"seed{seed}")
+                _candidates(_run_dir(family, out, strategy, seed))
                 for seed in family.seeds])
             for strategy in STRATEGIES}  # fmt: skip
 
@@ -241,7 +245,7 @@ def final_population(family: Family, out: Path, strategy: int, chosen: np.ndarra
     family = family.settings(quick)
     out = out / family.folder
     for seed in family.seeds:
-        run_dir = out / "runs" / family.name(strategy) / f"seed{seed}"
+        run_dir = _run_dir(family, out, strategy, seed)
         if any(np.array_equal(row, chosen) for row in _candidates(run_dir)):
             return GAState.load(run_dir / "checkpoint.npz").population
     raise ValueError(f"no run of {family.name(strategy)} produced the chosen controller")

@@ -84,13 +84,13 @@ def _ranked(world: World, candidates: np.ndarray) -> tuple[np.ndarray, Evidence]
     vehicle on validation situations — the first is §5.5.1's winning chromosome — and what
     those situations showed of each (world layout)."""
     evidence = Evidence()
-    for genes in world.spec.in_source_layout(candidates):
+    source = world.spec.in_source_layout(candidates)
+    for genes in source:
         for situation in range(VALIDATION_SITUATIONS):
             run = _broadcast(world, genes, situation, VALIDATION_KEY)[0]
             evidence.record(genes, run.vehicle_steps,
                             int(run.collisions.sum() + run.spins.sum()))
-    rates = [evidence.loss_rate(genes.tobytes())
-             for genes in world.spec.in_source_layout(candidates)]
+    rates = [evidence.loss_rate(genes.tobytes()) for genes in source]
     return candidates[np.argsort(rates, kind="stable")], evidence
 
 
