@@ -54,6 +54,20 @@ def test_step_cap_ends_a_wide_circle(tmp_path, root):
     assert results.outcome[0, 0] == CAPPED and results.steps[0, 0] == 500
 
 
+def test_the_arena_scenarios_spin_rule_ends_the_wide_circle(tmp_path, root):
+    """The same ~19 m loop stays within 17 m on both axes for 30 s: the arena scenarios'
+    wider spin rule scores it 0 once the window is full."""
+    episode = load_scenario(root / "scenarios" / "arena_strategy1.toml").episode
+    world = arena_world(tmp_path, root, max_steps=500, x=50.0, y=20.0)
+    world = World(world.scenario.with_overrides(episode={
+        "spin_window": episode.spin_window, "spin_variance": episode.spin_variance}))
+    genes = np.zeros(world.spec.chromosome_length)
+    genes[-1] = 0.35
+    results = world.evaluate(genes[None, :])
+    assert results.outcome[0, 0] == SPUN and results.fitness[0] == 0
+    assert results.steps[0, 0] == episode.spin_window - 1 < 500
+
+
 def test_compiled_episodes_equal_the_plain_reference_loop(root):
     scenario = load_scenario(root / "scenarios" / "navigation_narrow.toml")
     world = World(scenario)
