@@ -19,11 +19,12 @@ max_steps = {max_steps}
 """
 
 
-def arena_world(tmp_path, root, max_steps=1000, x=10.0, y=50.0):
+def arena_world(tmp_path, root, max_steps=1000, x=10.0, y=50.0, **episode):
+    """The empty arena; ``episode`` overrides further ``[episode]`` settings."""
     path = tmp_path / "arena.toml"
     path.write_text(ARENA.format(net=root / "sumo_nets" / "arena.net.xml", max_steps=max_steps,
                                  x=x, y=y))
-    return World(load_scenario(path))
+    return World(load_scenario(path).with_overrides(episode=episode))
 
 
 def test_straight_driving_hits_the_far_wall_at_the_expected_step(tmp_path, root):
@@ -58,9 +59,8 @@ def test_the_arena_scenarios_spin_rule_ends_the_wide_circle(tmp_path, root):
     """The same ~19 m loop stays within 17 m on both axes for 30 s: the arena scenarios'
     wider spin rule scores it 0 once the window is full."""
     episode = load_scenario(root / "scenarios" / "arena_strategy1.toml").episode
-    world = arena_world(tmp_path, root, max_steps=500, x=50.0, y=20.0)
-    world = World(world.scenario.with_overrides(episode={
-        "spin_window": episode.spin_window, "spin_variance": episode.spin_variance}))
+    world = arena_world(tmp_path, root, max_steps=500, x=50.0, y=20.0,
+                        spin_window=episode.spin_window, spin_variance=episode.spin_variance)
     genes = np.zeros(world.spec.chromosome_length)
     genes[-1] = 0.35
     results = world.evaluate(genes[None, :])
