@@ -85,3 +85,22 @@ def test_candidates_are_every_generations_best_and_the_final_elites_each_once(sm
     # the last generation's best is also the first elite, and comes once
     np.testing.assert_array_equal(state.champions[-1], state.population[0])
     assert len(candidates) <= 6
+
+
+def test_the_pick_rechecks_its_short_list_and_keeps_the_best_worst_strategy():
+    """Table 1 and 2 choose by the worst included strategy, on more traffic for the short list."""
+    from dataclasses import replace
+
+    from enn_traffic.experiments import dynamic
+
+    family = replace(dynamic.ARENA, test_episodes=2, recheck_episodes=3)
+    length = dynamic._test_world(family, 1).spec.chromosome_length
+    candidates = np.random.default_rng(0).uniform(-1, 1, size=(16, length))
+    strategies = [1, 3]
+    picked = dynamic._pick(family, candidates, strategies)
+    short = dynamic._validation(family, candidates, strategies).min(axis=1)
+    listed = candidates[np.argsort(-short, kind="stable")[: dynamic.RECHECKED]]
+    rechecked = dynamic._validation(family, listed, strategies, 3).min(axis=1)
+    assert any(np.array_equal(picked, row) for row in listed)
+    assert dynamic._validation(family, picked, strategies, 3).min() == rechecked.max()
+    assert len(set(np.round(rechecked, 6))) > 1  # the recheck tells the short list apart
