@@ -344,10 +344,13 @@ def table2(out: Path, quick: bool = False, progress: bool = True,
         worlds = [make_world(sc) for sc in scenarios]
 
         def accepted(population, fitness, included=included):
-            top = population[np.argsort(-fitness, kind="stable")[:TOP_CANDIDATES]]
-            passing = top[_validation(family, top, included).min(axis=1) >= threshold]
-            return len(passing) > 0 and bool(_validation(
-                family, passing, included, family.recheck_episodes).min(axis=1).max() >= threshold)
+            passing = population[np.argsort(-fitness, kind="stable")[:TOP_CANDIDATES]]
+            for episodes in (family.test_episodes, family.recheck_episodes):
+                worst = _validation(family, passing, included, episodes).min(axis=1)
+                passing = passing[worst >= threshold]
+                if len(passing) == 0:
+                    return False
+            return True
 
         run_dir = out / "runs" / "incremental" / f"iteration{iteration}"
         table = run_or_reuse(sc, run_dir, progress, evaluator=MeanOverWorlds(worlds),
