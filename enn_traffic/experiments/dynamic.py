@@ -338,7 +338,12 @@ def table2(out: Path, quick: bool = False, progress: bool = True,
     population, rows = None, []
     for iteration in range(1, len(STRATEGIES) + 1):
         ga = {"generations": family.incremental_max_generations, **family.ga()}
-        sc = base.with_overrides(name=f"incremental_{iteration}", ga=ga)
+        # the acceptance rule is part of the run's settings: a run stopped by another is redone
+        rule = (f"Incremental evolution (§5.4.1), iteration {iteration}: stops when one of the "
+                f"{TOP_CANDIDATES} fittest reaches {threshold:g} steps on every included "
+                f"strategy in {family.test_episodes} and in {family.recheck_episodes} "
+                "validation situations.")
+        sc = base.with_overrides(name=f"incremental_{iteration}", description=rule, ga=ga)
         included = STRATEGIES[:iteration]
         scenarios = [family.scenario(s) for s in included]
         worlds = [make_world(sc) for sc in scenarios]
