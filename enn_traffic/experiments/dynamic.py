@@ -112,12 +112,16 @@ def _family_runs(family: Family, out: Path, progress: bool) -> dict[int, dict[in
             for strategy in STRATEGIES}
 
 
-@cache
 def _test_world(family: Family, strategy: int, episodes: int | None = None) -> World:
     """The world of a strategy with ``episodes`` traffic situations (``test_episodes`` unless
-    given), built once."""
+    given), built once for each count."""
+    return _world(family, strategy, episodes or family.test_episodes)
+
+
+@cache
+def _world(family: Family, strategy: int, episodes: int) -> World:
     sc = family.scenario(strategy)
-    return make_world(sc.with_overrides(traffic={"episodes": episodes or family.test_episodes}))
+    return make_world(sc.with_overrides(traffic={"episodes": episodes}))
 
 
 def _mean_fitness(family: Family, candidates: np.ndarray, strategy: int, key: int,
