@@ -1,3 +1,5 @@
+import math
+
 import numpy as np
 import pandas as pd
 import pytest
@@ -104,3 +106,26 @@ def test_the_pick_rechecks_its_short_list_and_keeps_the_best_worst_strategy():
     assert any(np.array_equal(picked, row) for row in listed)
     assert dynamic._validation(family, picked, strategies, 3).min() == rechecked.max()
     assert len(set(np.round(rechecked, 6))) > 1  # the recheck tells the short list apart
+
+
+def test_table2_accepts_by_the_mean_less_one_standard_error_on_other_situations():
+    """§5.4.1's acceptance: the screen on validation traffic, then the bound on other traffic;
+    a threshold between a candidate's bound and its mean there is refused."""
+    from dataclasses import replace
+
+    from enn_traffic.experiments import dynamic
+    from enn_traffic.sim.world import SPUN
+
+    family = replace(dynamic.ARENA, test_episodes=2, recheck_episodes=6)
+    world = dynamic._test_world(family, 1, 6)
+    candidate = np.random.default_rng(3).uniform(-1, 1, size=(1, world.spec.chromosome_length))
+    results = world.evaluate(candidate, dynamic.ACCEPTANCE_KEY)
+    fitness = np.where(results.outcome[0] == SPUN, 0.0, results.steps[0])
+    mean, error = fitness.mean(), fitness.std(ddof=1) / math.sqrt(6)
+    bound = dynamic._lower_bound(family, candidate, 1, dynamic.ACCEPTANCE_KEY, 6)
+    assert bound[0] == pytest.approx(mean - error) and error > 0
+    screen = dynamic._validation(family, candidate, [1]).min()
+    assert bound[0] < min(mean, screen)  # this candidate tells the bound from the mean
+    assert dynamic._accepts(family, candidate, [1], bound[0])
+    assert not dynamic._accepts(family, candidate, [1], 0.5 * (bound[0] + min(mean, screen)))
+    assert not dynamic._accepts(family, candidate, [1], screen + 1e-6)  # the screen refuses
