@@ -362,7 +362,7 @@ def table1(out: Path, quick: bool = False, progress: bool = True,
     rows_ok = sum(diagonal[i] > np.delete(matrix[i], i).max() for i in range(4))
     label = f"{family.folder}/table1" if family.folder else "table1"
     return [f"{label}: mean diagonal {diagonal.mean():.0f}, mean off-diagonal {off.mean():.0f} "
-            f"(ratio {diagonal.mean() / off.mean():.1f}; paper 4.9); diagonal above the rest "
+            f"(ratio {diagonal.mean() / off.mean():.2f}; paper 4.9); diagonal above the rest "
             f"of its row in {rows_ok} of 4 rows (paper: 4 of 4)"]
 
 
