@@ -42,10 +42,11 @@ def ga_params(scenario: Scenario) -> ga.GAParams:
 def fingerprint(scenario: Scenario, others: Sequence[Scenario] = (),
                 population: np.ndarray | None = None) -> str:
     """Identifies a run's settings (everything but the number of generations), with the other
-    scenarios its evaluator runs and the population it started from, where there are such."""
+    scenarios its evaluator runs (their worlds: not their own number of generations) and the
+    population it started from, where there are such."""
     digest = hashlib.sha256(scenario.with_overrides(ga={"generations": 1}).to_toml().encode())
     for other in others:
-        digest.update(other.to_toml().encode())
+        digest.update(other.with_overrides(ga={"generations": 1}).to_toml().encode())
     if population is not None:
         digest.update(np.ascontiguousarray(population, dtype=np.float64).tobytes())
     return digest.hexdigest()[:16]

@@ -64,6 +64,12 @@ def test_a_run_is_resumed_only_from_the_same_start_and_other_worlds(small, tmp_p
     again = evolve(scenario, tmp_path, resume=True, progress=False,
                    initial_population=population, others=[wide])
     assert len(again) == 2
+    # the other worlds' own number of generations plays no part in this run
+    longer = wide.with_overrides(ga={"generations": wide.ga.generations + 50})
+    again = evolve(scenario, tmp_path, resume=True, progress=False,
+                   initial_population=population, others=[longer])
+    pd.testing.assert_frame_equal(again, evolve(scenario, tmp_path, resume=True, progress=False,
+                                                initial_population=population, others=[wide]))
     changes = [{"initial_population": population * 0.5, "others": [wide]},
                {"initial_population": population, "others": []},
                {"initial_population": population,
