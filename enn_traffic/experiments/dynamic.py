@@ -129,19 +129,25 @@ def _world(family: Family, strategy: int, episodes: int) -> World:
     return make_world(sc.with_overrides(traffic={"episodes": episodes}))
 
 
+def _results(family: Family, candidates: np.ndarray, strategy: int, key: int,
+             episodes: int | None = None) -> EpisodeResults:
+    """Each candidate driven in the episodes (``test_episodes`` unless given) drawn from
+    ``key``."""
+    return _test_world(family, strategy, episodes).evaluate(np.atleast_2d(candidates), key)
+
+
 def _mean_fitness(family: Family, candidates: np.ndarray, strategy: int, key: int,
                   episodes: int | None = None) -> np.ndarray:
     """Mean fitness of each candidate over the episodes (``test_episodes`` unless given)
     drawn from ``key``."""
-    world = _test_world(family, strategy, episodes)
-    return world.evaluate(np.atleast_2d(candidates), key).fitness
+    return _results(family, candidates, strategy, key, episodes).fitness
 
 
 def _lower_bound(family: Family, candidates: np.ndarray, strategy: int, key: int,
                  episodes: int) -> np.ndarray:
     """Each candidate's mean fitness over ``episodes`` situations drawn from ``key``, less
     one standard error of that mean."""
-    results = _test_world(family, strategy, episodes).evaluate(np.atleast_2d(candidates), key)
+    results = _results(family, candidates, strategy, key, episodes)
     fitness = EpisodeResults.lifetime_fitness(results.steps, results.outcome)
     return fitness.mean(axis=1) - fitness.std(axis=1, ddof=1) / np.sqrt(episodes)
 
