@@ -121,6 +121,8 @@ class TrafficConfig(_Section):
     wander_max_deg: float = Field(45.0, gt=0, le=90, allow_inf_nan=False)
     circle_radius: tuple[PositiveFloat, PositiveFloat] = (10.0, 30.0)
     respawn_clearance: float = Field(10.0, ge=0, allow_inf_nan=False)
+    turn_side: Literal["open", "left", "right"] = "open"
+    sees_vehicles: bool = False
     routes: list[Path] = []
     sumocfg: Path | None = None
     mode: Literal["replay", "closed-loop"] = "replay"
@@ -176,6 +178,8 @@ class TrafficConfig(_Section):
         params[k.P_WANDER_DECAY] = self.wander_decay
         params[k.P_WANDER_MAX] = math.radians(self.wander_max_deg)
         params[k.P_CLEARANCE] = self.respawn_clearance
+        params[k.P_TURN_SIDE] = k.TURN_SIDES[self.turn_side]
+        params[k.P_SEES_VEHICLES] = float(self.sees_vehicles)
         params[k.P_WHEELBASE] = wheelbase
         return params
 

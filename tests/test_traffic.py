@@ -146,3 +146,32 @@ def test_circle_steering_drives_the_drawn_radius(radius):
         circumradius = sides[0] * sides[1] * sides[2] / (4.0 * area)
         assert circumradius == pytest.approx(radius, rel=0.02)
         assert np.sign(poses[1][2] - poses[0][2]) == side
+
+
+def test_turn_side_left_turns_left_where_the_open_side_is_right(tmp_path, root):
+    """A straight driver heading north 15 m from the west wall meets the north wall: by the
+    open-side rule it turns right (east, heading falls); with turn_side = "left" it turns
+    left (heading rises), whichever side is open."""
+    world = two_cars(tmp_path, root, (50.0, 20.0), (15.0, 70.0), 90.0)
+    genes = np.zeros(world.spec.chromosome_length)
+    turned = {}
+    for side in ("open", "left"):
+        sided = World(world.scenario.with_overrides(traffic={"turn_distance": 10.0,
+                                                              "turn_side": side}))
+        poses, _ = sided.trace(genes, max_steps=30)
+        turned[side] = (poses[30, 1, 2] - poses[0, 1, 2] + math.pi) % (2 * math.pi) - math.pi
+    assert turned["open"] < -0.5 and turned["left"] > 0.5
+
+
+def test_traffic_that_sees_vehicles_turns_away_from_the_learner(tmp_path, root):
+    """Head-on at 2 m per step: a straight driver blind to vehicles meets the learner (both
+    responsible, the learner dies); one that sees vehicles (19 beams) turns away 20 m before,
+    and the learner drives on to the far wall (about 80 steps)."""
+    world = two_cars(tmp_path, root, (20.0, 50.0), (60.0, 50.0), 180.0)
+    steps = {}
+    for sees in (False, True):
+        seeing = World(world.scenario.with_overrides(
+            traffic={"turn_distance": 20.0, "sees_vehicles": sees}, sensor={"beams": 19}))
+        results = seeing.evaluate(np.zeros((1, seeing.spec.chromosome_length)))
+        steps[sees] = (int(results.steps[0, 0]), int(results.outcome[0, 0]))
+    assert steps[False] == (21, COLLIDED) and steps[True][0] > 60

@@ -44,6 +44,7 @@ from enn_traffic.sim.world import (
 from enn_traffic.traffic.kinematic import (
     NONE,
     P_CLEARANCE,
+    P_SEES_VEHICLES,
     RANDOM_NETWORK,
     reset_memory,
     scripted_steering,
@@ -101,9 +102,10 @@ def drive(pose, corners, centres, previous, previous_centres, fresh, kinds, gene
         candidates = nearby_walls(pose[v, 0], pose[v, 1], lookup)
         sense_walls(pose[v, 0], pose[v, 1], pose[v, 2], beam_cos, beam_sin, max_range, walls,
                     candidates, readings)
-        if kind == RANDOM_NETWORK:
+        if kind == RANDOM_NETWORK or (kind != NONE and params[P_SEES_VEHICLES] > 0.0):
             _sense_bodies(v, pose[v, 0], pose[v, 1], pose[v, 2], beam_cos, beam_sin, corners,
                           centres, radius, readings)
+        if kind == RANDOM_NETWORK:
             steering[v] = network_steering(genes[v], layer_sizes, readings, activation, scratch,
                                            gain)
         elif kind != NONE:

@@ -7,13 +7,17 @@ from its strategy:
    paper's setup, where every vehicle starts with random weights and a random heading.
 2. ``straight`` — drives straight; when a wall is closer than ``turn_distance`` within
    ±``turn_cone_deg`` ahead, it turns towards the more open side until that cone is clear
-   (``turn_distance = 0``: it never turns, and respawns at the wall). It does not see vehicles.
+   (``turn_distance = 0``: it never turns, and respawns at the wall); ``turn_side = "left"``
+   or ``"right"`` always turns that way, a one-way flow round the walls.
 3. ``circling`` — every vehicle drives circles of its own: a radius drawn from
    ``circle_radius`` and a direction (left or right) drawn each life, so it holds the steering
    angle of that circle; near a wall it turns away as ``straight`` does, then circles on about
    a new centre. Circles of different radii, anywhere in the area, crossing each other.
 4. ``wander`` — steering follows a random process, δ ← decay·δ + Normal(0, σ); near a wall it
    turns away as ``straight`` does.
+
+Scripted vehicles see walls only, unless ``sees_vehicles``: then other vehicles' bodies in the
+cone ahead start a turn as a wall does.
 
 An uncontrolled vehicle responsible for a collision respawns at a free spot. All randomness
 comes from one counter-based generator per world (:func:`next_uniform`), seeded the same for
@@ -38,7 +42,9 @@ STRATEGIES = {
 # Layout of the float parameter vector the kernel takes.
 P_TURN_DISTANCE, P_TURN_STEERING, P_TURN_CONE, P_RADIUS_MIN, P_RADIUS_MAX = 0, 1, 2, 3, 4
 P_WANDER_SIGMA, P_WANDER_DECAY, P_WANDER_MAX, P_CLEARANCE, P_WHEELBASE = 5, 6, 7, 8, 9
-N_PARAMS = 10
+P_TURN_SIDE, P_SEES_VEHICLES = 10, 11
+N_PARAMS = 12
+TURN_SIDES = {"open": 0.0, "left": 1.0, "right": -1.0}
 
 _GOLDEN = np.uint64(0x9E3779B97F4A7C15)
 _MIX1 = np.uint64(0xBF58476D1CE4E5B9)
@@ -105,7 +111,8 @@ def scripted_steering(kind, readings, beam_cos, beam_sin, max_range, params, mem
 def wall_turn(readings, beam_cos, beam_sin, max_range, params, memory) -> float:
     """Turn away from what is ahead: start when something is nearer than ``turn_distance`` in
     the cone ahead, keep turning the same way until nothing at all is in range there (so the
-    vehicle heads back across the area instead of running along the wall). 0: no turn."""
+    vehicle heads back across the area instead of running along the wall). The way is the more
+    open side, or always left or right (``turn_side``: 1 left, -1 right, 0 open). 0: no turn."""
     cone = math.cos(params[P_TURN_CONE])
     nearest = np.inf
     left, right = 0.0, 0.0
@@ -117,7 +124,10 @@ def wall_turn(readings, beam_cos, beam_sin, max_range, params, memory) -> float:
         elif beam_sin[b] < 0.0:
             right += readings[b]
     if memory[1] == 0.0 and nearest < params[P_TURN_DISTANCE]:
-        memory[1] = params[P_TURN_STEERING] if left >= right else -params[P_TURN_STEERING]
+        side = params[P_TURN_SIDE]
+        if side == 0.0:
+            side = 1.0 if left >= right else -1.0
+        memory[1] = side * params[P_TURN_STEERING]
     elif memory[1] != 0.0 and nearest >= max_range:
         memory[1] = 0.0
     return memory[1]
