@@ -110,9 +110,9 @@ def scripted_steering(kind, readings, beam_cos, beam_sin, max_range, params, mem
 @njit(cache=True)
 def wall_turn(readings, beam_cos, beam_sin, max_range, params, memory) -> float:
     """Turn away from what is ahead: start when something is nearer than ``turn_distance`` in
-    the cone ahead, keep turning the same way until nothing at all is in range there (so the
-    vehicle heads back across the area instead of running along the wall). The way is the more
-    open side, or always left or right (``turn_side``: 1 left, -1 right, 0 open). 0: no turn."""
+    the cone ahead, keep turning the same way until nothing at all is in range there (a vehicle
+    that meets a wall head-on turns about 90° and drives on along it). The way is the more open
+    side, or always left or right (``turn_side``: 1 left, -1 right, 0 open). 0: no turn."""
     cone = math.cos(params[P_TURN_CONE])
     nearest = np.inf
     left, right = 0.0, 0.0
