@@ -44,10 +44,10 @@ from enn_traffic.sim.world import (
 from enn_traffic.traffic.kinematic import (
     NONE,
     P_CLEARANCE,
-    P_SEES_VEHICLES,
     RANDOM_NETWORK,
     reset_memory,
     scripted_steering,
+    senses_vehicles,
 )
 
 ALIVE = -1
@@ -102,7 +102,7 @@ def drive(pose, corners, centres, previous, previous_centres, fresh, kinds, gene
         candidates = nearby_walls(pose[v, 0], pose[v, 1], lookup)
         sense_walls(pose[v, 0], pose[v, 1], pose[v, 2], beam_cos, beam_sin, max_range, walls,
                     candidates, readings)
-        if kind == RANDOM_NETWORK or (kind != NONE and params[P_SEES_VEHICLES] > 0.0):
+        if senses_vehicles(kind, params):
             _sense_bodies(v, pose[v, 0], pose[v, 1], pose[v, 2], beam_cos, beam_sin, corners,
                           centres, radius, readings)
         if kind == RANDOM_NETWORK:

@@ -39,11 +39,11 @@ from enn_traffic.traffic import kinematic
 from enn_traffic.traffic.kinematic import (
     NONE,
     P_CLEARANCE,
-    P_SEES_VEHICLES,
     RANDOM_NETWORK,
     next_uniform,
     reset_memory,
     scripted_steering,
+    senses_vehicles,
 )
 
 # How an episode ended.
@@ -187,7 +187,6 @@ def run_episode(
     previous[:] = corners
     previous_centres[:] = centres
     near = 4.0 * radius * radius  # bodies whose centres are farther apart cannot touch
-    sees_vehicles = params[P_SEES_VEHICLES] > 0.0  # scripted vehicles: walls only, or both
     suffered = 0
     steps = 0
     while True:
@@ -222,7 +221,7 @@ def run_episode(
                 candidates = nearby_walls(pose[v, 0], pose[v, 1], lookup)
                 sense_walls(pose[v, 0], pose[v, 1], pose[v, 2], beam_cos, beam_sin, max_range,
                             walls, candidates, readings)
-                if count > 1 and (v == 0 or kind == RANDOM_NETWORK or sees_vehicles):
+                if count > 1 and (v == 0 or senses_vehicles(kind, params)):
                     _sense_bodies(v, pose[v, 0], pose[v, 1], pose[v, 2], beam_cos, beam_sin,
                                   corners, centres, radius, readings)
             if v == 0:

@@ -84,6 +84,13 @@ def reset_memory(kind, params, rng, memory) -> None:
 
 
 @njit(cache=True)
+def senses_vehicles(kind, params) -> bool:
+    """Does an uncontrolled vehicle of ``kind`` sense other vehicles' bodies? A network
+    always does; a scripted driver only with ``sees_vehicles``."""
+    return kind == RANDOM_NETWORK or (kind != NONE and params[P_SEES_VEHICLES] > 0.0)
+
+
+@njit(cache=True)
 def circle_steering(radius, wheelbase) -> float:
     """The steering angle that keeps the bicycle model of :mod:`enn_traffic.sim.kinematics` on
     a circle of ``radius``: its front and rear points move apart by the angle δ, so the pose
