@@ -129,7 +129,7 @@ def test_table2_accepts_by_the_mean_less_one_standard_error_on_other_situations(
     fitness = np.where(results.outcome[0] == SPUN, 0.0, results.steps[0])
     mean, error = fitness.mean(), fitness.std(ddof=1) / math.sqrt(6)
     bound = dynamic._lower_bound(family, candidate, 1, dynamic.ACCEPTANCE_KEY, 6)
-    assert bound[0] == pytest.approx(mean - error) and error > 0
+    assert bound[0] == pytest.approx(mean - dynamic.ACCEPTANCE_ERRORS * error) and error > 0
     screen = dynamic._validation(family, candidate, [1]).min()
     assert bound[0] < min(mean, screen)  # this candidate tells the bound from the mean
     assert dynamic._accepts(family, candidate, [1], bound[0])
