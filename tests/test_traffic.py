@@ -163,6 +163,21 @@ def test_turn_side_left_turns_left_where_the_open_side_is_right(tmp_path, root):
     assert turned["open"] < -0.5 and turned["left"] > 0.5
 
 
+def test_a_turn_begun_6_m_before_a_wall_head_on_hits_it(tmp_path, root):
+    """A straight driver heading north from the arena's centre meets the north wall head-on
+    (19 beams, 1 m per step): turning left 10 m or 7 m before, it clears the wall and drives
+    on west; turning 6 m before (arena_strategy2), it hits the wall and respawns elsewhere."""
+    world = two_cars(tmp_path, root, (10.0, 5.0), (50.0, 50.0), 90.0)
+    jumps = {}
+    for distance in (10.0, 7.0, 6.0):
+        turning = World(world.scenario.with_overrides(
+            traffic={"turn_distance": distance, "turn_side": "left"}, sensor={"beams": 19}))
+        poses, _ = turning.trace(np.zeros(turning.spec.chromosome_length), max_steps=70)
+        jumps[distance] = np.hypot(*np.diff(poses[:, 1, :2], axis=0).T).max()
+    assert jumps[10.0] == pytest.approx(1.0) and jumps[7.0] == pytest.approx(1.0)
+    assert jumps[6.0] > 10.0
+
+
 def test_traffic_that_sees_vehicles_turns_away_from_the_learner(tmp_path, root):
     """Head-on at 2 m per step: a straight driver blind to vehicles meets the learner (both
     responsible, the learner dies); one that sees vehicles (19 beams) turns away 20 m before,
