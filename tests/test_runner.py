@@ -114,7 +114,7 @@ def test_the_pick_rechecks_its_short_list_and_keeps_the_best_worst_strategy():
     assert len(set(np.round(rechecked, 6))) > 1  # the recheck tells the short list apart
 
 
-def test_table2_accepts_by_the_mean_less_one_standard_error_on_other_situations():
+def test_table2_accepts_by_the_mean_less_standard_errors_on_other_situations():
     """§5.4.1's acceptance: the screen on validation traffic, then the bound on other traffic;
     a threshold between a candidate's bound and its mean there is refused."""
     from dataclasses import replace

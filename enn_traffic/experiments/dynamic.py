@@ -34,9 +34,7 @@ VALIDATION_KEY = 2_000_000_000
 # fittest of a generation, since a generation's best fitness alone is mostly luck: a candidate
 # that passes on test_episodes situations must pass again on recheck_episodes other ones
 # (ACCEPTANCE_KEY) by its mean less ACCEPTANCE_ERRORS standard errors, so that a candidate just
-# under the threshold seldom passes by the luck of one of the many checks a run makes (with one
-# standard error, a run accepted on non-test traffic chose a controller that lived 566 steps
-# among wanderers on the test traffic, under the 600 asked).
+# under the threshold seldom passes by the luck of one of the many checks a run makes.
 TOP_CANDIDATES = 5
 ACCEPTANCE_KEY = 3_000_000_000
 ACCEPTANCE_ERRORS = 2.0
