@@ -165,8 +165,9 @@ def test_turn_side_left_turns_left_where_the_open_side_is_right(tmp_path, root):
 
 def test_a_turn_begun_6_m_before_a_wall_head_on_hits_it(tmp_path, root):
     """A straight driver heading north from the arena's centre meets the north wall head-on
-    (19 beams, 1 m per step): turning left 10 m or 7 m before, it clears the wall and drives
-    on west; turning 6 m before (arena_strategy2), it hits the wall and respawns elsewhere."""
+    (19 beams, 1 m per step): turning left 10 m or 7 m before, it clears the wall (no step
+    longer than 1 m); turning 6 m before (arena_strategy2), it hits the wall and respawns
+    elsewhere (a jump of more than 10 m)."""
     world = two_cars(tmp_path, root, (10.0, 5.0), (50.0, 50.0), 90.0)
     jumps = {}
     for distance in (10.0, 7.0, 6.0):
