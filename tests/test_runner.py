@@ -135,3 +135,38 @@ def test_table2_accepts_by_the_mean_less_standard_errors_on_other_situations():
     assert dynamic._accepts(family, candidate, [1], bound[0])
     assert not dynamic._accepts(family, candidate, [1], 0.5 * (bound[0] + min(mean, screen)))
     assert not dynamic._accepts(family, candidate, [1], screen + 1e-6)  # the screen refuses
+
+
+def test_table2_evolves_a_wider_network_than_table1():
+    """Table 2's one controller must hold every strategy's skill: its worlds are built with the
+    family's incremental hidden layer, Table 1's with the scenarios' own (Figure 1's count)."""
+    from enn_traffic.experiments import dynamic
+
+    incremental = dynamic.ARENA.incremental()
+    (hidden,) = dynamic.ARENA.incremental_hidden
+    assert dynamic.ARENA.scenario(2).network.hidden == [3] and hidden != 3
+    # (19 beams + bias) x hidden + (hidden + bias) x 2 outputs
+    assert dynamic._test_world(incremental, 2, 1).spec.chromosome_length == 20 * hidden + (
+        hidden + 1) * 2
+    assert dynamic._test_world(dynamic.ARENA, 2, 1).spec.chromosome_length == 20 * 3 + 4 * 2
+
+
+def test_table2_reports_the_evolution_whose_last_controller_does_best_on_validation(tmp_path):
+    """One incremental evolution per seed; table2.csv is the one whose last controller's worst
+    strategy does best on validation traffic, table2_runs.csv holds them all."""
+    from enn_traffic.experiments import dynamic
+
+    dynamic.table2(tmp_path, quick=True, progress=False)
+    runs = pd.read_csv(tmp_path / "table2_runs.csv")
+    family = dynamic.ARENA.settings(True).incremental()
+    assert sorted(runs["seed"].unique()) == list(family.incremental_seeds) == [1, 2]
+    worst = {}
+    for seed in family.incremental_seeds:
+        last = tmp_path / "runs" / "incremental" / f"seed{seed}" / "iteration4"
+        chosen = dynamic._pick(family, dynamic._candidates(last), dynamic.STRATEGIES)
+        worst[seed] = dynamic._validation(family, chosen, dynamic.STRATEGIES,
+                                          family.recheck_episodes).min()
+    assert worst[1] != worst[2]  # the two evolutions are told apart
+    best = max(worst, key=worst.get)
+    expected = runs[runs["seed"] == best].drop(columns="seed").reset_index(drop=True)
+    pd.testing.assert_frame_equal(pd.read_csv(tmp_path / "table2.csv"), expected)
