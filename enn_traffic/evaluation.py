@@ -9,7 +9,15 @@ import pandas as pd
 from enn_traffic.controller import Controller
 from enn_traffic.scenario import Scenario
 from enn_traffic.sim import make_world
-from enn_traffic.sim.world import CAPPED, HELD_OUT_KEYS, OUTCOMES, EpisodeResults
+from enn_traffic.sim.world import (
+    CAPPED,
+    HELD_OUT_KEYS,
+    MET_NEAR_MAX,
+    MET_NEAR_STEPS,
+    MET_START,
+    OUTCOMES,
+    EpisodeResults,
+)
 
 # Evaluation episodes draw held-out traffic, so a controller is never deployed on the traffic
 # it was trained on, whether its training drew new traffic every generation or kept one set.
@@ -30,6 +38,7 @@ def evaluate_controller(controller: Controller, scenario: Scenario, episodes: in
     results = world.evaluate(controller.chromosome[None, :], EVALUATION_KEY)
     steps, outcome = results.steps[0], results.outcome[0]
     fitness = EpisodeResults.lifetime_fitness(steps, outcome)
+    traffic = results.traffic[0]
     rows = []
     for column, strategy in enumerate(world.episode_labels()):
         rows.append({
@@ -44,6 +53,9 @@ def evaluate_controller(controller: Controller, scenario: Scenario, episodes: in
             "outcome": OUTCOMES[int(outcome[column])],
             "capped": bool(outcome[column] == CAPPED),
             "suffered_collisions": int(results.suffered[0, column]),
+            "traffic_at_start": int(traffic[column, MET_START]),
+            "traffic_near_mean": traffic[column, MET_NEAR_STEPS] / (steps[column] + 1),
+            "traffic_near_max": int(traffic[column, MET_NEAR_MAX]),
         })  # fmt: skip
     return pd.DataFrame(rows)
 

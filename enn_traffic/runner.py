@@ -25,12 +25,13 @@ from enn_traffic.evolution.genome import NetworkSpec
 from enn_traffic.io import write_csv, write_text
 from enn_traffic.report.plots import learning_curve
 from enn_traffic.scenario import Scenario
-from enn_traffic.sim.world import CAPPED, COLLIDED, SPUN
+from enn_traffic.sim.world import CAPPED, COLLIDED, LEFT_NETWORK, SPUN
 
 CHECKPOINT = "checkpoint.npz"
 COLUMNS = [
     "generation", "best_fitness", "mean_fitness", "median_fitness", "min_fitness",
-    "vehicle_steps", "collisions", "spins", "capped", "suffered", "elapsed_s",
+    "vehicle_steps", "collisions", "spins", "capped", "left_network", "suffered",
+    "traffic_at_start", "traffic_near_mean", "traffic_near_max", "elapsed_s",
 ]  # fmt: skip
 
 
@@ -167,7 +168,9 @@ def evolve(
                 "collisions": int((results.outcome == COLLIDED).sum()),
                 "spins": int((results.outcome == SPUN).sum()),
                 "capped": int((results.outcome == CAPPED).sum()),
+                "left_network": int((results.outcome == LEFT_NETWORK).sum()),
                 "suffered": int(results.suffered.sum()),
+                **results.traffic_summary(),
                 "elapsed_s": state.extra["elapsed_s"],
             })  # fmt: skip
             state.generation += 1

@@ -7,7 +7,9 @@ after loading is in metres, seconds and radians. See README "Scenario reference"
 
 from __future__ import annotations
 
+import importlib.util
 import math
+import re
 import tomllib
 from pathlib import Path
 from typing import Annotated, Literal
@@ -26,19 +28,37 @@ class _Section(BaseModel):
 
 
 class TrackConfig(_Section):
-    """Where the vehicle drives: a SUMO network and a start pose on it."""
+    """Where the vehicle drives: a SUMO network and a start pose on it. ``start_lane`` and
+    ``start_edge`` may list several; each traffic situation then draws one."""
 
-    net: Path
+    net: Path | None = None
     start_xy: tuple[float, float] | None = None
     start_heading_deg: float = Field(0.0, allow_inf_nan=False)
-    start_lane: str | None = None
+    start_lane: str | list[str] | None = None
+    start_edge: str | list[str] | None = None
     start_offset: float = Field(10.0, ge=0, allow_inf_nan=False)
+    fringe: Literal["wall", "exit"] | None = None
 
     @model_validator(mode="after")
     def _one_start(self) -> TrackConfig:
-        if (self.start_xy is None) == (self.start_lane is None):
-            raise ValueError("give exactly one of start_xy (with start_heading_deg) or start_lane")
+        given = [v for v in (self.start_xy, self.start_lane, self.start_edge) if v is not None]
+        if len(given) != 1:
+            raise ValueError("give exactly one of start_xy (with start_heading_deg), start_lane "
+                             "or start_edge")
+        for name in ("start_lane", "start_edge"):
+            if getattr(self, name) == []:
+                raise ValueError(f"{name} must name at least one {name.removeprefix('start_')}")
         return self
+
+    @property
+    def start_names(self) -> list[tuple[str, str]]:
+        """The start lanes and edges as (kind, id) pairs: ``("lane", id)`` or ``("edge", id)``;
+        empty for ``start_xy``."""
+        for kind in ("lane", "edge"):
+            value = getattr(self, f"start_{kind}")
+            if value is not None:
+                return [(kind, v) for v in ([value] if isinstance(value, str) else value)]
+        return []
 
 
 class VehicleConfig(_Section):
@@ -126,7 +146,9 @@ class TrafficConfig(_Section):
     routes: list[Path] = []
     sumocfg: Path | None = None
     mode: Literal["replay", "closed-loop"] = "replay"
+    begin_s: float | None = Field(None, ge=0, allow_inf_nan=False)
     warmup_s: float = Field(60.0, ge=0, le=86_400, allow_inf_nan=False)
+    warmup_states: int = Field(0, ge=0, le=1000)
 
     @model_validator(mode="after")
     def _sumo_sources(self) -> TrafficConfig:
@@ -223,6 +245,26 @@ class Scenario(_Section):
             raise ValueError("give exactly one of [track] (a SUMO network) or [lane_keeping]")
         return self
 
+    @model_validator(mode="after")
+    def _track_net(self) -> Scenario:
+        if self.track is not None and self.track.net is None and self.traffic.sumocfg is None:
+            raise ValueError("track.net: required unless traffic.sumocfg names the network")
+        return self
+
+    @model_validator(mode="after")
+    def _fringe_exits(self) -> Scenario:
+        if self.track is not None and self.track.fringe == "exit" and not self.traffic.is_sumo:
+            raise ValueError('track.fringe: "exit" needs SUMO traffic (strategy = "sumo"); '
+                             "scripted vehicles would drive off the map")
+        return self
+
+    @property
+    def fringe_exits(self) -> bool:
+        """Does reaching the network's fringe end a life as "left the network" (the default
+        with SUMO traffic) rather than count as a wall?"""
+        fringe = self.track.fringe if self.track is not None else None
+        return fringe == "exit" or (fringe is None and self.traffic.is_sumo)
+
     @property
     def beam_angles(self) -> list[float]:
         """Beam directions relative to the heading, radians, right (negative) to left."""
@@ -257,8 +299,15 @@ class Scenario(_Section):
         return tomli_w.dumps(data)
 
 
-def _key_of(error: dict) -> str:
-    return ".".join(str(part) for part in error["loc"]) or "(top level)"
+def _key_of(error: dict) -> tuple[str, str]:
+    """The key an error names, and its message. A whole-scenario check names its key as the
+    message's prefix (``"track.net: required ..."``)."""
+    key = ".".join(str(part) for part in error["loc"])
+    message = error["msg"].removeprefix("Value error, ")
+    prefix, _, rest = message.partition(": ")
+    if not key and rest and re.fullmatch(r"[a-z_]+(\.[a-z_]+)*", prefix):
+        return prefix, rest
+    return key or "(top level)", error["msg"]
 
 
 def _validate(data: dict, source: Path | None) -> Scenario:
@@ -273,32 +322,60 @@ def _validate(data: dict, source: Path | None) -> Scenario:
         scenario = Scenario.model_validate(data)
     except ValidationError as exc:
         first = exc.errors()[0]
-        message = first["msg"]
+        key, message = _key_of(first)
         if first["type"] == "extra_forbidden":
             message = "unknown key"
         elif first["type"] == "missing":
             message = "required key is missing"
         extra = f" (and {exc.error_count() - 1} more problems)" if exc.error_count() > 1 else ""
-        raise InputError(message + extra, source, _key_of(first)) from None
+        raise InputError(message + extra, source, key) from None
     return scenario.model_copy(update={"source": source})
 
 
+PACKAGE_PREFIX = "pkg:"
+
+
+def package_file(reference: str) -> Path:
+    """``pkg:NAME/inner/path``: a file inside the installed Python package NAME (found without
+    importing it), for data that a package ships, such as sumo-rl's city scenarios."""
+    name, _, inner = reference.removeprefix(PACKAGE_PREFIX).partition("/")
+    try:
+        spec = importlib.util.find_spec(name) if name.isidentifier() else None
+    except (ImportError, ValueError):
+        spec = None
+    if spec is None or not spec.submodule_search_locations:
+        raise ValueError(f"no installed Python package {name!r} for {reference!r}")
+    return Path(list(spec.submodule_search_locations)[0]) / inner
+
+
 def _resolve(path: Path, section, key: str) -> None:
-    """Make ``section[key]`` (a path or a list of paths) absolute, relative to ``path``'s
-    folder."""
+    """Make ``section[key]`` (a path or a list of paths) absolute: relative to ``path``'s
+    folder, or inside an installed package (``pkg:NAME/...``)."""
     if not isinstance(section, dict):
         return
+
+    def resolve(value, where: str):
+        if not isinstance(value, str):
+            return value
+        if value.startswith(PACKAGE_PREFIX):
+            try:
+                return str(package_file(value))
+            except ValueError as exc:
+                raise InputError(str(exc), path, where) from None
+        return str((path.parent / value).resolve())
+
     value = section.get(key)
-    if isinstance(value, str):
-        section[key] = str((path.parent / value).resolve())
-    elif isinstance(value, list):
-        section[key] = [str((path.parent / v).resolve()) if isinstance(v, str) else v
-                        for v in value]
+    if isinstance(value, list):
+        section[key] = [resolve(v, f"{key}[{i}]") for i, v in enumerate(value)]
+    elif value is not None:
+        section[key] = resolve(value, key)
 
 
 def load_scenario(path: str | Path) -> Scenario:
     """Read and validate a scenario; network, route and SUMO configuration paths resolve
-    relative to the scenario file."""
+    relative to the scenario file (or inside an installed package, ``pkg:NAME/...``). A
+    ``.sumocfg`` is read as SUMO reads it, and names the track when ``[track] net`` is left
+    out."""
     path = Path(path)
     if not path.is_file():
         raise InputError("scenario file not found", path)
@@ -310,13 +387,39 @@ def load_scenario(path: str | Path) -> Scenario:
     _resolve(path, data.get("traffic"), "routes")
     _resolve(path, data.get("traffic"), "sumocfg")
     scenario = _validate(data, path.resolve())
-    if scenario.track is not None and not scenario.track.net.is_file():
-        raise InputError(f"network file not found: {scenario.track.net}", path, "track.net")
     traffic = scenario.traffic
     for index, route in enumerate(traffic.routes):
         if not route.is_file():
             raise InputError(f"route file not found: {route}", path, f"traffic.routes[{index}]")
-    if traffic.sumocfg is not None and not traffic.sumocfg.is_file():
-        raise InputError(f"SUMO configuration not found: {traffic.sumocfg}", path,
-                         "traffic.sumocfg")
+    if traffic.sumocfg is not None:
+        if not traffic.sumocfg.is_file():
+            raise InputError(f"SUMO configuration not found: {traffic.sumocfg}", path,
+                             "traffic.sumocfg")
+        scenario = _with_sumocfg(scenario, path)
+    if scenario.track is not None and not scenario.track.net.is_file():
+        raise InputError(f"network file not found: {scenario.track.net}", path, "track.net")
+    return scenario
+
+
+def _with_sumocfg(scenario: Scenario, path: Path) -> Scenario:
+    """Check the ``.sumocfg`` and the learner's start time against its begin and end; fill
+    ``[track] net`` from it when left out."""
+    from enn_traffic.traffic.sumocfg import read_sumocfg
+
+    traffic = scenario.traffic
+    config = read_sumocfg(traffic.sumocfg)
+    begin = traffic.begin_s if traffic.begin_s is not None else (config.begin or 0.0)
+    start = begin + traffic.warmup_s
+    if config.end is not None and config.end >= 0 and start >= config.end:
+        raise InputError(
+            f"the learner would start at {start:g} s (begin {begin:g} s + warmup_s "
+            f"{traffic.warmup_s:g} s), not before the end of {traffic.sumocfg.name} "
+            f"({config.end:g} s)", path,
+            "traffic.begin_s" if traffic.begin_s is not None else "traffic.warmup_s")
+    if scenario.track is not None and scenario.track.net is None:
+        if config.net_file is None:
+            raise InputError(f"[track] net is left out and {traffic.sumocfg.name} names no "
+                             "net-file", path, "track.net")
+        track = scenario.track.model_copy(update={"net": config.net_file})
+        scenario = scenario.model_copy(update={"track": track})
     return scenario

@@ -136,7 +136,9 @@ def test_replay_and_closed_loop_agree_where_traffic_does_not_react(tmp_path, roo
     replayed = replay.evaluate(population, generation=3)
     closed = make_world(sumo_scenario(tmp_path, root, CLOCKWISE, mode="closed-loop"))
     live = closed.evaluate(population, generation=3)
-    alone = make_world(sumo_scenario(tmp_path, root, "<routes/>")).evaluate(population, 3)
+    no_traffic = {"strategy": "random_network", "routes": []}  # the same road, no vehicle
+    alone = make_world(replay.scenario.with_overrides(traffic=no_traffic)).evaluate(population,
+                                                                                    3)
     own_side = np.array([[np.nanmax(replay.trace(chromosome, 3, episode)[0][:, 0, 1]) < -1.0
                           for episode in range(2)] for chromosome in population])
     assert own_side.sum() >= 20

@@ -164,11 +164,12 @@ class MeanOverWorlds:
 
     def evaluate(self, population: np.ndarray, generation: int = 0) -> EpisodeResults:
         parts = [world.evaluate(population, generation) for world in self.worlds]
-        steps, outcome, suffered = (np.concatenate([getattr(p, f) for p in parts], axis=1)
-                                    for f in ("steps", "outcome", "suffered"))
+        steps, outcome, suffered, traffic = (
+            np.concatenate([getattr(p, f) for p in parts], axis=1)
+            for f in ("steps", "outcome", "suffered", "traffic"))
         fitness = EpisodeResults.lifetime_fitness(steps, outcome).mean(axis=1)
         vehicles = round(float(np.mean([p.vehicles for p in parts])))
-        return EpisodeResults(fitness, steps, outcome, suffered, vehicles)
+        return EpisodeResults(fitness, steps, outcome, suffered, vehicles, traffic)
 
     def close(self) -> None:
         pass

@@ -1,15 +1,18 @@
 """A SUMO ``.net.xml`` becomes walls: the boundary of the union of lane and junction shapes.
 
-DESIGN.md, "SUMO": the drivable area is the union of lane shapes (each lane's centre line
-buffered by half its width, flat ends) and junction polygons; every edge of its boundary,
-exterior and holes alike, is one wall segment.
+docs/sumo.md, "Walls and exits": the drivable area is the union of lane shapes (each lane's
+centre line buffered by half its width, flat ends) and junction polygons; every edge of its
+boundary, exterior and holes alike, is one wall segment. Holes narrower than ``SLIVER_M``
+(the millimetre gaps between abutting lanes of imported networks) are road, not walls. With
+``exits``, the network's fringe (a node with a single neighbour: where traffic enters or
+leaves the map) is cut open across the road, and the cut lines become exits, not walls.
 """
 
 from __future__ import annotations
 
 import math
 import xml.etree.ElementTree as ElementTree
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
@@ -19,14 +22,19 @@ from shapely.ops import unary_union
 
 from enn_traffic.errors import InputError
 
+SLIVER_M = 0.2  # holes narrower than this are gaps between lanes, not walls
+EXIT_MARGIN_M = 0.5  # a fringe cut reaches this far past the road's outer lane edges
+
 
 @dataclass(frozen=True)
 class Track:
-    """Walls of a road network and its drivable area."""
+    """Walls of a road network, its drivable area, and its exits (segments across the road
+    at the fringe; none unless asked for)."""
 
     name: str
     walls: np.ndarray  # (S, 4) float64: x1, y1, x2, y2 in metres
     area: Polygon | MultiPolygon
+    exits: np.ndarray = field(default_factory=lambda: np.empty((0, 4)))
 
     @property
     def bounds(self) -> tuple[float, float, float, float]:
@@ -37,18 +45,54 @@ class Track:
 
     def lane_pose(self, net_file: Path, lane_id: str, offset: float) -> tuple[float, float, float]:
         """(x, y, heading) at ``offset`` metres along the centre line of ``lane_id``."""
-        net = _read_net(net_file)
-        try:
-            lane = net.getLane(lane_id)
-        except KeyError:
-            raise InputError(f"no lane {lane_id!r} in the network", net_file) from None
-        shape = LineString(lane.getShape())
-        offset = min(max(offset, 0.0), shape.length)
-        point = shape.interpolate(offset)
-        ahead = shape.interpolate(min(offset + 0.1, shape.length))
-        behind = shape.interpolate(max(offset - 0.1, 0.0))
-        heading = math.atan2(ahead.y - behind.y, ahead.x - behind.x)
-        return point.x, point.y, heading
+        return start_poses(net_file, [("lane", lane_id)], offset)[0]
+
+
+def start_poses(net_file: Path, names: list[tuple[str, str]], offset: float
+                ) -> list[tuple[float, float, float]]:
+    """(x, y, heading) at ``offset`` metres along each start's centre line: a lane
+    ``("lane", id)``, or an edge ``("edge", id)``, whose rightmost lane that allows passenger
+    cars is taken. A ValueError ``(index, message)`` for a start that does not exist or does
+    not allow passenger cars."""
+    net = _read_net(net_file)
+    poses = []
+    for index, (kind, name) in enumerate(names):
+        if kind == "edge":
+            edge = net.getEdge(name) if net.hasEdge(name) else None
+            if edge is None:
+                raise ValueError(index, f"no edge {name!r} in the network {net_file.name}")
+            lanes = [lane for lane in edge.getLanes() if lane.allows("passenger")]
+            if not lanes:
+                raise ValueError(index, f"no lane of edge {name!r} allows passenger cars")
+            lane = lanes[0]
+        else:
+            lane = _lane(net, name)
+            if lane is None:
+                raise ValueError(index, f"no lane {name!r} in the network {net_file.name}")
+            if not lane.allows("passenger"):
+                raise ValueError(index, f"lane {name!r} does not allow passenger cars")
+        poses.append(_along(lane, offset))
+    return poses
+
+
+def _lane(net: sumolib.net.Net, lane_id: str):
+    """The lane ``EDGE_INDEX``, or None."""
+    edge_id, _, index = lane_id.rpartition("_")
+    if not net.hasEdge(edge_id) or not index.isdigit():
+        return None
+    lanes = net.getEdge(edge_id).getLanes()
+    return lanes[int(index)] if int(index) < len(lanes) else None
+
+
+def _along(lane, offset: float) -> tuple[float, float, float]:
+    """(x, y, heading) ``offset`` metres along a lane's centre line (clipped to its length)."""
+    shape = LineString(lane.getShape())
+    offset = min(max(offset, 0.0), shape.length)
+    point = shape.interpolate(offset)
+    ahead = shape.interpolate(min(offset + 0.1, shape.length))
+    behind = shape.interpolate(max(offset - 0.1, 0.0))
+    heading = math.atan2(ahead.y - behind.y, ahead.x - behind.x)
+    return point.x, point.y, heading
 
 
 def _read_net(path: Path) -> sumolib.net.Net:
@@ -81,9 +125,88 @@ def drivable_area(net: sumolib.net.Net) -> Polygon | MultiPolygon:
             polygon = Polygon(shape)
             pieces.append(polygon if polygon.is_valid else polygon.buffer(0))
     # Snap away slivers between abutting shapes, then drop collinear vertices.
-    return unary_union(pieces).buffer(1e-6, join_style="mitre").buffer(
+    area = unary_union(pieces).buffer(1e-6, join_style="mitre").buffer(
         -1e-6, join_style="mitre"
     ).simplify(1e-3)
+    return _without_slivers(area)
+
+
+def _without_slivers(area: Polygon | MultiPolygon) -> Polygon | MultiPolygon:
+    """``area`` without its holes narrower than ``SLIVER_M`` (width ~ 2 area / perimeter)."""
+    polygons = list(area.geoms) if isinstance(area, MultiPolygon) else [area]
+    kept = []
+    for polygon in polygons:
+        holes = [ring for ring in polygon.interiors
+                 if 2.0 * Polygon(ring).area / ring.length >= SLIVER_M]
+        kept.append(Polygon(polygon.exterior, holes))
+    return kept[0] if len(kept) == 1 else MultiPolygon(kept)
+
+
+def fringe_mouths(net: sumolib.net.Net) -> list[tuple[np.ndarray, np.ndarray, float, float]]:
+    """The road ends at the network's fringe, one per node with a single neighbouring node:
+    (a point on the mouth line, the unit direction into the network, the mouth's extent across
+    the road from that point: lowest and highest, lane edges included)."""
+    mouths = []
+    for node in net.getNodes():
+        edges = [(e, True) for e in node.getOutgoing() if e.getFunction() != "internal"]
+        edges += [(e, False) for e in node.getIncoming() if e.getFunction() != "internal"]
+        neighbours = {(e.getToNode() if out else e.getFromNode()).getID() for e, out in edges}
+        neighbours.discard(node.getID())
+        if len(neighbours) != 1:
+            continue
+        ends, inward, widths = [], [], []
+        for edge, out in edges:
+            for lane in edge.getLanes():
+                shape = np.asarray(lane.getShape(), dtype=np.float64)
+                end, nxt = (shape[0], shape[1]) if out else (shape[-1], shape[-2])
+                ends.append(end)
+                inward.append((nxt - end) / max(np.linalg.norm(nxt - end), 1e-9))
+                widths.append(lane.getWidth())
+        if not ends:
+            continue
+        u = np.sum(inward, axis=0)
+        u /= max(np.linalg.norm(u), 1e-9)
+        n = np.array([-u[1], u[0]])
+        centre = np.asarray(node.getCoord(), dtype=np.float64)
+        # The mouth lies where the innermost lane ends, so that every lane reaches it.
+        along = max(float((end - centre) @ u) for end in ends)
+        across = [float((end - centre) @ n) for end in ends]
+        low = min(a - w / 2 for a, w in zip(across, widths, strict=True))
+        high = max(a + w / 2 for a, w in zip(across, widths, strict=True))
+        mouths.append((centre + along * u, u, low, high))
+    return mouths
+
+
+def _open_fringe(area, net) -> tuple[Polygon | MultiPolygon, np.ndarray, list]:
+    """``area`` cut open at every fringe mouth (whatever lies beyond a mouth, such as a
+    turnaround, is removed), the mouths' lines (M, 4), and the mouths."""
+    mouths = fringe_mouths(net)
+    cuts, lines = [], []
+    for point, u, low, high in mouths:
+        n = np.array([-u[1], u[0]])
+        depth = max(10.0, 2.0 * (high - low))
+        a, b = point + (low - EXIT_MARGIN_M) * n, point + (high + EXIT_MARGIN_M) * n
+        cuts.append(Polygon([a, b, b - depth * u, a - depth * u]))
+        lines.append([*a, *b])
+    if cuts:
+        area = area.difference(unary_union(cuts)).simplify(1e-3)
+    return area, np.asarray(lines, dtype=np.float64).reshape(-1, 4), mouths
+
+
+def split_exits(segments: np.ndarray, mouth_lines: np.ndarray, tolerance: float = 1e-2
+                ) -> tuple[np.ndarray, np.ndarray]:
+    """Boundary segments that lie on a mouth line (exits), and the rest (walls)."""
+    on_mouth = np.zeros(len(segments), dtype=bool)
+    for x1, y1, x2, y2 in mouth_lines:
+        d = np.array([x2 - x1, y2 - y1])
+        length = np.linalg.norm(d)
+        d /= length
+        first, second = segments[:, 0:2] - (x1, y1), segments[:, 2:4] - (x1, y1)
+        off = np.maximum(np.abs(first @ (-d[1], d[0])), np.abs(second @ (-d[1], d[0])))
+        inside = ((first @ d >= -tolerance) & (first @ d <= length + tolerance)
+                  & (second @ d >= -tolerance) & (second @ d <= length + tolerance))
+        on_mouth |= (off <= tolerance) & inside
+    return segments[on_mouth], segments[~on_mouth]
 
 
 def boundary_segments(area: Polygon | MultiPolygon) -> np.ndarray:
@@ -97,11 +220,17 @@ def boundary_segments(area: Polygon | MultiPolygon) -> np.ndarray:
     return np.vstack(rows) if rows else np.empty((0, 4))
 
 
-def load_track(net_file: str | Path) -> Track:
-    """Read a SUMO network and return its walls; a clear :class:`InputError` if it has none."""
+def load_track(net_file: str | Path, exits: bool = False) -> Track:
+    """Read a SUMO network and return its walls (and, with ``exits``, its fringe cut open
+    into exits); a clear :class:`InputError` if it has no drivable area."""
     path = Path(net_file)
     net = _read_net(path)
     area = drivable_area(net)
     if area.is_empty or area.area <= 0:
         raise InputError("the network has no drivable area (no lanes or junctions)", path)
-    return Track(name=path.name.removesuffix(".net.xml"), walls=boundary_segments(area), area=area)
+    name = path.name.removesuffix(".net.xml")
+    if not exits:
+        return Track(name=name, walls=boundary_segments(area), area=area)
+    area, mouth_lines, _ = _open_fringe(area, net)
+    exit_segments, walls = split_exits(boundary_segments(area), mouth_lines)
+    return Track(name=name, walls=walls, area=area, exits=exit_segments)

@@ -11,7 +11,8 @@ is the arena's (:mod:`enn_traffic.sim.world`, paper §5.3): the learner is respo
 body touches a wall or a vehicle's body from before the step; a vehicle whose body touches the
 learner's body from before the step is responsible, counts as a collision the learner suffered,
 and leaves this world (``gone``), as an arena vehicle respawns. Vehicles within
-``respawn_clearance`` of the learner's start leave the world before the first step.
+``respawn_clearance`` of the learner's start leave the world before the first step. A learner
+whose body touches an exit (the network's fringe, docs/sumo.md) has left the network.
 """
 
 from __future__ import annotations
@@ -21,16 +22,23 @@ import math
 import numpy as np
 from numba import njit, prange
 
-from enn_traffic.sim.collide import body_corners, box_hits_walls, boxes_overlap
+from enn_traffic.sim.collide import (
+    body_corners,
+    box_hits_segment,
+    box_hits_walls,
+    boxes_overlap,
+)
 from enn_traffic.sim.kinematics import bicycle_step
 from enn_traffic.sim.sensors import nearby_walls, sense_walls
 from enn_traffic.sim.world import (
     CAPPED,
     COLLIDED,
+    LEFT_NETWORK,
     SPUN,
     _sense_bodies,
     _small_spread,
     network_steering,
+    within_range,
 )
 
 RUNNING = -1
@@ -64,19 +72,24 @@ def clear_start(body, ids, centres, gone, clearance) -> None:
 
 @njit(cache=True)
 def learner_step(
-    t, genes, layer_sizes, physics, beam_cos, beam_sin, walls, lookup,
+    t, genes, layer_sizes, physics, beam_cos, beam_sin, walls, lookup, exits,
     ids_before, corners_before, centres_before, ids_now, corners_now, centres_now,
-    max_steps, spin_window, pose, body, body_before, recent, gone, suffered, readings,
+    max_steps, spin_window, pose, body, body_before, recent, gone, suffered, met, readings,
     activation, scratch, visible_centres,
 ):  # fmt: skip
     """One step of the learner at pose ``pose`` (its body ``body``, ``body_before`` the step
-    before): collisions, spin test and step cap, then sense, decide and move. Returns an
-    outcome code, or ``RUNNING``; updates ``pose``, ``body``, ``body_before``, ``recent``,
-    ``gone`` and ``suffered[0]`` in place."""
+    before): the fringe, collisions, spin test and step cap, then sense, decide and move.
+    Returns an outcome code, or ``RUNNING``; updates ``pose``, ``body``, ``body_before``,
+    ``recent``, ``gone``, ``suffered[0]`` and the traffic met (``met``: vehicle-steps within
+    sensor range, most at once) in place."""
     radius = physics[RADIUS]
     near = 4.0 * radius * radius
     cx = 0.5 * (body[0, 0] + body[2, 0])
     cy = 0.5 * (body[0, 1] + body[2, 1])
+    # 0. the fringe: an exit reached ends the life, whatever else the body touches
+    for e in range(exits.shape[0]):
+        if box_hits_segment(body, exits[e, 0], exits[e, 1], exits[e, 2], exits[e, 3]):
+            return LEFT_NETWORK
     # 1. collisions by the blame rule
     candidates = nearby_walls(pose[0], pose[1], lookup)
     if box_hits_walls(body, walls, candidates, candidates.shape[0]):
@@ -112,6 +125,9 @@ def learner_step(
             visible_centres[s, 0], visible_centres[s, 1] = centres_now[s, 0], centres_now[s, 1]
         else:
             visible_centres[s, 0], visible_centres[s, 1] = FAR, FAR
+    within = within_range(pose[0], pose[1], visible_centres, 0, physics[MAX_RANGE] + radius)
+    met[0] += within
+    met[1] = max(met[1], within)
     _sense_bodies(-1, pose[0], pose[1], pose[2], beam_cos, beam_sin, corners_now,
                   visible_centres, radius, readings)
     steering = network_steering(genes, layer_sizes, readings, activation, scratch,
@@ -127,25 +143,27 @@ def learner_step(
 @njit(cache=True)
 def learner_state(start, physics, layer_sizes, beams, slots, spin_window):
     """Fresh per-episode arrays for :func:`learner_step`: pose, body, body before, recent
-    positions, gone, suffered, readings, activation, scratch, visible centres."""
+    positions, gone, suffered, traffic met, readings, activation, scratch, visible centres."""
     pose = start.copy()
     body = np.empty((4, 2))
     body_corners(pose[0], pose[1], pose[2], physics[LENGTH], physics[WIDTH], body)
     width_max = max(layer_sizes.max(), 2)
     return (pose, body, body.copy(), np.empty((spin_window, 2)), np.full(slots, -1, np.int64),
-            np.zeros(1, np.int64), np.empty(beams), np.empty(width_max), np.empty(width_max),
-            np.empty((slots, 2)))
+            np.zeros(1, np.int64), np.zeros(2, np.int64), np.empty(beams), np.empty(width_max),
+            np.empty(width_max), np.empty((slots, 2)))
 
 
 @njit(cache=True)
 def run_replay_episode(genes, layer_sizes, physics, start, beam_cos, beam_sin, walls, lookup,
-                       ids, corners, centres, max_steps, spin_window, trace):
+                       exits, ids, corners, centres, max_steps, spin_window, trace):
     """Drive one chromosome through a recorded traffic run (``ids`` etc. hold at least
-    ``max_steps + 1`` steps). Returns (steps moved, outcome, collisions suffered); ``trace``
-    (n, 3) receives the learner's poses of steps 0..n-1 when n > 0."""
+    ``max_steps + 1`` steps). Returns (steps moved, outcome, collisions suffered, vehicle-steps
+    within sensor range, most at once); ``trace`` (n, 3) receives the learner's poses of steps
+    0..n-1 when n > 0."""
     state = learner_state(start, physics, layer_sizes, beam_cos.shape[0], ids.shape[1],
                           spin_window)
-    pose, body, body_before, recent, gone, suffered, readings, activation, scratch, visible = state
+    pose, body, body_before, recent, gone, suffered, met = state[:7]
+    readings, activation, scratch, visible = state[7:]
     clear_start(body, ids[0], centres[0], gone, physics[CLEARANCE])
     t = 0
     while True:
@@ -153,28 +171,31 @@ def run_replay_episode(genes, layer_sizes, physics, start, beam_cos, beam_sin, w
             trace[t] = pose
         before = max(t - 1, 0)
         outcome = learner_step(
-            t, genes, layer_sizes, physics, beam_cos, beam_sin, walls, lookup,
+            t, genes, layer_sizes, physics, beam_cos, beam_sin, walls, lookup, exits,
             ids[before], corners[before], centres[before], ids[t], corners[t], centres[t],
-            max_steps, spin_window, pose, body, body_before, recent, gone, suffered, readings,
-            activation, scratch, visible,
+            max_steps, spin_window, pose, body, body_before, recent, gone, suffered, met,
+            readings, activation, scratch, visible,
         )  # fmt: skip
         if outcome != RUNNING:
-            return t, outcome, suffered[0]
+            return t, outcome, suffered[0], met[0], met[1]
         t += 1
 
 
 @njit(cache=True, parallel=True)
 def run_replay_population(population, layer_sizes, physics, start, beam_cos, beam_sin, walls,
-                          lookup, ids, corners, centres, max_steps, spin_window):
+                          lookup, exits, ids, corners, centres, max_steps, spin_window):
     """:func:`run_replay_episode` for every chromosome of ``population`` (P, G), spread over
-    the cores; per world (steps, outcome, collisions suffered)."""
+    the cores; per world (steps, outcome, collisions suffered, vehicle-steps within sensor
+    range, most at once)."""
     size = population.shape[0]
     steps = np.zeros(size, dtype=np.int64)
     outcome = np.zeros(size, dtype=np.int64)
     suffered = np.zeros(size, dtype=np.int64)
+    near_steps = np.zeros(size, dtype=np.int64)
+    near_max = np.zeros(size, dtype=np.int64)
     no_trace = np.empty((0, 3))
     for p in prange(size):
-        steps[p], outcome[p], suffered[p] = run_replay_episode(
+        steps[p], outcome[p], suffered[p], near_steps[p], near_max[p] = run_replay_episode(
             population[p], layer_sizes, physics, start, beam_cos, beam_sin, walls, lookup,
-            ids, corners, centres, max_steps, spin_window, no_trace)
-    return steps, outcome, suffered
+            exits, ids, corners, centres, max_steps, spin_window, no_trace)
+    return steps, outcome, suffered, near_steps, near_max

@@ -1,20 +1,24 @@
 """Worlds with SUMO traffic: the learner on a SUMO network among SUMO's vehicles, in replay or
-closed-loop mode (DESIGN.md "SUMO").
+closed-loop mode (docs/sumo.md).
 
 - replay: SUMO runs once per traffic situation without the learner; the recording is replayed
   to all P worlds of a generation in one compiled call (the traffic ignores the learner, as in
   the paper: "the dynamic objects do not cooperate").
 - closed-loop: one SUMO per chromosome and situation, with the learner in it every step, so
-  SUMO's drivers brake and change lanes for it. Sequential and slower: for validation.
+  SUMO's drivers brake and change lanes for it. Sequential and slower: for validation. Each
+  situation's warm-up is simulated once and loaded from a SUMO state file by every chromosome.
 
-A traffic situation is a SUMO seed drawn from (traffic seed, generation, episode), so every
-chromosome of a generation meets the same traffic, whatever the number of workers.
+A traffic situation is a SUMO seed and a start drawn from (traffic seed, generation, episode),
+so every chromosome of a generation meets the same traffic, whatever the number of workers.
+With ``traffic.warmup_states = N``, situations share N warm-ups (simulated once, then loaded)
+and differ by their own seed from the learner's start on.
 """
 
 from __future__ import annotations
 
 import math
 from collections import OrderedDict
+from pathlib import Path
 
 import numba
 import numpy as np
@@ -36,6 +40,7 @@ from enn_traffic.sim.world import EpisodeResults, World
 from enn_traffic.traffic import sumo
 
 RECORDINGS_KEPT = 24  # a test world holds 10 test and 10 validation situations
+WARMUP_STREAM = 7  # the key of the shared warm-ups' seeds (traffic.warmup_states)
 
 
 class SumoWorld(World):
@@ -45,6 +50,11 @@ class SumoWorld(World):
         super().__init__(scenario, track)
         self._recordings: OrderedDict[int, sumo.Recording] = OrderedDict()
         self.vehicles = 1
+        episode = scenario.episode
+        # A life also ends where the .sumocfg ends the simulation.
+        self._limits = (sumo.episode_steps(scenario), episode.spin_window,
+                        episode.spin_variance)
+        self._checked = False  # closed loop: has some traffic been seen on the network?
 
     def seeds(self, generation: int) -> list[int]:
         """The SUMO seed of each traffic situation of a generation."""
@@ -53,13 +63,31 @@ class SumoWorld(World):
         return [int(np.random.SeedSequence([traffic.seed, key, 0, e]).generate_state(1)[0]
                     % 2**31) for e in range(traffic.episodes)]
 
+    def situation_starts(self, generation: int) -> list[np.ndarray]:
+        """The learner's start pose in each traffic situation of a generation."""
+        key = self.traffic_key(generation)
+        return [np.asarray(self.start_of(key, 0, e), dtype=np.float64)
+                for e in range(self.scenario.traffic.episodes)]
+
+    def warm_state(self, seed: int) -> Path | None:
+        """The SUMO state a situation of ``seed`` starts from: one of the shared warm-ups
+        (``traffic.warmup_states``), or None for the situation's own warm-up."""
+        shared = self.scenario.traffic.warmup_states
+        if not shared:
+            return None
+        index = seed % shared
+        warm_seed = int(np.random.SeedSequence(
+            [self.scenario.traffic.seed, WARMUP_STREAM, index]).generate_state(1)[0] % 2**31)
+        return sumo.warm_state(self.scenario, warm_seed, keep_rng=False)
+
     def episode_labels(self) -> list[str]:
         return [f"sumo ({self.scenario.traffic.mode})"] * self.scenario.traffic.episodes
 
     def recording(self, seed: int) -> sumo.Recording:
         """The SUMO run of ``seed`` without the learner (recorded once, then kept)."""
         if seed not in self._recordings:
-            self._recordings[seed] = sumo.record(self.scenario, seed, self._limits[0])
+            self._recordings[seed] = sumo.record(self.scenario, seed, self._limits[0],
+                                                 self.warm_state(seed))
             while len(self._recordings) > RECORDINGS_KEPT:
                 self._recordings.popitem(last=False)
         self._recordings.move_to_end(seed)
@@ -74,54 +102,70 @@ class SumoWorld(World):
 
     def _sensor_and_walls(self) -> tuple:
         p = self._physics
-        return p.beam_cos, p.beam_sin, p.walls, p.lookup
+        return p.beam_cos, p.beam_sin, p.walls, p.lookup, self.exits
 
     def evaluate(self, population: np.ndarray, generation: int = 0) -> EpisodeResults:
         """Fitness of every chromosome: steps survived (0 for a spin), averaged over the
         generation's traffic situations."""
         genes = self.spec.in_source_layout(population)
         closed = self.scenario.traffic.mode == "closed-loop"
-        runs, vehicles = [], []
-        for seed in self.seeds(generation):
+        runs, vehicles, at_start = [], [], []
+        for seed, start in zip(self.seeds(generation), self.situation_starts(generation),
+                               strict=True):
             if closed:
-                runs.append(self._closed_loop_population(genes, seed))
+                runs.append(self._closed_loop_population(genes, seed, start))
+                at_start.append(runs[-1][-1])
                 continue
             record = self.recording(seed)
             vehicles.append(record.mean_vehicles)
+            at_start.append(int((record.ids[0] >= 0).sum()))
             with numba.parallel_chunksize(1):
                 runs.append(run_replay_population(
-                    genes, self._shape[0], self._learner_physics(record.radius),
-                    np.asarray(self.start, dtype=np.float64), *self._sensor_and_walls(),
-                    record.ids, record.corners, record.centres, *self._limits[:2]))
+                    genes, self._shape[0], self._learner_physics(record.radius), start,
+                    *self._sensor_and_walls(), record.ids, record.corners, record.centres,
+                    *self._limits[:2]))
         self.vehicles = 1 + round(float(np.mean(vehicles))) if vehicles else self.vehicles
-        steps, outcome, suffered = (np.stack([r[i] for r in runs], axis=1) for i in range(3))
+        steps, outcome, suffered, near_steps, near_max = (
+            np.stack([r[i] for r in runs], axis=1) for i in range(5))
         fitness = EpisodeResults.lifetime_fitness(steps, outcome).mean(axis=1)
-        return EpisodeResults(fitness, steps, outcome, suffered, self.vehicles)
+        start_counts = np.column_stack([np.broadcast_to(a, len(genes)) for a in at_start])
+        traffic = EpisodeResults.traffic_met(start_counts, near_steps, near_max)
+        return EpisodeResults(fitness, steps, outcome, suffered, self.vehicles, traffic)
 
-    def _closed_loop_population(self, genes: np.ndarray, seed: int) -> tuple:
-        results = np.array([self.closed_loop(row, seed) for row in genes], dtype=np.int64)
-        return results[:, 0], results[:, 1], results[:, 2]
+    def _closed_loop_population(self, genes: np.ndarray, seed: int, start: np.ndarray
+                                ) -> tuple:
+        results = np.array([self.closed_loop(row, seed, start=start) for row in genes],
+                           dtype=np.int64).reshape(-1, 6)
+        return tuple(results[:, i] for i in range(6))
 
     def closed_loop(self, genes: np.ndarray, seed: int, max_steps: int | None = None,
-                    frames: list | None = None) -> tuple[int, int, int]:
-        """One chromosome (source-layout genes) in a live SUMO with the learner in it.
-        Returns (steps moved, outcome, collisions suffered); ``frames`` receives (learner
-        pose, ids, corners) of every step when given. A vehicle that leaves the learner's
-        world (``gone``) stays in SUMO, unseen by the learner, as it does in a replay."""
+                    frames: list | None = None, start: np.ndarray | None = None
+                    ) -> tuple[int, int, int, int, int, int]:
+        """One chromosome (source-layout genes) in a live SUMO with the learner in it, from
+        ``start`` (the world's first start by default). Returns (steps moved, outcome,
+        collisions suffered, vehicle-steps within sensor range, most at once, vehicles on the
+        network at the start); ``frames`` receives (learner pose, ids, corners) of every step
+        when given. A vehicle that leaves the learner's world (``gone``) stays in SUMO, unseen
+        by the learner, as it does in a replay. The situation's warm-up is simulated once and
+        loaded from a SUMO state file by every later call."""
         limit = self._limits[0] if max_steps is None else max_steps
+        start = np.asarray(self.start if start is None else start, dtype=np.float64)
         vehicle = self.scenario.vehicle
-        simulation = sumo.Simulation(self.scenario, seed)
+        state = self.warm_state(seed) or sumo.warm_state(self.scenario, seed, keep_rng=True)
+        if not self._checked:  # refuse traffic that never reaches the network
+            sumo.first_traffic(self.scenario, seed, state, limit)
+            self._checked = True
+        simulation = sumo.Simulation(self.scenario, seed, state)
         try:
-            simulation.step(sumo.warmup_steps(self.scenario))
             physics = self._learner_physics(simulation.largest_radius())
             ids, corners, centres = sumo.slot_arrays(2, 64)  # rows: the step before, now
             before, now = 0, 1  # they swap roles every step, instead of copying
-            state = learner_state(np.asarray(self.start, dtype=np.float64), physics,
-                                  self._shape[0], len(self.scenario.beam_angles), ids.shape[1],
-                                  self._limits[1])
-            pose, body, body_before, recent, gone, suffered, *scratch = state
+            state = learner_state(start, physics, self._shape[0], len(self.scenario.beam_angles),
+                                  ids.shape[1], self._limits[1])
+            pose, body, body_before, recent, gone, suffered, met, *scratch = state
             ids, corners, centres, gone, scratch, radius = self._read(
                 simulation, now, ids, corners, centres, gone, scratch)
+            at_start = int((ids[now] >= 0).sum())
             physics[RADIUS] = max(physics[RADIUS], radius)  # a body larger than its type said
             clear_start(body, ids[now], centres[now], gone, physics[CLEARANCE])
             sumo.add_learner(vehicle.length, vehicle.width, vehicle.speed)
@@ -140,11 +184,11 @@ class SumoWorld(World):
                     t, genes, self._shape[0], physics, *sensor_and_walls,
                     ids[before], corners[before], centres[before],
                     ids[now], corners[now], centres[now],
-                    limit, self._limits[1], pose, body, body_before, recent, gone, suffered,
+                    limit, self._limits[1], pose, body, body_before, recent, gone, suffered, met,
                     *scratch,
                 )  # fmt: skip
                 if outcome != RUNNING:
-                    return t, int(outcome), int(suffered[0])
+                    return t, int(outcome), int(suffered[0]), int(met[0]), int(met[1]), at_start
                 sumo.move_learner(pose[0], pose[1], pose[2])
                 simulation.step()
                 before, now = now, before
@@ -179,10 +223,11 @@ class SumoWorld(World):
         slot is empty) in one episode, and the learner's outcome code."""
         limit = self._limits[0] if max_steps is None else max_steps
         seed = self.seeds(generation)[episode]
+        start = self.situation_starts(generation)[episode]
         genes = self.spec.in_source_layout(chromosome)[0]
         if self.scenario.traffic.mode == "closed-loop":
             frames: list = []
-            steps, outcome, _ = self.closed_loop(genes, seed, limit, frames)
+            steps, outcome, *_ = self.closed_loop(genes, seed, limit, frames, start)
             slots = max(len(f[1]) for f in frames)
             ids = np.full((len(frames), slots), -1, dtype=np.int64)
             corners = np.zeros((len(frames), slots, 4, 2))
@@ -192,10 +237,10 @@ class SumoWorld(World):
         else:
             record = self.recording(seed)
             learner = np.full((limit + 1, 3), np.nan)
-            steps, outcome, _ = run_replay_episode(
-                genes, self._shape[0], self._learner_physics(record.radius),
-                np.asarray(self.start, dtype=np.float64), *self._sensor_and_walls(),
-                record.ids, record.corners, record.centres, limit, self._limits[1], learner)
+            steps, outcome, *_ = run_replay_episode(
+                genes, self._shape[0], self._learner_physics(record.radius), start,
+                *self._sensor_and_walls(), record.ids, record.corners, record.centres, limit,
+                self._limits[1], learner)
             ids, corners = record.ids[: steps + 1], record.corners[: steps + 1]
             learner = learner[: steps + 1]
         front = 0.5 * (corners[:, :, 0] + corners[:, :, 1])

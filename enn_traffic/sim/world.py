@@ -31,6 +31,7 @@ from numba import njit, prange
 from enn_traffic.errors import InputError
 from enn_traffic.evolution.genome import NetworkSpec
 from enn_traffic.roads import Track, load_track
+from enn_traffic.roads.network import start_poses as start_lane_poses
 from enn_traffic.scenario import Scenario
 from enn_traffic.sim.collide import body_corners, box_hits_walls, boxes_overlap
 from enn_traffic.sim.kinematics import bicycle_step
@@ -46,15 +47,20 @@ from enn_traffic.traffic.kinematic import (
     senses_vehicles,
 )
 
-# How an episode ended.
-CAPPED, COLLIDED, SPUN = 0, 1, 2
-OUTCOMES = {CAPPED: "capped", COLLIDED: "collision", SPUN: "spin"}
+# How an episode ended. LEFT_NETWORK: the learner reached the network's fringe (SUMO traffic,
+# docs/sumo.md "Walls and exits"): its steps count as fitness, as a capped life's do.
+CAPPED, COLLIDED, SPUN, LEFT_NETWORK = 0, 1, 2, 3
+OUTCOMES = {CAPPED: "capped", COLLIDED: "collision", SPUN: "spin", LEFT_NETWORK: "left network"}
+# Columns of :attr:`EpisodeResults.traffic`: vehicles in the world when the learner starts,
+# vehicle-steps within the learner's sensor range, most vehicles within range at once.
+MET_START, MET_NEAR_STEPS, MET_NEAR_MAX = range(3)
 # What the blame rule found (:func:`_responsible`), besides the index of a vehicle.
 NO_HIT, HIT_WALL = -1, -2
 # Generation keys from here on draw held-out traffic (deployment, validation, the tables'
 # situations): far past any training run, and never folded into the training traffic by
 # ``vary = "fixed"``.
 HELD_OUT_KEYS = 1_000_000_000
+START_STREAM = 5  # the last key of the seed that draws a situation's start from a list
 
 
 @njit(cache=True)
@@ -162,8 +168,9 @@ def run_episode(
 ):  # fmt: skip
     """Drive one chromosome as vehicle 0 among ``start.shape[0] - 1`` uncontrolled vehicles.
 
-    Returns (steps moved, outcome, collisions suffered). ``trace`` (n, V, 3) receives the poses
-    of steps 0..n-1 when n > 0.
+    Returns (steps moved, outcome, collisions suffered, vehicle-steps within the learner's
+    sensor range, most vehicles within it at once). ``trace`` (n, V, 3) receives the poses of
+    steps 0..n-1 when n > 0.
     """
     count = start.shape[0]
     pose = np.empty((count, 3))
@@ -188,6 +195,7 @@ def run_episode(
     previous_centres[:] = centres
     near = 4.0 * radius * radius  # bodies whose centres are farther apart cannot touch
     suffered = 0
+    near_steps, near_max = 0, 0
     steps = 0
     while True:
         if steps < trace.shape[0]:
@@ -195,7 +203,7 @@ def run_episode(
         # 1. collisions by the blame rule
         if _responsible(0, pose, corners, centres, previous, previous_centres, fresh, walls,
                         lookup, near) != NO_HIT:
-            return steps, COLLIDED, suffered
+            return steps, COLLIDED, suffered, near_steps, near_max
         for v in range(1, count):
             hit = _responsible(v, pose, corners, centres, previous, previous_centres, fresh,
                                walls, lookup, near)
@@ -211,9 +219,12 @@ def run_episode(
         slot = steps % spin_window
         recent[slot, 0], recent[slot, 1] = pose[0, 0], pose[0, 1]
         if steps + 1 >= spin_window and _small_spread(recent, spin_variance):
-            return steps, SPUN, suffered
+            return steps, SPUN, suffered, near_steps, near_max
         if steps >= max_steps:
-            return steps, CAPPED, suffered
+            return steps, CAPPED, suffered, near_steps, near_max
+        within = within_range(pose[0, 0], pose[0, 1], centres, 1, max_range + radius)
+        near_steps += within
+        near_max = max(near_max, within)
         # 3. sense and decide
         for v in range(count):
             kind = kinds[v]
@@ -262,6 +273,16 @@ def _responsible(v, pose, corners, centres, previous, previous_centres, fresh, w
 
 
 @njit(cache=True)
+def within_range(x, y, centres, first, reach) -> int:
+    """How many of ``centres[first:]`` lie within ``reach`` of (x, y) (traffic met)."""
+    count = 0
+    for v in range(first, centres.shape[0]):
+        if (centres[v, 0] - x) ** 2 + (centres[v, 1] - y) ** 2 <= reach * reach:
+            count += 1
+    return count
+
+
+@njit(cache=True)
 def _close(centres, a, other_centres, b, limit) -> bool:
     """Are the centres of body ``a`` and (earlier) body ``b`` within sqrt(limit)?"""
     dx = centres[a, 0] - other_centres[b, 0]
@@ -288,32 +309,59 @@ def run_population(
     max_steps, spin_window, spin_variance,
 ):  # fmt: skip
     """Run every chromosome of ``population`` (P, G) in its own world; per world
-    (steps, outcome, collisions suffered)."""
+    (steps, outcome, collisions suffered, vehicle-steps within sensor range, most at once)."""
     size = population.shape[0]
     steps = np.zeros(size, dtype=np.int64)
     outcome = np.zeros(size, dtype=np.int64)
     suffered = np.zeros(size, dtype=np.int64)
+    near_steps = np.zeros(size, dtype=np.int64)
+    near_max = np.zeros(size, dtype=np.int64)
     no_trace = np.empty((0, start.shape[0], 3))
     for p in prange(size):
-        steps[p], outcome[p], suffered[p] = run_episode(
+        steps[p], outcome[p], suffered[p], near_steps[p], near_max[p] = run_episode(
             population[p], layer_sizes, gain, start, kinds, traffic_genes,
             length, width, wheelbase, distance, beam_cos, beam_sin, max_range,
             walls, lookup, bounds, params, seed,
             max_steps, spin_window, spin_variance, no_trace,
         )  # fmt: skip
-    return steps, outcome, suffered
+    return steps, outcome, suffered, near_steps, near_max
 
 
 @dataclass(frozen=True)
 class EpisodeResults:
     """Per world and episode (P, E): learner steps, outcome (``OUTCOMES``), collisions the
-    learner suffered; fitness (P,) is the mean over episodes of steps, 0 for a spin."""
+    learner suffered, and the traffic it met (P, E, 3; columns ``MET_*``); fitness (P,) is
+    the mean over episodes of steps, 0 for a spin."""
 
     fitness: np.ndarray
     steps: np.ndarray
     outcome: np.ndarray
     suffered: np.ndarray
     vehicles: int = 1
+    traffic: np.ndarray | None = None
+
+    def __post_init__(self):
+        if self.traffic is None:  # no traffic: nothing met
+            object.__setattr__(self, "traffic", np.zeros((*self.steps.shape, 3)))
+
+    @staticmethod
+    def traffic_met(start: np.ndarray, near_steps: np.ndarray, near_max: np.ndarray
+                    ) -> np.ndarray:
+        """The ``traffic`` array from its three (P, E) columns."""
+        return np.stack(np.broadcast_arrays(start, near_steps, near_max), axis=-1
+                        ).astype(np.float64)
+
+    def traffic_summary(self) -> dict[str, float]:
+        """Traffic the learners met, over all worlds and episodes: vehicles in the world at
+        the start (mean), vehicles within sensor range per learner step (mean; the steps of
+        the life and the start) and at most."""
+        t = self.traffic
+        return {
+            "traffic_at_start": float(t[..., MET_START].mean()) if t.size else 0.0,
+            "traffic_near_mean": float(t[..., MET_NEAR_STEPS].sum() / (self.steps + 1).sum())
+            if t.size else 0.0,
+            "traffic_near_max": float(t[..., MET_NEAR_MAX].max()) if t.size else 0.0,
+        }
 
     @staticmethod
     def lifetime_fitness(steps: np.ndarray, outcome: np.ndarray) -> np.ndarray:
@@ -329,7 +377,8 @@ class EpisodeResults:
     def concatenate(parts: list[EpisodeResults]) -> EpisodeResults:
         return EpisodeResults(*(np.concatenate([getattr(p, f) for p in parts])
                                 for f in ("fitness", "steps", "outcome", "suffered")),
-                              vehicles=parts[0].vehicles)
+                              vehicles=parts[0].vehicles,
+                              traffic=np.concatenate([p.traffic for p in parts]))
 
 
 @dataclass(frozen=True)
@@ -364,12 +413,14 @@ class World:
 
     def __init__(self, scenario: Scenario, track: Track | None = None):
         self.scenario = scenario
-        self.track = track or load_track(scenario.track.net)
+        self.track = track or load_track(scenario.track.net, exits=scenario.fringe_exits)
+        self.exits = self.track.exits if scenario.fringe_exits else np.empty((0, 4))
         self.spec = NetworkSpec(scenario.layer_sizes, scenario.network.layout)
         vehicle, sensor, traffic = scenario.vehicle, scenario.sensor, scenario.traffic
         reach = max(sensor.range, math.hypot(vehicle.length, vehicle.width / 2)) + 1.0
         self.grid = WallGrid.build(self.track.walls, reach)
-        self.start = start_pose(scenario, self.track)
+        self.starts = start_poses(scenario, self.track)
+        self.start = self.starts[0]
         self.traffic_starts = [tuple(xy) for xy in traffic.starts_xy]
         for index, (x, y) in enumerate(self.traffic_starts):
             if not self.track.contains(x, y):
@@ -407,7 +458,7 @@ class World:
                 sequence = np.random.SeedSequence([traffic.seed, key, s, e])
                 rng = np.random.default_rng(sequence)
                 low, high = np.radians(traffic.start_heading_deg)
-                start = np.array([self.start] + [
+                start = np.array([self.start_of(key, s, e)] + [
                     (x, y, rng.uniform(low, high)) for x, y in self.traffic_starts])
                 kind = kinematic.STRATEGIES.get(name, kinematic.NONE)
                 kinds = np.array([kinematic.NONE] + [kind] * len(self.traffic_starts))
@@ -415,6 +466,14 @@ class World:
                 result.append(Episode(start, kinds, self.spec.in_source_layout(genes),
                                       np.uint64(sequence.generate_state(1, np.uint64)[0])))
         return result
+
+    def start_of(self, key: int, strategy: int, episode: int) -> tuple[float, float, float]:
+        """The learner's start in the situation (traffic key, strategy, episode): the one
+        start, or one drawn from the scenario's list of start lanes or edges."""
+        if len(self.starts) == 1:
+            return self.starts[0]
+        sequence = [self.scenario.traffic.seed, key, strategy, episode, START_STREAM]
+        return self.starts[np.random.default_rng(sequence).integers(len(self.starts))]
 
     def traffic_key(self, generation: int) -> int:
         """The key a generation's traffic is drawn from: its own, or 0 for every training
@@ -437,9 +496,11 @@ class World:
                 runs.append(run_population(
                     genes, *self._shape, episode.start, episode.kinds, episode.traffic_genes,
                     *self._physics, episode.seed, *self._limits))  # fmt: skip
-        steps, outcome, suffered = (np.stack([r[i] for r in runs], axis=1) for i in range(3))
+        steps, outcome, suffered, near_steps, near_max = (
+            np.stack([r[i] for r in runs], axis=1) for i in range(5))
         fitness = EpisodeResults.lifetime_fitness(steps, outcome).mean(axis=1)
-        return EpisodeResults(fitness, steps, outcome, suffered, self.vehicles)
+        traffic = EpisodeResults.traffic_met(self.vehicles - 1, near_steps, near_max)
+        return EpisodeResults(fitness, steps, outcome, suffered, self.vehicles, traffic)
 
     def trace(self, chromosome: np.ndarray, generation: int = 0, episode: int = 0,
               max_steps: int | None = None) -> tuple[np.ndarray, int]:
@@ -447,23 +508,33 @@ class World:
         limit = self._limits[0] if max_steps is None else max_steps
         chosen = self.episodes(generation)[episode]
         trace = np.full((limit + 1, self.vehicles, 3), np.nan)
-        steps, outcome, _ = run_episode(
+        steps, outcome, *_ = run_episode(
             self.spec.in_source_layout(chromosome)[0], *self._shape, chosen.start, chosen.kinds,
             chosen.traffic_genes, *self._physics, chosen.seed, limit, *self._limits[1:], trace)
         return trace[: steps + 1], int(outcome)
 
 
-def start_pose(scenario: Scenario, track: Track) -> tuple[float, float, float]:
-    """The learner's start pose, checked to lie on the drivable area."""
+def start_poses(scenario: Scenario, track: Track) -> list[tuple[float, float, float]]:
+    """The learner's start poses (one, or one per listed start lane or edge), each checked to
+    exist, allow passenger cars and lie on the drivable area."""
     config = scenario.track
-    if config.start_lane is not None:
-        pose = track.lane_pose(config.net, config.start_lane, config.start_offset)
+    names = config.start_names
+    key = "track.start_xy" if not names else f"track.start_{names[0][0]}"
+
+    def where(index: int) -> str:
+        listed = not isinstance(getattr(config, key.removeprefix("track.")), str)
+        return f"{key}[{index}]" if names and listed else key
+
+    if names:
+        try:
+            poses = start_lane_poses(config.net, names, config.start_offset)
+        except ValueError as exc:
+            index, message = exc.args
+            raise InputError(message, scenario.source, where(index)) from None
     else:
-        pose = (*config.start_xy, math.radians(config.start_heading_deg))
-    if not track.contains(pose[0], pose[1]):
-        raise InputError(
-            f"start pose ({pose[0]:.1f}, {pose[1]:.1f}) is off the drivable area of {track.name}",
-            scenario.source,
-            "track.start_xy" if config.start_lane is None else "track.start_lane",
-        )
-    return pose
+        poses = [(*config.start_xy, math.radians(config.start_heading_deg))]
+    for index, pose in enumerate(poses):
+        if not track.contains(pose[0], pose[1]):
+            raise InputError(f"start pose ({pose[0]:.1f}, {pose[1]:.1f}) is off the drivable "
+                             f"area of {track.name}", scenario.source, where(index))
+    return poses

@@ -1,9 +1,12 @@
-"""SUMO background traffic through libsumo (DESIGN.md "SUMO").
+"""SUMO background traffic through libsumo (docs/sumo.md).
 
-SUMO runs a scenario's route files (or its ``.sumocfg``) on the track's network with a fixed
-seed per traffic situation. After ``warmup_s`` of SUMO time the learner starts, and each step
-every SUMO vehicle's position, angle, length and width become a body for the rangefinder and
-the collision test (:mod:`enn_traffic.sim.replay`).
+SUMO runs a scenario's ``.sumocfg`` (as SUMO would: its begin time, route and additional
+files) or its route files on the track's network with a fixed seed per traffic situation.
+``warmup_s`` of SUMO time after the begin, the learner starts, and each step every SUMO
+vehicle's position, angle, length and width become a body for the rangefinder and the
+collision test (:mod:`enn_traffic.sim.replay`). A warm-up can be simulated once and saved as a
+SUMO state file (:func:`warm_state`), which every later start loads instead of simulating it
+again.
 
 Pose convention: SUMO reports a vehicle's front-bumper middle and its navigation angle (degrees,
 0 = north, clockwise); ours is the same point with the heading in radians, 0 = east,
@@ -19,7 +22,10 @@ libsumo holds one simulation per process; every function here starts and closes 
 from __future__ import annotations
 
 import contextlib
+import functools
+import hashlib
 import math
+import os
 import tempfile
 from dataclasses import dataclass
 from pathlib import Path
@@ -32,6 +38,7 @@ from enn_traffic.errors import InputError
 from enn_traffic.scenario import Scenario
 from enn_traffic.sim.collide import body_corners
 from enn_traffic.sim.replay import FAR
+from enn_traffic.traffic.sumocfg import SumoConfig, departure_span, read_sumocfg
 
 LEARNER = "enn_learner"
 _POSITION, _ANGLE = libsumo.VAR_POSITION, libsumo.VAR_ANGLE
@@ -77,17 +84,68 @@ def fill_frame(rows, ids, corners, centres) -> float:
     return radius
 
 
-def sumo_command(scenario: Scenario, seed: int, error_log: Path) -> list[str]:
-    """The SUMO command line of a scenario's traffic with ``seed``."""
+@functools.lru_cache(maxsize=16)
+def _config(path: Path) -> SumoConfig:
+    return read_sumocfg(path)
+
+
+def sumo_config(scenario: Scenario) -> SumoConfig | None:
+    """The scenario's ``.sumocfg`` as read (None without one)."""
+    sumocfg = scenario.traffic.sumocfg
+    return None if sumocfg is None else _config(sumocfg)
+
+
+def begin_time(scenario: Scenario) -> float:
+    """SUMO time at which the traffic starts: ``traffic.begin_s``, else the ``.sumocfg``'s
+    begin, else 0."""
+    config = sumo_config(scenario)
+    if scenario.traffic.begin_s is not None:
+        return scenario.traffic.begin_s
+    return config.begin if config is not None and config.begin is not None else 0.0
+
+
+def learner_start_time(scenario: Scenario) -> float:
+    """SUMO time at which the learner starts: ``warmup_s`` after the begin."""
+    return begin_time(scenario) + scenario.traffic.warmup_s
+
+
+def episode_steps(scenario: Scenario) -> int:
+    """The step cap of a life among this traffic: ``episode.max_steps``, or fewer when the
+    ``.sumocfg`` ends the simulation sooner (its ``end``)."""
+    config = sumo_config(scenario)
+    limit = scenario.episode.max_steps
+    if config is not None and config.end is not None and config.end >= 0:
+        left = (config.end - learner_start_time(scenario)) / scenario.vehicle.dt
+        limit = min(limit, max(int(math.floor(left + 1e-9)), 1))
+    return limit
+
+
+def route_files(scenario: Scenario) -> list[Path]:
+    """The route files SUMO runs: the ``.sumocfg``'s, then ``traffic.routes``."""
+    config = sumo_config(scenario)
+    return [*(config.route_files if config is not None else ()), *scenario.traffic.routes]
+
+
+def sumo_command(scenario: Scenario, seed: int, error_log: Path, state: Path | None = None,
+                 save_rng: bool = False) -> list[str]:
+    """The SUMO command line of a scenario's traffic with ``seed``: started at the begin time,
+    or from a saved ``state`` (whose time it takes). ``save_rng``: states saved by this run
+    keep SUMO's random generators, so that a run loading one goes on exactly as this one."""
     traffic = scenario.traffic
     source = ["-c", str(traffic.sumocfg)] if traffic.sumocfg is not None else []
-    if traffic.routes:
-        source += ["-r", ",".join(str(r) for r in traffic.routes)]
+    if traffic.routes:  # added to the .sumocfg's own route files, which -r would replace
+        source += ["-r", ",".join(str(r) for r in route_files(scenario))]
+    if state is not None:
+        source += ["--load-state", str(state)]
+    elif traffic.begin_s is not None or traffic.sumocfg is None:
+        source += ["--begin", f"{begin_time(scenario):g}"]
+    if save_rng:
+        source += ["--save-state.rng", "true"]
     return [
         "sumo", *source, "-n", str(scenario.track.net),
         "--seed", str(seed), "--step-length", f"{scenario.vehicle.dt:g}",
-        "--begin", "0", "--no-step-log", "true", "--no-warnings", "true",
-        "--collision.action", "none",  # collisions with the learner are ours (DESIGN.md)
+        "--no-step-log", "true", "--no-warnings", "true",
+        "--collision.action", "none",  # collisions with the learner are ours (docs/sumo.md)
         "--error-log", str(error_log),
     ]  # fmt: skip
 
@@ -100,12 +158,13 @@ class Simulation:
     """One libsumo run of a scenario's traffic: start, step, and the bodies of its vehicles in
     stable slots (a vehicle keeps its slot while it is on the network)."""
 
-    def __init__(self, scenario: Scenario, seed: int):
+    def __init__(self, scenario: Scenario, seed: int, state: Path | None = None,
+                 save_rng: bool = False, extra: tuple[str, ...] = ()):
         self.scenario = scenario
         self._log = tempfile.NamedTemporaryFile("r", suffix=".log", prefix="enn-sumo-")  # noqa: SIM115 (open for the run)
-        command = sumo_command(scenario, seed, Path(self._log.name))
+        command = sumo_command(scenario, seed, Path(self._log.name), state, save_rng)
         try:
-            libsumo.start(command)
+            libsumo.start([*command, *extra])
         except Exception as exc:  # libsumo raises its own exception types
             self._fail("SUMO failed to start", exc)
         # vehicle -> (slot, number, length, width): the first row columns of :meth:`read`
@@ -114,7 +173,9 @@ class Simulation:
         self.following = False
         self.slots_used = 0  # one more than the highest slot given so far
         self._free = list(range(MAX_SLOTS - 1, -1, -1))
-
+        for vehicle in libsumo.vehicle.getIDList():  # on the network in a loaded state
+            libsumo.vehicle.subscribe(vehicle, _VARIABLES)
+        self._stepped = False  # libsumo refreshes subscription results only with a step
     def _fail(self, what: str, exc: Exception | None = None) -> None:
         detail = self._log.read().strip().replace("\n", "; ") or str(exc or "")
         self.close()
@@ -124,6 +185,7 @@ class Simulation:
         try:
             for _ in range(count):
                 libsumo.simulationStep()
+                self._stepped = True
                 if self.following:  # unseen vehicles keep their slots until they arrive
                     for vehicle in libsumo.simulation.getArrivedIDList():
                         if vehicle in self.vehicles:
@@ -146,6 +208,9 @@ class Simulation:
             results = libsumo.vehicle.getContextSubscriptionResults(LEARNER)
         else:
             results = libsumo.vehicle.getAllSubscriptionResults()
+        if not self._stepped:  # results of the last simulation may linger until a step
+            present = set(libsumo.vehicle.getIDList())
+            results = {v: value for v, value in results.items() if v in present}
         results.pop(LEARNER, None)
         vehicles = self.vehicles
         if len(results) != len(vehicles) or any(v not in vehicles for v in results):
@@ -194,6 +259,11 @@ class Simulation:
         """The top speed of the fastest traffic vehicle type (SUMO never exceeds it)."""
         return max(libsumo.vehicletype.getMaxSpeed(kind) for kind in self._traffic_types())
 
+    @staticmethod
+    def vehicle_count() -> int:
+        """Vehicles on the network now."""
+        return libsumo.vehicle.getIDCount()
+
     def close(self) -> None:
         with contextlib.suppress(Exception):  # not started, or already closed
             libsumo.close()
@@ -217,24 +287,107 @@ def warmup_steps(scenario: Scenario) -> int:
     return round(scenario.traffic.warmup_s / scenario.vehicle.dt)
 
 
+STATE_FOLDER = Path(tempfile.gettempdir()) / "enn-traffic-sumo-states"
+
+
+def _inputs_key(scenario: Scenario) -> list[str]:
+    """What a warm-up depends on: the SUMO command's files (path, size, modification time,
+    the ``.sumocfg``'s own files too), begin, warm-up and step length, and SUMO's version."""
+    config = sumo_config(scenario)
+    files = [scenario.track.net, *route_files(scenario)]
+    if config is not None:
+        files += [config.path, *config.additional_files]
+    stamps = []
+    for file in files:
+        stat = Path(file).stat()
+        stamps.append(f"{Path(file).resolve()}:{stat.st_size}:{stat.st_mtime_ns}")
+    return [*stamps, repr(begin_time(scenario)), repr(scenario.traffic.warmup_s),
+            repr(scenario.vehicle.dt), libsumo.getVersion()[1]]
+
+
+def warm_state(scenario: Scenario, seed: int, keep_rng: bool) -> Path:
+    """A SUMO state file of the scenario's traffic ``warmup_s`` after its begin, simulated with
+    ``seed`` once and kept on disk (in ``STATE_FOLDER``, named by everything it depends on).
+    ``keep_rng``: the state holds SUMO's random generators, so a run loading it goes on as the
+    warm-up would have (one traffic situation's own warm-up); without, a run loading it goes
+    on by its own seed (a warm-up shared by several situations)."""
+    key = hashlib.sha256("\n".join([*_inputs_key(scenario), str(seed), str(keep_rng)])
+                         .encode()).hexdigest()[:24]
+    path = STATE_FOLDER / f"{key}.xml.gz"
+    if path.is_file():
+        return path
+    STATE_FOLDER.mkdir(parents=True, exist_ok=True)
+    simulation = Simulation(scenario, seed, save_rng=keep_rng)
+    partial = path.with_name(f"{key}.{os.getpid()}.partial.xml.gz")
+    try:
+        simulation.step(warmup_steps(scenario))
+        libsumo.simulation.saveState(str(partial))
+    finally:
+        simulation.close()
+    os.replace(partial, path)  # whole or not at all, whichever process wrote it first
+    return path
+
+
+def no_traffic_error(scenario: Scenario, steps: int) -> InputError:
+    """Why a scenario's traffic never reached the learner's world: no SUMO vehicle on the
+    network from the learner's start to the end of its life."""
+    start = learner_start_time(scenario)
+    end = start + steps * scenario.vehicle.dt
+    config = sumo_config(scenario)
+    begin = f"the learner starts at {start:g} s: warmup_s = {scenario.traffic.warmup_s:g} s "
+    if scenario.traffic.begin_s is not None:
+        begin += f"after traffic.begin_s = {begin_time(scenario):g} s"
+    elif config is not None and config.begin is not None:
+        begin += f"after {config.path.name}'s begin, {config.begin:g} s"
+    else:
+        begin += "after SUMO time 0"
+    span = departure_span(route_files(scenario))
+    departures = ("the route files name no departure" if span is None else
+                  f"the route files' departures span {span[0]:g}-{span[1]:g} s")
+    return InputError(f"no SUMO vehicle is on the network from {start:g} s to {end:g} s of "
+                      f"SUMO time, so the learner would drive without traffic ({begin}; "
+                      f"{departures}); set traffic.begin_s or warmup_s", scenario.source,
+                      _key(scenario))
+
+
+def first_traffic(scenario: Scenario, seed: int, state: Path | None, steps: int) -> int:
+    """Steps after the learner's start until a SUMO vehicle is on the network (at most
+    ``steps``; an InputError if none ever is)."""
+    simulation = Simulation(scenario, seed, state)
+    try:
+        if state is None:
+            simulation.step(warmup_steps(scenario))
+        for t in range(steps + 1):
+            if simulation.vehicle_count():
+                return t
+            simulation.step()
+    finally:
+        simulation.close()
+    raise no_traffic_error(scenario, steps)
+
+
 def slot_arrays(steps: int, slots: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Empty slot arrays: ids (steps, slots) all -1, corners, and centres far out of range."""
     return (np.full((steps, slots), -1, dtype=np.int64), np.zeros((steps, slots, 4, 2)),
             np.full((steps, slots, 2), FAR))
 
 
-def record(scenario: Scenario, seed: int, steps: int) -> Recording:
-    """Run SUMO for the warm-up and then ``steps`` steps; keep steps 0..steps."""
-    simulation = Simulation(scenario, seed)
+def record(scenario: Scenario, seed: int, steps: int, state: Path | None = None) -> Recording:
+    """Run SUMO for the warm-up (or load its ``state``) and then ``steps`` steps; keep steps
+    0..steps. An InputError if no vehicle is on the network at any of them."""
+    simulation = Simulation(scenario, seed, state)
     frames = []
     try:
-        simulation.step(warmup_steps(scenario))
+        if state is None:
+            simulation.step(warmup_steps(scenario))
         for t in range(steps + 1):
             if t:
                 simulation.step()
             frames.append(simulation.read())
     finally:
         simulation.close()
+    if not any(len(rows) for rows in frames):
+        raise no_traffic_error(scenario, steps)
     ids, corners, centres = slot_arrays(steps + 1, simulation.slots_used)
     radius = max((fill_frame(rows, ids[t], corners[t], centres[t])
                   for t, rows in enumerate(frames)), default=0.0)

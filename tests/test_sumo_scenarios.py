@@ -1,0 +1,267 @@
+"""Users' own SUMO scenarios through a real libsumo: a ``.sumocfg`` run as SUMO runs it (its
+begin time, its network), traffic that never comes refused, the network's fringe as an exit,
+starts drawn from lanes and edges, warm-ups simulated once, and the city scenario that ships
+with the project."""
+
+import subprocess
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from enn_traffic.cli import main
+from enn_traffic.errors import InputError
+from enn_traffic.roads import load_track
+from enn_traffic.scenario import load_scenario
+from enn_traffic.sim import make_world
+from enn_traffic.sim.world import COLLIDED, LEFT_NETWORK, MET_START
+from enn_traffic.traffic import sumo
+
+# A straight two-way road from x = 0 to x = 200 (4 m lanes, centre lines at y = -2 eastbound
+# and y = +2 westbound), joined at x = 100; its ends are the network's fringe. The westbound
+# half from x = 200 to 100 is for buses only.
+NODES = """<nodes>
+    <node id="w" x="0" y="0" type="priority"/>
+    <node id="m" x="100" y="0" type="priority"/>
+    <node id="e" x="200" y="0" type="priority"/>
+</nodes>"""
+EDGES = """<edges>
+    <edge id="we" from="w" to="m" numLanes="1" speed="13.9" width="4"/>
+    <edge id="ew" from="m" to="w" numLanes="1" speed="13.9" width="4"/>
+    <edge id="me" from="m" to="e" numLanes="1" speed="13.9" width="4"/>
+    <edge id="em" from="e" to="m" numLanes="1" speed="13.9" width="4" allow="bus"/>
+</edges>"""
+# One westbound bus per 10 s from ``begin`` on: traffic beside the learner's lane, never in it.
+BUSES = """<routes>
+    <vType id="bus" vClass="bus" length="12" width="2.5" sigma="0"/>
+    <flow id="bus" type="bus" begin="{begin}" end="{end}" period="10" departSpeed="max">
+        <route edges="em ew"/>
+    </flow>
+</routes>"""
+CONFIG = """<configuration>
+    <input>
+        <net-file value="road.net.xml"/>
+        <route-files value="buses.rou.xml"/>
+    </input>
+    <time><begin value="{begin}"/>{end}</time>
+</configuration>"""
+SCENARIO = """name = "road"
+[track]
+{start}
+start_offset = 20.0
+{fringe}
+[episode]
+max_steps = 400
+[traffic]
+strategy = "sumo"
+sumocfg = "road.sumocfg"
+warmup_s = {warmup}
+episodes = 2
+{extra}
+"""
+
+
+@pytest.fixture(scope="module")
+def road_net(tmp_path_factory):
+    folder = tmp_path_factory.mktemp("road")
+    (folder / "road.nod.xml").write_text(NODES)
+    (folder / "road.edg.xml").write_text(EDGES)
+    import sumo as sumo_wheel  # netconvert of the eclipse-sumo wheel
+
+    netconvert = f"{sumo_wheel.SUMO_HOME}/bin/netconvert"
+    subprocess.run([netconvert, "-n", "road.nod.xml", "-e", "road.edg.xml", "-o", "road.net.xml",
+                    "--no-turnarounds", "true"], cwd=folder, check=True, capture_output=True)
+    return folder / "road.net.xml"
+
+
+def road_scenario(tmp_path, road_net, begin=1000.0, departs=1000.0, end="", warmup=10.0,
+                  start='start_lane = "we_0"', fringe="", extra=""):
+    """A scenario on the straight road whose ``.sumocfg`` (beside it) begins at ``begin`` and
+    whose buses depart from ``departs`` on."""
+    (tmp_path / "road.net.xml").write_bytes(road_net.read_bytes())
+    (tmp_path / "buses.rou.xml").write_text(BUSES.format(begin=departs, end=departs + 600))
+    end_tag = f'<end value="{end}"/>' if end != "" else ""
+    (tmp_path / "road.sumocfg").write_text(CONFIG.format(begin=begin, end=end_tag))
+    path = tmp_path / "scenario.toml"
+    path.write_text(SCENARIO.format(start=start, fringe=fringe, warmup=warmup, extra=extra))
+    return path
+
+
+def straight(world) -> np.ndarray:
+    """A chromosome that steers straight ahead: all genes 0, so both outputs are equal."""
+    return np.zeros((1, world.spec.chromosome_length))
+
+
+def test_sumocfg_begin_time_and_network_are_used(tmp_path, road_net):
+    """The .sumocfg begins at 1000 s and the first bus departs then: the learner, 10 s later,
+    meets traffic. (Started at 0 s, as SUMO was before, the network would be empty for 1000 s
+    and nothing would be met.) [track] names no net: the .sumocfg's is the track."""
+    scenario = load_scenario(road_scenario(tmp_path, road_net))
+    assert scenario.track.net == (tmp_path / "road.net.xml").resolve()
+    assert sumo.learner_start_time(scenario) == 1010.0
+    world = make_world(scenario)
+    results = world.evaluate(straight(world))
+    assert (results.traffic[0, :, MET_START] == 1).all()  # the first bus, 10 s along
+    assert results.traffic_summary()["traffic_near_max"] >= 1
+
+
+def test_begin_s_overrides_the_sumocfg(tmp_path, road_net):
+    scenario = load_scenario(road_scenario(tmp_path, road_net, begin=0.0, departs=500.0,
+                                           extra="begin_s = 600.0"))
+    assert sumo.learner_start_time(scenario) == 610.0
+    world = make_world(scenario)
+    assert world.evaluate(straight(world)).traffic[0, 0, MET_START] >= 1
+
+
+def test_traffic_that_never_reaches_the_network_is_refused(tmp_path, road_net, capsys):
+    """Buses depart from 5000 s on, the learner starts at 10 s and lives at most 40 s: `run`
+    stops with exit status 2 and says why, naming the scenario and its traffic key."""
+    path = road_scenario(tmp_path, road_net, begin=0.0, departs=5000.0)
+    code = main(["run", str(path), "--out", str(tmp_path / "run"), "--quiet",
+                 "--generations", "1", "--population", "10"])
+    message = capsys.readouterr().err
+    assert code == 2
+    assert str(path) in message and "traffic.sumocfg" in message
+    assert "no SUMO vehicle is on the network from 10 s to 50 s" in message
+    assert "departures span 5000-5000 s" in message
+    scenario = load_scenario(path).with_overrides(traffic={"mode": "closed-loop"})
+    with pytest.raises(InputError, match="no SUMO vehicle"):
+        make_world(scenario).evaluate(np.zeros((1, 19 * 3 + 3 + 3 * 2 + 2)))
+
+
+@pytest.mark.parametrize("mode", ["replay", "closed-loop"])
+def test_reaching_the_fringe_is_leaving_the_network(tmp_path, road_net, mode):
+    """A straight driver from x = 20 on the eastbound lane reaches the road's east end (x = 200)
+    after 180 steps of 1 m. With SUMO traffic the fringe is an exit: "left network", not a
+    collision; ``fringe = "wall"`` keeps it a wall."""
+    ends = {}
+    for fringe in ("", 'fringe = "wall"'):
+        scenario = load_scenario(road_scenario(tmp_path, road_net, fringe=fringe)).with_overrides(
+            traffic={"mode": mode})
+        world = make_world(scenario)
+        results = world.evaluate(straight(world))
+        ends[fringe] = (int(results.steps[0, 0]), int(results.outcome[0, 0]))
+    assert ends[""] == (180, LEFT_NETWORK)
+    assert ends['fringe = "wall"'] == (180, COLLIDED)
+
+
+def test_exits_lie_across_the_road_ends(road_net):
+    """The exits are the two road ends, x = 0 and x = 200, across both lanes (y from -4 to 4);
+    no wall is left there, and no exit elsewhere."""
+    track = load_track(road_net, exits=True)
+    exits = sorted(tuple(np.round(row, 6)) for row in track.exits)
+    assert len(exits) == 2
+    for exit_row, x in zip(exits, (0.0, 200.0), strict=True):
+        assert exit_row[0] == exit_row[2] == x
+        assert sorted((exit_row[1], exit_row[3])) == [-4.0, 4.0]
+    walls = load_track(road_net).walls
+    assert len(track.walls) == len(walls) - 2
+    assert not ((track.walls[:, 0] == 200.0) & (track.walls[:, 2] == 200.0)).any()
+
+
+def test_fringe_exit_needs_sumo_traffic(tmp_path, road_net):
+    path = tmp_path / "alone.toml"
+    path.write_text(f'name = "alone"\n[track]\nnet = "{road_net}"\nstart_lane = "we_0"\n'
+                    'fringe = "exit"\n')
+    with pytest.raises(InputError, match="needs SUMO traffic") as error:
+        load_scenario(path)
+    assert error.value.key == "track.fringe"
+
+
+def test_starts_are_drawn_per_situation_from_lanes_and_edges(tmp_path, road_net):
+    """Two start edges: each situation starts on one of them (the rightmost lane that allows
+    cars, 20 m along), the same for every chromosome, and over generations on both."""
+    path = road_scenario(tmp_path, road_net, start='start_edge = ["we", "me"]')
+    world = make_world(load_scenario(path))
+    assert [tuple(np.round(p, 6)) for p in world.starts] == [(20.0, -2.0, 0.0), (120.0, -2.0, 0.0)]
+    drawn = {tuple(start) for g in range(8) for start in world.situation_starts(g)}
+    assert len(drawn) == 2
+    assert [s.tolist() for s in world.situation_starts(3)] == [
+        s.tolist() for s in world.situation_starts(3)]
+
+
+@pytest.mark.parametrize(("start", "key", "message"), [
+    ('start_lane = "em_0"', "track.start_lane", "does not allow passenger cars"),
+    ('start_edge = ["we", "nope"]', "track.start_edge[1]", "no edge 'nope'"),
+    ('start_lane = ["we_0", "we_7"]', "track.start_lane[1]", "no lane 'we_7'"),
+    ('start_edge = "em"', "track.start_edge", "no lane of edge 'em' allows passenger cars"),
+])
+def test_bad_starts_are_named(tmp_path, road_net, capsys, start, key, message):
+    path = road_scenario(tmp_path, road_net, start=start)
+    assert main(["run", str(path), "--out", str(tmp_path / "run"), "--quiet"]) == 2
+    error = capsys.readouterr().err
+    assert f"{path}: {key}: " in error and message in error
+
+
+@pytest.mark.parametrize(("config", "option", "message"), [
+    (CONFIG.replace("buses.rou.xml", "missing.rou.xml"), "route-files", "missing.rou.xml"),
+    (CONFIG.replace("road.net.xml", "nowhere.net.xml"), "net-file", "nowhere.net.xml"),
+    (CONFIG.format(begin=100, end='<end value="50"/>'), "end", "not after begin"),
+    (CONFIG.format(begin="x7", end=""), "begin", "not a SUMO time"),
+])
+def test_bad_sumocfg_is_named(tmp_path, road_net, capsys, config, option, message):
+    path = road_scenario(tmp_path, road_net)
+    (tmp_path / "road.sumocfg").write_text(config.format(begin=0, end=""))
+    assert main(["run", str(path), "--out", str(tmp_path / "run"), "--quiet"]) == 2
+    error = capsys.readouterr().err
+    assert f"road.sumocfg: {option}: " in error and message in error
+
+
+def test_learner_start_after_the_end_is_refused(tmp_path, road_net):
+    path = road_scenario(tmp_path, road_net, begin=0.0, end=60.0, warmup=60.0)
+    with pytest.raises(InputError, match="not before the end of road.sumocfg") as error:
+        load_scenario(path)
+    assert error.value.key == "traffic.warmup_s"
+
+
+def test_a_life_ends_where_the_sumocfg_ends(tmp_path, road_net):
+    """The .sumocfg ends 15 s after the learner's start: lives are capped at 150 steps."""
+    scenario = load_scenario(road_scenario(tmp_path, road_net, end=1025.0))
+    assert sumo.episode_steps(scenario) == 150
+    world = make_world(scenario)
+    results = world.evaluate(straight(world))
+    assert results.steps[0, 0] == 150 and results.outcome[0, 0] == 0  # capped
+
+
+def test_shared_warmups_are_simulated_once_and_reused(tmp_path, road_net, monkeypatch):
+    """``warmup_states = 2``: over three generations of two situations, two warm-ups are
+    simulated and saved; a second world reuses them and gets the same results."""
+    monkeypatch.setattr(sumo, "STATE_FOLDER", tmp_path / "states")
+    path = road_scenario(tmp_path, road_net, warmup=30.0, extra="warmup_states = 2")
+    scenario = load_scenario(path)
+    population = np.random.default_rng(3).uniform(-1, 1, (6, 19 * 3 + 3 + 3 * 2 + 2))
+    first = [make_world(scenario).evaluate(population, g) for g in range(3)]
+    assert len(list((tmp_path / "states").glob("*.xml.gz"))) == 2
+    stamps = {p: p.stat().st_mtime_ns for p in (tmp_path / "states").iterdir()}
+    again = [make_world(scenario).evaluate(population, g) for g in range(3)]
+    assert {p: p.stat().st_mtime_ns for p in (tmp_path / "states").iterdir()} == stamps
+    for a, b in zip(first, again, strict=True):
+        np.testing.assert_array_equal(a.steps, b.steps)
+        np.testing.assert_array_equal(a.traffic, b.traffic)
+
+
+def test_package_paths_and_unknown_packages(tmp_path):
+    path = tmp_path / "scenario.toml"
+    path.write_text('name = "x"\n[track]\nstart_edge = "241660955#0"\n[traffic]\n'
+                    'strategy = "sumo"\nsumocfg = "pkg:no_such_package_here/a.sumocfg"\n')
+    with pytest.raises(InputError, match="no installed Python package") as error:
+        load_scenario(path)
+    assert error.value.key == "sumocfg"
+
+
+def test_city_scenario_runs_evaluates_and_meets_traffic(tmp_path, root):
+    """The shipped Cologne scenario (its .sumocfg as published, begin 7:00) through the command
+    line: a short run records the traffic met in generations.csv, and its best controller,
+    evaluated in replay and in closed loop, starts among tens of vehicles."""
+    scenario = root / "scenarios" / "city_cologne3.toml"
+    out = tmp_path / "run"
+    assert main(["run", str(scenario), "--out", str(out), "--quiet", "--generations", "2",
+                 "--population", "20"]) == 0
+    table = pd.read_csv(out / "generations.csv")
+    assert (table["traffic_at_start"] > 20).all() and (table["traffic_near_max"] >= 1).all()
+    rows = {}
+    for mode in ("replay", "closed-loop"):
+        assert main(["evaluate", str(out / "best.npz"), str(scenario), "--mode", mode,
+                     "--out", str(tmp_path / f"{mode}.csv")]) == 0
+        rows[mode] = pd.read_csv(tmp_path / f"{mode}.csv").iloc[0]
+        assert rows[mode]["traffic_at_start"] > 20
