@@ -61,15 +61,25 @@ def build_parser() -> argparse.ArgumentParser:
                      help="start over even if the folder holds another run")
     run.add_argument("--quiet", action="store_true", help="no progress bar")
 
-    evaluate = commands.add_parser("evaluate", help="run a saved controller on a scenario",
-                                   epilog=EPILOG)
-    evaluate.add_argument("controller", type=Path, metavar="CONTROLLER.npz")
-    evaluate.add_argument("scenario", type=Path, metavar="SCENARIO.toml")
-    evaluate.add_argument("--episodes", type=_positive, default=1)
+    evaluate = commands.add_parser(
+        "evaluate", help="run saved controllers on scenarios", epilog=EPILOG,
+        description="Run each controller on each scenario's held-out traffic situations. One "
+        "pair prints its lifetimes; several print the controller x scenario matrix of mean "
+        "fitness. --out FILE.csv writes every situation (tidy) and, for several pairs, "
+        "FILE_matrix.csv and FILE_matrix.png (heat map).")
+    evaluate.add_argument("paths", type=Path, nargs="+",
+                          metavar="CONTROLLER.npz... SCENARIO.toml...",
+                          help="one or more controllers and one or more scenarios, any order")
+    evaluate.add_argument("--episodes", type=_positive, default=1,
+                          help="traffic situations per pair (default 1)")
     evaluate.add_argument("--out", type=Path, metavar="FILE.csv", help="write the lifetimes")
     evaluate.add_argument("--mode", choices=["replay", "closed-loop"],
                           help="SUMO traffic: replayed, or reacting to the controller "
                                "(default: the scenario's traffic.mode)")
+    evaluate.add_argument("--executor", choices=["local", "process", "ray"], default="local",
+                          help="where the pairs run (default: local, one after another)")
+    evaluate.add_argument("--address", help="Ray cluster address (with --executor ray)")
+    evaluate.add_argument("--quiet", action="store_true", help="no progress bar")
 
     render = commands.add_parser("render", help="draw a controller's path (PNG) or animate it "
                                  "(GIF)", epilog=EPILOG)
@@ -129,24 +139,51 @@ def _cmd_run(args) -> int:
     return 0
 
 
+def _labels(paths: list[Path]) -> list[str]:
+    """Short unique names for controller files: the file name without .npz, with as many
+    parent folders as it takes to tell them apart."""
+    for depth in range(1, max(len(p.parts) for p in paths) + 1):
+        labels = ["/".join(p.with_suffix("").parts[-depth:]) for p in paths]
+        if len(set(labels)) == len(labels):
+            return labels
+    return [str(p) for p in paths]
+
+
 def _cmd_evaluate(args) -> int:
     from enn_traffic.controller import Controller
-    from enn_traffic.evaluation import evaluate_controller
+    from enn_traffic.evaluation import evaluate_batch, fitness_matrix, write_batch
     from enn_traffic.io import write_csv
     from enn_traffic.scenario import load_scenario
 
-    controller = Controller.load(args.controller)
-    scenario = load_scenario(args.scenario)
+    controller_paths = [p for p in args.paths if p.suffix == ".npz"]
+    scenario_paths = [p for p in args.paths if p.suffix == ".toml"]
+    for path in args.paths:
+        if path.suffix not in (".npz", ".toml"):
+            raise InputError("expected controllers (.npz) and scenarios (.toml)", path)
+    if not controller_paths or not scenario_paths:
+        raise InputError("give at least one controller (.npz) and one scenario (.toml)",
+                         key="evaluate")
+    controllers = {label: Controller.load(path) for label, path
+                   in zip(_labels(controller_paths), controller_paths, strict=True)}
+    scenarios = [load_scenario(path) for path in scenario_paths]
     if args.mode:
-        if not scenario.traffic.is_sumo:
+        if not any(s.traffic.is_sumo for s in scenarios):
             raise InputError('--mode applies to SUMO traffic (traffic.strategy = "sumo")',
-                             args.scenario, "traffic.strategy")
-        scenario = scenario.with_overrides(traffic={"mode": args.mode})
-    table = evaluate_controller(controller, scenario, args.episodes)
-    print(table.to_string(index=False))
+                             scenario_paths[0], "traffic.strategy")
+        scenarios = [s.with_overrides(traffic={"mode": args.mode}) if s.traffic.is_sumo else s
+                     for s in scenarios]
+    table = evaluate_batch(controllers, scenarios, args.episodes, args.executor, args.address,
+                           progress=not args.quiet)
+    single = len(controllers) == 1 and len(scenarios) == 1
+    if single:
+        print(table.drop(columns="controller").to_string(index=False))
+    else:
+        print(fitness_matrix(table).round(1).to_string())
     if args.out:
-        write_csv(args.out, table)
-        print(f"written {args.out}")
+        written = [args.out] if single else write_batch(table, args.out)
+        if single:
+            write_csv(args.out, table)
+        print("written " + ", ".join(str(p) for p in written))
     return 0
 
 

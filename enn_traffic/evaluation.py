@@ -1,12 +1,23 @@
-"""Run a saved controller on any scenario and report lifetimes (``enn-traffic evaluate``)."""
+"""Run saved controllers on scenarios and report lifetimes (``enn-traffic evaluate``).
+
+One controller on one scenario gives a row per traffic situation; several controllers and
+scenarios give one tidy table of every pair's situations and the controller x scenario matrix
+of mean fitness (Table 1 for any set of scenarios), spread over a process pool or Ray.
+"""
 
 from __future__ import annotations
 
+import multiprocessing
+from collections.abc import Sequence
+from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 
 import pandas as pd
+from tqdm import tqdm
 
 from enn_traffic.controller import Controller
+from enn_traffic.errors import InputError
+from enn_traffic.io import write_csv
 from enn_traffic.scenario import Scenario
 from enn_traffic.sim import make_world
 from enn_traffic.sim.world import (
@@ -45,19 +56,97 @@ def evaluate_controller(controller: Controller, scenario: Scenario, episodes: in
             "scenario": scenario.name,
             "track": world.track.name,
             "strategy": strategy,
-            "episode": column % episodes,
-            "lifetime_steps": int(steps[column]),
+            "situation": column % episodes,
+            "steps": int(steps[column]),
             "lifetime_s": steps[column] * vehicle.dt,
             "distance_m": steps[column] * vehicle.speed * vehicle.dt,
             "fitness": fitness[column],
             "outcome": OUTCOMES[int(outcome[column])],
             "capped": bool(outcome[column] == CAPPED),
-            "suffered_collisions": int(results.suffered[0, column]),
+            "suffered": int(results.suffered[0, column]),
             "traffic_at_start": int(traffic[column, MET_START]),
             "traffic_near_mean": traffic[column, MET_NEAR_STEPS] / (steps[column] + 1),
             "traffic_near_max": int(traffic[column, MET_NEAR_MAX]),
         })  # fmt: skip
     return pd.DataFrame(rows)
+
+
+def _evaluate_pair(label: str, controller: Controller, scenario: Scenario, episodes: int
+                   ) -> pd.DataFrame:
+    table = evaluate_controller(controller, scenario, episodes)
+    table.insert(0, "controller", label)
+    return table
+
+
+def _one_thread() -> None:
+    import numba
+
+    numba.set_num_threads(1)
+
+
+def evaluate_batch(controllers: dict[str, Controller], scenarios: Sequence[Scenario],
+                   episodes: int = 1, executor: str = "local", address: str | None = None,
+                   progress: bool = True) -> pd.DataFrame:
+    """Every controller on every scenario (each fitted to it first, so a misfit is an error
+    before anything runs): one row per (controller, scenario, situation). ``executor``:
+    ``local`` (one pair after another, numba threads over the cores), ``process`` (pairs over a
+    process pool, one core each) or ``ray`` (pairs as Ray tasks of one core)."""
+    pairs = [(label, controller, scenario) for label, controller in controllers.items()
+             for scenario in scenarios]
+    for _, controller, scenario in pairs:
+        controller.fit(scenario, scenario.source)
+    bar = tqdm(total=len(pairs), desc="evaluate", unit="pair", disable=not progress,
+               leave=False)
+    tables = []
+    try:
+        if executor == "local":
+            for pair in pairs:
+                tables.append(_evaluate_pair(*pair, episodes))
+                bar.update(1)
+        elif executor == "process":
+            context = multiprocessing.get_context("spawn")  # numba threads and libsumo
+            with ProcessPoolExecutor(mp_context=context, initializer=_one_thread) as pool:
+                futures = [pool.submit(_evaluate_pair, *pair, episodes) for pair in pairs]
+                for future in futures:
+                    tables.append(future.result())
+                    bar.update(1)
+        elif executor == "ray":
+            from enn_traffic.evolution.evaluate import connect_ray
+
+            ray = connect_ray(address)
+            task = ray.remote(num_cpus=1)(_evaluate_pair)
+            futures = [task.remote(*pair, episodes) for pair in pairs]
+            for future in futures:
+                tables.append(ray.get(future))
+                bar.update(1)
+        else:
+            raise InputError(f"unknown executor {executor!r}; use local, process or ray",
+                             key="--executor")
+    finally:
+        bar.close()
+    return pd.concat(tables, ignore_index=True)
+
+
+def fitness_matrix(table: pd.DataFrame) -> pd.DataFrame:
+    """Mean fitness of each controller (rows, in table order) on each scenario (columns)."""
+    matrix = table.pivot_table(index="controller", columns="scenario", values="fitness",
+                               aggfunc="mean", sort=False)
+    matrix.columns.name = None
+    return matrix
+
+
+def write_batch(table: pd.DataFrame, out: Path) -> list[Path]:
+    """``out`` (the tidy table), ``<out>_matrix.csv`` and ``<out>_matrix.png`` (heat map)."""
+    from enn_traffic.report.plots import heat_map
+
+    matrix = fitness_matrix(table)
+    stem = out.with_name(out.stem + "_matrix")
+    write_csv(out, table)
+    write_csv(stem.with_suffix(".csv"), matrix.reset_index())
+    situations = int(table.groupby(["controller", "scenario"]).size().max())
+    heat_map(matrix, stem.with_suffix(".png"), f"mean fitness over {situations} situation(s)",
+             "mean fitness [steps]")
+    return [out, stem.with_suffix(".csv"), stem.with_suffix(".png")]
 
 
 def evaluation_scenario(controller: Controller, scenario: Scenario, episodes: int) -> Scenario:

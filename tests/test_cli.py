@@ -62,7 +62,8 @@ def test_evaluate_and_render_a_saved_controller(small_run, tmp_path, root):
     assert result.returncode == 0, result.stderr
     table = pd.read_csv(csv)
     assert len(table) == 2 and set(table["outcome"]) <= {"collision", "spin", "capped"}
-    assert (table["lifetime_steps"] >= 0).all()
+    assert (table["steps"] * 0.1 == table["lifetime_s"]).all()
+    assert (table["traffic_at_start"] == 0).all()  # the loop has no traffic
     picture = tmp_path / "path.png"
     result = cli("render", small_run / "best.npz", root / "scenarios" / "navigation_narrow.toml",
                  "--out", picture)

@@ -55,3 +55,18 @@ def test_reproduce_with_whole_runs_on_ray_gives_the_local_runs(local_ray, quick_
         assert_same_run(quick_fig7 / run, out / run)
     pd.testing.assert_frame_equal(pd.read_csv(quick_fig7 / "fig7.csv"),
                                   pd.read_csv(out / "fig7.csv"))
+
+
+def test_batch_evaluation_on_ray_gives_the_local_table(local_ray, root, tmp_path):
+    """``evaluate --executor ray``: every (controller, scenario) pair a Ray task."""
+    from enn_traffic.controller import Controller
+    from enn_traffic.evaluation import evaluate_batch
+
+    scenario = load_scenario(root / "scenarios" / "arena_strategy3.toml")
+    genes = np.random.default_rng(4).uniform(-1, 1, (2, 68))
+    controllers = {f"c{i}": Controller.from_scenario(scenario, g, 0.0, 0)
+                   for i, g in enumerate(genes)}
+    scenarios = [scenario, load_scenario(root / "scenarios" / "unseen_loop.toml")]
+    local = evaluate_batch(controllers, scenarios, episodes=2, progress=False)
+    on_ray = evaluate_batch(controllers, scenarios, episodes=2, executor="ray", progress=False)
+    pd.testing.assert_frame_equal(local, on_ray)

@@ -36,6 +36,27 @@ def learning_curve(table: pd.DataFrame, path: str | Path, title: str = "") -> No
     save_figure(figure, path)
 
 
+def heat_map(matrix: pd.DataFrame, path: str | Path, title: str, label: str) -> None:
+    """A matrix (rows by columns, e.g. controllers by scenarios) as colours, each cell with its
+    value written in it."""
+    rows, columns = matrix.shape
+    figure, ax = plt.subplots(figsize=(2.2 + 1.1 * columns, 1.6 + 0.45 * rows))
+    values = matrix.to_numpy(dtype=float)
+    image = ax.imshow(values, cmap="viridis", aspect="auto")
+    middle = (np.nanmin(values) + np.nanmax(values)) / 2
+    ax.set_xticks(range(columns), [str(c) for c in matrix.columns], rotation=30, ha="right",
+                  fontsize=8)
+    ax.set_yticks(range(rows), [str(r) for r in matrix.index], fontsize=8)
+    for i in range(rows):
+        for j in range(columns):
+            ax.text(j, i, f"{values[i, j]:.0f}", ha="center", va="center", fontsize=8,
+                    color="black" if values[i, j] > middle else "white")
+    figure.colorbar(image, label=label)
+    ax.set_title(title, fontsize=9)
+    figure.tight_layout()
+    save_figure(figure, path)
+
+
 def learning_curves(
     runs: dict[str, pd.DataFrame],
     path: str | Path | None,

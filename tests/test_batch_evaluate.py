@@ -1,0 +1,78 @@
+"""``enn-traffic evaluate`` with several controllers and scenarios: one tidy table of every
+pair's situations, the controller x scenario matrix and its heat map; the same table on a
+process pool as in one process."""
+
+import numpy as np
+import pandas as pd
+import pytest
+from conftest import ROOT
+
+from enn_traffic.cli import main
+from enn_traffic.controller import Controller
+from enn_traffic.evaluation import evaluate_batch, fitness_matrix
+from enn_traffic.scenario import load_scenario
+
+
+@pytest.fixture(scope="module")
+def controllers(tmp_path_factory):
+    """Two controllers of the narrow track's network: a straight driver (all genes 0) and a
+    random network, saved in two folders under the same file name."""
+    scenario = load_scenario(ROOT / "scenarios" / "navigation_narrow.toml")
+    folder = tmp_path_factory.mktemp("controllers")
+    length = 20 * 3 + 4 * 2
+    paths = []
+    for name, genes in (("straight", np.zeros(length)),
+                        ("random", np.random.default_rng(2).uniform(-1, 1, length))):
+        (folder / name).mkdir()
+        Controller.from_scenario(scenario, genes, 0.0, 0).save(folder / name / "best.npz")
+        paths.append(folder / name / "best.npz")
+    return paths
+
+
+def test_every_pair_in_one_table_with_its_matrix(controllers, root, tmp_path, capsys):
+    scenarios = [root / "scenarios" / f"{n}.toml" for n in ("arena_strategy2", "unseen_loop")]
+    out = tmp_path / "batch.csv"
+    assert main(["evaluate", *map(str, controllers), *map(str, scenarios), "--episodes", "3",
+                 "--out", str(out), "--quiet"]) == 0
+    table = pd.read_csv(out)
+    assert list(table.columns[:5]) == ["controller", "scenario", "track", "strategy",
+                                       "situation"]
+    assert {"steps", "outcome", "suffered", "distance_m", "traffic_at_start",
+            "traffic_near_mean", "traffic_near_max"} <= set(table.columns)
+    assert len(table) == 2 * 2 * 3
+    assert set(table["controller"]) == {"straight/best", "random/best"}  # told apart
+    arena = table[table["scenario"] == "arena_strategy2"]
+    assert (arena["traffic_at_start"] == 7).all()  # the arena's 7 other vehicles
+    assert (table[table["scenario"] == "unseen_loop"]["traffic_near_max"] == 0).all()
+    matrix = pd.read_csv(tmp_path / "batch_matrix.csv", index_col="controller")
+    assert matrix.shape == (2, 2)
+    for (controller, scenario), group in table.groupby(["controller", "scenario"]):
+        assert matrix.loc[controller, scenario] == pytest.approx(group["fitness"].mean(), abs=1e-3)
+    assert (tmp_path / "batch_matrix.png").read_bytes()[:4] == b"\x89PNG"
+    printed = capsys.readouterr().out
+    assert "straight/best" in printed and "unseen_loop" in printed
+
+
+def test_a_process_pool_gives_the_local_table(controllers, root):
+    labelled = {f"c{i}": Controller.load(p) for i, p in enumerate(controllers)}
+    scenarios = [load_scenario(root / "scenarios" / f"{n}.toml")
+                 for n in ("arena_strategy4", "navigation_narrow")]
+    local = evaluate_batch(labelled, scenarios, episodes=2, progress=False)
+    pooled = evaluate_batch(labelled, scenarios, episodes=2, executor="process",
+                            progress=False)
+    pd.testing.assert_frame_equal(local, pooled)
+    assert fitness_matrix(local).index.tolist() == ["c0", "c1"]
+
+
+def test_a_misfit_controller_is_refused_before_anything_runs(controllers, root, tmp_path,
+                                                             capsys):
+    """The lane-keeping camera gives 8 inputs, the controllers take 19 beams."""
+    code = main(["evaluate", str(controllers[0]), str(root / "scenarios" / "unseen_loop.toml"),
+                 str(root / "scenarios" / "lane_keeping.toml"), "--quiet"])
+    assert code == 2
+    assert "lane_keeping.toml" in capsys.readouterr().err
+
+
+def test_evaluate_needs_a_controller_and_a_scenario(root, capsys):
+    assert main(["evaluate", str(root / "scenarios" / "unseen_loop.toml")]) == 2
+    assert "at least one controller" in capsys.readouterr().err
