@@ -67,8 +67,21 @@ def evaluate_controller(controller: Controller, scenario: Scenario, episodes: in
             "traffic_at_start": int(traffic[column, MET_START]),
             "traffic_near_mean": traffic[column, MET_NEAR_STEPS] / (steps[column] + 1),
             "traffic_near_max": int(traffic[column, MET_NEAR_MAX]),
+            **_safety(results.safety, column, steps[column] * vehicle.dt),
         })  # fmt: skip
     return pd.DataFrame(rows)
+
+
+def _safety(safety, column: int, lifetime_s: float) -> dict[str, float]:
+    """The SSM columns of a closed-loop row (none in replay): lowest TTC, conflicts by
+    measure, and all three per hour of the learner's life."""
+    if safety is None:
+        return {}
+    min_ttc, ttc, drac, pet = safety[0, column]
+    hours = max(lifetime_s, 1e-9) / 3600.0
+    return {"min_ttc_s": min_ttc, "ttc_conflicts": int(ttc), "drac_conflicts": int(drac),
+            "pet_conflicts": int(pet), "ttc_conflicts_per_h": ttc / hours,
+            "drac_conflicts_per_h": drac / hours, "pet_conflicts_per_h": pet / hours}
 
 
 def _evaluate_pair(label: str, controller: Controller, scenario: Scenario, episodes: int

@@ -210,3 +210,21 @@ def test_process_pool_with_one_libsumo_per_worker_gives_the_local_results(tmp_pa
     local, spread = local_and_spread(scenario, population, 4, ProcessEvaluator(scenario, 2))
     np.testing.assert_array_equal(local.steps, spread.steps)
     np.testing.assert_array_equal(local.outcome, spread.outcome)
+
+
+def test_closed_loop_records_the_learners_conflicts_with_ssm(tmp_path, root):
+    """SUMO's SSM device on the learner. The 20 m/s car departs at the lane's start (x = 15 m)
+    behind the learner, which starts 15 m along the lane and enters SUMO after its first step
+    (10 m/s, front at x = 31 m, rear at 26.7 m): time-to-collision 11.7 m / 10 m/s = 1.17 s,
+    below 1.5 s; the deceleration that avoids a crash, 10² / (2 · 11.7) = 4.3 m/s², above 3.
+    One conflict, by TTC and by DRAC. A replay has no learner in SUMO: no figures."""
+    length = SumoWorld(sumo_scenario(tmp_path, root, FOLLOWER)).spec.chromosome_length
+    straight = np.zeros((1, length))
+    settings = dict(lane="g0_0to1_0_0", offset=15.0, steps=90, warmup=0.0, episodes=1)
+    closed = make_world(sumo_scenario(tmp_path, root, FOLLOWER, mode="closed-loop", **settings))
+    safety = closed.evaluate(straight).safety[0, 0]
+    min_ttc, ttc, drac, pet = safety
+    assert min_ttc == pytest.approx(1.17, abs=0.01)
+    assert (ttc, drac, pet) == (1, 1, 0)
+    replay = make_world(sumo_scenario(tmp_path, root, FOLLOWER, **settings))
+    assert replay.evaluate(straight).safety is None

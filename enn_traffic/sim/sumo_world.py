@@ -17,8 +17,11 @@ and differ by their own seed from the learner's start on.
 from __future__ import annotations
 
 import math
+import os
+import tempfile
 from collections import OrderedDict
 from pathlib import Path
+from typing import NamedTuple
 
 import numba
 import numpy as np
@@ -38,6 +41,21 @@ from enn_traffic.sim.replay import (
 )
 from enn_traffic.sim.world import EpisodeResults, World
 from enn_traffic.traffic import sumo
+
+
+class ClosedLoopLife(NamedTuple):
+    """One life in a live SUMO: steps moved, outcome, collisions suffered, vehicle-steps
+    within sensor range, most within range at once, vehicles on the network at the start, and
+    the conflicts its SSM device recorded."""
+
+    steps: int
+    outcome: int
+    suffered: int
+    near_steps: int
+    near_max: int
+    at_start: int
+    conflicts: sumo.Conflicts
+
 
 RECORDINGS_KEPT = 24  # a test world holds 10 test and 10 validation situations
 WARMUP_STREAM = 7  # the key of the shared warm-ups' seeds (traffic.warmup_states)
@@ -109,12 +127,14 @@ class SumoWorld(World):
         generation's traffic situations."""
         genes = self.spec.in_source_layout(population)
         closed = self.scenario.traffic.mode == "closed-loop"
-        runs, vehicles, at_start = [], [], []
+        runs, vehicles, at_start, safety = [], [], [], []
         for seed, start in zip(self.seeds(generation), self.situation_starts(generation),
                                strict=True):
             if closed:
-                runs.append(self._closed_loop_population(genes, seed, start))
-                at_start.append(runs[-1][-1])
+                *columns, safety_now = self._closed_loop_population(genes, seed, start)
+                runs.append(columns)
+                at_start.append(columns[5])
+                safety.append(safety_now)
                 continue
             record = self.recording(seed)
             vehicles.append(record.mean_vehicles)
@@ -130,24 +150,28 @@ class SumoWorld(World):
         fitness = EpisodeResults.lifetime_fitness(steps, outcome).mean(axis=1)
         start_counts = np.column_stack([np.broadcast_to(a, len(genes)) for a in at_start])
         traffic = EpisodeResults.traffic_met(start_counts, near_steps, near_max)
-        return EpisodeResults(fitness, steps, outcome, suffered, self.vehicles, traffic)
+        return EpisodeResults(fitness, steps, outcome, suffered, self.vehicles, traffic,
+                              np.stack(safety, axis=1) if safety else None)
 
     def _closed_loop_population(self, genes: np.ndarray, seed: int, start: np.ndarray
                                 ) -> tuple:
-        results = np.array([self.closed_loop(row, seed, start=start) for row in genes],
-                           dtype=np.int64).reshape(-1, 6)
-        return tuple(results[:, i] for i in range(6))
+        """Per chromosome: steps, outcome, suffered, vehicle-steps within range, most at once,
+        vehicles at the start (arrays), and the safety figures (P, 4)."""
+        lives = [self.closed_loop(row, seed, start=start) for row in genes]
+        columns = tuple(np.array([life[i] for life in lives], dtype=np.int64) for i in range(6))
+        safety = np.array([[life.conflicts.min_ttc, life.conflicts.ttc, life.conflicts.drac,
+                            life.conflicts.pet] for life in lives], dtype=np.float64)
+        return (*columns, safety.reshape(-1, 4))
 
     def closed_loop(self, genes: np.ndarray, seed: int, max_steps: int | None = None,
                     frames: list | None = None, start: np.ndarray | None = None
-                    ) -> tuple[int, int, int, int, int, int]:
+                    ) -> ClosedLoopLife:
         """One chromosome (source-layout genes) in a live SUMO with the learner in it, from
-        ``start`` (the world's first start by default). Returns (steps moved, outcome,
-        collisions suffered, vehicle-steps within sensor range, most at once, vehicles on the
-        network at the start); ``frames`` receives (learner pose, ids, corners) of every step
-        when given. A vehicle that leaves the learner's world (``gone``) stays in SUMO, unseen
-        by the learner, as it does in a replay. The situation's warm-up is simulated once and
-        loaded from a SUMO state file by every later call."""
+        ``start`` (the world's first start by default), its SSM device recording conflicts;
+        ``frames`` receives (learner pose, ids, corners) of every step when given. A vehicle
+        that leaves the learner's world (``gone``) stays in SUMO, unseen by the learner, as it
+        does in a replay. The situation's warm-up is simulated once and loaded from a SUMO
+        state file by every later call."""
         limit = self._limits[0] if max_steps is None else max_steps
         start = np.asarray(self.start if start is None else start, dtype=np.float64)
         vehicle = self.scenario.vehicle
@@ -155,7 +179,10 @@ class SumoWorld(World):
         if not self._checked:  # refuse traffic that never reaches the network
             sumo.first_traffic(self.scenario, seed, state, limit)
             self._checked = True
-        simulation = sumo.Simulation(self.scenario, seed, state)
+        handle, ssm_file = tempfile.mkstemp(suffix=".xml", prefix="enn-ssm-")
+        os.close(handle)
+        simulation = sumo.Simulation(self.scenario, seed, state,
+                                     extra=sumo.ssm_options(Path(ssm_file)))
         try:
             physics = self._learner_physics(simulation.largest_radius())
             ids, corners, centres = sumo.slot_arrays(2, 64)  # rows: the step before, now
@@ -188,7 +215,7 @@ class SumoWorld(World):
                     *scratch,
                 )  # fmt: skip
                 if outcome != RUNNING:
-                    return t, int(outcome), int(suffered[0]), int(met[0]), int(met[1]), at_start
+                    break
                 sumo.move_learner(pose[0], pose[1], pose[2])
                 simulation.step()
                 before, now = now, before
@@ -199,7 +226,11 @@ class SumoWorld(World):
                     simulation.follow_learner(reach + 4.0 * physics[RADIUS])
                 t += 1
         finally:
-            simulation.close()
+            simulation.close()  # SUMO writes the SSM file as it closes
+            conflicts = sumo.read_conflicts(Path(ssm_file))
+            os.unlink(ssm_file)
+        return ClosedLoopLife(t, int(outcome), int(suffered[0]), int(met[0]), int(met[1]),
+                              at_start, conflicts)
 
     @staticmethod
     def _read(simulation: sumo.Simulation, row: int, ids, corners, centres, gone, scratch):

@@ -54,6 +54,9 @@ OUTCOMES = {CAPPED: "capped", COLLIDED: "collision", SPUN: "spin", LEFT_NETWORK:
 # Columns of :attr:`EpisodeResults.traffic`: vehicles in the world when the learner starts,
 # vehicle-steps within the learner's sensor range, most vehicles within range at once.
 MET_START, MET_NEAR_STEPS, MET_NEAR_MAX = range(3)
+# Columns of :attr:`EpisodeResults.safety` (closed loop with SUMO only): the lowest
+# time-to-collision its SSM device saw (s; inf: none), conflicts by TTC, DRAC and PET.
+SAFETY_MIN_TTC, SAFETY_TTC, SAFETY_DRAC, SAFETY_PET = range(4)
 # What the blame rule found (:func:`_responsible`), besides the index of a vehicle.
 NO_HIT, HIT_WALL = -1, -2
 # Generation keys from here on draw held-out traffic (deployment, validation, the tables'
@@ -339,6 +342,7 @@ class EpisodeResults:
     suffered: np.ndarray
     vehicles: int = 1
     traffic: np.ndarray | None = None
+    safety: np.ndarray | None = None  # (P, E, 4), ``SAFETY_*``: measured in closed loop only
 
     def __post_init__(self):
         if self.traffic is None:  # no traffic: nothing met
@@ -378,7 +382,9 @@ class EpisodeResults:
         return EpisodeResults(*(np.concatenate([getattr(p, f) for p in parts])
                                 for f in ("fitness", "steps", "outcome", "suffered")),
                               vehicles=parts[0].vehicles,
-                              traffic=np.concatenate([p.traffic for p in parts]))
+                              traffic=np.concatenate([p.traffic for p in parts]),
+                              safety=None if any(p.safety is None for p in parts)
+                              else np.concatenate([p.safety for p in parts]))
 
 
 @dataclass(frozen=True)

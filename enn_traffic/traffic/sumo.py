@@ -395,6 +395,60 @@ def record(scenario: Scenario, seed: int, steps: int, state: Path | None = None)
     return Recording(ids, corners, centres, radius, mean_vehicles)
 
 
+# SUMO's SSM device on the learner (closed loop): conflicts with the vehicles around it,
+# where time-to-collision falls below 1.5 s, the deceleration to avoid a crash exceeds
+# 3 m/s², or the post-encroachment time falls below 2 s (docs/sumo.md, "Safety figures").
+SSM_THRESHOLDS = {"TTC": 1.5, "DRAC": 3.0, "PET": 2.0}
+SSM_RANGE_M = 50.0
+
+
+def ssm_options(output: Path) -> tuple[str, ...]:
+    """SUMO options that equip the learner with an SSM device writing to ``output``."""
+    return ("--device.ssm.explicit", LEARNER,
+            "--device.ssm.measures", " ".join(SSM_THRESHOLDS),
+            "--device.ssm.thresholds", " ".join(f"{v:g}" for v in SSM_THRESHOLDS.values()),
+            "--device.ssm.range", f"{SSM_RANGE_M:g}", "--device.ssm.trajectories", "false",
+            "--device.ssm.file", str(output))
+
+
+@dataclass(frozen=True)
+class Conflicts:
+    """What the learner's SSM device wrote: conflicts (encounters in which some measure passed
+    its threshold), the lowest TTC seen (inf: none), and the conflicts by measure."""
+
+    count: int = 0
+    min_ttc: float = math.inf
+    ttc: int = 0
+    drac: int = 0
+    pet: int = 0
+
+
+def read_conflicts(path: Path) -> Conflicts:
+    """Read an SSM output file (an empty or missing one: no conflict)."""
+    import xml.etree.ElementTree as ElementTree
+
+    try:
+        root = ElementTree.parse(path).getroot()
+    except (ElementTree.ParseError, OSError):
+        return Conflicts()
+
+    def value(conflict, tag: str) -> float | None:
+        element = conflict.find(tag)
+        try:
+            return float(element.get("value")) if element is not None else None
+        except (TypeError, ValueError):  # "NA"
+            return None
+
+    conflicts = root.findall("conflict")
+    ttc = [v for c in conflicts if (v := value(c, "minTTC")) is not None]
+    drac = [v for c in conflicts if (v := value(c, "maxDRAC")) is not None]
+    pet = [v for c in conflicts if (v := value(c, "PET")) is not None]
+    return Conflicts(len(conflicts), min(ttc, default=math.inf),
+                     sum(v < SSM_THRESHOLDS["TTC"] for v in ttc),
+                     sum(v > SSM_THRESHOLDS["DRAC"] for v in drac),
+                     sum(v < SSM_THRESHOLDS["PET"] for v in pet))
+
+
 def add_learner(length: float, width: float, speed: float) -> None:
     """Put the learner into the running SUMO as a vehicle with no route, that obeys no speed
     or lane-change rule and is moved by :func:`move_learner`."""
@@ -405,7 +459,10 @@ def add_learner(length: float, width: float, speed: float) -> None:
     libsumo.vehicletype.setMaxSpeed(kind, max(speed, 1e-3))
     libsumo.vehicletype.setSpeedDeviation(kind, 0.0)
     libsumo.vehicletype.setImperfection(kind, 0.0)
-    libsumo.vehicle.add(LEARNER, "", typeID=kind)
+    # It enters SUMO at its own speed (so that SSM sees it moving from the start) whatever the
+    # first edge's speed limit: its speed factor binds nothing else, as it is moved by moveToXY.
+    libsumo.vehicletype.setSpeedFactor(kind, 100.0)
+    libsumo.vehicle.add(LEARNER, "", typeID=kind, departSpeed=f"{speed:g}")
     libsumo.vehicle.setSpeedMode(LEARNER, 0)
     libsumo.vehicle.setLaneChangeMode(LEARNER, 0)
     libsumo.vehicle.setSpeed(LEARNER, speed)  # for its first step; then SUMO derives it
