@@ -6,12 +6,16 @@ against the plain per-vehicle Python loop of :mod:`enn_traffic.sim.reference` on
 of the same generations, in the same process, so machine drift cancels out of the ratio.
 The arena and SUMO workloads are timed on the generations of GA runs too; SUMO replay counts
 the time SUMO takes to record each generation's traffic, and SUMO closed loop is timed on one
-process for an evolved controller, without SUMO's start and warm-up.
+process for an evolved controller, without SUMO's start and warm-up. The city workload (the
+shipped Cologne scenario) counts everything, warm-ups included, and reports their share of
+the wall time: with warm-ups shared and simulated once, and with each situation its own.
 """
 
 from __future__ import annotations
 
+import tempfile
 import time
+from pathlib import Path
 
 import numba
 import numpy as np
@@ -128,27 +132,106 @@ def sumo_bench(generations: int = 10, closed_loop_steps: int = 10_000) -> pd.Dat
         population = ga.next_generation(rng, population, results.fitness, params)
     rows = [(f"sumo replay: P=200 worlds x {world.vehicles} vehicles, strategy 1",
              "compiled batch + SUMO recording", threads, steps, learner_steps, seconds)]
-    closed = make_world(world.scenario.with_overrides(traffic={"mode": "closed-loop"}))
-    genes = closed.spec.in_source_layout(best)[0]
-    closed.closed_loop(genes, 0, max_steps=2)  # load the compiled step outside the timing
-    steps, seconds, generation = 0, 0.0, generations
+    steps, seconds = _closed_loop(world.scenario, best, generations, closed_loop_steps)
+    rows.append(("sumo closed loop: the best controller, strategy 1",
+                 "libsumo step by step, 1 process", 1, steps, steps, seconds))
+    return _rate_table(rows)
+
+
+def _closed_loop(scenario, chromosome, generation: int, learner_steps: int,
+                 count_start: bool = False) -> tuple[int, float]:
+    """Learner steps and seconds of ``chromosome`` in closed loop over the traffic of the
+    generations after ``generation`` until ``learner_steps`` steps; each situation's warm-up
+    is simulated before the timing, and SUMO's start (loading that state) is counted only
+    with ``count_start``."""
+    closed = make_world(scenario.with_overrides(traffic={"mode": "closed-loop"}))
+    genes = closed.spec.in_source_layout(chromosome)[0]
+    closed.closed_loop(genes, closed.seeds(0)[0], max_steps=2)  # compile, check the traffic
+    steps, seconds, last = 0, 0.0, generation + 100
     seeds: list[int] = []
-    while steps < closed_loop_steps and generation < generations + 100:
+    while steps < learner_steps and generation < last:
         if not seeds:
             generation += 1
             seeds = list(closed.seeds(generation))
         seed = seeds.pop()
+        state = closed.warm_state(seed) or sumo.warm_state(closed.scenario, seed, keep_rng=True)
         started = time.perf_counter()
         steps += closed.closed_loop(genes, seed)[0]
         total = time.perf_counter() - started
+        if not count_start:
+            started = time.perf_counter()
+            sumo.Simulation(closed.scenario, seed, state).close()
+            total -= time.perf_counter() - started
+        seconds += total
+    return steps, seconds
+
+
+def city_bench(generations: int = 10, closed_loop_steps: int = 5_000) -> pd.DataFrame:
+    """The shipped city scenario (Cologne, its .sumocfg as published, P = 100): replay over the
+    generations of a GA run, warm-ups and recordings included, once with the scenario's shared
+    warm-ups (simulated in the timing, into an empty state folder) and once with each traffic
+    situation warming up itself; then the run's best controller in closed loop, SUMO's start
+    included. ``warmup_share``: the part of the wall time spent simulating warm-ups."""
+    scenario = shipped_scenario("city_cologne3")
+    saved_folder = sumo.STATE_FOLDER
+    rows = []
+    try:
+        with tempfile.TemporaryDirectory(prefix="enn-bench-states-") as folder:
+            sumo.STATE_FOLDER = Path(folder)
+            for label, settings in (("shared warm-ups", {}),
+                                    ("each situation its own warm-up", {"warmup_states": 0})):
+                world = make_world(scenario.with_overrides(traffic=settings))
+                rows.append(_city_replay(world, label, generations))
+            best = rows[0][-1]
+            # closed loop: its situations' warm-ups are simulated before the timing
+            steps, seconds = _closed_loop(scenario, best, generations, closed_loop_steps,
+                                          count_start=True)
+    finally:
+        sumo.STATE_FOLDER = saved_folder
+    table = _rate_table([row[:-2] for row in rows] + [
+        ("city closed loop: the best controller", "libsumo step by step, 1 process, SUMO "
+         "start included", 1, steps, steps, seconds)])
+    table["warmup_share"] = [row[-2] for row in rows] + [np.nan]
+    return table
+
+
+def _city_replay(world, label: str, generations: int) -> tuple:
+    """Replay generations of a GA run on the city: the rate row, the warm-up share and the
+    best chromosome."""
+    scenario = world.scenario
+    rng = np.random.default_rng(scenario.seed)
+    params = ga_params(scenario)
+    population = ga.initial_population(rng, params.population_size,
+                                       world.spec.chromosome_length, params.init_range)
+    # One warm-up alone, timed, prices each situation's own warm-up.
+    started = time.perf_counter()
+    simulation = sumo.Simulation(scenario, 1)
+    simulation.step(sumo.warmup_steps(scenario))
+    simulation.close()
+    one_warmup = time.perf_counter() - started
+    warmup = 0.0
+    if scenario.traffic.warmup_states:
         started = time.perf_counter()
-        simulation = sumo.Simulation(closed.scenario, seed)
-        simulation.step(sumo.warmup_steps(closed.scenario))
-        simulation.close()
-        seconds += total - (time.perf_counter() - started)
-    rows.append(("sumo closed loop: the best controller, strategy 1",
-                 "libsumo step by step, 1 process", 1, steps, steps, seconds))
-    return _rate_table(rows)
+        for seed in range(scenario.traffic.warmup_states):  # every shared warm-up, once
+            world.warm_state(seed)
+        warmup = time.perf_counter() - started
+    else:
+        warmup = one_warmup * scenario.traffic.episodes * generations
+    world.evaluate(population[:2], generations + 1)  # compile outside the timing
+    steps, learner_steps, seconds = 0, 0, 0.0
+    best, best_fitness = population[0], -1.0
+    for generation in range(generations):
+        started = time.perf_counter()
+        results = world.evaluate(population, generation)
+        seconds += time.perf_counter() - started
+        steps += results.vehicle_steps
+        learner_steps += int(results.steps.sum())
+        if results.fitness.max() > best_fitness:
+            best, best_fitness = population[int(np.argmax(results.fitness))], results.fitness.max()
+        population = ga.next_generation(rng, population, results.fitness, params)
+    total = seconds + (warmup if scenario.traffic.warmup_states else 0.0)
+    return (f"city replay: Cologne, P={params.population_size}", label, numba.get_num_threads(),
+            steps, learner_steps, total, warmup / total, best)
 
 
 def _rate_table(rows: list[tuple]) -> pd.DataFrame:
@@ -199,5 +282,6 @@ def run_bench(quick: bool = False) -> pd.DataFrame:
                          reference_seconds=3.0 if quick else 10.0),
         arena_bench(generations=3 if quick else 10),
         sumo_bench(generations=3 if quick else 10, closed_loop_steps=2_000 if quick else 10_000),
+        city_bench(generations=3 if quick else 20, closed_loop_steps=1_000 if quick else 5_000),
         lane_keeping_bench(generations=2 if quick else 4),
     ], ignore_index=True)

@@ -223,6 +223,8 @@ def _cmd_bench(args) -> int:
     shown["speedup_vs_reference"] = shown["speedup_vs_reference"].map(
         lambda ratio: "" if np.isnan(ratio) else f"{ratio:.1f}x")
     shown["seconds"] = shown["seconds"].map("{:.2f}".format)
+    shown["warmup_share"] = shown["warmup_share"].map(
+        lambda share: "" if np.isnan(share) else f"{share:.1%}")
     print(shown.to_string(index=False))
     if args.out:
         write_csv(args.out, table)
