@@ -197,7 +197,7 @@ def render(
         if len(paths) > MAX_LABELLED:  # SUMO traffic: the learner in red among grey traffic
             labels = ["learner", "traffic"] + [None] * (len(paths) - 2)
             colors = ["C3"] + ["0.6"] * (len(paths) - 1)
-        trajectories(world.track.walls, paths, out, title=title, start=world.start,
+        trajectories(world.track.walls, paths, out, title=title, start=tuple(poses[0, 0]),
                      labels=labels if len(paths) > 1 else None, colors=colors)
     return {"steps": steps, "outcome": OUTCOMES[outcome], "file": str(out)}
 
