@@ -119,9 +119,23 @@ def sumo_bench(generations: int = 10, closed_loop_steps: int = 10_000) -> pd.Dat
     warm-up of each episode, timed apart, not counted)."""
     world, params, rng, population = _workload("sumo_strategy1")
     threads = numba.get_num_threads()
+    # generation 0's traffic was recorded above
+    steps, learner_steps, seconds, best = _timed_generations(world, params, rng, population,
+                                                             range(1, generations + 1))
+    rows = [(f"sumo replay: P=200 worlds x {world.vehicles} vehicles, strategy 1",
+             "compiled batch + SUMO recording", threads, steps, learner_steps, seconds)]
+    steps, seconds = _closed_loop(world.scenario, best, generations, closed_loop_steps)
+    rows.append(("sumo closed loop: the best controller, strategy 1",
+                 "libsumo step by step, 1 process", 1, steps, steps, seconds))
+    return _rate_table(rows)
+
+
+def _timed_generations(world, params, rng, population, generations: range) -> tuple:
+    """A GA run over ``generations``, its evaluations timed: vehicle steps, learner steps,
+    seconds, and the best chromosome met."""
     steps, learner_steps, seconds = 0, 0, 0.0
     best, best_fitness = population[0], -1.0
-    for generation in range(1, generations + 1):  # generation 0's traffic was recorded above
+    for generation in generations:
         started = time.perf_counter()
         results = world.evaluate(population, generation)
         seconds += time.perf_counter() - started
@@ -130,12 +144,7 @@ def sumo_bench(generations: int = 10, closed_loop_steps: int = 10_000) -> pd.Dat
         if results.fitness.max() > best_fitness:
             best, best_fitness = population[int(np.argmax(results.fitness))], results.fitness.max()
         population = ga.next_generation(rng, population, results.fitness, params)
-    rows = [(f"sumo replay: P=200 worlds x {world.vehicles} vehicles, strategy 1",
-             "compiled batch + SUMO recording", threads, steps, learner_steps, seconds)]
-    steps, seconds = _closed_loop(world.scenario, best, generations, closed_loop_steps)
-    rows.append(("sumo closed loop: the best controller, strategy 1",
-                 "libsumo step by step, 1 process", 1, steps, steps, seconds))
-    return _rate_table(rows)
+    return steps, learner_steps, seconds, best
 
 
 def _closed_loop(scenario, chromosome, generation: int, learner_steps: int,
@@ -218,17 +227,8 @@ def _city_replay(world, label: str, generations: int) -> tuple:
     else:
         warmup = one_warmup * scenario.traffic.episodes * generations
     world.evaluate(population[:2], generations + 1)  # compile outside the timing
-    steps, learner_steps, seconds = 0, 0, 0.0
-    best, best_fitness = population[0], -1.0
-    for generation in range(generations):
-        started = time.perf_counter()
-        results = world.evaluate(population, generation)
-        seconds += time.perf_counter() - started
-        steps += results.vehicle_steps
-        learner_steps += int(results.steps.sum())
-        if results.fitness.max() > best_fitness:
-            best, best_fitness = population[int(np.argmax(results.fitness))], results.fitness.max()
-        population = ga.next_generation(rng, population, results.fitness, params)
+    steps, learner_steps, seconds, best = _timed_generations(world, params, rng, population,
+                                                             range(generations))
     total = seconds + (warmup if scenario.traffic.warmup_states else 0.0)
     return (f"city replay: Cologne, P={params.population_size}", label, numba.get_num_threads(),
             steps, learner_steps, total, warmup / total, best)

@@ -197,6 +197,8 @@ def test_bad_starts_are_named(tmp_path, road_net, capsys, start, key, message):
     (CONFIG.replace("buses.rou.xml", "missing.rou.xml"), "route-files", "missing.rou.xml"),
     (CONFIG.replace("road.net.xml", "nowhere.net.xml"), "net-file", "nowhere.net.xml"),
     (CONFIG.format(begin=100, end='<end value="50"/>'), "end", "not after begin"),
+    (CONFIG.replace("</input>", '<additional-files value="lights.add.xml"/></input>'),
+     "additional-files", "lights.add.xml"),
     (CONFIG.format(begin="x7", end=""), "begin", "not a SUMO time"),
 ])
 def test_bad_sumocfg_is_named(tmp_path, road_net, capsys, config, option, message):
@@ -205,6 +207,28 @@ def test_bad_sumocfg_is_named(tmp_path, road_net, capsys, config, option, messag
     assert main(["run", str(path), "--out", str(tmp_path / "run"), "--quiet"]) == 2
     error = capsys.readouterr().err
     assert f"road.sumocfg: {option}: " in error and message in error
+
+
+TRIPS = """<routes>
+    <vTypeDistribution id="mix">
+        <vType id="small" vClass="bus" length="8" width="2.3" probability="0.5"/>
+        <vType id="large" vClass="bus" length="14" width="2.5" probability="0.5"/>
+    </vTypeDistribution>
+    <trip id="t0" type="mix" depart="1000" from="em" to="ew" departSpeed="max"/>
+    <trip id="t1" type="mix" depart="1004" from="em" to="ew" departSpeed="max"/>
+</routes>"""
+
+
+def test_trips_and_type_distributions_run_as_sumo_runs_them(tmp_path, road_net):
+    """Trips (SUMO routes them) of a vTypeDistribution: two buses on the road 10 s after the
+    .sumocfg's begin, each of one of the distribution's lengths."""
+    path = road_scenario(tmp_path, road_net)
+    (tmp_path / "buses.rou.xml").write_text(TRIPS)
+    world = make_world(load_scenario(path))
+    assert world.evaluate(straight(world)).traffic[0, 0, MET_START] == 2
+    recording = world.recording(world.seeds(0)[0])
+    lengths = np.linalg.norm(recording.corners[0, :, 0] - recording.corners[0, :, 3], axis=1)
+    assert set(np.round(lengths[recording.ids[0] >= 0], 6)) <= {8.0, 14.0}
 
 
 def test_learner_start_after_the_end_is_refused(tmp_path, road_net):
