@@ -67,9 +67,9 @@ def build_parser() -> argparse.ArgumentParser:
         "pair prints its lifetimes; several print the controller x scenario matrix of mean "
         "fitness. --out FILE.csv writes every situation (tidy) and, for several pairs, "
         "FILE_matrix.csv and FILE_matrix.png (heat map).")
-    evaluate.add_argument("paths", type=Path, nargs="+",
-                          metavar="CONTROLLER.npz... SCENARIO.toml...",
-                          help="one or more controllers and one or more scenarios, any order")
+    evaluate.add_argument("paths", type=Path, nargs="+", metavar="FILE",
+                          help="controllers (.npz) and scenarios (.toml): one or more of each, "
+                               "in any order")
     evaluate.add_argument("--episodes", type=_positive, default=1,
                           help="traffic situations per pair (default 1)")
     evaluate.add_argument("--out", type=Path, metavar="FILE.csv", help="write the lifetimes")
