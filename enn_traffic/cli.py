@@ -1,4 +1,4 @@
-"""The ``enn-traffic`` command line (DESIGN.md, "Command line").
+"""The ``enn-traffic`` command line (docs/design.md, "Command line").
 
 Bad input ends with one message naming the file and key, and exit status 2; never a traceback.
 """

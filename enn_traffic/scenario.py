@@ -62,7 +62,7 @@ class TrackConfig(_Section):
 
 
 class VehicleConfig(_Section):
-    """Kinematic bicycle, constant speed (paper §4; reference-implementation.md §2)."""
+    """Kinematic bicycle, constant speed (paper §4; docs/design.md, "The authors' code" 2)."""
 
     length: PositiveFloat = 4.3
     width: PositiveFloat = 1.7
@@ -125,7 +125,7 @@ Strategy = Literal["random_network", "straight", "circling", "wander", "sumo"]
 class TrafficConfig(_Section):
     """Uncontrolled vehicles around the learner (paper §5.3): one vehicle per start, all
     driving by ``strategy`` (a list: the fitness averages over the strategies, §5.4.1), or
-    SUMO traffic from ``routes`` / ``sumocfg`` (strategy ``"sumo"``, DESIGN.md "SUMO")."""
+    SUMO traffic from ``routes`` / ``sumocfg`` (strategy ``"sumo"``, docs/sumo.md)."""
 
     strategy: Strategy | list[Strategy] = "random_network"
     starts_xy: list[tuple[float, float]] = []

@@ -8,7 +8,7 @@ Each track is a chain of nodes on the corridor centreline joined by one-lane edg
 width is the corridor width (``spreadType="center"`` keeps the lane centred on the node line).
 Corner nodes of the authors' tracks carry a square ``shape`` so that the union of lane and
 junction shapes has the square corners of the reference polyline
-(../shared/paper/reference-implementation.md §1.2); other tracks keep netconvert's own rounded
+(docs/design.md, "The authors' code" 1); other tracks keep netconvert's own rounded
 junction shapes. ``track_grid`` is a small town grid with three 5 m lanes each way (30 m roads).
 """
 
@@ -21,7 +21,7 @@ from pathlib import Path
 
 HERE = Path(__file__).resolve().parent
 
-# Centreline of the authors' 12 m navigation corridor (reference-implementation.md §1.2): the
+# Centreline of the authors' 12 m navigation corridor (docs/design.md, "The authors' code" 1): the
 # medial line of their 57-segment polyline, from the start cap (-8..4, -20) to the far cap at B.
 NARROW_CENTRELINE = [
     (-2, -20), (-2, 16), (28, 16), (28, 34), (-52, 34), (-52, 76), (-22, 76), (-22, 144),

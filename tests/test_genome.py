@@ -21,7 +21,7 @@ def test_figure1_layout_groups_weights_by_source_neuron():
 
 
 def test_chromosome_lengths_of_the_authors_networks():
-    # reference-implementation.md §4: 19, 10, 5, 3, 1 beams with 3 hidden neurons
+    # docs/design.md, "The authors' code" 4: 19, 10, 5, 3, 1 beams with 3 hidden neurons
     lengths = {n: NetworkSpec((n, 3, 2)).chromosome_length for n in (19, 10, 5, 3, 1)}
     assert lengths == {19: 68, 10: 41, 5: 26, 3: 20, 1: 14}
     assert NetworkSpec((19, 8, 4, 2)).chromosome_length == 20 * 8 + 9 * 4 + 5 * 2

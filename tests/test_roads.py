@@ -5,7 +5,7 @@ from shapely.geometry import LineString, Polygon
 from enn_traffic.errors import InputError
 from enn_traffic.roads import load_track
 
-# reference-implementation.md §1.2: the authors' narrow track, start vertex and 57 moves
+# docs/design.md, "The authors' code" 1: the authors' narrow track, start vertex and 57 moves
 AUTHORS_MOVES = [12, 30, 30, 30, -80, 30, 30, 80, -30, -40, -30, 80, 80, 30, -200, -30, 40, -30,
                  -80, -30, 40, -60, 30, 60, 30, -80, -80, -80, 12, 68, 80, 104, -54, -60, -6,
                  60, -40, 6, 80, 54, -40, 6, 176, -6, -80, -104, 54, 40, 6, -56, -30, -54, 80,

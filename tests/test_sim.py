@@ -10,7 +10,7 @@ from enn_traffic.sim.sensors import WallGrid, nearby_walls, sense_walls
 
 @pytest.mark.parametrize(
     "steering_deg, turn_deg, moved",
-    # reference-implementation.md §2.3, d = 1 m, wheelbase 2.6 m
+    # docs/design.md, "The authors' code" 2, d = 1 m, wheelbase 2.6 m
     [(10, 3.8, 0.996), (30, 11.5, 0.966), (45, 17.0, 0.924), (60, 22.4, 0.866)],
 )
 def test_bicycle_step_matches_the_authors_table(steering_deg, turn_deg, moved):

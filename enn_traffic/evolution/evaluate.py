@@ -1,4 +1,4 @@
-"""Evaluators: how a population's fitness gets computed (DESIGN.md, "Scale-out").
+"""Evaluators: how a population's fitness gets computed (docs/design.md, "Scale-out").
 
 The GA calls ``evaluator.evaluate(population, generation) -> EpisodeResults`` and nothing else
 (the generation picks the traffic situations). ``local``
@@ -129,7 +129,7 @@ def connect_ray(address: str | None = None):
 
 
 class RayEvaluator:
-    """Population chunks over Ray actors, each holding its own world (DESIGN.md, Scale-out).
+    """Population chunks over Ray actors, each holding its own world (docs/design.md, "Scale-out").
 
     ``address=None`` starts a local Ray; otherwise it joins the running cluster there. A
     chromosome's fitness depends only on it and the generation's traffic, never on the chunk

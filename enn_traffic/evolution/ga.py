@@ -37,7 +37,7 @@ class GAParams:
 def initial_population(
     rng: np.random.Generator, population_size: int, chromosome_length: int, init_range: float
 ) -> np.ndarray:
-    """Genes i.i.d. U[-init_range, init_range] (reference-implementation.md §5)."""
+    """Genes i.i.d. U[-init_range, init_range] (docs/design.md, "The authors' code" 5)."""
     return rng.uniform(-init_range, init_range, size=(population_size, chromosome_length))
 
 

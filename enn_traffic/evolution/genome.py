@@ -3,7 +3,7 @@
 A chromosome is a flat vector of every weight, layer by layer. Within a layer, all weights
 coming *out of* one source neuron are consecutive, and the bias node is the last source
 ("source" layout, the paper's Figure 1). The authors' MATLAB code groups weights by *target*
-neuron instead ("target" layout, reference-implementation.md §4); it is offered as an option.
+neuron instead ("target" layout, docs/design.md, "The authors' code" 4); it is offered as an option.
 Every layer, the output layer included, applies the logistic sigmoid.
 """
 

@@ -16,7 +16,7 @@ from enn_traffic.io import write_csv
 from enn_traffic.report.plots import draw_paths, learning_curves, save_figure
 
 # Best fitness at which the vehicle has reached the far dead end of the narrow track
-# (location B, ≈1.3 km of corridor; reference-implementation.md §8.19).
+# (location B, ≈1.3 km of corridor; docs/design.md, "The authors' code" 1).
 REACHED_B = 1200
 SEEDS = [1, 2, 3, 4, 5]
 QUICK = {"population_size": 60, "generations": 20}

@@ -14,7 +14,7 @@ time each:
 - Table 4 (§5.5.2, broadcasting the evolved population): every vehicle starts from a copy of the
   evolved population (the candidates, fewest broadcast lives lost first, then the rest of the
   winner's run's final population) and all learn at once for ``SECONDS`` (each its own GA,
-  sharing the best chromosomes across vehicles, reference-implementation.md §7.4); then all
+  sharing the best chromosomes across vehicles, docs/design.md, "The authors' code" 6); then all
   drive what they found together: the chromosome that lost fewest lives per step
   (:class:`~enn_traffic.sim.shared.Evidence`), counting what the vehicles saw while learning
   together with what the validation situations showed of each candidate, and the rate is

@@ -1,7 +1,7 @@
 """Segment and box tests, and the body rectangle of a vehicle.
 
 The body spans [-length, 0] along the heading and [-width/2, width/2] across it, measured from
-the pose at the middle of the front bumper (reference-implementation.md §2.2).
+the pose at the middle of the front bumper (docs/design.md, "The authors' code" 2).
 """
 
 from __future__ import annotations
@@ -27,7 +27,7 @@ def body_corners(x, y, heading, length, width, out):
 @njit(cache=True)
 def segments_intersect(ax, ay, bx, by, cx, cy, dx, dy) -> bool:
     """Do segments AB and CD meet (ends included)? Parallel pairs never do
-    (reference-implementation.md §3)."""
+    (docs/design.md, "The authors' code" 3)."""
     ex, ey = bx - ax, by - ay
     fx, fy = dx - cx, dy - cy
     den = ex * fy - ey * fx

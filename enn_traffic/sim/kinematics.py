@@ -1,4 +1,4 @@
-"""Kinematic bicycle model (paper §4, Figure 4; reference-implementation.md §2.3).
+"""Kinematic bicycle model (paper §4, Figure 4; docs/design.md, "The authors' code" 2).
 
 The pose (x, y, heading) is the middle of the front bumper. Each step, a rear point half a
 wheelbase behind the pose moves ``distance`` along the heading, a front point half a wheelbase

@@ -1,4 +1,4 @@
-"""The learner among traffic it does not steer, given as bodies step by step (DESIGN.md "SUMO").
+"""The learner among traffic it does not steer, given as bodies step by step (docs/sumo.md).
 
 The traffic comes from SUMO: recorded once per traffic seed and replayed to every world of a
 generation (replay mode), or read from a live SUMO after each step (closed-loop mode, where

@@ -1,11 +1,11 @@
-"""Rangefinder (paper §3, §5.2; reference-implementation.md §3) and the wall-culling grid.
+"""Rangefinder (paper §3, §5.2; docs/design.md, "The authors' code" 3) and the wall-culling grid.
 
 Beam i points at heading + beam_angles[i] (right to left) from the pose at the front bumper;
 its reading is the distance to the nearest wall or vehicle-body edge it crosses, or the range
 when it crosses none. Readings are raw metres, as the authors feed them to the network.
 
 Walls are culled with a uniform grid: each cell lists the walls within reach of any point in
-the cell, so a sensing step only tests the walls that can matter (DESIGN.md, "Speed").
+the cell, so a sensing step only tests the walls that can matter (docs/design.md, "Speed").
 """
 
 from __future__ import annotations

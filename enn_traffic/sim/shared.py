@@ -1,5 +1,5 @@
 """One arena where every vehicle drives by its own controller, and may learn while it drives
-(paper §5.5; reference-implementation.md §7).
+(paper §5.5; docs/design.md, "The authors' code" 6).
 
 Unlike :mod:`enn_traffic.sim.world`, which runs one learner per world and P worlds at once,
 this is one world of V vehicles run for a stretch of simulated time. Each step:

@@ -4,7 +4,7 @@ A world holds one learning vehicle (index 0), driven by the chromosome under eva
 ``V - 1`` uncontrolled vehicles driven by a traffic strategy (:mod:`enn_traffic.traffic.kinematic`).
 Every evaluation resets the whole world to the same start (§5.3). Each step:
 
-1. collisions at the current poses, by the blame rule (DESIGN.md): a vehicle is responsible if
+1. collisions at the current poses, by the blame rule (docs/design.md): a vehicle is responsible if
    its body touches a wall or the body another vehicle had *before* the step. The learner's
    life ends at its first responsible collision; an uncontrolled vehicle that is responsible
    respawns at a free spot, and if it ran into the learner the learner's ``suffered`` count
@@ -261,7 +261,7 @@ def run_episode(
 @njit(cache=True)
 def _responsible(v, pose, corners, centres, previous, previous_centres, fresh, walls, lookup,
                  near) -> int:
-    """The blame rule (DESIGN.md) for vehicle ``v``: ``HIT_WALL`` if its body touches a wall,
+    """The blame rule (docs/design.md) for vehicle ``v``: ``HIT_WALL`` if its body touches a wall,
     else the first other vehicle whose body from before the step it touches (a vehicle that
     just respawned has no such body), else ``NO_HIT``. ``near``: the squared distance of body
     centres beyond which bodies cannot touch."""
