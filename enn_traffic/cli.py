@@ -13,7 +13,7 @@ from pathlib import Path
 from enn_traffic import __version__
 from enn_traffic.errors import InputError
 
-EPILOG = "Scenario files are described in README.md, section 'Scenario reference'."
+EPILOG = "Scenario files are described in docs/scenarios.md."
 
 
 def _int_at_least(minimum: int):

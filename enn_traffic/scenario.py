@@ -2,7 +2,7 @@
 
 A scenario names a SUMO network, the vehicle, its rangefinder, the controller network, the GA
 settings and the episode rules. Degrees appear only here (keys ending in ``_deg``); everything
-after loading is in metres, seconds and radians. See README "Scenario reference".
+after loading is in metres, seconds and radians. See docs/scenarios.md.
 """
 
 from __future__ import annotations

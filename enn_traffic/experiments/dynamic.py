@@ -57,7 +57,8 @@ class Family:
     accepted_fitness: float
     incremental_max_generations: int
     # Table 2's hidden layers (None: the scenarios' own): its one controller must hold every
-    # strategy's skill, each of Table 1's only one (README, "Why Table 2 evolves a wider network")
+    # strategy's skill, each of Table 1's only one (docs/results.md, "Why Table 2 evolves a
+    # wider network")
     incremental_hidden: tuple[int, ...] | None = None
     incremental_seeds: tuple[int, ...] = (1,)  # Table 2's evolutions, one per GA seed
     hidden: tuple[int, ...] | None = None  # every scenario's hidden layers, when given
