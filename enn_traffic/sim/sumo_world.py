@@ -73,6 +73,7 @@ class SumoWorld(World):
         self._limits = (sumo.episode_steps(scenario), episode.spin_window,
                         episode.spin_variance)
         self._checked = False  # closed loop: has some traffic been seen on the network?
+        self._states: dict[int, Path] = {}  # closed loop: each situation's saved warm-up
 
     def seeds(self, generation: int) -> list[int]:
         """The SUMO seed of each traffic situation of a generation."""
@@ -175,7 +176,10 @@ class SumoWorld(World):
         limit = self._limits[0] if max_steps is None else max_steps
         start = np.asarray(self.start if start is None else start, dtype=np.float64)
         vehicle = self.scenario.vehicle
-        state = self.warm_state(seed) or sumo.warm_state(self.scenario, seed, keep_rng=True)
+        if seed not in self._states:  # found (or simulated) once, not once per chromosome
+            self._states[seed] = (self.warm_state(seed)
+                                  or sumo.warm_state(self.scenario, seed, keep_rng=True))
+        state = self._states[seed]
         if not self._checked:  # refuse traffic that never reaches the network
             sumo.first_traffic(self.scenario, seed, state, limit)
             self._checked = True
