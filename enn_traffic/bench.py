@@ -22,13 +22,13 @@ import numpy as np
 import pandas as pd
 
 from enn_traffic.evolution import ga
-from enn_traffic.evolution.evaluate import Evaluator
+from enn_traffic.evolution.backends import Evaluator
 from enn_traffic.experiments.common import scenario as shipped_scenario
 from enn_traffic.runner import ga_params
-from enn_traffic.sim import make_world
 from enn_traffic.sim.reference import reference_episode
 from enn_traffic.sim.world import World
 from enn_traffic.traffic import sumo
+from enn_traffic.worlds import make_world
 
 
 def _timed_batches(world: World | Evaluator, populations: list[np.ndarray]) -> tuple[int, float]:
@@ -258,7 +258,7 @@ def _ga_generations(world, params, rng, population, generations: int) -> list[np
 def lane_keeping_bench(generations: int = 3) -> pd.DataFrame:
     """highway-env lane keeping: environment steps per second, in this process and over a
     process pool (one environment per worker), on the generations of a GA run."""
-    from enn_traffic.evolution.evaluate import LocalEvaluator, ProcessEvaluator
+    from enn_traffic.evolution.backends import LocalEvaluator, ProcessEvaluator
 
     world, params, rng, population = _workload("lane_keeping")
     populations = _ga_generations(world, params, rng, population, generations)

@@ -109,7 +109,7 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def _cmd_run(args) -> int:
-    from enn_traffic.evolution.evaluate import make_evaluator
+    from enn_traffic.evolution.backends import make_evaluator
     from enn_traffic.runner import evolve
     from enn_traffic.scenario import load_scenario
 
@@ -151,7 +151,7 @@ def _labels(paths: list[Path]) -> list[str]:
 
 def _cmd_evaluate(args) -> int:
     from enn_traffic.controller import Controller
-    from enn_traffic.evaluation import evaluate_batch, fitness_matrix, write_batch
+    from enn_traffic.deploy import evaluate_batch, fitness_matrix, write_batch
     from enn_traffic.io import write_csv
     from enn_traffic.scenario import load_scenario
 
@@ -189,7 +189,7 @@ def _cmd_evaluate(args) -> int:
 
 def _cmd_render(args) -> int:
     from enn_traffic.controller import Controller
-    from enn_traffic.evaluation import render
+    from enn_traffic.deploy import render
     from enn_traffic.scenario import load_scenario
 
     if args.out.suffix.lower() not in (".png", ".gif", ".svg", ".pdf"):

@@ -9,8 +9,8 @@ from pathlib import Path
 import numpy as np
 
 from enn_traffic.errors import InputError
-from enn_traffic.evolution.genome import NetworkSpec
 from enn_traffic.io import write_atomic
+from enn_traffic.network import NetworkSpec
 from enn_traffic.scenario import Scenario
 
 

@@ -20,17 +20,17 @@ from tqdm import tqdm
 from enn_traffic.controller import Controller
 from enn_traffic.errors import InputError
 from enn_traffic.evolution import ga
-from enn_traffic.evolution.evaluate import Evaluator, make_evaluator
-from enn_traffic.evolution.genome import NetworkSpec
+from enn_traffic.evolution.backends import Evaluator, make_evaluator
 from enn_traffic.io import write_csv, write_text
+from enn_traffic.network import NetworkSpec
 from enn_traffic.report.plots import learning_curve
 from enn_traffic.scenario import Scenario
-from enn_traffic.sim.world import CAPPED, COLLIDED, LEFT_NETWORK, SPUN
+from enn_traffic.sim.world import CAPPED, COLLIDED, LEFT_LANE, LEFT_NETWORK, SPUN
 
 CHECKPOINT = "checkpoint.npz"
 COLUMNS = [
     "generation", "best_fitness", "mean_fitness", "median_fitness", "min_fitness",
-    "vehicle_steps", "collisions", "spins", "capped", "left_network", "suffered",
+    "vehicle_steps", "collisions", "spins", "capped", "left_network", "left_lane", "suffered",
     "traffic_at_start", "traffic_near_mean", "traffic_near_max", "elapsed_s",
 ]  # fmt: skip
 
@@ -169,6 +169,7 @@ def evolve(
                 "spins": int((results.outcome == SPUN).sum()),
                 "capped": int((results.outcome == CAPPED).sum()),
                 "left_network": int((results.outcome == LEFT_NETWORK).sum()),
+                "left_lane": int((results.outcome == LEFT_LANE).sum()),
                 "suffered": int(results.suffered.sum()),
                 **results.traffic_summary(),
                 "elapsed_s": state.extra["elapsed_s"],

@@ -14,7 +14,6 @@ import tomllib
 from pathlib import Path
 from typing import Annotated, Literal
 
-import numpy as np
 import tomli_w
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_validator
 
@@ -185,25 +184,6 @@ class TrafficConfig(_Section):
         if not self.starts_xy:
             return ["none"]
         return [self.strategy] if isinstance(self.strategy, str) else list(self.strategy)
-
-    def kernel_params(self, wheelbase: float) -> np.ndarray:
-        """The float parameter vector of :mod:`enn_traffic.traffic.kinematic` (``wheelbase``
-        sets the steering of a circle)."""
-        from enn_traffic.traffic import kinematic as k
-
-        params = np.zeros(k.N_PARAMS)
-        params[k.P_TURN_DISTANCE] = self.turn_distance
-        params[k.P_TURN_STEERING] = math.radians(self.turn_steering_deg)
-        params[k.P_TURN_CONE] = math.radians(self.turn_cone_deg)
-        params[k.P_RADIUS_MIN], params[k.P_RADIUS_MAX] = self.circle_radius
-        params[k.P_WANDER_SIGMA] = math.radians(self.wander_sigma_deg)
-        params[k.P_WANDER_DECAY] = self.wander_decay
-        params[k.P_WANDER_MAX] = math.radians(self.wander_max_deg)
-        params[k.P_CLEARANCE] = self.respawn_clearance
-        params[k.P_TURN_SIDE] = k.TURN_SIDES[self.turn_side]
-        params[k.P_SEES_VEHICLES] = float(self.sees_vehicles)
-        params[k.P_WHEELBASE] = wheelbase
-        return params
 
 
 class LaneKeepingConfig(_Section):

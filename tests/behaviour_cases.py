@@ -34,8 +34,8 @@ def _results(prefix: str, results, out: dict) -> None:
 def behaviour() -> dict[str, np.ndarray]:
     """Lifetimes, outcomes, collisions suffered, traffic met and traces, world by world."""
     from enn_traffic.lanekeeping.world import LaneKeepingWorld
+    from enn_traffic.sim.arena import ArenaWorld as World
     from enn_traffic.sim.sumo_world import SumoWorld
-    from enn_traffic.sim.world import World
 
     out: dict[str, np.ndarray] = {}
     for name in ARENAS:  # one learner per world among scripted or network traffic
@@ -67,15 +67,10 @@ def behaviour() -> dict[str, np.ndarray]:
 
 def _many_learners() -> dict[str, np.ndarray]:
     """Every vehicle of one arena driving at once, half of them learning as they drive."""
+    from enn_traffic.evolution.online import Evidence, OnlineLearning, VehicleGA
     from enn_traffic.runner import ga_params
-    from enn_traffic.sim.world import World
-
-    try:
-        from enn_traffic.evolution.online import Evidence, VehicleGA
-        from enn_traffic.sim.many import ManyDrivers as Arena
-    except ImportError:  # before issue 23
-        from enn_traffic.sim.shared import Evidence, VehicleGA
-        from enn_traffic.sim.shared import SharedArena as Arena
+    from enn_traffic.sim.arena import ArenaWorld as World
+    from enn_traffic.sim.crowd import Crowd as Arena
 
     def arena(world, key, kinds=None):
         episode = world.episodes(key)[0]
@@ -90,14 +85,14 @@ def _many_learners() -> dict[str, np.ndarray]:
         arena_, genes = arena(world, 11)
         run = arena_.run(20.0, genes)
         out[f"many_{name}/collisions"], out[f"many_{name}/trace"] = run.collisions, run.trace
-        arena_, _ = arena(world, 12, np.full(world.vehicles, 1))  # random_network
+        arena_, _ = arena(world, 12, np.full(world.vehicles, 1))  # network drivers
         pool = world.spec.in_source_layout(_population(world, 6, 3))
         learners = [VehicleGA(pool.copy(), np.random.default_rng(v)) if v % 2 else None
                     for v in range(world.vehicles)]
         evidence = Evidence()
-        run = arena_.run(30.0, np.tile(pool[0], (world.vehicles, 1)), learners,
-                        ga_params(world.scenario), share_elites=True, elite_count=2,
-                        evidence=evidence)
+        learning = OnlineLearning(learners, ga_params(world.scenario), share_elites=True,
+                                  elite_count=2, evidence=evidence)
+        run = arena_.run(30.0, np.tile(pool[0], (world.vehicles, 1)), learning)
         out[f"many_{name}/learning_collisions"] = run.collisions
         out[f"many_{name}/learning_spins"] = run.spins
         out[f"many_{name}/learning_trace"] = run.trace

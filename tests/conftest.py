@@ -3,7 +3,7 @@ from pathlib import Path
 import pytest
 
 from enn_traffic.scenario import load_scenario
-from enn_traffic.sim.world import World
+from enn_traffic.sim.arena import ArenaWorld
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -33,7 +33,7 @@ FIG7_RUNS = ("runs/navigation_narrow/seed1", "runs/navigation_narrow/seed2")
 def local_and_spread(scenario, population, generation, evaluator):
     """The results of the local evaluator and of ``evaluator`` (closed afterwards) on the
     same population and generation."""
-    from enn_traffic.evolution.evaluate import LocalEvaluator
+    from enn_traffic.evolution.backends import LocalEvaluator
 
     local = LocalEvaluator(scenario).evaluate(population, generation)
     try:
@@ -78,4 +78,4 @@ def two_cars(tmp_path, root, learner, other, heading):
     path = tmp_path / "two.toml"
     path.write_text(TWO_CARS.format(net=root / "sumo_nets" / "arena.net.xml", lx=learner[0],
                                     ly=learner[1], tx=other[0], ty=other[1], th=heading))
-    return World(load_scenario(path))
+    return ArenaWorld(load_scenario(path))

@@ -1,6 +1,12 @@
+import math
+
 import numpy as np
 
-from enn_traffic.evolution.genome import NetworkSpec, sigmoid
+from enn_traffic.network import NetworkSpec
+
+
+def sigmoid(z: float) -> float:
+    return 1.0 / (1.0 + math.exp(-z))
 
 
 def test_figure1_layout_groups_weights_by_source_neuron():
@@ -37,7 +43,8 @@ def test_target_layout_is_the_authors_grouping():
     np.testing.assert_array_equal(output[0, :, 1], np.arange(64, 68))
 
 
-def test_forward_matches_hand_computation():
+def test_compiled_forward_pass_matches_hand_computation():
+    """The one forward pass every world drives with, against Figure 1's layout by hand."""
     spec = NetworkSpec((2, 3, 2))
     rng = np.random.default_rng(3)
     population = rng.uniform(-1, 1, size=(4, spec.chromosome_length))

@@ -11,8 +11,8 @@ from enn_traffic.evolution import ga
 from enn_traffic.lanekeeping.env import lane_markings, make_env
 from enn_traffic.runner import ga_params
 from enn_traffic.scenario import LaneKeepingConfig, load_scenario
-from enn_traffic.sim import make_world
-from enn_traffic.sim.world import COLLIDED
+from enn_traffic.sim.world import LEFT_LANE
+from enn_traffic.worlds import make_world
 
 SCENARIO = """
 name = "lk"
@@ -62,7 +62,7 @@ def test_leaving_the_lane_ends_the_life(tmp_path):
     sqrt(62² − 60²) = 15.6 m, i.e. at step 19 at 0.83 m per step."""
     world = make_world(scenario(tmp_path, "circle"))
     results = world.evaluate(np.zeros((1, world.spec.chromosome_length)))
-    assert results.outcome[0, 0] == COLLIDED
+    assert results.outcome[0, 0] == LEFT_LANE
     assert 17 <= results.steps[0, 0] <= 21
 
 
@@ -83,7 +83,7 @@ def test_evolution_learns_to_keep_the_lane(tmp_path):
 
 
 def test_process_pool_gives_the_local_lane_keeping_results(tmp_path):
-    from enn_traffic.evolution.evaluate import ProcessEvaluator
+    from enn_traffic.evolution.backends import ProcessEvaluator
 
     sc = scenario(tmp_path)
     population = np.random.default_rng(0).uniform(-1, 1, (6, make_world(sc).spec.chromosome_length))

@@ -5,7 +5,7 @@ import pandas as pd
 import pytest
 from conftest import FIG7_RUNS, assert_same_run, local_and_spread
 
-from enn_traffic.evolution.evaluate import RayEvaluator
+from enn_traffic.evolution.backends import RayEvaluator
 from enn_traffic.runner import evolve
 from enn_traffic.scenario import load_scenario
 
@@ -60,7 +60,7 @@ def test_reproduce_with_whole_runs_on_ray_gives_the_local_runs(local_ray, quick_
 def test_batch_evaluation_on_ray_gives_the_local_table(local_ray, root, tmp_path):
     """``evaluate --executor ray``: every (controller, scenario) pair a Ray task."""
     from enn_traffic.controller import Controller
-    from enn_traffic.evaluation import evaluate_batch
+    from enn_traffic.deploy import evaluate_batch
 
     scenario = load_scenario(root / "scenarios" / "arena_strategy3.toml")
     genes = np.random.default_rng(4).uniform(-1, 1, (2, 68))

@@ -86,9 +86,9 @@ def test_missing_required_key_and_broken_toml(tmp_path):
 
 
 def test_start_off_the_road_is_refused(tmp_path, net):
-    from enn_traffic.sim.world import World
+    from enn_traffic.sim.arena import ArenaWorld
 
     scenario = load_text(tmp_path, GOOD.format(net=net).replace("[0.0, 0.0]", "[500.0, 0.0]"))
     with pytest.raises(InputError, match="off the drivable area") as info:
-        World(scenario)
+        ArenaWorld(scenario)
     assert info.value.key == "track.start_xy"

@@ -5,8 +5,9 @@ import pytest
 from conftest import two_cars
 
 from enn_traffic.evolution import ga
-from enn_traffic.sim.shared import Evidence, SharedArena, VehicleGA, _global_elites
-from enn_traffic.traffic.kinematic import RANDOM_NETWORK, STRAIGHT
+from enn_traffic.evolution.online import Evidence, OnlineLearning, VehicleGA, global_elites
+from enn_traffic.sim.crowd import Crowd
+from enn_traffic.traffic.strategies import NETWORK, STRAIGHT
 
 
 @pytest.fixture
@@ -19,7 +20,7 @@ def test_head_on_counts_one_collision_for_each_responsible_vehicle(world):
     new body reaches into the other's old one, so both are responsible (two collisions); both
     respawn elsewhere and, with turning off, later hit walls."""
     starts = np.array([[20.0, 50.0, 0.0], [40.0, 50.0, np.pi]])
-    arena = SharedArena(world, starts, np.array([STRAIGHT, STRAIGHT]), seed=3)
+    arena = Crowd(world, starts, np.array([STRAIGHT, STRAIGHT]), seed=3)
     first = arena.run(1.0, np.zeros((2, world.spec.chromosome_length)))  # 10 steps: no contact
     assert first.collisions.tolist() == [0, 0]
     second = arena.run(0.1, np.zeros((2, world.spec.chromosome_length)))
@@ -35,21 +36,21 @@ def test_learning_vehicle_moves_through_its_population(world):
     population = np.zeros((3, length))
     learner = VehicleGA(population.copy(), np.random.default_rng(0))
     starts = np.array([[80.0, 50.0, 0.0], [20.0, 20.0, np.pi / 2]])
-    arena = SharedArena(world, starts, np.array([RANDOM_NETWORK, STRAIGHT]), seed=1)
-    arena.run(3.0, np.zeros((2, length)), [learner, None], ga.GAParams(population_size=3,
-              tournament_size=2))
+    arena = Crowd(world, starts, np.array([NETWORK, STRAIGHT]), seed=1)
+    arena.run(3.0, np.zeros((2, length)), OnlineLearning(
+        [learner, None], ga.GAParams(population_size=3, tournament_size=2)))
     assert learner.index >= 1
     assert learner.fitness[0] == pytest.approx(20.0, abs=1.0)  # 20 m to the wall at x = 100
 
 
-def test_exhausted_population_breeds_with_the_global_elites(world):
+def test_exhausted_population_breeds_with_theglobal_elites(world):
     rng = np.random.default_rng(4)
     length = world.spec.chromosome_length
     learners = [VehicleGA(rng.uniform(-1, 1, (6, length)), np.random.default_rng(v))
                 for v in range(2)]
     learners[0].fitness[:] = [1, 2, 3, 4, 5, 6]
     learners[1].fitness[:] = [10, 0, 0, 0, 0, 0]
-    elites = _global_elites(learners, 2)
+    elites = global_elites(learners, 2)
     np.testing.assert_array_equal(elites[0], learners[1].population[0])
     np.testing.assert_array_equal(elites[1], learners[0].population[5])
     learners[0].index = 6
@@ -80,10 +81,10 @@ def test_learners_record_every_step_they_drove(world):
     learners = [VehicleGA(rng.uniform(-1, 1, (4, length)), np.random.default_rng(v))
                 for v in range(2)]
     starts = np.array([[80.0, 50.0, 0.0], [20.0, 50.0, np.pi]])  # both 20 m from a wall
-    arena = SharedArena(world, starts, np.array([RANDOM_NETWORK, RANDOM_NETWORK]), seed=2)
+    arena = Crowd(world, starts, np.array([NETWORK, NETWORK]), seed=2)
     evidence = Evidence()
-    run = arena.run(3.0, np.zeros((2, length)), learners,
-                    ga.GAParams(population_size=4, tournament_size=2), evidence=evidence)
+    run = arena.run(3.0, np.zeros((2, length)), OnlineLearning(
+        learners, ga.GAParams(population_size=4, tournament_size=2), evidence=evidence))
     assert sum(evidence.steps.values()) == 2 * 30
     assert sum(evidence.losses.values()) == run.collisions.sum() + run.spins.sum() >= 1
     driven = {row.tobytes() for learner in learners
@@ -105,10 +106,10 @@ def test_evolved_drivers_held_to_the_spin_rule_lose_their_life_circling_on_the_s
     genes = np.zeros((2, world.spec.chromosome_length))
     genes[:, -1] = 1.0
     starts = np.array([[30.0, 50.0, 0.0], [70.0, 50.0, np.pi]])
-    kinds = np.array([RANDOM_NETWORK, RANDOM_NETWORK])
-    free = SharedArena(world, starts, kinds, seed=1).run(10.0, genes.copy())
+    kinds = np.array([NETWORK, NETWORK])
+    free = Crowd(world, starts, kinds, seed=1).run(10.0, genes.copy())
     assert free.spins.tolist() == [0, 0] and free.collisions.tolist() == [0, 0]
-    held = SharedArena(world, starts, kinds, seed=1).run(10.0, genes.copy(), check_spins=True)
+    held = Crowd(world, starts, kinds, seed=1).run(10.0, genes.copy(), check_spins=True)
     assert held.spins.min() >= 1 and held.collisions.tolist() == [0, 0]
     assert held.spin_rate == pytest.approx(held.spins.sum() / (2 * 10.0))
 

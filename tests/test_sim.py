@@ -3,8 +3,8 @@ import math
 import numpy as np
 import pytest
 
+from enn_traffic.sim.bicycle import bicycle_step
 from enn_traffic.sim.collide import body_polygon, box_hits_segment, boxes_overlap
-from enn_traffic.sim.kinematics import bicycle_step
 from enn_traffic.sim.sensors import WallGrid, nearby_walls, sense_walls
 
 
@@ -80,7 +80,7 @@ def test_grid_culling_gives_the_same_readings_as_all_walls(root):
     for _ in range(300):
         x, y = rng.uniform(-240, 40), rng.uniform(-35, 225)
         heading = rng.uniform(-math.pi, math.pi)
-        near = nearby_walls(x, y, grid.lookup)
+        near = nearby_walls(x, y, grid)
         culled = np.empty(19)
         sense_walls(x, y, heading, np.cos(angles), np.sin(angles), 25.0, track.walls, near,
                     culled)

@@ -11,9 +11,9 @@ from conftest import local_and_spread
 
 from enn_traffic.errors import InputError
 from enn_traffic.scenario import load_scenario
-from enn_traffic.sim import make_world
 from enn_traffic.sim.sumo_world import SumoWorld
 from enn_traffic.traffic import sumo
+from enn_traffic.worlds import make_world
 
 SCENARIO = """
 name = "sumo_test"
@@ -133,9 +133,9 @@ def test_replay_and_closed_loop_agree_where_traffic_does_not_react(tmp_path, roo
     rng = np.random.default_rng(5)
     replay = make_world(sumo_scenario(tmp_path, root, CLOCKWISE))
     population = rng.uniform(-1, 1, (40, replay.spec.chromosome_length))
-    replayed = replay.evaluate(population, generation=3)
+    replayed = replay.evaluate(population, key=3)
     closed = make_world(sumo_scenario(tmp_path, root, CLOCKWISE, mode="closed-loop"))
-    live = closed.evaluate(population, generation=3)
+    live = closed.evaluate(population, key=3)
     no_traffic = {"strategy": "random_network", "routes": []}  # the same road, no vehicle
     alone = make_world(replay.scenario.with_overrides(traffic=no_traffic)).evaluate(population,
                                                                                     3)
@@ -203,7 +203,7 @@ def test_missing_route_file_names_the_key(tmp_path, root):
 
 def test_process_pool_with_one_libsumo_per_worker_gives_the_local_results(tmp_path, root):
     """Each worker process runs its own libsumo and records the same traffic."""
-    from enn_traffic.evolution.evaluate import ProcessEvaluator
+    from enn_traffic.evolution.backends import ProcessEvaluator
 
     scenario = sumo_scenario(tmp_path, root, CLOCKWISE, steps=150, episodes=1)
     population = np.random.default_rng(2).uniform(-1, 1, (9, 68))

@@ -13,9 +13,9 @@ from enn_traffic.cli import main
 from enn_traffic.errors import InputError
 from enn_traffic.roads import load_track
 from enn_traffic.scenario import load_scenario
-from enn_traffic.sim import make_world
 from enn_traffic.sim.world import COLLIDED, LEFT_NETWORK, MET_START
 from enn_traffic.traffic import sumo
+from enn_traffic.worlds import make_world
 
 # A straight two-way road from x = 0 to x = 200 (4 m lanes, centre lines at y = -2 eastbound
 # and y = +2 westbound), joined at x = 100; its ends are the network's fringe. The westbound

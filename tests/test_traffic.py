@@ -8,8 +8,10 @@ from conftest import TWO_CARS, local_and_spread, two_cars
 
 from enn_traffic.errors import InputError
 from enn_traffic.scenario import load_scenario
+from enn_traffic.sim.arena import ArenaWorld
 from enn_traffic.sim.collide import body_polygon
-from enn_traffic.sim.world import COLLIDED, World, _sense_bodies
+from enn_traffic.sim.rules import sense_bodies
+from enn_traffic.sim.world import COLLIDED
 
 
 def test_head_on_both_responsible_learner_dies_at_the_expected_step(tmp_path, root):
@@ -40,7 +42,7 @@ def test_beams_see_other_vehicles_bodies():
     centres = corners.mean(axis=1)
     angles = np.array([-math.pi / 2, 0.0, math.pi / 2])
     readings = np.full(3, 25.0)
-    _sense_bodies(0, 0.0, 0.0, 0.0, np.cos(angles), np.sin(angles), corners, centres,
+    sense_bodies(0, 0.0, 0.0, 0.0, np.cos(angles), np.sin(angles), corners, centres,
                   0.5 * math.hypot(4.3, 2.5), readings)
     np.testing.assert_allclose(readings, [25.0, 10.0, 25.0])
 
@@ -48,19 +50,19 @@ def test_beams_see_other_vehicles_bodies():
 @pytest.fixture(scope="module")
 def arena(request):
     root = request.config.rootpath
-    return World(load_scenario(root / "scenarios" / "arena_strategy1.toml"))
+    return ArenaWorld(load_scenario(root / "scenarios" / "arena_strategy1.toml"))
 
 
 def test_every_world_of_a_generation_meets_the_same_traffic(arena):
     chromosome = np.random.default_rng(0).uniform(-1, 1, arena.spec.chromosome_length)
-    results = arena.evaluate(np.repeat(chromosome[None, :], 6, axis=0), generation=3)
+    results = arena.evaluate(np.repeat(chromosome[None, :], 6, axis=0), key=3)
     assert len(set(results.steps[:, 0].tolist())) == 1
-    again = arena.evaluate(chromosome[None, :], generation=3)
+    again = arena.evaluate(chromosome[None, :], key=3)
     np.testing.assert_array_equal(again.steps[0], results.steps[0])
 
 
 def test_traffic_changes_with_the_generation(arena):
-    varying = World(arena.scenario.with_overrides(traffic={"vary": "generation"}))
+    varying = ArenaWorld(arena.scenario.with_overrides(traffic={"vary": "generation"}))
     first = varying.episodes(0)[0]
     second = varying.episodes(1)[0]
     assert not np.array_equal(first.start, second.start)
@@ -71,10 +73,10 @@ def test_traffic_changes_with_the_generation(arena):
 def test_fixed_traffic_holds_for_training_but_never_for_held_out_keys(arena):
     """vary = "fixed": every training generation meets generation 0's traffic, while the
     deployment key still draws other traffic, the same as without "fixed"."""
-    from enn_traffic.evaluation import EVALUATION_KEY
+    from enn_traffic.deploy import EVALUATION_KEY
 
-    fixed = World(arena.scenario.with_overrides(traffic={"vary": "fixed"}))
-    varying = World(arena.scenario.with_overrides(traffic={"vary": "generation"}))
+    fixed = ArenaWorld(arena.scenario.with_overrides(traffic={"vary": "fixed"}))
+    varying = ArenaWorld(arena.scenario.with_overrides(traffic={"vary": "generation"}))
     np.testing.assert_array_equal(fixed.episodes(0)[0].start, fixed.episodes(9)[0].start)
     held_out = fixed.episodes(EVALUATION_KEY)[0].start
     assert not np.array_equal(held_out, fixed.episodes(0)[0].start)
@@ -83,7 +85,7 @@ def test_fixed_traffic_holds_for_training_but_never_for_held_out_keys(arena):
 
 @pytest.mark.parametrize("strategy", [1, 2, 3, 4])
 def test_uncontrolled_vehicles_stay_on_the_arena(strategy, root):
-    world = World(load_scenario(root / "scenarios" / f"arena_strategy{strategy}.toml"))
+    world = ArenaWorld(load_scenario(root / "scenarios" / f"arena_strategy{strategy}.toml"))
     genes = np.zeros(world.spec.chromosome_length)
     genes[-1] = 0.35  # the learner circles gently; the traffic does what its strategy says
     poses, _ = world.trace(genes, max_steps=600)
@@ -99,7 +101,7 @@ def test_strategies_differ(root):
     """Straight drivers mostly keep their heading; circling ones turn at every step."""
     still = {}
     for strategy in (2, 3):
-        world = World(load_scenario(root / "scenarios" / f"arena_strategy{strategy}.toml"))
+        world = ArenaWorld(load_scenario(root / "scenarios" / f"arena_strategy{strategy}.toml"))
         poses, _ = world.trace(np.zeros(world.spec.chromosome_length), max_steps=40)
         turned = np.abs(np.diff(np.unwrap(poses[:, 1:, 2], axis=0), axis=0))
         still[strategy] = (turned < 1e-12).mean()
@@ -111,12 +113,12 @@ def test_traffic_start_off_the_area_is_refused(tmp_path, root):
     path.write_text(TWO_CARS.format(net=root / "sumo_nets" / "arena.net.xml", lx=20, ly=50,
                                     tx=150, ty=50, th=0))
     with pytest.raises(InputError) as info:
-        World(load_scenario(path))
+        ArenaWorld(load_scenario(path))
     assert info.value.key == "traffic.starts_xy[0]"
 
 
 def test_process_pool_matches_local_with_traffic(root):
-    from enn_traffic.evolution.evaluate import ProcessEvaluator
+    from enn_traffic.evolution.backends import ProcessEvaluator
 
     scenario = load_scenario(root / "scenarios" / "arena_strategy4.toml")
     population = np.random.default_rng(1).uniform(-1, 1, (9, 68))
@@ -129,8 +131,8 @@ def test_process_pool_matches_local_with_traffic(root):
 def test_circle_steering_drives_the_drawn_radius(radius):
     """Holding circle_steering(R) and -circle_steering(R), the bicycle model's poses lie on
     circles of radius R (the circumcircle of three poses), turning left and right."""
-    from enn_traffic.sim.kinematics import bicycle_step
-    from enn_traffic.traffic.kinematic import circle_steering
+    from enn_traffic.sim.bicycle import bicycle_step
+    from enn_traffic.traffic.strategies import circle_steering
 
     for side in (1.0, -1.0):
         x, y, heading = 50.0, 50.0, 0.3
@@ -156,7 +158,7 @@ def test_turn_side_left_turns_left_where_the_open_side_is_right(tmp_path, root):
     genes = np.zeros(world.spec.chromosome_length)
     turned = {}
     for side in ("open", "left"):
-        sided = World(world.scenario.with_overrides(traffic={"turn_distance": 10.0,
+        sided = ArenaWorld(world.scenario.with_overrides(traffic={"turn_distance": 10.0,
                                                               "turn_side": side}))
         poses, _ = sided.trace(genes, max_steps=30)
         turned[side] = (poses[30, 1, 2] - poses[0, 1, 2] + math.pi) % (2 * math.pi) - math.pi
@@ -171,7 +173,7 @@ def test_a_turn_begun_6_m_before_a_wall_head_on_hits_it(tmp_path, root):
     world = two_cars(tmp_path, root, (10.0, 5.0), (50.0, 50.0), 90.0)
     jumps = {}
     for distance in (10.0, 7.0, 6.0):
-        turning = World(world.scenario.with_overrides(
+        turning = ArenaWorld(world.scenario.with_overrides(
             traffic={"turn_distance": distance, "turn_side": "left"}, sensor={"beams": 19}))
         poses, _ = turning.trace(np.zeros(turning.spec.chromosome_length), max_steps=70)
         jumps[distance] = np.hypot(*np.diff(poses[:, 1, :2], axis=0).T).max()
@@ -186,7 +188,7 @@ def test_traffic_that_sees_vehicles_turns_away_from_the_learner(tmp_path, root):
     world = two_cars(tmp_path, root, (20.0, 50.0), (60.0, 50.0), 180.0)
     steps = {}
     for sees in (False, True):
-        seeing = World(world.scenario.with_overrides(
+        seeing = ArenaWorld(world.scenario.with_overrides(
             traffic={"turn_distance": 20.0, "sees_vehicles": sees}, sensor={"beams": 19}))
         results = seeing.evaluate(np.zeros((1, seeing.spec.chromosome_length)))
         steps[sees] = (int(results.steps[0, 0]), int(results.outcome[0, 0]))

@@ -3,8 +3,9 @@ import pytest
 from conftest import local_and_spread
 
 from enn_traffic.scenario import load_scenario
+from enn_traffic.sim.arena import ArenaWorld
 from enn_traffic.sim.reference import reference_episode
-from enn_traffic.sim.world import CAPPED, COLLIDED, SPUN, World
+from enn_traffic.sim.world import CAPPED, COLLIDED, SPUN
 
 ARENA = """
 name = "arena_test"
@@ -24,7 +25,7 @@ def arena_world(tmp_path, root, max_steps=1000, x=10.0, y=50.0, **episode):
     path = tmp_path / "arena.toml"
     path.write_text(ARENA.format(net=root / "sumo_nets" / "arena.net.xml", max_steps=max_steps,
                                  x=x, y=y))
-    return World(load_scenario(path).with_overrides(episode=episode))
+    return ArenaWorld(load_scenario(path).with_overrides(episode=episode))
 
 
 def test_straight_driving_hits_the_far_wall_at_the_expected_step(tmp_path, root):
@@ -70,7 +71,7 @@ def test_the_arena_scenarios_spin_rule_ends_the_wide_circle(tmp_path, root):
 
 def test_compiled_episodes_equal_the_plain_reference_loop(root):
     scenario = load_scenario(root / "scenarios" / "navigation_narrow.toml")
-    world = World(scenario)
+    world = ArenaWorld(scenario)
     rng = np.random.default_rng(11)
     population = rng.uniform(-1, 1, (40, world.spec.chromosome_length))
     results = world.evaluate(population)
@@ -82,7 +83,7 @@ def test_compiled_episodes_equal_the_plain_reference_loop(root):
 
 def test_trace_starts_at_the_start_pose_and_ends_where_evaluate_says(root):
     scenario = load_scenario(root / "scenarios" / "navigation_narrow.toml")
-    world = World(scenario)
+    world = ArenaWorld(scenario)
     chromosome = np.random.default_rng(2).uniform(-1, 1, world.spec.chromosome_length)
     poses, outcome = world.trace(chromosome)
     results = world.evaluate(chromosome[None, :])
@@ -93,7 +94,7 @@ def test_trace_starts_at_the_start_pose_and_ends_where_evaluate_says(root):
 
 
 def test_wrong_chromosome_length_is_refused(root):
-    world = World(load_scenario(root / "scenarios" / "navigation_narrow.toml"))
+    world = ArenaWorld(load_scenario(root / "scenarios" / "navigation_narrow.toml"))
     with pytest.raises(ValueError, match="needs 68"):
         world.evaluate(np.zeros((2, 20)))
 
@@ -105,7 +106,7 @@ def test_learning_on_the_narrow_track_improves_fitness(root):
 
     scenario = load_scenario(root / "scenarios" / "navigation_narrow.toml").with_overrides(
         ga={"population_size": 40})
-    world = World(scenario)
+    world = ArenaWorld(scenario)
     rng = np.random.default_rng(scenario.seed)
     population = ga.initial_population(rng, 40, world.spec.chromosome_length, 1.0)
     bests = []
@@ -117,7 +118,7 @@ def test_learning_on_the_narrow_track_improves_fitness(root):
 
 
 def test_process_pool_gives_the_local_results(root):
-    from enn_traffic.evolution.evaluate import ProcessEvaluator
+    from enn_traffic.evolution.backends import ProcessEvaluator
 
     scenario = load_scenario(root / "scenarios" / "navigation_narrow.toml")
     population = np.random.default_rng(5).uniform(-1, 1, (37, 68))

@@ -72,7 +72,7 @@ class RayRuns:
     a run's result depends on its scenario only, never on where it ran."""
 
     def __init__(self, address: str | None = None):
-        from enn_traffic.evolution.evaluate import connect_ray
+        from enn_traffic.evolution.backends import connect_ray
 
         self.ray = connect_ray(address)
         self.task = self.ray.remote(num_cpus=1)(_run_in_folder_files)

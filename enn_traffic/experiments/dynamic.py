@@ -16,19 +16,20 @@ import matplotlib.pyplot as plt
 import numpy as np
 import pandas as pd
 
-from enn_traffic.evaluation import EVALUATION_KEY
-from enn_traffic.evolution.evaluate import MeanOverWorlds
+from enn_traffic import keys
+from enn_traffic.deploy import EVALUATION_KEY
+from enn_traffic.evolution.backends import MeanOverWorlds
 from enn_traffic.evolution.ga import GAState
 from enn_traffic.experiments.common import distinct, run_all, run_or_reuse, scenario
 from enn_traffic.io import write_csv
 from enn_traffic.report.plots import draw_paths, learning_curves, save_figure
 from enn_traffic.scenario import Scenario, load_scenario
-from enn_traffic.sim import make_world
 from enn_traffic.sim.world import EpisodeResults, World
+from enn_traffic.worlds import make_world
 
 STRATEGIES = [1, 2, 3, 4]
 # Candidates are chosen on validation traffic, never on the test traffic of Tables 1 and 2.
-VALIDATION_KEY = 2_000_000_000
+VALIDATION_KEY = keys.VALIDATION.start
 # Table 2 (§5.4.1): a strategy is added once the fitness on every strategy included so far
 # exceeds 80% of the accepted fitness, judged on validation traffic for the TOP_CANDIDATES
 # fittest of a generation, since a generation's best fitness alone is mostly luck: a candidate
@@ -36,7 +37,7 @@ VALIDATION_KEY = 2_000_000_000
 # (ACCEPTANCE_KEY) by its mean less ACCEPTANCE_ERRORS standard errors, so that a candidate just
 # under the threshold seldom passes by the luck of one of the many checks a run makes.
 TOP_CANDIDATES = 5
-ACCEPTANCE_KEY = 3_000_000_000
+ACCEPTANCE_KEY = keys.ACCEPTANCE.start
 ACCEPTANCE_ERRORS = 2.0
 # The best of a few hundred candidates on test_episodes situations is partly luck too: the
 # RECHECKED best are scored again on recheck_episodes validation situations before the choice.

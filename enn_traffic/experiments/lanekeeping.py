@@ -9,13 +9,13 @@ from pathlib import Path
 import matplotlib.pyplot as plt
 import pandas as pd
 
-from enn_traffic.evolution.evaluate import ProcessEvaluator
+from enn_traffic.evolution.backends import ProcessEvaluator
 from enn_traffic.evolution.ga import GAState
 from enn_traffic.experiments.common import run_or_reuse, scenario
 from enn_traffic.io import write_csv
 from enn_traffic.report.plots import draw_paths, learning_curves, save_figure
-from enn_traffic.sim import make_world
 from enn_traffic.sim.world import CAPPED
+from enn_traffic.worlds import make_world
 
 SEEDS = [1, 2, 3]
 DRAWN_STEPS = 400

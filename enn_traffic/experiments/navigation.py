@@ -10,7 +10,7 @@ import numpy as np
 import pandas as pd
 
 from enn_traffic.controller import Controller
-from enn_traffic.evaluation import controller_trace, evaluate_controller
+from enn_traffic.deploy import controller_trace, evaluate_controller
 from enn_traffic.experiments.common import first_generation, run_all, scenario, seed_runs
 from enn_traffic.io import write_csv
 from enn_traffic.report.plots import draw_paths, learning_curves, save_figure

@@ -16,7 +16,7 @@ time each:
   winner's run's final population) and all learn at once for ``SECONDS`` (each its own GA,
   sharing the best chromosomes across vehicles, docs/design.md, "The authors' code" 6); then all
   drive what they found together: the chromosome that lost fewest lives per step
-  (:class:`~enn_traffic.sim.shared.Evidence`), counting what the vehicles saw while learning
+  (:class:`~enn_traffic.evolution.online.Evidence`), counting what the vehicles saw while learning
   together with what the validation situations showed of each candidate, and the rate is
   measured over the ``SECONDS`` that follow.
 
@@ -24,7 +24,7 @@ Table 4 thus measures a later span than Table 3 and the initial behaviour, which
 the start poses. So the initial drivers and the winner also drive on for a second span
 (``initial_next``, ``winner_next`` in ``simultaneous.csv``): the like-for-like comparison.
 
-The metric is :attr:`enn_traffic.sim.shared.SharedRun.collision_rate`. Evolved drivers are held
+The metric is :attr:`enn_traffic.sim.crowd.CrowdRun.collision_rate`. Evolved drivers are held
 to §5.3's spin rule throughout: rotating in place ends a life (the vehicle respawns), so a
 chromosome cannot avoid collisions by circling on the spot; their spins per second are
 recorded beside the collisions.
@@ -41,45 +41,47 @@ import matplotlib.pyplot as plt
 import numpy as np
 import pandas as pd
 
+from enn_traffic import keys
+from enn_traffic.evolution.online import Evidence, OnlineLearning, VehicleGA
 from enn_traffic.experiments import dynamic
 from enn_traffic.experiments.common import distinct, scenario
 from enn_traffic.io import write_csv
 from enn_traffic.report.plots import draw_paths, save_figure
 from enn_traffic.runner import ga_params
-from enn_traffic.sim.shared import Evidence, SharedArena, SharedRun, VehicleGA
-from enn_traffic.sim.world import World
-from enn_traffic.traffic.kinematic import RANDOM_NETWORK, STRATEGIES
+from enn_traffic.sim.arena import ArenaWorld
+from enn_traffic.sim.crowd import Crowd, CrowdRun
+from enn_traffic.traffic.strategies import NETWORK, STRATEGIES
 
 SECONDS = 100.0  # the paper's training time, and each measuring period
 SITUATIONS = 20
-SITUATION_KEY = 3_000_000_000  # traffic situations apart from training, validation and tests
-VALIDATION_KEY = 4_000_000_000  # the situations that choose the winning chromosome
+SITUATION_KEY = keys.CROWD_TEST.start  # the situations whose rates are reported
+VALIDATION_KEY = keys.CROWD_VALIDATION.start  # the situations that choose the winner
 VALIDATION_SITUATIONS = 20
 DRAWN_SECONDS = 20.0
 # Mean reduction of the collision rate over the four strategies in the paper's Tables 3 and 4.
 PAPER_REDUCTION = {"table3": 0.54, "table4": 0.89}
 
 
-def _arena(world: World, situation: int, kinds=None, key: int = SITUATION_KEY
-           ) -> tuple[SharedArena, np.ndarray]:
+def _arena(world: ArenaWorld, situation: int, kinds=None, key: int = SITUATION_KEY
+           ) -> tuple[Crowd, np.ndarray]:
     """The arena of one traffic situation: 8 start poses; ``kinds`` default to the strategy's
     own drivers; and the drivers' random genes (random-network strategy)."""
     episode = world.episodes(key + situation)[0]
     strategy = STRATEGIES[world.scenario.traffic.strategy_list[0]]
     kinds = np.full(world.vehicles, strategy) if kinds is None else kinds
-    return SharedArena(world, episode.start, kinds, int(episode.seed)), episode.traffic_genes.copy()
+    return Crowd(world, episode.start, kinds, int(episode.seed)), episode.traffic_genes.copy()
 
 
-def _broadcast(world: World, genes: np.ndarray, situation: int, key: int = SITUATION_KEY,
-               periods: int = 1) -> list[SharedRun]:
+def _broadcast(world: ArenaWorld, genes: np.ndarray, situation: int, key: int = SITUATION_KEY,
+               periods: int = 1) -> list[CrowdRun]:
     """``periods`` spans of ``SECONDS``, one after another, of one situation with ``genes``
     (world layout) driving every vehicle, held to the spin rule."""
-    arena, _ = _arena(world, situation, np.full(world.vehicles, RANDOM_NETWORK), key)
+    arena, _ = _arena(world, situation, np.full(world.vehicles, NETWORK), key)
     return [arena.run(SECONDS, np.tile(genes, (world.vehicles, 1)), check_spins=True)
             for _ in range(periods)]
 
 
-def _ranked(world: World, candidates: np.ndarray) -> tuple[np.ndarray, Evidence]:
+def _ranked(world: ArenaWorld, candidates: np.ndarray) -> tuple[np.ndarray, Evidence]:
     """The candidates, fewest lives lost (collisions and spins) first when each drives every
     vehicle on validation situations — the first is §5.5.1's winning chromosome — and what
     those situations showed of each (world layout)."""
@@ -101,7 +103,7 @@ def _evolved_population(ranked: np.ndarray, run_population: np.ndarray, size: in
     return distinct(np.concatenate([ranked, run_population]))[:size]
 
 
-def _strategy_rows(world: World, strategy: int, winner: np.ndarray, population: np.ndarray,
+def _strategy_rows(world: ArenaWorld, strategy: int, winner: np.ndarray, population: np.ndarray,
                    validation: Evidence, paths: dict) -> tuple[dict, list[dict]]:
     """The strategy's mean rates (with the simulated and wall time they took) and each
     situation's."""
@@ -109,7 +111,7 @@ def _strategy_rows(world: World, strategy: int, winner: np.ndarray, population: 
     params = ga_params(sc)
     winner_genes = world.spec.in_source_layout(winner)[0]
     evolved = world.spec.in_source_layout(population)
-    network = np.full(world.vehicles, RANDOM_NETWORK)
+    network = np.full(world.vehicles, NETWORK)
     rates = {"initial": [], "winner": [], "learning": [], "population": [],
              "winner_spins": [], "population_spins": [], "initial_next": [], "winner_next": []}
     started = time.perf_counter()
@@ -128,8 +130,9 @@ def _strategy_rows(world: World, strategy: int, winner: np.ndarray, population: 
                     for v in range(world.vehicles)]
         genes = np.tile(winner_genes, (world.vehicles, 1))
         evidence = copy.deepcopy(validation)
-        learning = arena.run(SECONDS, genes, learners, params, share_elites=True,
-                             elite_count=sc.ga.elite_count, evidence=evidence)
+        learning = arena.run(SECONDS, genes, OnlineLearning(
+            learners, params, share_elites=True, elite_count=sc.ga.elite_count,
+            evidence=evidence))
         rates["learning"].append(learning.collision_rate)
         after = arena.run(SECONDS, np.tile(evidence.best(), (world.vehicles, 1)),
                           check_spins=True)
@@ -154,7 +157,7 @@ def _measure(out: Path, quick: bool, progress: bool) -> tuple[pd.DataFrame, pd.D
     candidates = dynamic.evolved_candidates(out, quick, progress)
     rows, situations, paths = [], [], {}
     for strategy in dynamic.STRATEGIES:
-        world = World(scenario(dynamic.ARENA.name(strategy)))
+        world = ArenaWorld(scenario(dynamic.ARENA.name(strategy)))
         ranked, validation = _ranked(world, candidates[strategy])
         winner = ranked[0]
         population = _evolved_population(

@@ -14,12 +14,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from enn_traffic.evolution.genome import NetworkSpec
 from enn_traffic.lanekeeping.env import lane_markings, lane_offset, make_env, marking_segments
+from enn_traffic.network import NetworkSpec, network_buffers
+from enn_traffic.network import steering as network_steering
 from enn_traffic.scenario import Scenario
-from enn_traffic.sim.world import CAPPED, COLLIDED, EpisodeResults, network_steering
-
-LEFT_LANE = COLLIDED  # the outcome code of a life that ended by leaving the lane
+from enn_traffic.sim.world import CAPPED, LEFT_LANE, EpisodeResults
 
 
 @dataclass(frozen=True)
@@ -39,7 +38,7 @@ class LaneKeepingWorld:
         self.scenario = scenario
         self.config = scenario.lane_keeping
         self.spec = NetworkSpec(scenario.layer_sizes, scenario.network.layout)
-        self._layers = np.asarray(scenario.layer_sizes, dtype=np.int64)
+        self.layer_sizes = np.asarray(scenario.layer_sizes, dtype=np.int64)
         self.env = make_env(self.config)
         self._track: Road | None = None
         self.start = (0.0, 0.0, 0.0)
@@ -53,16 +52,15 @@ class LaneKeepingWorld:
     def episode_labels(self) -> list[str]:
         return [f"{self.config.road} road"] * self.config.episodes
 
-    def _rng(self, generation: int, episode: int) -> np.random.Generator:
-        return np.random.default_rng([self.config.seed, generation, episode])
+    def _rng(self, key: int, episode: int) -> np.random.Generator:
+        return np.random.default_rng([self.config.seed, key, episode])
 
     def episode(self, genes: np.ndarray, rng: np.random.Generator, max_steps: int,
                 trace: list | None = None) -> tuple[int, int, float]:
         """One life: (steps kept in the lane, outcome, mean |lateral offset| in metres)."""
         self.env.reset(seed=0)
         vehicle = self.env.unwrapped.vehicle
-        width = int(self._layers.max())
-        activation, scratch = np.empty(max(width, 2)), np.empty(max(width, 2))
+        activation, scratch = network_buffers(self.layer_sizes)
         action = np.zeros(1)
         offsets = 0.0
         steps = 0
@@ -77,11 +75,12 @@ class LaneKeepingWorld:
                 return steps, CAPPED, offsets / max(steps, 1)
             offsets += abs(offset)
             readings = lane_markings(vehicle, self.config.lookahead_m, self.config.noise_m, rng)
-            action[0] = network_steering(genes, self._layers, readings, activation, scratch, 1.0)
+            action[0] = network_steering(genes, self.layer_sizes, readings, activation, scratch,
+                                         1.0)
             self.env.step(action)
             steps += 1
 
-    def evaluate(self, population: np.ndarray, generation: int = 0) -> EpisodeResults:
+    def evaluate(self, population: np.ndarray, key: int = 0) -> EpisodeResults:
         """Fitness of every chromosome: steps kept in the lane, averaged over episodes."""
         genes = self.spec.in_source_layout(population)
         episodes = self.config.episodes
@@ -90,21 +89,21 @@ class LaneKeepingWorld:
         for p, row in enumerate(genes):
             for e in range(episodes):
                 steps[p, e], outcome[p, e], _ = self.episode(
-                    row, self._rng(generation, e), self.scenario.episode.max_steps)
+                    row, self._rng(key, e), self.scenario.episode.max_steps)
         fitness = EpisodeResults.lifetime_fitness(steps, outcome).mean(axis=1)
         return EpisodeResults(fitness, steps, outcome, np.zeros_like(steps), 1)
 
-    def offsets(self, chromosome: np.ndarray, generation: int = 0) -> list[tuple[int, int, float]]:
+    def offsets(self, chromosome: np.ndarray, key: int = 0) -> list[tuple[int, int, float]]:
         """Per episode: (steps, outcome, mean |lateral offset|) of one chromosome."""
         genes = self.spec.in_source_layout(chromosome)[0]
-        return [self.episode(genes, self._rng(generation, e), self.scenario.episode.max_steps)
+        return [self.episode(genes, self._rng(key, e), self.scenario.episode.max_steps)
                 for e in range(self.config.episodes)]
 
-    def trace(self, chromosome: np.ndarray, generation: int = 0, episode: int = 0,
+    def trace(self, chromosome: np.ndarray, key: int = 0, episode: int = 0,
               max_steps: int | None = None) -> tuple[np.ndarray, int]:
         """The vehicle's poses (n, 1, 3) in one episode and the outcome code."""
         poses: list = []
         limit = self.scenario.episode.max_steps if max_steps is None else max_steps
         genes = self.spec.in_source_layout(chromosome)[0]
-        _, outcome, _ = self.episode(genes, self._rng(generation, episode), limit, poses)
+        _, outcome, _ = self.episode(genes, self._rng(key, episode), limit, poses)
         return np.array(poses)[:, None, :], int(outcome)

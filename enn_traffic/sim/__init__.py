@@ -1,26 +1,4 @@
-"""Batched simulation: kinematics, sensors, collisions and the episode loop."""
-
-from __future__ import annotations
-
-from typing import TYPE_CHECKING
-
-if TYPE_CHECKING:
-    from enn_traffic.roads import Track
-    from enn_traffic.scenario import Scenario
-    from enn_traffic.sim.world import World
-
-
-def make_world(scenario: Scenario, track: Track | None = None) -> World:
-    """The world a scenario describes: arena/navigation worlds, SUMO traffic worlds, or a
-    highway-env lane-keeping road."""
-    if scenario.lane_keeping is not None:
-        from enn_traffic.lanekeeping.world import LaneKeepingWorld
-
-        return LaneKeepingWorld(scenario)
-    if scenario.traffic.is_sumo:
-        from enn_traffic.sim.sumo_world import SumoWorld
-
-        return SumoWorld(scenario, track)
-    from enn_traffic.sim.world import World
-
-    return World(scenario, track)
+"""Simulation: the rules of a step (:mod:`~enn_traffic.sim.rules`) and the worlds that run
+them — the arena (:mod:`~enn_traffic.sim.arena`), SUMO traffic replayed or live
+(:mod:`~enn_traffic.sim.replay`, :mod:`~enn_traffic.sim.sumo_world`) and many drivers at once
+(:mod:`~enn_traffic.sim.crowd`)."""

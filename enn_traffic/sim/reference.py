@@ -1,6 +1,6 @@
 """A plain per-vehicle Python episode loop: the yardstick for ``bench`` and the oracle for tests.
 
-Same rules as :func:`enn_traffic.sim.world.run_episode`, written as simply as possible: one
+Same rules as :func:`enn_traffic.sim.arena.run_episode`, written as simply as possible: one
 vehicle at a time, every wall tested every step, no compilation.
 """
 
@@ -11,7 +11,8 @@ from itertools import pairwise
 
 import numpy as np
 
-from enn_traffic.sim.world import CAPPED, COLLIDED, SPUN, World
+from enn_traffic.sim.arena import ArenaWorld
+from enn_traffic.sim.world import CAPPED, COLLIDED, SPUN
 
 
 def _segments_intersect(ax, ay, bx, by, cx, cy, dx, dy):
@@ -33,7 +34,7 @@ def _inside(px, py, corners):
     return True
 
 
-def reference_episode(world: World, chromosome: np.ndarray) -> tuple[int, int]:
+def reference_episode(world: ArenaWorld, chromosome: np.ndarray) -> tuple[int, int]:
     """(steps moved, outcome) of one chromosome, computed the slow, obvious way."""
     scenario = world.scenario
     genes = [float(g) for g in world.spec.in_source_layout(chromosome)[0]]

@@ -11,21 +11,23 @@ the cell, so a sensing step only tests the walls that can matter (docs/design.md
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from typing import NamedTuple
 
 import numpy as np
 from numba import njit
 
 
-@dataclass(frozen=True)
-class WallGrid:
-    """Walls and, per grid cell, the indices of the walls within ``reach`` of the cell."""
+class WallGrid(NamedTuple):
+    """Walls and, per grid cell, the indices of the walls within ``reach`` of the cell; the
+    compiled kernels take it as it is (or any tuple with these fields, such as
+    :class:`enn_traffic.sim.rules.Physics`)."""
 
     walls: np.ndarray  # (S, 4)
-    origin: np.ndarray  # (2,) lower-left corner of cell (0, 0)
+    cell_origin: np.ndarray  # (2,) lower-left corner of cell (0, 0)
     cell_size: float
-    shape: tuple[int, int]  # cells along x, along y
-    cell_start: np.ndarray  # (nx*ny + 1,) CSR offsets into cell_walls
+    cells_x: int
+    cells_y: int
+    cell_start: np.ndarray  # (cells_x * cells_y + 1,) CSR offsets into cell_walls
     cell_walls: np.ndarray  # wall indices
     all_walls: np.ndarray  # arange(S): the fallback outside the grid
 
@@ -50,19 +52,14 @@ class WallGrid:
         cell_walls = np.concatenate(members) if members else np.empty(0, dtype=np.int64)
         return cls(
             walls=walls,
-            origin=low,
+            cell_origin=low,
             cell_size=float(cell_size),
-            shape=(int(nx), int(ny)),
+            cells_x=int(nx),
+            cells_y=int(ny),
             cell_start=np.asarray(starts, dtype=np.int64),
             cell_walls=cell_walls.astype(np.int64),
             all_walls=np.arange(len(walls), dtype=np.int64),
         )
-
-    @property
-    def lookup(self) -> tuple:
-        """The cell lookup as the compiled kernels take it (see :func:`nearby_walls`)."""
-        return (self.origin, self.cell_size, self.shape[0], self.shape[1], self.cell_start,
-                self.cell_walls, self.all_walls)
 
 
 def point_segment_distance(points: np.ndarray, walls: np.ndarray) -> np.ndarray:
@@ -76,15 +73,14 @@ def point_segment_distance(points: np.ndarray, walls: np.ndarray) -> np.ndarray:
 
 
 @njit(cache=True)
-def nearby_walls(x, y, lookup):
-    """The wall indices to test for a vehicle at (x, y); ``lookup`` is :attr:`WallGrid.lookup`."""
-    origin, cell_size, nx, ny, cell_start, cell_walls, all_walls = lookup
-    i = int(math.floor((x - origin[0]) / cell_size))
-    j = int(math.floor((y - origin[1]) / cell_size))
-    if i < 0 or j < 0 or i >= nx or j >= ny:
-        return all_walls
-    cell = i * ny + j
-    return cell_walls[cell_start[cell] : cell_start[cell + 1]]
+def nearby_walls(x, y, grid):
+    """The wall indices to test for a vehicle at (x, y) (``grid``: a :class:`WallGrid`)."""
+    i = int(math.floor((x - grid.cell_origin[0]) / grid.cell_size))
+    j = int(math.floor((y - grid.cell_origin[1]) / grid.cell_size))
+    if i < 0 or j < 0 or i >= grid.cells_x or j >= grid.cells_y:
+        return grid.all_walls
+    cell = i * grid.cells_y + j
+    return grid.cell_walls[grid.cell_start[cell] : grid.cell_start[cell + 1]]
 
 
 @njit(cache=True)

@@ -16,7 +16,6 @@ and differ by their own seed from the learner's start on.
 
 from __future__ import annotations
 
-import math
 import os
 import tempfile
 from collections import OrderedDict
@@ -28,18 +27,17 @@ import numpy as np
 
 from enn_traffic.roads import Track
 from enn_traffic.scenario import Scenario
+from enn_traffic.sim.arena import ArenaWorld
 from enn_traffic.sim.replay import (
-    CLEARANCE,
-    RADIUS,
     RUNNING,
     clear_start,
     learner_state,
     learner_step,
-    physics_vector,
     run_replay_episode,
     run_replay_population,
 )
-from enn_traffic.sim.world import EpisodeResults, World
+from enn_traffic.sim.rules import Physics
+from enn_traffic.sim.world import EpisodeResults
 from enn_traffic.traffic import sumo
 
 
@@ -61,30 +59,27 @@ RECORDINGS_KEPT = 24  # a test world holds 10 test and 10 validation situations
 WARMUP_STREAM = 7  # the key of the shared warm-ups' seeds (traffic.warmup_states)
 
 
-class SumoWorld(World):
+class SumoWorld(ArenaWorld):
     """A scenario whose traffic is SUMO's: evaluate populations, trace one episode."""
 
     def __init__(self, scenario: Scenario, track: Track | None = None):
         super().__init__(scenario, track)
         self._recordings: OrderedDict[int, sumo.Recording] = OrderedDict()
         self.vehicles = 1
-        episode = scenario.episode
-        # A life also ends where the .sumocfg ends the simulation.
-        self._limits = (sumo.episode_steps(scenario), episode.spin_window,
-                        episode.spin_variance)
+        self.max_steps = sumo.episode_steps(scenario)  # or where the .sumocfg ends
         self._checked = False  # closed loop: has some traffic been seen on the network?
         self._states: dict[int, Path] = {}  # closed loop: each situation's saved warm-up
 
-    def seeds(self, generation: int) -> list[int]:
-        """The SUMO seed of each traffic situation of a generation."""
+    def seeds(self, key: int) -> list[int]:
+        """The SUMO seed of each traffic situation of a traffic key."""
         traffic = self.scenario.traffic
-        key = self.traffic_key(generation)
+        key = self.traffic_key(key)
         return [int(np.random.SeedSequence([traffic.seed, key, 0, e]).generate_state(1)[0]
                     % 2**31) for e in range(traffic.episodes)]
 
-    def situation_starts(self, generation: int) -> list[np.ndarray]:
-        """The learner's start pose in each traffic situation of a generation."""
-        key = self.traffic_key(generation)
+    def situation_starts(self, key: int) -> list[np.ndarray]:
+        """The learner's start pose in each traffic situation of a traffic key."""
+        key = self.traffic_key(key)
         return [np.asarray(self.start_of(key, 0, e), dtype=np.float64)
                 for e in range(self.scenario.traffic.episodes)]
 
@@ -105,32 +100,24 @@ class SumoWorld(World):
     def recording(self, seed: int) -> sumo.Recording:
         """The SUMO run of ``seed`` without the learner (recorded once, then kept)."""
         if seed not in self._recordings:
-            self._recordings[seed] = sumo.record(self.scenario, seed, self._limits[0],
+            self._recordings[seed] = sumo.record(self.scenario, seed, self.max_steps,
                                                  self.warm_state(seed))
             while len(self._recordings) > RECORDINGS_KEPT:
                 self._recordings.popitem(last=False)
         self._recordings.move_to_end(seed)
         return self._recordings[seed]
 
-    def _learner_physics(self, radius: float) -> np.ndarray:
-        p = self._physics
-        learner_radius = 0.5 * math.hypot(p.length, p.width)
-        return physics_vector(p.length, p.width, p.wheelbase, p.distance, p.max_range,
-                              self._shape[1], max(radius, learner_radius), self._limits[2],
-                              self.scenario.traffic.respawn_clearance)
+    def _learner_physics(self, radius: float) -> Physics:
+        """The constants, with bodies as large as the traffic's largest (``radius``)."""
+        return self.physics._replace(radius=max(radius, self.physics.radius))
 
-    def _sensor_and_walls(self) -> tuple:
-        p = self._physics
-        return p.beam_cos, p.beam_sin, p.walls, p.lookup, self.exits
-
-    def evaluate(self, population: np.ndarray, generation: int = 0) -> EpisodeResults:
+    def evaluate(self, population: np.ndarray, key: int = 0) -> EpisodeResults:
         """Fitness of every chromosome: steps survived (0 for a spin), averaged over the
-        generation's traffic situations."""
+        traffic situations of ``key``."""
         genes = self.spec.in_source_layout(population)
         closed = self.scenario.traffic.mode == "closed-loop"
         runs, vehicles, at_start, safety = [], [], [], []
-        for seed, start in zip(self.seeds(generation), self.situation_starts(generation),
-                               strict=True):
+        for seed, start in zip(self.seeds(key), self.situation_starts(key), strict=True):
             if closed:
                 *columns, safety_now = self._closed_loop_population(genes, seed, start)
                 runs.append(columns)
@@ -142,9 +129,8 @@ class SumoWorld(World):
             at_start.append(int((record.ids[0] >= 0).sum()))
             with numba.parallel_chunksize(1):
                 runs.append(run_replay_population(
-                    genes, self._shape[0], self._learner_physics(record.radius), start,
-                    *self._sensor_and_walls(), record.ids, record.corners, record.centres,
-                    *self._limits[:2]))
+                    genes, self.layer_sizes, self._learner_physics(record.radius), start,
+                    record.ids, record.corners, record.centres, self.max_steps))
         self.vehicles = 1 + round(float(np.mean(vehicles))) if vehicles else self.vehicles
         steps, outcome, suffered, near_steps, near_max = (
             np.stack([r[i] for r in runs], axis=1) for i in range(5))
@@ -173,7 +159,7 @@ class SumoWorld(World):
         that leaves the learner's world (``gone``) stays in SUMO, unseen by the learner, as it
         does in a replay. The situation's warm-up is simulated once and loaded from a SUMO
         state file by every later call."""
-        limit = self._limits[0] if max_steps is None else max_steps
+        limit = self.max_steps if max_steps is None else max_steps
         start = np.asarray(self.start if start is None else start, dtype=np.float64)
         vehicle = self.scenario.vehicle
         if seed not in self._states:  # found (or simulated) once, not once per chromosome
@@ -191,43 +177,40 @@ class SumoWorld(World):
             physics = self._learner_physics(simulation.largest_radius())
             ids, corners, centres = sumo.slot_arrays(2, 64)  # rows: the step before, now
             before, now = 0, 1  # they swap roles every step, instead of copying
-            state = learner_state(start, physics, self._shape[0], len(self.scenario.beam_angles),
-                                  ids.shape[1], self._limits[1])
-            pose, body, body_before, recent, gone, suffered, met, *scratch = state
-            ids, corners, centres, gone, scratch, radius = self._read(
-                simulation, now, ids, corners, centres, gone, scratch)
+            state = learner_state(start, physics, self.layer_sizes, ids.shape[1])
+            pose, suffered, met = state[0], state[8], state[9]
+            ids, corners, centres, state, radius = self._read(
+                simulation, now, ids, corners, centres, state)
             at_start = int((ids[now] >= 0).sum())
-            physics[RADIUS] = max(physics[RADIUS], radius)  # a body larger than its type said
-            clear_start(body, ids[now], centres[now], gone, physics[CLEARANCE])
+            # a body larger than its type said
+            physics = physics._replace(radius=max(physics.radius, radius))
+            clear_start(state[2], ids[now], centres[now], state[13], physics.clearance)
             sumo.add_learner(vehicle.length, vehicle.width, vehicle.speed)
             # Vehicles farther than this from the learner's front bumper can neither be seen
             # nor be hit within a step: the sensor's range, two bodies and two steps of both
             # vehicles' travel.
             travel = (simulation.largest_speed() + vehicle.speed) * vehicle.dt
             reach = self.scenario.sensor.range + 2.0 * travel
-            simulation.follow_learner(reach + 4.0 * physics[RADIUS])
-            sensor_and_walls = self._sensor_and_walls()
+            simulation.follow_learner(reach + 4.0 * physics.radius)
             t = 0
             while True:
                 if frames is not None:
-                    frames.append((pose.copy(), ids[now].copy(), corners[now].copy()))
+                    frames.append((pose[0].copy(), ids[now].copy(), corners[now].copy()))
                 outcome = learner_step(
-                    t, genes, self._shape[0], physics, *sensor_and_walls,
-                    ids[before], corners[before], centres[before],
-                    ids[now], corners[now], centres[now],
-                    limit, self._limits[1], pose, body, body_before, recent, gone, suffered, met,
-                    *scratch,
-                )  # fmt: skip
+                    t, genes, self.layer_sizes, physics,
+                    (ids[before], corners[before], centres[before]),
+                    (ids[now], corners[now], centres[now]), limit, state)
                 if outcome != RUNNING:
                     break
-                sumo.move_learner(pose[0], pose[1], pose[2])
+                sumo.move_learner(pose[0, 0], pose[0, 1], pose[0, 2])
                 simulation.step()
                 before, now = now, before
-                ids, corners, centres, gone, scratch, radius = self._read(
-                    simulation, now, ids, corners, centres, gone, scratch)
-                if radius > physics[RADIUS]:  # a body larger than its type said
-                    physics[RADIUS] = radius
-                    simulation.follow_learner(reach + 4.0 * physics[RADIUS])
+                ids, corners, centres, state, radius = self._read(
+                    simulation, now, ids, corners, centres, state)
+                pose, suffered, met = state[0], state[8], state[9]
+                if radius > physics.radius:  # a body larger than its type said
+                    physics = physics._replace(radius=radius)
+                    simulation.follow_learner(reach + 4.0 * physics.radius)
                 t += 1
         finally:
             simulation.close()  # SUMO writes the SSM file as it closes
@@ -237,9 +220,10 @@ class SumoWorld(World):
                               at_start, conflicts)
 
     @staticmethod
-    def _read(simulation: sumo.Simulation, row: int, ids, corners, centres, gone, scratch):
+    def _read(simulation: sumo.Simulation, row: int, ids, corners, centres, state):
         """Read SUMO's vehicles into row ``row`` of the slot arrays, doubling the number of
-        slots when a vehicle's slot lies beyond them; also the largest body's half diagonal."""
+        slots (and the learner state's per-slot arrays) when a vehicle's slot lies beyond
+        them; also the largest body's half diagonal."""
         rows = simulation.read()
         while simulation.slots_used > ids.shape[1]:
             size = 2 * ids.shape[1]
@@ -247,18 +231,19 @@ class SumoWorld(World):
             for new, old in zip(grown, (ids, corners, centres), strict=True):
                 new[:, : old.shape[1]] = old
             ids, corners, centres = grown
+            gone = state[13]
             gone = np.concatenate([gone, np.full(size - gone.shape[0], -1, dtype=np.int64)])
-            scratch = [*scratch[:-1], np.empty((size, 2))]
+            state = (*state[:13], gone, np.empty((size, 2)), np.empty(size, np.bool_))
         radius = sumo.fill_frame(rows, ids[row], corners[row], centres[row])
-        return ids, corners, centres, gone, scratch, radius
+        return ids, corners, centres, state, radius
 
-    def trace(self, chromosome: np.ndarray, generation: int = 0, episode: int = 0,
+    def trace(self, chromosome: np.ndarray, key: int = 0, episode: int = 0,
               max_steps: int | None = None) -> tuple[np.ndarray, int]:
         """Poses (n, 1 + S, 3) of the learner and of every SUMO vehicle slot (NaN where a
         slot is empty) in one episode, and the learner's outcome code."""
-        limit = self._limits[0] if max_steps is None else max_steps
-        seed = self.seeds(generation)[episode]
-        start = self.situation_starts(generation)[episode]
+        limit = self.max_steps if max_steps is None else max_steps
+        seed = self.seeds(key)[episode]
+        start = self.situation_starts(key)[episode]
         genes = self.spec.in_source_layout(chromosome)[0]
         if self.scenario.traffic.mode == "closed-loop":
             frames: list = []
@@ -273,9 +258,8 @@ class SumoWorld(World):
             record = self.recording(seed)
             learner = np.full((limit + 1, 3), np.nan)
             steps, outcome, *_ = run_replay_episode(
-                genes, self._shape[0], self._learner_physics(record.radius), start,
-                *self._sensor_and_walls(), record.ids, record.corners, record.centres, limit,
-                self._limits[1], learner)
+                genes, self.layer_sizes, self._learner_physics(record.radius), start,
+                record.ids, record.corners, record.centres, limit, learner)
             ids, corners = record.ids[: steps + 1], record.corners[: steps + 1]
             learner = learner[: steps + 1]
         front = 0.5 * (corners[:, :, 0] + corners[:, :, 1])

@@ -37,10 +37,10 @@ from numba import njit
 from enn_traffic.errors import InputError
 from enn_traffic.scenario import Scenario
 from enn_traffic.sim.collide import body_corners
-from enn_traffic.sim.replay import FAR
 from enn_traffic.traffic.sumocfg import SumoConfig, departure_span, read_sumocfg
 
 LEARNER = "enn_learner"
+FAR = 1e12  # where an empty slot's centre is put, out of every range
 _POSITION, _ANGLE = libsumo.VAR_POSITION, libsumo.VAR_ANGLE
 _VARIABLES = [_POSITION, _ANGLE]  # a vehicle's length and width are read once
 MAX_SLOTS = 4096  # vehicles on the network at once
@@ -202,7 +202,7 @@ class Simulation:
         y, navigation angle; :func:`fill_frame` makes bodies of them. Once
         :meth:`follow_learner` was called, only the vehicles within its reach of the learner;
         a vehicle keeps its slot and number while it is on the network, in reach or not, so
-        that one that left the learner's world (``gone`` in :mod:`enn_traffic.sim.replay`)
+        that one that left the learner's world (``gone``, :mod:`enn_traffic.sim.replay`)
         stays out of it."""
         if self.following:
             results = libsumo.vehicle.getContextSubscriptionResults(LEARNER)

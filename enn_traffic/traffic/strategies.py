@@ -31,20 +31,39 @@ import math
 import numpy as np
 from numba import njit
 
-NONE, RANDOM_NETWORK, STRAIGHT, CIRCLING, WANDER = 0, 1, 2, 3, 4
+# Who steers a vehicle: nobody (it stands), a network (the learner's, an evolved driver's, or
+# the random-network strategy's fixed random genes), or a scripted strategy.
+NONE, NETWORK, STRAIGHT, CIRCLING, WANDER = 0, 1, 2, 3, 4
 STRATEGIES = {
-    "random_network": RANDOM_NETWORK,
+    "random_network": NETWORK,
     "straight": STRAIGHT,
     "circling": CIRCLING,
     "wander": WANDER,
 }
-
-# Layout of the float parameter vector the kernel takes.
-P_TURN_DISTANCE, P_TURN_STEERING, P_TURN_CONE, P_RADIUS_MIN, P_RADIUS_MAX = 0, 1, 2, 3, 4
-P_WANDER_SIGMA, P_WANDER_DECAY, P_WANDER_MAX, P_CLEARANCE, P_WHEELBASE = 5, 6, 7, 8, 9
-P_TURN_SIDE, P_SEES_VEHICLES = 10, 11
-N_PARAMS = 12
 TURN_SIDES = {"open": 0.0, "left": 1.0, "right": -1.0}
+
+
+# The scripted strategies' settings (``[traffic]``) travel in the world's constants
+# (:class:`enn_traffic.sim.rules.Physics`), the ``params`` of the kernels below, as these fields.
+STRATEGY_FIELDS = ("turn_distance", "turn_steering", "turn_cone", "circle_radius_min",
+                   "circle_radius_max", "wander_sigma", "wander_decay", "wander_max",
+                   "turn_side", "sees_vehicles")
+
+
+def strategy_settings(traffic) -> dict[str, float | bool]:
+    """The :data:`STRATEGY_FIELDS` of a scenario's ``[traffic]`` section, in radians and
+    metres (``turn_side``: 1 left, -1 right, 0 the more open side)."""
+    low, high = traffic.circle_radius
+    return {"turn_distance": traffic.turn_distance,
+            "turn_steering": math.radians(traffic.turn_steering_deg),
+            "turn_cone": math.radians(traffic.turn_cone_deg),
+            "circle_radius_min": float(low), "circle_radius_max": float(high),
+            "wander_sigma": math.radians(traffic.wander_sigma_deg),
+            "wander_decay": traffic.wander_decay,
+            "wander_max": math.radians(traffic.wander_max_deg),
+            "turn_side": TURN_SIDES[traffic.turn_side],
+            "sees_vehicles": bool(traffic.sees_vehicles)}
+
 
 _GOLDEN = np.uint64(0x9E3779B97F4A7C15)
 _MIX1 = np.uint64(0xBF58476D1CE4E5B9)
@@ -77,22 +96,22 @@ def reset_memory(kind, params, rng, memory) -> None:
     memory[0] = 0.0
     memory[1] = 0.0
     if kind == CIRCLING:
-        low, high = params[P_RADIUS_MIN], params[P_RADIUS_MAX]
+        low, high = params.circle_radius_min, params.circle_radius_max
         radius = low + (high - low) * next_uniform(rng)
         side = 1.0 if next_uniform(rng) < 0.5 else -1.0
-        memory[0] = side * circle_steering(radius, params[P_WHEELBASE])
+        memory[0] = side * circle_steering(radius, params.wheelbase)
 
 
 @njit(cache=True)
 def senses_vehicles(kind, params) -> bool:
     """Does an uncontrolled vehicle of ``kind`` sense other vehicles' bodies? A network
     always does; a scripted driver only with ``sees_vehicles``."""
-    return kind == RANDOM_NETWORK or (kind != NONE and params[P_SEES_VEHICLES] > 0.0)
+    return kind == NETWORK or (kind != NONE and params.sees_vehicles)
 
 
 @njit(cache=True)
 def circle_steering(radius, wheelbase) -> float:
-    """The steering angle that keeps the bicycle model of :mod:`enn_traffic.sim.kinematics` on
+    """The steering angle that keeps the bicycle model of :mod:`enn_traffic.sim.bicycle` on
     a circle of ``radius``: its front and rear points move apart by the angle δ, so the pose
     turns on a circle of wheelbase / (2 sin(δ/2))."""
     return 2.0 * math.asin(min(0.5 * wheelbase / radius, 1.0))
@@ -105,8 +124,8 @@ def scripted_steering(kind, readings, beam_cos, beam_sin, max_range, params, mem
     one, else the strategy's own steering ``memory[0]`` (0 when driving straight, the circle's,
     or the wander process's, updated here)."""
     if kind == WANDER:
-        limit = params[P_WANDER_MAX]
-        value = params[P_WANDER_DECAY] * memory[0] + params[P_WANDER_SIGMA] * next_normal(rng)
+        limit = params.wander_max
+        value = params.wander_decay * memory[0] + params.wander_sigma * next_normal(rng)
         memory[0] = min(max(value, -limit), limit)
     if kind in (STRAIGHT, CIRCLING, WANDER):
         turn = wall_turn(readings, beam_cos, beam_sin, max_range, params, memory)
@@ -120,7 +139,7 @@ def wall_turn(readings, beam_cos, beam_sin, max_range, params, memory) -> float:
     the cone ahead, keep turning the same way until nothing at all is in range there (a vehicle
     that meets a wall head-on turns about 90° and drives on along it). The way is the more open
     side, or always left or right (``turn_side``: 1 left, -1 right, 0 open). 0: no turn."""
-    cone = math.cos(params[P_TURN_CONE])
+    cone = math.cos(params.turn_cone)
     nearest = np.inf
     left, right = 0.0, 0.0
     for b in range(readings.shape[0]):
@@ -130,11 +149,11 @@ def wall_turn(readings, beam_cos, beam_sin, max_range, params, memory) -> float:
             left += readings[b]
         elif beam_sin[b] < 0.0:
             right += readings[b]
-    if memory[1] == 0.0 and nearest < params[P_TURN_DISTANCE]:
-        side = params[P_TURN_SIDE]
+    if memory[1] == 0.0 and nearest < params.turn_distance:
+        side = params.turn_side
         if side == 0.0:
             side = 1.0 if left >= right else -1.0
-        memory[1] = side * params[P_TURN_STEERING]
+        memory[1] = side * params.turn_steering
     elif memory[1] != 0.0 and nearest >= max_range:
         memory[1] = 0.0
     return memory[1]

@@ -1,19 +1,26 @@
-"""Chromosome layout and the batched forward pass (paper §3, Figure 1).
+"""The controller network: its chromosome layout and its one compiled forward pass (paper §3,
+Figure 1).
 
 A chromosome is a flat vector of every weight, layer by layer. Within a layer, all weights
 coming *out of* one source neuron are consecutive, and the bias node is the last source
 ("source" layout, the paper's Figure 1). The authors' MATLAB code groups weights by *target*
 neuron instead ("target" layout, docs/design.md, "The authors' code" 4); it is offered as an option.
-Every layer, the output layer included, applies the logistic sigmoid.
+Every layer, the output layer included, applies the logistic sigmoid. The steering angle is
+``gain · (left − right)`` of the two outputs.
+
+Every world drives its networks through :func:`steering`; this module sits below both the
+simulation (``sim/``) and the GA (``evolution/``).
 """
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from itertools import pairwise
 from typing import Literal
 
 import numpy as np
+from numba import njit
 
 Layout = Literal["source", "target"]
 
@@ -72,13 +79,51 @@ class NetworkSpec:
         return matrices
 
     def forward(self, population: np.ndarray, inputs: np.ndarray) -> np.ndarray:
-        """Outputs (P, n_out) of P networks, each on its own input row (P, n_in)."""
-        activation = np.atleast_2d(inputs).astype(float)
-        for matrix in self.weights(population):
-            with_bias = np.concatenate([activation, np.ones((len(activation), 1))], axis=1)
-            activation = sigmoid(np.einsum("pi,pio->po", with_bias, matrix))
-        return activation
+        """Outputs (P, n_out) of P networks, each on its own input row (P, n_in), by the
+        compiled pass the worlds drive with."""
+        genes = self.in_source_layout(population)
+        inputs = np.atleast_2d(np.asarray(inputs, dtype=np.float64))
+        layer_sizes = np.asarray(self.layer_sizes, dtype=np.int64)
+        activation, scratch = network_buffers(layer_sizes)
+        outputs = np.empty((len(genes), self.layer_sizes[-1]))
+        for p, row in enumerate(genes):
+            outputs[p] = network_outputs(row, layer_sizes, inputs[p], activation,
+                                         scratch)[: self.layer_sizes[-1]]
+        return outputs
 
 
-def sigmoid(z: np.ndarray) -> np.ndarray:
-    return 1.0 / (1.0 + np.exp(-z))
+@njit(cache=True)
+def network_buffers(layer_sizes):
+    """The two work arrays :func:`network_outputs` needs, as wide as the widest layer."""
+    width = max(layer_sizes.max(), 2)
+    return np.empty(width), np.empty(width)
+
+
+@njit(cache=True)
+def network_outputs(genes, layer_sizes, inputs, activation, scratch):
+    """Forward pass of one source-layout chromosome on ``inputs``; the outputs are the first
+    ``layer_sizes[-1]`` entries of the returned ``activation`` (sigmoid at every layer)."""
+    for i in range(layer_sizes[0]):
+        activation[i] = inputs[i]
+    offset = 0
+    for layer in range(layer_sizes.shape[0] - 1):
+        n_in, n_out = layer_sizes[layer], layer_sizes[layer + 1]
+        bias = offset + n_in * n_out
+        for j in range(n_out):
+            scratch[j] = genes[bias + j]
+        for i in range(n_in):
+            a = activation[i]
+            base = offset + i * n_out
+            for j in range(n_out):
+                scratch[j] += a * genes[base + j]
+        for j in range(n_out):
+            activation[j] = 1.0 / (1.0 + math.exp(-scratch[j]))
+        offset = bias + n_out
+    return activation
+
+
+@njit(cache=True)
+def steering(genes, layer_sizes, readings, activation, scratch, gain):
+    """Steering angle = gain · (left − right) of the network's two outputs (paper §3)."""
+    out = network_outputs(genes, layer_sizes, readings, activation, scratch)
+    return gain * (out[1] - out[0])

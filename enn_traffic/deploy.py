@@ -15,24 +15,25 @@ from pathlib import Path
 import pandas as pd
 from tqdm import tqdm
 
+from enn_traffic import keys
 from enn_traffic.controller import Controller
 from enn_traffic.errors import InputError
 from enn_traffic.io import write_csv
 from enn_traffic.scenario import Scenario
-from enn_traffic.sim import make_world
 from enn_traffic.sim.world import (
     CAPPED,
-    HELD_OUT_KEYS,
     MET_NEAR_MAX,
     MET_NEAR_STEPS,
     MET_START,
     OUTCOMES,
     EpisodeResults,
 )
+from enn_traffic.worlds import make_world
 
-# Evaluation episodes draw held-out traffic, so a controller is never deployed on the traffic
-# it was trained on, whether its training drew new traffic every generation or kept one set.
-EVALUATION_KEY = HELD_OUT_KEYS
+# Evaluation episodes draw the test traffic (:mod:`enn_traffic.keys`), so a controller is never
+# deployed on the traffic it was trained on, whether its training drew new traffic every
+# generation or kept one set, nor on the traffic any choice was made on.
+EVALUATION_KEY = keys.TEST.start
 MAX_LABELLED = 9  # vehicles drawn with a legend entry each
 
 
@@ -124,7 +125,7 @@ def evaluate_batch(controllers: dict[str, Controller], scenarios: Sequence[Scena
                     tables.append(future.result())
                     bar.update(1)
         elif executor == "ray":
-            from enn_traffic.evolution.evaluate import connect_ray
+            from enn_traffic.evolution.backends import connect_ray
 
             ray = connect_ray(address)
             task = ray.remote(num_cpus=1)(_evaluate_pair)

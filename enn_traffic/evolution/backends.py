@@ -1,10 +1,10 @@
 """Evaluators: how a population's fitness gets computed (docs/design.md, "Scale-out").
 
-The GA calls ``evaluator.evaluate(population, generation) -> EpisodeResults`` and nothing else
-(the generation picks the traffic situations). ``local``
-runs the compiled batch in this process (numba threads over the cores); ``process`` splits the
-population into chunks over a process pool, each worker building its own world once. Results
-do not depend on the backend or the number of workers.
+The GA calls ``evaluator.evaluate(population, key) -> EpisodeResults`` and nothing else (the
+traffic key picks the traffic situations: a training generation's number, or a held-out key,
+:mod:`enn_traffic.keys`). ``local`` runs the compiled batch in this process (numba threads over
+the cores); ``process`` splits the population into chunks over a process pool, each worker
+building its own world once. Results do not depend on the backend or the number of workers.
 """
 
 from __future__ import annotations
@@ -18,12 +18,12 @@ import numpy as np
 
 from enn_traffic.errors import InputError
 from enn_traffic.scenario import Scenario
-from enn_traffic.sim import make_world
 from enn_traffic.sim.world import EpisodeResults, World
+from enn_traffic.worlds import make_world
 
 
 class Evaluator(Protocol):
-    def evaluate(self, population: np.ndarray, generation: int = 0) -> EpisodeResults: ...
+    def evaluate(self, population: np.ndarray, key: int = 0) -> EpisodeResults: ...
 
     def close(self) -> None: ...
 
@@ -34,8 +34,8 @@ class LocalEvaluator:
     def __init__(self, scenario: Scenario):
         self.world = make_world(scenario)
 
-    def evaluate(self, population: np.ndarray, generation: int = 0) -> EpisodeResults:
-        return self.world.evaluate(population, generation)
+    def evaluate(self, population: np.ndarray, key: int = 0) -> EpisodeResults:
+        return self.world.evaluate(population, key)
 
     def close(self) -> None:
         pass
@@ -57,9 +57,9 @@ def _init_worker(scenario: Scenario) -> None:
     _worker_world = _single_threaded_world(scenario)
 
 
-def _evaluate_chunk(chunk: np.ndarray, generation: int) -> EpisodeResults:
+def _evaluate_chunk(chunk: np.ndarray, key: int) -> EpisodeResults:
     assert _worker_world is not None
-    return _worker_world.evaluate(chunk, generation)
+    return _worker_world.evaluate(chunk, key)
 
 
 class ProcessEvaluator:
@@ -78,9 +78,9 @@ class ProcessEvaluator:
             initargs=(scenario,),
         )
 
-    def evaluate(self, population: np.ndarray, generation: int = 0) -> EpisodeResults:
+    def evaluate(self, population: np.ndarray, key: int = 0) -> EpisodeResults:
         chunks = np.array_split(population, min(self.workers * 4, len(population)))
-        parts = list(self.pool.map(_evaluate_chunk, chunks, [generation] * len(chunks)))
+        parts = list(self.pool.map(_evaluate_chunk, chunks, [key] * len(chunks)))
         return EpisodeResults.concatenate(parts)
 
     def close(self) -> None:
@@ -93,8 +93,8 @@ class _WorldActor:
     def __init__(self, scenario: Scenario):
         self.world = _single_threaded_world(scenario)
 
-    def evaluate(self, chunk: np.ndarray, generation: int) -> EpisodeResults:
-        return self.world.evaluate(chunk, generation)
+    def evaluate(self, chunk: np.ndarray, key: int) -> EpisodeResults:
+        return self.world.evaluate(chunk, key)
 
 
 def _check_reachable(address: str, timeout: float = 3.0) -> None:
@@ -132,7 +132,7 @@ class RayEvaluator:
     """Population chunks over Ray actors, each holding its own world (docs/design.md, "Scale-out").
 
     ``address=None`` starts a local Ray; otherwise it joins the running cluster there. A
-    chromosome's fitness depends only on it and the generation's traffic, never on the chunk
+    chromosome's fitness depends only on it and the key's traffic, never on the chunk
     it was in, so results are identical with any number of workers.
     """
 
@@ -143,9 +143,9 @@ class RayEvaluator:
         actor = ray.remote(num_cpus=1)(_WorldActor)
         self.actors = [actor.remote(scenario) for _ in range(self.workers)]
 
-    def evaluate(self, population: np.ndarray, generation: int = 0) -> EpisodeResults:
+    def evaluate(self, population: np.ndarray, key: int = 0) -> EpisodeResults:
         chunks = np.array_split(population, min(self.workers, len(population)))
-        futures = [actor.evaluate.remote(chunk, generation)
+        futures = [actor.evaluate.remote(chunk, key)
                    for actor, chunk in zip(self.actors, chunks, strict=False)]
         return EpisodeResults.concatenate(self.ray.get(futures))
 
@@ -162,8 +162,8 @@ class MeanOverWorlds:
     def __init__(self, worlds: list[World]):
         self.worlds = worlds
 
-    def evaluate(self, population: np.ndarray, generation: int = 0) -> EpisodeResults:
-        parts = [world.evaluate(population, generation) for world in self.worlds]
+    def evaluate(self, population: np.ndarray, key: int = 0) -> EpisodeResults:
+        parts = [world.evaluate(population, key) for world in self.worlds]
         steps, outcome, suffered, traffic = (
             np.concatenate([getattr(p, f) for p in parts], axis=1)
             for f in ("steps", "outcome", "suffered", "traffic"))

@@ -1,0 +1,28 @@
+"""Every range of traffic keys, named in one place (docs/design.md, "Traffic keys").
+
+A world draws its traffic situations from (traffic seed, key, ...) alone, so a key range is a
+set of situations. Training generations use their own numbers; every other use has a range of
+its own, far past any training run, so that no choice is ever made on the traffic that measures
+the result (the held-out discipline). A use takes the keys ``start``, ``start + 1``, ... of
+its range.
+"""
+
+from __future__ import annotations
+
+SPAN = 1_000_000_000
+
+TRAINING = range(0, SPAN)  # generation g of a training run draws key g
+TEST = range(SPAN, 2 * SPAN)  # what is reported: `evaluate`, Tables 1–2, the figures
+VALIDATION = range(2 * SPAN, 3 * SPAN)  # choosing a controller among a run's candidates
+ACCEPTANCE = range(3 * SPAN, 4 * SPAN)  # Table 2: a candidate's acceptance by its lower bound
+CROWD_VALIDATION = range(4 * SPAN, 5 * SPAN)  # Tables 3–4: choosing the winning chromosome
+CROWD_TEST = range(5 * SPAN, 6 * SPAN)  # Tables 3–4: the situations whose rates are reported
+
+RANGES = {"training": TRAINING, "test": TEST, "validation": VALIDATION,
+          "acceptance": ACCEPTANCE, "crowd validation": CROWD_VALIDATION,
+          "crowd test": CROWD_TEST}
+
+
+def is_training(key: int) -> bool:
+    """Is ``key`` a training generation's (not a held-out key)?"""
+    return key in TRAINING

@@ -1,0 +1,271 @@
+"""The arena and the navigation tracks: one learner per world, P worlds at once (paper §4–§5.4).
+
+A world holds one learning vehicle (index 0), driven by the chromosome under evaluation, and
+``V - 1`` uncontrolled vehicles driven by a traffic strategy
+(:mod:`enn_traffic.traffic.strategies`). Every evaluation resets the whole world to the same
+start (§5.3). Each step applies the rules of :mod:`enn_traffic.sim.rules`:
+
+1. blame: the learner's life ends at its first responsible collision; an uncontrolled vehicle
+   that is responsible respawns at a free spot, and if it ran into the learner the learner's
+   ``suffered`` count rises (a collision the learner did not cause);
+2. the spin test (fitness 0) and the step cap, for the learner;
+3. every vehicle senses and decides its steering; 4. every vehicle moves.
+
+All P worlds of a generation run in one compiled call spread over the cores with ``prange``;
+each world stops at its own end, and the call returns when all have.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numba
+import numpy as np
+from numba import njit, prange
+
+from enn_traffic import keys
+from enn_traffic.errors import InputError
+from enn_traffic.network import NetworkSpec, network_buffers
+from enn_traffic.roads import Track, load_track
+from enn_traffic.roads.network import start_poses as start_lane_poses
+from enn_traffic.scenario import Scenario
+from enn_traffic.sim.rules import (
+    NO_HIT,
+    Physics,
+    drive_all,
+    place,
+    respawn,
+    responsible,
+    spun,
+    within_range,
+)
+from enn_traffic.sim.sensors import WallGrid
+from enn_traffic.sim.world import CAPPED, COLLIDED, SPUN, EpisodeResults
+from enn_traffic.traffic import strategies
+from enn_traffic.traffic.strategies import reset_memory, strategy_settings
+
+START_STREAM = 5  # the last key of the seed that draws a situation's start from a list
+
+
+@njit(cache=True)
+def run_episode(genes, layer_sizes, start, kinds, traffic_genes, physics, seed, max_steps, trace):
+    """Drive one chromosome (source layout) as vehicle 0 among ``start.shape[0] - 1``
+    uncontrolled vehicles (``kinds``; ``traffic_genes`` drive the network ones).
+
+    Returns (steps moved, outcome, collisions suffered, vehicle-steps within the learner's
+    sensor range, most vehicles within it at once). ``trace`` (n, V, 3) receives the poses of
+    steps 0..n-1 when n > 0.
+    """
+    count = start.shape[0]
+    pose = np.empty((count, 3))
+    corners = np.empty((count, 4, 2))
+    centres = np.empty((count, 2))
+    fresh = np.zeros(count, dtype=np.bool_)  # respawned: no earlier body to blame against
+    memory = np.zeros((count, 2))
+    steering = np.zeros(count)
+    drivers = traffic_genes.copy()
+    drivers[0] = genes
+    rng = np.full(1, seed, dtype=np.uint64)
+    readings = np.empty(physics.beam_cos.shape[0])
+    activation, scratch = network_buffers(layer_sizes)
+    recent = np.empty((physics.spin_window, 2))
+    for v in range(count):
+        reset_memory(kinds[v], physics, rng, memory[v])
+        place(v, start[v, 0], start[v, 1], start[v, 2], physics, pose, corners, centres)
+    previous, previous_centres = corners.copy(), centres.copy()
+    reach = physics.max_range + physics.radius
+    suffered, near_steps, near_max = 0, 0, 0
+    steps = 0
+    while True:
+        if steps < trace.shape[0]:
+            trace[steps] = pose
+        # 1. collisions by the blame rule
+        if responsible(0, pose, corners, centres, previous, previous_centres, fresh, 0,
+                       physics) != NO_HIT:
+            return steps, COLLIDED, suffered, near_steps, near_max
+        for v in range(1, count):
+            hit = responsible(v, pose, corners, centres, previous, previous_centres, fresh, v,
+                              physics)
+            if hit == 0:
+                suffered += 1
+            if hit != NO_HIT:
+                respawn(v, kinds[v], physics, pose, corners, centres, previous,
+                        previous_centres, fresh, memory, rng)
+        # 2. spin test and step cap for the learner
+        if spun(recent, steps, pose[0, 0], pose[0, 1], physics.spin_variance):
+            return steps, SPUN, suffered, near_steps, near_max
+        if steps >= max_steps:
+            return steps, CAPPED, suffered, near_steps, near_max
+        within = within_range(pose[0, 0], pose[0, 1], centres, 1, reach)
+        near_steps += within
+        near_max = max(near_max, within)
+        # 3. sense and decide, 4. move
+        drive_all(kinds, drivers, layer_sizes, physics, pose, corners, centres, previous,
+                  previous_centres, fresh, memory, rng, readings, activation, scratch, steering)
+        steps += 1
+
+
+@njit(cache=True, parallel=True)
+def run_population(population, layer_sizes, start, kinds, traffic_genes, physics, seed,
+                   max_steps):
+    """Run every chromosome of ``population`` (P, G) in its own world; per world
+    (steps, outcome, collisions suffered, vehicle-steps within sensor range, most at once)."""
+    size = population.shape[0]
+    steps = np.zeros(size, dtype=np.int64)
+    outcome = np.zeros(size, dtype=np.int64)
+    suffered = np.zeros(size, dtype=np.int64)
+    near_steps = np.zeros(size, dtype=np.int64)
+    near_max = np.zeros(size, dtype=np.int64)
+    no_trace = np.empty((0, start.shape[0], 3))
+    for p in prange(size):
+        steps[p], outcome[p], suffered[p], near_steps[p], near_max[p] = run_episode(
+            population[p], layer_sizes, start, kinds, traffic_genes, physics, seed, max_steps,
+            no_trace)
+    return steps, outcome, suffered, near_steps, near_max
+
+
+@dataclass(frozen=True)
+class Episode:
+    """One traffic situation: every vehicle's start pose, strategy and (for random networks)
+    genes, and the seed of the world's generator."""
+
+    start: np.ndarray  # (V, 3)
+    kinds: np.ndarray  # (V,)
+    traffic_genes: np.ndarray  # (V, G), source layout
+    seed: np.uint64
+
+
+class ArenaWorld:
+    """A scenario's worlds: its track, learner and traffic, ready to evaluate populations."""
+
+    def __init__(self, scenario: Scenario, track: Track | None = None):
+        self.scenario = scenario
+        self.track = track or load_track(scenario.track.net, exits=scenario.fringe_exits)
+        self.exits = self.track.exits if scenario.fringe_exits else np.empty((0, 4))
+        self.spec = NetworkSpec(scenario.layer_sizes, scenario.network.layout)
+        vehicle, sensor, traffic = scenario.vehicle, scenario.sensor, scenario.traffic
+        reach = max(sensor.range, math.hypot(vehicle.length, vehicle.width / 2)) + 1.0
+        self.grid = WallGrid.build(self.track.walls, reach)
+        self.starts = start_poses(scenario, self.track)
+        self.start = self.starts[0]
+        self.traffic_starts = [tuple(xy) for xy in traffic.starts_xy]
+        for index, (x, y) in enumerate(self.traffic_starts):
+            if not self.track.contains(x, y):
+                raise InputError(f"start ({x:g}, {y:g}) is off the drivable area",
+                                 scenario.source, f"traffic.starts_xy[{index}]")
+        self.vehicles = 1 + len(self.traffic_starts)
+        self.layer_sizes = np.asarray(scenario.layer_sizes, dtype=np.int64)
+        episode = scenario.episode
+        self.physics = Physics.build(
+            self.grid,
+            strategy_settings(traffic),
+            length=vehicle.length,
+            width=vehicle.width,
+            wheelbase=vehicle.wheelbase,
+            distance=vehicle.speed * vehicle.dt,
+            radius=0.5 * math.hypot(vehicle.length, vehicle.width),
+            beam_cos=np.cos(scenario.beam_angles),
+            beam_sin=np.sin(scenario.beam_angles),
+            max_range=sensor.range,
+            gain=math.radians(scenario.network.steering_gain_deg),
+            bounds=np.asarray(self.track.bounds, dtype=np.float64),
+            exits=np.ascontiguousarray(self.exits, dtype=np.float64),
+            spin_window=episode.spin_window,
+            spin_variance=episode.spin_variance,
+            clearance=traffic.respawn_clearance,
+        )
+        self.max_steps = episode.max_steps
+
+    def episodes(self, key: int) -> list[Episode]:
+        """The traffic situations of a traffic key: one per (strategy, episode), drawn from
+        (traffic seed, key, strategy, episode) alone. The learner (vehicle 0) is a network
+        driver."""
+        traffic = self.scenario.traffic
+        key = self.traffic_key(key)
+        result = []
+        for s, name in enumerate(traffic.strategy_list):
+            for e in range(traffic.episodes):
+                sequence = np.random.SeedSequence([traffic.seed, key, s, e])
+                rng = np.random.default_rng(sequence)
+                low, high = np.radians(traffic.start_heading_deg)
+                start = np.array([self.start_of(key, s, e)] + [
+                    (x, y, rng.uniform(low, high)) for x, y in self.traffic_starts])
+                kind = strategies.STRATEGIES.get(name, strategies.NONE)
+                kinds = np.array([strategies.NETWORK] + [kind] * len(self.traffic_starts))
+                genes = rng.uniform(-1, 1, size=(self.vehicles, self.spec.chromosome_length))
+                result.append(Episode(start, kinds, self.spec.in_source_layout(genes),
+                                      np.uint64(sequence.generate_state(1, np.uint64)[0])))
+        return result
+
+    def start_of(self, key: int, strategy: int, episode: int) -> tuple[float, float, float]:
+        """The learner's start in the situation (traffic key, strategy, episode): the one
+        start, or one drawn from the scenario's list of start lanes or edges."""
+        if len(self.starts) == 1:
+            return self.starts[0]
+        sequence = [self.scenario.traffic.seed, key, strategy, episode, START_STREAM]
+        return self.starts[np.random.default_rng(sequence).integers(len(self.starts))]
+
+    def traffic_key(self, key: int) -> int:
+        """The key traffic is drawn from: ``key``, or 0 for every training generation when
+        ``traffic.vary = "fixed"`` (held-out keys stay their own)."""
+        fixed = self.scenario.traffic.vary == "fixed" and keys.is_training(key)
+        return 0 if fixed else key
+
+    def episode_labels(self) -> list[str]:
+        """The strategy of each column of :meth:`evaluate`'s per-episode arrays."""
+        traffic = self.scenario.traffic
+        return [name for name in traffic.strategy_list for _ in range(traffic.episodes)]
+
+    def evaluate(self, population: np.ndarray, key: int = 0) -> EpisodeResults:
+        """Fitness of every chromosome: steps survived (0 for a spin), averaged over the
+        traffic situations of ``key``."""
+        genes = self.spec.in_source_layout(population)
+        runs = []
+        with numba.parallel_chunksize(1):
+            for episode in self.episodes(key):
+                runs.append(run_population(
+                    genes, self.layer_sizes, episode.start, episode.kinds, episode.traffic_genes,
+                    self.physics, episode.seed, self.max_steps))  # fmt: skip
+        steps, outcome, suffered, near_steps, near_max = (
+            np.stack([r[i] for r in runs], axis=1) for i in range(5))
+        fitness = EpisodeResults.lifetime_fitness(steps, outcome).mean(axis=1)
+        traffic = EpisodeResults.traffic_met(self.vehicles - 1, near_steps, near_max)
+        return EpisodeResults(fitness, steps, outcome, suffered, self.vehicles, traffic)
+
+    def trace(self, chromosome: np.ndarray, key: int = 0, episode: int = 0,
+              max_steps: int | None = None) -> tuple[np.ndarray, int]:
+        """Poses (n, V, 3) of every vehicle in one episode, and the learner's outcome code."""
+        limit = self.max_steps if max_steps is None else max_steps
+        chosen = self.episodes(key)[episode]
+        trace = np.full((limit + 1, self.vehicles, 3), np.nan)
+        steps, outcome, *_ = run_episode(
+            self.spec.in_source_layout(chromosome)[0], self.layer_sizes, chosen.start,
+            chosen.kinds, chosen.traffic_genes, self.physics, chosen.seed, limit, trace)
+        return trace[: steps + 1], int(outcome)
+
+
+def start_poses(scenario: Scenario, track: Track) -> list[tuple[float, float, float]]:
+    """The learner's start poses (one, or one per listed start lane or edge), each checked to
+    exist, allow passenger cars and lie on the drivable area."""
+    config = scenario.track
+    names = config.start_names
+    key = "track.start_xy" if not names else f"track.start_{names[0][0]}"
+
+    def where(index: int) -> str:
+        listed = not isinstance(getattr(config, key.removeprefix("track.")), str)
+        return f"{key}[{index}]" if names and listed else key
+
+    if names:
+        try:
+            poses = start_lane_poses(config.net, names, config.start_offset)
+        except ValueError as exc:
+            index, message = exc.args
+            raise InputError(message, scenario.source, where(index)) from None
+    else:
+        poses = [(*config.start_xy, math.radians(config.start_heading_deg))]
+    for index, pose in enumerate(poses):
+        if not track.contains(pose[0], pose[1]):
+            raise InputError(f"start pose ({pose[0]:.1f}, {pose[1]:.1f}) is off the drivable "
+                             f"area of {track.name}", scenario.source, where(index))
+    return poses

@@ -1,0 +1,169 @@
+"""One arena where every vehicle drives by its own controller, and may learn while it drives
+(paper §5.5; docs/design.md, "The authors' code" 6).
+
+Unlike :mod:`enn_traffic.sim.arena`, which runs one learner per world and P worlds at once,
+this is one world of V vehicles run for a stretch of simulated time, by the same rules
+(:mod:`enn_traffic.sim.rules`). Each step:
+
+1. :func:`detect` — collisions by the blame rule, and the spin test for learning vehicles (and
+   for every network vehicle when asked: evolved drivers are held to §5.3's rule that rotating
+   in place ends a life);
+2. every vehicle whose life ended respawns at a free spot; a learning vehicle first tells its
+   learning (:class:`Learning`, e.g. :class:`enn_traffic.evolution.online.OnlineLearning`), which
+   gives the chromosome of its next life;
+3. every vehicle senses walls and the other bodies, decides and moves.
+
+Collision rate (the metric of Tables 3–4): responsible collisions per second of simulated time,
+per vehicle — all responsible collisions, each counted once for each vehicle responsible,
+divided by the number of vehicles and the simulated time.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Protocol
+
+import numpy as np
+from numba import njit
+
+from enn_traffic.network import network_buffers
+from enn_traffic.sim.arena import ArenaWorld
+from enn_traffic.sim.rules import NO_HIT, drive_all, place, respawn, responsible, spun
+from enn_traffic.sim.world import COLLIDED, SPUN
+from enn_traffic.traffic.strategies import NETWORK, reset_memory
+
+ALIVE = -1
+
+
+class Learning(Protocol):
+    """What a crowd calls back for its learning vehicles."""
+
+    def learns(self, vehicle: int) -> bool: ...
+
+    def current(self, vehicle: int) -> np.ndarray:
+        """The chromosome (world layout) the vehicle drives with now."""
+        ...
+
+    def life_ended(self, vehicle: int, steps: int, unseen_steps: int, spun: bool
+                   ) -> np.ndarray:
+        """A life of ``steps`` steps ended by a collision or a spin; the next chromosome."""
+        ...
+
+    def still_driving(self, vehicle: int, unseen_steps: int) -> None:
+        """The run ends with the vehicle's life going on."""
+        ...
+
+
+@njit(cache=True)
+def detect(pose, corners, centres, previous, previous_centres, fresh, spin_checked, life, recent,
+           physics, events) -> None:
+    """Fill ``events`` (V,): ``COLLIDED`` for a responsible collision, ``SPUN`` for a
+    ``spin_checked`` vehicle spinning in place, else ``ALIVE``."""
+    for v in range(pose.shape[0]):
+        events[v] = ALIVE
+        if responsible(v, pose, corners, centres, previous, previous_centres, fresh, v,
+                       physics) != NO_HIT:
+            events[v] = COLLIDED
+        elif spin_checked[v] and spun(recent[v], life[v], pose[v, 0], pose[v, 1],
+                                      physics.spin_variance):
+            events[v] = SPUN
+
+
+@njit(cache=True)
+def drive(kinds, genes, layer_sizes, physics, pose, corners, centres, previous, previous_centres,
+          fresh, memory, rng, readings, activation, scratch, steering, life) -> None:
+    """Every vehicle senses, decides (its own genes, or its scripted strategy) and moves."""
+    drive_all(kinds, genes, layer_sizes, physics, pose, corners, centres, previous,
+              previous_centres, fresh, memory, rng, readings, activation, scratch, steering)
+    life += 1
+
+
+@dataclass
+class CrowdRun:
+    """What a stretch of simulated time produced."""
+
+    collisions: np.ndarray  # (V,) responsible collisions per vehicle
+    spins: np.ndarray  # (V,)
+    seconds: float
+    trace: np.ndarray  # (steps + 1, V, 3)
+
+    @property
+    def vehicle_steps(self) -> int:
+        """Steps driven, summed over the vehicles."""
+        return (self.trace.shape[0] - 1) * len(self.collisions)
+
+    @property
+    def collision_rate(self) -> float:
+        """Responsible collisions per second of simulated time, per vehicle."""
+        return float(self.collisions.sum()) / (len(self.collisions) * self.seconds)
+
+    @property
+    def spin_rate(self) -> float:
+        """Spins in place per second of simulated time, per vehicle."""
+        return float(self.spins.sum()) / (len(self.spins) * self.seconds)
+
+
+class Crowd:
+    """V vehicles in one arena: the scenario's learner start and traffic starts, each vehicle
+    driven by genes of its own or by a scripted strategy (``kinds``)."""
+
+    def __init__(self, world: ArenaWorld, starts: np.ndarray, kinds: np.ndarray, seed: int):
+        self.world = world
+        self.kinds = np.asarray(kinds, dtype=np.int64)
+        count = len(self.kinds)
+        self.physics = p = world.physics
+        self.pose = np.empty((count, 3))
+        self.corners = np.empty((count, 4, 2))
+        self.centres = np.empty((count, 2))
+        self.memory = np.zeros((count, 2))
+        self.rng = np.full(1, np.uint64(seed), dtype=np.uint64)
+        for v in range(count):
+            place(v, *starts[v], p, self.pose, self.corners, self.centres)
+            reset_memory(self.kinds[v], p, self.rng, self.memory[v])
+        self.previous, self.previous_centres = self.corners.copy(), self.centres.copy()
+        self.fresh = np.zeros(count, dtype=np.bool_)
+        self.life = np.zeros(count, dtype=np.int64)
+        self.recent = np.zeros((count, p.spin_window, 2))
+        self.events = np.empty(count, dtype=np.int64)
+        self._work = (np.empty(len(p.beam_cos)), *network_buffers(world.layer_sizes),
+                      np.zeros(count))
+
+    def run(self, seconds: float, genes: np.ndarray, learning: Learning | None = None,
+            check_spins: bool = False) -> CrowdRun:
+        """Drive for ``seconds`` of simulated time. ``genes`` (V, G, source layout) drive the
+        network vehicles; a vehicle that ``learning`` learns drives with its current
+        chromosome, and its learning hears of every life it ends. Learning vehicles, and with
+        ``check_spins`` every network vehicle, lose their life when they spin in place."""
+        count = len(self.kinds)
+        learns = [learning is not None and learning.learns(v) for v in range(count)]
+        spin_checked = np.array(learns) | (check_spins & (self.kinds == NETWORK))
+        unseen_from = self.life.copy()  # steps of a life going on that an earlier run showed
+        for v in np.flatnonzero(learns):
+            genes[v] = learning.current(v)
+        steps = round(seconds / self.world.scenario.vehicle.dt)
+        collisions, spins = np.zeros(count, dtype=np.int64), np.zeros(count, dtype=np.int64)
+        trace = np.empty((steps + 1, count, 3))
+        p = self.physics
+        for t in range(steps + 1):
+            trace[t] = self.pose
+            detect(self.pose, self.corners, self.centres, self.previous, self.previous_centres,
+                   self.fresh, spin_checked, self.life, self.recent, p, self.events)
+            for v in np.nonzero(self.events != ALIVE)[0]:
+                spun = bool(self.events[v] == SPUN)
+                spins[v] += spun
+                collisions[v] += not spun
+                if learns[v]:
+                    genes[v] = learning.life_ended(v, int(self.life[v]),
+                                                   int(self.life[v] - unseen_from[v]), spun)
+                unseen_from[v] = 0
+                respawn(v, self.kinds[v], p, self.pose, self.corners, self.centres,
+                        self.previous, self.previous_centres, self.fresh, self.memory, self.rng)
+                self.life[v] = 0
+            if t == steps:
+                break
+            drive(self.kinds, genes, self.world.layer_sizes, p, self.pose, self.corners,
+                  self.centres, self.previous, self.previous_centres, self.fresh, self.memory,
+                  self.rng, *self._work, self.life)
+        for v in np.flatnonzero(learns):  # a life still going counts what it has shown
+            learning.still_driving(v, int(self.life[v] - unseen_from[v]))
+        return CrowdRun(collisions, spins, steps * self.world.scenario.vehicle.dt, trace)

@@ -1,0 +1,296 @@
+"""The rules of a step, written once (paper §4–§5.3; docs/design.md, "The step").
+
+Every loop that moves vehicles calls these compiled rules: the arena's episode
+(:mod:`enn_traffic.sim.arena`), the learner among SUMO's traffic in replay and closed loop
+(:mod:`enn_traffic.sim.replay`) and many drivers at once (:mod:`enn_traffic.sim.crowd`). A step
+is:
+
+1. **blame** (:func:`responsible`): a vehicle is responsible for a collision if its body touches
+   a wall or the body another vehicle had *before* the step (a vehicle that has just respawned
+   has no such body);
+2. **spin** (:func:`spun`): a vehicle whose positions over the last ``spin_window`` poses have
+   variance at most ``spin_variance`` on both axes is spinning in place (fitness 0, §5.3);
+3. **sense and decide** (:func:`sense`, :func:`decide`): rangefinder readings of walls and of
+   the other bodies, then the vehicle's network or scripted strategy gives its steering;
+4. **move** (:func:`move_all`): the bicycle model, and the body that goes with the new pose;
+
+and a vehicle that is responsible (other than the one being evaluated) **respawns**
+(:func:`respawn`) at a free spot. The constants of all of them travel in one
+:class:`Physics`.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import NamedTuple
+
+import numpy as np
+from numba import njit
+
+from enn_traffic.network import steering as network_steering
+from enn_traffic.sim.bicycle import bicycle_step
+from enn_traffic.sim.collide import body_corners, box_hits_segment, box_hits_walls, boxes_overlap
+from enn_traffic.sim.sensors import WallGrid, nearby_walls, ray_segment_distance, sense_walls
+from enn_traffic.traffic.strategies import (
+    NETWORK,
+    NONE,
+    next_uniform,
+    reset_memory,
+    scripted_steering,
+    senses_vehicles,
+)
+
+# What the blame rule found (:func:`responsible`), besides the index of a vehicle.
+NO_HIT, HIT_WALL = -1, -2
+
+
+class Physics(NamedTuple):
+    """Every constant a step needs, in the one form the compiled rules take: flat, since a
+    compiled parallel loop cannot take a tuple within a tuple. It is also the wall grid
+    (:class:`~enn_traffic.sim.sensors.WallGrid`'s fields) and the scripted strategies'
+    settings (:data:`~enn_traffic.traffic.strategies.STRATEGY_FIELDS`)."""
+
+    length: float  # body, m
+    width: float
+    wheelbase: float
+    distance: float  # metres moved per step
+    radius: float  # half diagonal of the largest body: farther apart, bodies cannot touch
+    beam_cos: np.ndarray  # cos and sin of each beam angle (right to left)
+    beam_sin: np.ndarray
+    max_range: float
+    gain: float  # steering angle per unit of (left − right) network output, rad
+    walls: np.ndarray  # (S, 4)
+    cell_origin: np.ndarray  # the wall grid: walls within reach of each cell
+    cell_size: float
+    cells_x: int
+    cells_y: int
+    cell_start: np.ndarray
+    cell_walls: np.ndarray
+    all_walls: np.ndarray
+    bounds: np.ndarray  # (xmin, ymin, xmax, ymax) of the drivable area
+    exits: np.ndarray  # (X, 4) segments that end a life as "left network"
+    spin_window: int
+    spin_variance: float
+    clearance: float  # a respawned vehicle's least distance to every other
+    turn_distance: float  # the scripted strategies' settings
+    turn_steering: float
+    turn_cone: float
+    circle_radius_min: float
+    circle_radius_max: float
+    wander_sigma: float
+    wander_decay: float
+    wander_max: float
+    turn_side: float
+    sees_vehicles: bool
+
+    @classmethod
+    def build(cls, grid: WallGrid, strategy: dict, **constants) -> Physics:
+        """From the wall grid, the strategies' settings
+        (:func:`~enn_traffic.traffic.strategies.strategy_settings`) and the other fields."""
+        walls = {name: getattr(grid, name) for name in WallGrid._fields}
+        return cls(**walls, **strategy, **constants)
+
+
+@njit(cache=True)
+def place(v, x, y, heading, physics, pose, corners, centres):
+    """Put vehicle ``v`` at (x, y, heading): its pose, body corners and body centre."""
+    pose[v, 0], pose[v, 1], pose[v, 2] = x, y, heading
+    body_corners(x, y, heading, physics.length, physics.width, corners[v])
+    centres[v, 0] = 0.5 * (corners[v, 0, 0] + corners[v, 2, 0])
+    centres[v, 1] = 0.5 * (corners[v, 0, 1] + corners[v, 2, 1])
+
+
+@njit(cache=True)
+def touches(corners, centres, a, others, other_centres, b, near) -> bool:
+    """Does body ``a`` touch (earlier) body ``b``? ``near``: the squared distance of body
+    centres beyond which bodies cannot touch."""
+    dx = centres[a, 0] - other_centres[b, 0]
+    dy = centres[a, 1] - other_centres[b, 1]
+    return dx * dx + dy * dy <= near and boxes_overlap(corners[a], others[b])
+
+
+@njit(cache=True)
+def responsible(v, pose, corners, centres, before, before_centres, absent, me, physics) -> int:
+    """The blame rule for vehicle ``v`` (``pose``, ``corners`` and ``centres`` hold its body):
+    ``HIT_WALL`` if its body touches a wall, else the first vehicle of ``before`` (the bodies
+    from before the step; ``absent`` ones and ``me``, its own, skipped) it touches, else
+    ``NO_HIT``."""
+    candidates = nearby_walls(pose[v, 0], pose[v, 1], physics)
+    if box_hits_walls(corners[v], physics.walls, candidates, candidates.shape[0]):
+        return HIT_WALL
+    near = 4.0 * physics.radius * physics.radius
+    for other in range(before.shape[0]):
+        if (other != me and not absent[other]
+                and touches(corners, centres, v, before, before_centres, other, near)):
+            return other
+    return NO_HIT
+
+
+@njit(cache=True)
+def left_network(body, exits) -> bool:
+    """Does the body touch an exit (the network's fringe, docs/sumo.md)?"""
+    for e in range(exits.shape[0]):
+        if box_hits_segment(body, exits[e, 0], exits[e, 1], exits[e, 2], exits[e, 3]):
+            return True
+    return False
+
+
+@njit(cache=True)
+def spun(recent, life, x, y, spin_variance) -> bool:
+    """Record (x, y) as step ``life`` of a life in the ring ``recent`` (window, 2); is the
+    vehicle spinning in place: a full window whose x and y each vary by at most
+    ``spin_variance``?"""
+    window = recent.shape[0]
+    slot = life % window
+    recent[slot, 0], recent[slot, 1] = x, y
+    return life + 1 >= window and _small_spread(recent, spin_variance)
+
+
+@njit(cache=True)
+def _small_spread(points, limit) -> bool:
+    """Population variance of x and of y both at most ``limit``."""
+    n = points.shape[0]
+    mx = points[:, 0].sum() / n
+    my = points[:, 1].sum() / n
+    vx = ((points[:, 0] - mx) ** 2).sum() / n
+    vy = ((points[:, 1] - my) ** 2).sum() / n
+    return vx <= limit and vy <= limit
+
+
+@njit(cache=True)
+def sense(v, pose, physics, bodies, corners, centres, me, readings) -> None:
+    """Rangefinder readings of vehicle ``v`` (paper §3): the nearest wall along each beam and,
+    when ``bodies``, the nearest edge of any other body (``corners``, ``centres``; ``me``, its
+    own there, skipped)."""
+    x, y, heading = pose[v, 0], pose[v, 1], pose[v, 2]
+    candidates = nearby_walls(x, y, physics)
+    sense_walls(x, y, heading, physics.beam_cos, physics.beam_sin, physics.max_range,
+                physics.walls, candidates, readings)
+    if bodies:
+        sense_bodies(me, x, y, heading, physics.beam_cos, physics.beam_sin, corners, centres,
+                     physics.radius, readings)
+
+
+@njit(cache=True)
+def sense_bodies(me, x, y, heading, beam_cos, beam_sin, corners, centres, radius, readings):
+    """Lower ``readings`` of a vehicle at (x, y, heading) to the nearest edge of any body but
+    ``me``."""
+    cos_h, sin_h = math.cos(heading), math.sin(heading)
+    for other in range(corners.shape[0]):
+        if other == me:
+            continue
+        dx, dy = centres[other, 0] - x, centres[other, 1] - y
+        if math.hypot(dx, dy) - radius > readings.max():
+            continue
+        for b in range(beam_cos.shape[0]):
+            ux = cos_h * beam_cos[b] - sin_h * beam_sin[b]
+            uy = sin_h * beam_cos[b] + cos_h * beam_sin[b]
+            along = dx * ux + dy * uy
+            if along < -radius or along - radius > readings[b] or abs(dx * uy - dy * ux) > radius:
+                continue  # the beam passes clear of the body's bounding circle
+            for i in range(4):
+                j = (i + 1) % 4
+                d = ray_segment_distance(
+                    x, y, ux, uy, readings[b], corners[other, i, 0], corners[other, i, 1],
+                    corners[other, j, 0], corners[other, j, 1],
+                )  # fmt: skip
+                if d < readings[b]:
+                    readings[b] = d
+
+
+@njit(cache=True)
+def decide(kind, genes, layer_sizes, readings, physics, memory, rng, activation, scratch):
+    """The steering angle of a vehicle driven by ``kind``: its network (``genes``, source
+    layout) or its scripted strategy (``memory``: the strategy's state for this life)."""
+    if kind == NETWORK:
+        return network_steering(genes, layer_sizes, readings, activation, scratch, physics.gain)
+    if kind != NONE:
+        return scripted_steering(kind, readings, physics.beam_cos, physics.beam_sin,
+                                 physics.max_range, physics, memory, rng)
+    return 0.0
+
+
+@njit(cache=True)
+def drive_all(kinds, genes, layer_sizes, physics, pose, corners, centres, previous,
+              previous_centres, fresh, memory, rng, readings, activation, scratch, steering):
+    """Every vehicle senses and decides (``genes[v]`` for a network driver), then all move at
+    once: the bodies before the move become ``previous``, and no body is ``fresh`` any more."""
+    count = pose.shape[0]
+    for v in range(count):
+        kind = kinds[v]
+        if kind != NONE:
+            sense(v, pose, physics, count > 1 and senses_vehicles(kind, physics),
+                  corners, centres, v, readings)
+        steering[v] = decide(kind, genes[v], layer_sizes, readings, physics, memory[v], rng,
+                             activation, scratch)
+    move_all(steering, physics, pose, corners, centres, previous, previous_centres, fresh)
+
+
+@njit(cache=True)
+def move_all(steering, physics, pose, corners, centres, previous, previous_centres, fresh):
+    """Every vehicle moves one step by the bicycle model (paper §4)."""
+    previous[:] = corners
+    previous_centres[:] = centres
+    fresh[:] = False
+    for v in range(pose.shape[0]):
+        x, y, heading = bicycle_step(pose[v, 0], pose[v, 1], pose[v, 2], steering[v],
+                                     physics.distance, physics.wheelbase)
+        place(v, x, y, heading, physics, pose, corners, centres)
+
+
+@njit(cache=True)
+def respawn(v, kind, physics, pose, corners, centres, previous, previous_centres, fresh, memory,
+            rng) -> bool:
+    """Move vehicle ``v`` to a random free pose with a fresh life: on the drivable area,
+    touching no wall, at least ``clearance`` from every other vehicle, with no earlier body to
+    blame against and its strategy's state reset. False (nothing changed) if no such pose
+    was found in 200 draws."""
+    trial = np.empty((4, 2))
+    bounds, walls = physics.bounds, physics.walls
+    for _ in range(200):
+        x = bounds[0] + (bounds[2] - bounds[0]) * next_uniform(rng)
+        y = bounds[1] + (bounds[3] - bounds[1]) * next_uniform(rng)
+        heading = math.pi * (2.0 * next_uniform(rng) - 1.0)
+        if not inside(x, y, walls):
+            continue
+        body_corners(x, y, heading, physics.length, physics.width, trial)
+        candidates = nearby_walls(x, y, physics)
+        if box_hits_walls(trial, walls, candidates, candidates.shape[0]):
+            continue
+        if not inside(trial[2, 0], trial[2, 1], walls):
+            continue
+        free = True
+        for other in range(pose.shape[0]):
+            if (other != v
+                    and math.hypot(x - pose[other, 0], y - pose[other, 1]) < physics.clearance):
+                free = False
+                break
+        if free:
+            place(v, x, y, heading, physics, pose, corners, centres)
+            previous[v] = corners[v]
+            previous_centres[v] = centres[v]
+            fresh[v] = True
+            reset_memory(kind, physics, rng, memory[v])
+            return True
+    return False
+
+
+@njit(cache=True)
+def inside(x, y, walls) -> bool:
+    """Is (x, y) inside the area the closed wall rings bound? (crossing number)"""
+    result = False
+    for w in range(walls.shape[0]):
+        x1, y1, x2, y2 = walls[w, 0], walls[w, 1], walls[w, 2], walls[w, 3]
+        if (y1 > y) != (y2 > y) and x < x1 + (y - y1) * (x2 - x1) / (y2 - y1):
+            result = not result
+    return result
+
+
+@njit(cache=True)
+def within_range(x, y, centres, first, reach) -> int:
+    """How many of ``centres[first:]`` lie within ``reach`` of (x, y) (traffic met)."""
+    count = 0
+    for v in range(first, centres.shape[0]):
+        if (centres[v, 0] - x) ** 2 + (centres[v, 1] - y) ** 2 <= reach * reach:
+            count += 1
+    return count
