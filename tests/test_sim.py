@@ -3,8 +3,8 @@ import math
 import numpy as np
 import pytest
 
+from enn_traffic.geometry import body_polygon, box_hits_segment, boxes_overlap
 from enn_traffic.sim.bicycle import bicycle_step
-from enn_traffic.sim.collide import body_polygon, box_hits_segment, boxes_overlap
 from enn_traffic.sim.sensors import WallGrid, nearby_walls, sense_walls
 
 

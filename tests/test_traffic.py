@@ -7,9 +7,9 @@ import pytest
 from conftest import TWO_CARS, local_and_spread, two_cars
 
 from enn_traffic.errors import InputError
+from enn_traffic.geometry import body_polygon
 from enn_traffic.scenario import load_scenario
 from enn_traffic.sim.arena import ArenaWorld
-from enn_traffic.sim.collide import body_polygon
 from enn_traffic.sim.rules import sense_bodies
 from enn_traffic.sim.world import COLLIDED
 

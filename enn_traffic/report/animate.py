@@ -12,7 +12,7 @@ import numpy as np  # noqa: E402
 from matplotlib.animation import FuncAnimation, PillowWriter  # noqa: E402
 from matplotlib.patches import Polygon  # noqa: E402
 
-from enn_traffic.sim.collide import body_polygon  # noqa: E402
+from enn_traffic.geometry import body_polygon  # noqa: E402
 
 
 def animate_run(world, poses: np.ndarray, out: str | Path, title: str = "",

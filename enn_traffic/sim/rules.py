@@ -27,9 +27,9 @@ from typing import NamedTuple
 import numpy as np
 from numba import njit
 
+from enn_traffic.geometry import body_corners, box_hits_segment, box_hits_walls, boxes_overlap
 from enn_traffic.network import steering as network_steering
 from enn_traffic.sim.bicycle import bicycle_step
-from enn_traffic.sim.collide import body_corners, box_hits_segment, box_hits_walls, boxes_overlap
 from enn_traffic.sim.sensors import WallGrid, nearby_walls, ray_segment_distance, sense_walls
 from enn_traffic.traffic.strategies import (
     NETWORK,

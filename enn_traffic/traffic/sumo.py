@@ -35,8 +35,8 @@ import numpy as np
 from numba import njit
 
 from enn_traffic.errors import InputError
+from enn_traffic.geometry import body_corners
 from enn_traffic.scenario import Scenario
-from enn_traffic.sim.collide import body_corners
 from enn_traffic.traffic.sumocfg import SumoConfig, departure_span, read_sumocfg
 
 LEARNER = "enn_learner"
