@@ -23,8 +23,8 @@ import pandas as pd
 
 from enn_traffic.evolution import ga
 from enn_traffic.evolution.backends import Evaluator
-from enn_traffic.experiments.common import scenario as shipped_scenario
 from enn_traffic.runner import ga_params
+from enn_traffic.shipped import shipped_scenario
 from enn_traffic.sim.reference import reference_episode
 from enn_traffic.sim.world import World
 from enn_traffic.traffic import sumo

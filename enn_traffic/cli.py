@@ -47,7 +47,8 @@ def build_parser() -> argparse.ArgumentParser:
     run = commands.add_parser("run", help="evolve a controller on a scenario", epilog=EPILOG,
                               description="Evolve a controller; writes scenario.toml, "
                               "generations.csv, best.npz, learning_curve.png and a checkpoint.")
-    run.add_argument("scenario", type=Path, metavar="SCENARIO.toml")
+    run.add_argument("scenario", type=Path, metavar="SCENARIO.toml",
+                     help="a scenario file, or a shipped scenario's name (navigation_narrow)")
     run.add_argument("--out", type=Path, help="run folder (default: results/<scenario name>)")
     run.add_argument("--seed", type=_non_negative, help="override the scenario's seed")
     run.add_argument("--generations", type=_positive, help="override ga.generations")
@@ -112,8 +113,9 @@ def _cmd_run(args) -> int:
     from enn_traffic.evolution.backends import make_evaluator
     from enn_traffic.runner import evolve
     from enn_traffic.scenario import load_scenario
+    from enn_traffic.shipped import scenario_path
 
-    scenario = load_scenario(args.scenario)
+    scenario = load_scenario(scenario_path(args.scenario))
     overrides = {}
     if args.generations:
         overrides["generations"] = args.generations
@@ -154,6 +156,7 @@ def _cmd_evaluate(args) -> int:
     from enn_traffic.deploy import evaluate_batch, fitness_matrix, write_batch
     from enn_traffic.io import write_csv
     from enn_traffic.scenario import load_scenario
+    from enn_traffic.shipped import scenario_path
 
     controller_paths = [p for p in args.paths if p.suffix == ".npz"]
     scenario_paths = [p for p in args.paths if p.suffix == ".toml"]
@@ -165,7 +168,7 @@ def _cmd_evaluate(args) -> int:
                          key="evaluate")
     controllers = {label: Controller.load(path) for label, path
                    in zip(_labels(controller_paths), controller_paths, strict=True)}
-    scenarios = [load_scenario(path) for path in scenario_paths]
+    scenarios = [load_scenario(scenario_path(path)) for path in scenario_paths]
     if args.mode:
         if not any(s.traffic.is_sumo for s in scenarios):
             raise InputError('--mode applies to SUMO traffic (traffic.strategy = "sumo")',
@@ -191,11 +194,13 @@ def _cmd_render(args) -> int:
     from enn_traffic.controller import Controller
     from enn_traffic.deploy import render
     from enn_traffic.scenario import load_scenario
+    from enn_traffic.shipped import scenario_path
 
     if args.out.suffix.lower() not in (".png", ".gif", ".svg", ".pdf"):
         raise InputError("the output must end in .png, .gif, .svg or .pdf", args.out, "--out")
     controller = Controller.load(args.controller)
-    info = render(controller, load_scenario(args.scenario), args.out, args.max_steps)
+    scenario = load_scenario(scenario_path(args.scenario))
+    info = render(controller, scenario, args.out, args.max_steps)
     print(f"{info['steps']} steps ({info['outcome']}); written {info['file']}")
     return 0
 

@@ -30,13 +30,32 @@ class TrackConfig(_Section):
     """Where the vehicle drives: a SUMO network and a start pose on it. ``start_lane`` and
     ``start_edge`` may list several; each traffic situation then draws one."""
 
-    net: Path | None = None
-    start_xy: tuple[float, float] | None = None
-    start_heading_deg: float = Field(0.0, allow_inf_nan=False)
-    start_lane: str | list[str] | None = None
-    start_edge: str | list[str] | None = None
-    start_offset: float = Field(10.0, ge=0, allow_inf_nan=False)
-    fringe: Literal["wall", "exit"] | None = None
+    net: Path | None = Field(
+        None, description="SUMO `.net.xml`; the drivable area is the union of its lane and "
+        "junction shapes, its boundary the walls (holes under 0.2 m wide excepted); may be left "
+        "out when `traffic.sumocfg` names one. Any path may be `pkg:PACKAGE/path` (a file inside "
+        "an installed Python package)")
+    start_xy: tuple[float, float] | None = Field(
+        None, description="start position of the front-bumper point; give one of `start_xy`, "
+        "`start_lane`, `start_edge`")
+    start_heading_deg: float = Field(
+        0.0, allow_inf_nan=False, description="start heading with `start_xy` (0 = +x, "
+        "counter-clockwise)")
+    start_lane: str | list[str] | None = Field(
+        None, description="start on this lane's centre line, `start_offset` m from its beginning, "
+        "facing along it; the lane must allow passenger cars. A list: each traffic situation "
+        "draws one")
+    start_edge: str | list[str] | None = Field(
+        None, description="start on this edge's rightmost lane that allows passenger cars. A list: "
+        "each traffic situation draws one")
+    start_offset: float = Field(
+        10.0, ge=0, allow_inf_nan=False, description="distance of a lane or edge start from the "
+        "lane's beginning (m)")
+    fringe: Literal["wall", "exit"] | None = Field(
+        None, description="`exit`: nodes with a single neighbouring node (where traffic enters or "
+        "leaves the map) are exits, and reaching one ends a life as `left network`, its steps "
+        "counted as fitness; `wall`: they are walls. Default: `exit` with SUMO traffic, `wall` "
+        "otherwise (the only choice there)")
 
     @model_validator(mode="after")
     def _one_start(self) -> TrackConfig:
@@ -63,43 +82,64 @@ class TrackConfig(_Section):
 class VehicleConfig(_Section):
     """Kinematic bicycle, constant speed (paper §4; docs/design.md, "The authors' code" 2)."""
 
-    length: PositiveFloat = 4.3
-    width: PositiveFloat = 1.7
-    wheelbase: PositiveFloat = 2.6
-    speed: PositiveFloat = 10.0
-    dt: PositiveFloat = 0.1
+    length: PositiveFloat = Field(
+        4.3, description="body length (m); the pose is the middle of the front bumper")
+    width: PositiveFloat = Field(1.7, description="body width (m)")
+    wheelbase: PositiveFloat = Field(2.6, description="wheelbase of the bicycle model (m)")
+    speed: PositiveFloat = Field(10.0, description="constant speed (m/s)")
+    dt: PositiveFloat = Field(
+        0.1, description="time step (s); with the default speed one step is 1 m")
 
 
 class SensorConfig(_Section):
     """Rangefinder: ``beams`` equally spaced over ``span_deg``, right to left (paper §3, §5.2)."""
 
-    beams: int = Field(19, ge=1, le=361)
-    span_deg: float = Field(180.0, gt=0, le=360, allow_inf_nan=False)
-    range: PositiveFloat = 25.0
+    beams: int = Field(
+        19, ge=1, le=361, description="rangefinder beams, equally spaced, right to left; 1 = "
+        "straight ahead")
+    span_deg: float = Field(
+        180.0, gt=0, le=360, allow_inf_nan=False, description="horizontal span of the beams")
+    range: PositiveFloat = Field(
+        25.0, description="beam length (m); a beam that hits nothing reads the range")
 
 
 class NetworkConfig(_Section):
     """Fully connected sigmoid network; 2 outputs (right, left steering force)."""
 
-    hidden: list[Annotated[int, Field(ge=1, le=1024)]] = [3]
-    steering_gain_deg: float = Field(90.0, gt=0, le=180, allow_inf_nan=False)
-    layout: Literal["source", "target"] = "source"
+    hidden: list[Annotated[int, Field(ge=1, le=1024)]] = Field(
+        [3], description="hidden layer sizes; inputs = beams, outputs = 2 (right, left force), "
+        "sigmoid everywhere")
+    steering_gain_deg: float = Field(
+        90.0, gt=0, le=180, allow_inf_nan=False, description="steering = gain × (left − right)")
+    layout: Literal["source", "target"] = Field(
+        "source", description="chromosome layout: `source` (paper Fig. 1: weights out of one "
+        "neuron consecutive, bias last) or `target` (the authors' MATLAB grouping)")
 
 
 class GAConfig(_Section):
     """The paper's GA (§5) and its options; ``target_fitness`` stops a run early once a
     generation's best fitness reaches it."""
 
-    population_size: int = Field(200, ge=2, le=100_000)
-    generations: int = Field(50, ge=1, le=100_000)
-    tournament_size: int = Field(10, ge=1)
-    crossover_probability: float = Field(1.0, ge=0, le=1)
-    crossover_cut_mean: float = Field(0.95, ge=0, le=1)
-    crossover_cut_std: float = Field(0.05, ge=0, le=1)
-    mutation_probability: float = Field(0.1, ge=0, le=1)
-    init_range: PositiveFloat = 1.0
-    elite_count: int = Field(0, ge=0)
-    target_fitness: float | None = Field(None, gt=0, allow_inf_nan=False)
+    population_size: int = Field(200, ge=2, le=100_000, description="chromosomes per generation")
+    generations: int = Field(50, ge=1, le=100_000, description="generations to run")
+    tournament_size: int = Field(
+        10, ge=1, description="tournament selection, contestants drawn with replacement")
+    crossover_probability: float = Field(
+        1.0, ge=0, le=1, description="one-point crossover probability")
+    crossover_cut_mean: float = Field(
+        0.95, ge=0, le=1, description="the cut is at round(Normal(mean, std) × length)")
+    crossover_cut_std: float = Field(
+        0.05, ge=0, le=1, description="spread of the cut, as a share of the length")
+    mutation_probability: float = Field(
+        0.1, ge=0, le=1, description="per gene; a mutated gene is replaced by U[−init_range, "
+        "init_range]")
+    init_range: PositiveFloat = Field(1.0, description="initial genes U[−init_range, init_range]")
+    elite_count: int = Field(
+        0, ge=0, description="best chromosomes copied unchanged (0 = children replace parents, as "
+        "in the paper)")
+    target_fitness: float | None = Field(
+        None, gt=0, allow_inf_nan=False, description="stop early once a generation's best fitness "
+        "reaches this")
 
     @model_validator(mode="after")
     def _fits_population(self) -> GAConfig:
@@ -113,9 +153,12 @@ class GAConfig(_Section):
 class EpisodeConfig(_Section):
     """Episode rules: step cap and the spin ("rotating around itself") penalty of §5.3."""
 
-    max_steps: int = Field(20_000, ge=1, le=10_000_000)
-    spin_window: int = Field(49, ge=2)
-    spin_variance: float = Field(64.0, ge=0, allow_inf_nan=False)
+    max_steps: int = Field(20_000, ge=1, le=10_000_000, description="step cap of one life")
+    spin_window: int = Field(
+        49, ge=2, description="a vehicle whose last `spin_window` positions have variance ≤ "
+        "`spin_variance` m² on both axes is spinning in place: fitness 0 (paper §5.3)")
+    spin_variance: float = Field(
+        64.0, ge=0, allow_inf_nan=False, description="see `spin_window` (m²)")
 
 
 Strategy = Literal["random_network", "straight", "circling", "wander", "sumo"]
@@ -126,28 +169,71 @@ class TrafficConfig(_Section):
     driving by ``strategy`` (a list: the fitness averages over the strategies, §5.4.1), or
     SUMO traffic from ``routes`` / ``sumocfg`` (strategy ``"sumo"``, docs/sumo.md)."""
 
-    strategy: Strategy | list[Strategy] = "random_network"
-    starts_xy: list[tuple[float, float]] = []
-    start_heading_deg: tuple[float, float] = (-90.0, 90.0)
-    seed: int = Field(1000, ge=0)
-    vary: Literal["generation", "fixed"] = "generation"
-    episodes: int = Field(1, ge=1, le=1000)
-    turn_distance: float = Field(10.0, ge=0, allow_inf_nan=False)
-    turn_steering_deg: float = Field(35.0, gt=0, le=90, allow_inf_nan=False)
-    turn_cone_deg: float = Field(20.0, ge=0, le=90, allow_inf_nan=False)
-    wander_sigma_deg: float = Field(6.0, ge=0, le=90, allow_inf_nan=False)
-    wander_decay: float = Field(0.95, ge=0, le=1)
-    wander_max_deg: float = Field(45.0, gt=0, le=90, allow_inf_nan=False)
-    circle_radius: tuple[PositiveFloat, PositiveFloat] = (10.0, 30.0)
-    respawn_clearance: float = Field(10.0, ge=0, allow_inf_nan=False)
-    turn_side: Literal["open", "left", "right"] = "open"
-    sees_vehicles: bool = False
-    routes: list[Path] = []
-    sumocfg: Path | None = None
-    mode: Literal["replay", "closed-loop"] = "replay"
-    begin_s: float | None = Field(None, ge=0, allow_inf_nan=False)
-    warmup_s: float = Field(60.0, ge=0, le=86_400, allow_inf_nan=False)
-    warmup_states: int = Field(0, ge=0, le=1000)
+    strategy: Strategy | list[Strategy] = Field(
+        "random_network", description="how the uncontrolled vehicles drive: `random_network`, "
+        "`straight`, `circling`, `wander` (below) or `sumo`; a list = fitness averaged over those "
+        "strategies")
+    starts_xy: list[tuple[float, float]] = Field(
+        [], description="one uncontrolled vehicle per `[x, y]` start; none = the learner drives "
+        "alone")
+    start_heading_deg: tuple[float, float] = Field(
+        (-90.0, 90.0), description="their start headings are drawn from this range")
+    seed: int = Field(1000, ge=0, description="traffic seed")
+    vary: Literal["generation", "fixed"] = Field(
+        "generation", description="`generation` draws new traffic every generation (the same for "
+        "every chromosome of it), `fixed` keeps one")
+    episodes: int = Field(
+        1, ge=1, le=1000, description="traffic situations per chromosome and strategy; fitness is "
+        "the mean")
+    turn_distance: float = Field(
+        10.0, ge=0, allow_inf_nan=False, description="`straight`, `circling`, `wander`: turn when "
+        "a wall is nearer than this (m) within ±`turn_cone_deg` ahead, until that cone is clear; "
+        "0 = never turn")
+    turn_steering_deg: float = Field(
+        35.0, gt=0, le=90, allow_inf_nan=False, description="the steering angle of those turns")
+    turn_cone_deg: float = Field(
+        20.0, ge=0, le=90, allow_inf_nan=False, description="half-width of the cone ahead that "
+        "starts a turn")
+    wander_sigma_deg: float = Field(
+        6.0, ge=0, le=90, allow_inf_nan=False, description="`wander`: steering ← decay × steering "
+        "+ Normal(0, σ), clipped to ±`wander_max_deg`")
+    wander_decay: float = Field(0.95, ge=0, le=1, description="`wander`: the decay of that process")
+    wander_max_deg: float = Field(
+        45.0, gt=0, le=90, allow_inf_nan=False, description="`wander`: the largest steering angle")
+    circle_radius: tuple[PositiveFloat, PositiveFloat] = Field(
+        (10.0, 30.0), description="`circling`: range of the circle radii (m), one drawn per life")
+    respawn_clearance: float = Field(
+        10.0, ge=0, allow_inf_nan=False, description="an uncontrolled vehicle that causes a "
+        "collision respawns at a random free spot at least this far (m) from every other vehicle; "
+        "with SUMO traffic, vehicles this near the learner's start leave its world before the "
+        "first step")
+    turn_side: Literal["open", "left", "right"] = Field(
+        "open", description="which way the turns go: `open` (towards the side with more room), "
+        "`left` or `right` (always; a one-way flow round the walls)")
+    sees_vehicles: bool = Field(
+        False, description="`straight`, `circling`, `wander`: also turn away from vehicles, not "
+        "only walls, in the cone ahead")
+    routes: list[Path] = Field(
+        [], description="`strategy = \"sumo\"`: SUMO route files (routes, flows, vehicle types) "
+        "run on the track's network")
+    sumocfg: Path | None = Field(
+        None, description="`strategy = \"sumo\"`: alternatively (or as well: `routes` are added to "
+        "its route files) a SUMO `.sumocfg`, run as SUMO runs it — its begin and end, route and "
+        "additional files; `[track] net`, when given, replaces its `net-file`")
+    mode: Literal["replay", "closed-loop"] = Field(
+        "replay", description="SUMO traffic: `replay` (SUMO runs once per traffic situation "
+        "without the learner; every chromosome meets the recording) or `closed-loop` (the learner "
+        "is in SUMO every step and drivers react; slower)")
+    begin_s: float | None = Field(
+        None, ge=0, allow_inf_nan=False, description="SUMO time at which traffic begins: the "
+        "`.sumocfg`'s begin by default (0 without one)")
+    warmup_s: float = Field(
+        60.0, ge=0, le=86_400, allow_inf_nan=False, description="SUMO time simulated after the "
+        "begin before the learner starts; a life also ends at the `.sumocfg`'s end")
+    warmup_states: int = Field(
+        0, ge=0, le=1000, description="`N` > 0: `N` warm-ups, simulated once and saved as SUMO "
+        "states, shared by every traffic situation (each then drives on with its own seed); `0`: "
+        "each situation warms up with its own seed ([sumo.md](sumo.md#warm-up-once))")
 
     @model_validator(mode="after")
     def _sumo_sources(self) -> TrafficConfig:
@@ -190,25 +276,35 @@ class LaneKeepingConfig(_Section):
     """Lane keeping on a highway-env road, steered from a camera's lane markings (paper §5.6):
     the lateral offsets of both markings at each look-ahead distance, in the vehicle frame."""
 
-    road: Literal["sine", "circle"] = "sine"
-    amplitude: float = Field(5.0, ge=0, allow_inf_nan=False)
-    period: PositiveFloat = 100.0
-    length: PositiveFloat = 1000.0
-    radius: PositiveFloat = 60.0
-    lane_width: PositiveFloat = 4.0
-    lookahead_m: list[PositiveFloat] = Field([5.0, 10.0, 15.0, 20.0], min_length=1)
-    noise_m: float = Field(0.0, ge=0, allow_inf_nan=False)
-    episodes: int = Field(1, ge=1, le=1000)
-    seed: int = Field(0, ge=0)
+    road: Literal["sine", "circle"] = Field(
+        "sine", description="`sine` (highway-env's lane-keeping road shape) or `circle`")
+    amplitude: float = Field(
+        5.0, ge=0, allow_inf_nan=False, description="sine road: amplitude of the centre line (m)")
+    period: PositiveFloat = Field(100.0, description="sine road: period of the centre line (m)")
+    length: PositiveFloat = Field(1000.0, description="sine road: length (m)")
+    radius: PositiveFloat = Field(60.0, description="circle road: radius of the centre line (m)")
+    lane_width: PositiveFloat = Field(
+        4.0, description="lane width (m); the life ends when the vehicle's centre leaves the lane")
+    lookahead_m: list[PositiveFloat] = Field(
+        [5.0, 10.0, 15.0, 20.0], min_length=1, description="the camera's look-ahead distances "
+        "along the lane; the network gets both markings' lateral offsets (vehicle frame) at each: "
+        "2 inputs per distance")
+    noise_m: float = Field(
+        0.0, ge=0, allow_inf_nan=False, description="Gaussian noise on the offsets (m)")
+    episodes: int = Field(1, ge=1, le=1000, description="episodes per chromosome")
+    seed: int = Field(0, ge=0, description="noise seed")
 
 
 class Scenario(_Section):
     """A whole scenario file: a SUMO ``[track]`` (navigation, arena, SUMO traffic) or a
     highway-env ``[lane_keeping]`` road."""
 
-    name: str = Field(min_length=1, pattern=r"^[A-Za-z0-9_.-]+$")
-    description: str = ""
-    seed: int = Field(0, ge=0)
+    name: str = Field(
+        min_length=1, pattern=r"^[A-Za-z0-9_.-]+$", description="run name (letters, digits, "
+        "`_.-`); the default output folder")
+    description: str = Field("", description="free text")
+    seed: int = Field(
+        0, ge=0, description="seed of the run's random generator; same seed, same run")
     track: TrackConfig | None = None
     lane_keeping: LaneKeepingConfig | None = None
     vehicle: VehicleConfig = VehicleConfig()

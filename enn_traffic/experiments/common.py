@@ -14,14 +14,8 @@ from tqdm import tqdm
 from enn_traffic.errors import InputError
 from enn_traffic.io import write_atomic
 from enn_traffic.runner import CHECKPOINT, evolve
-from enn_traffic.scenario import Scenario, load_scenario
-
-SCENARIOS = Path(__file__).resolve().parents[2] / "scenarios"
-
-
-def scenario(name: str) -> Scenario:
-    """A shipped scenario by name (``scenarios/NAME.toml``)."""
-    return load_scenario(SCENARIOS / f"{name}.toml")
+from enn_traffic.scenario import Scenario
+from enn_traffic.shipped import shipped_scenario
 
 
 def distinct(rows: np.ndarray) -> np.ndarray:
@@ -126,7 +120,7 @@ def seed_runs(name: str, out: Path, seeds, ga: dict, progress: bool
               ) -> dict[int, pd.DataFrame]:
     """One run of scenario ``name`` per seed under ``out/runs/NAME/seedN``; experiments that
     share runs (Fig. 7 and Fig. 9's 19 beams) find them done."""
-    base = scenario(name)
+    base = shipped_scenario(name)
     jobs = {seed: (base.with_overrides(seed=seed, ga=ga), out / "runs" / name / f"seed{seed}")
             for seed in seeds}
     return run_all(jobs, progress)

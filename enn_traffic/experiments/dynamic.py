@@ -20,10 +20,11 @@ from enn_traffic import keys
 from enn_traffic.deploy import EVALUATION_KEY
 from enn_traffic.evolution.backends import MeanOverWorlds
 from enn_traffic.evolution.ga import GAState
-from enn_traffic.experiments.common import distinct, run_all, run_or_reuse, scenario
+from enn_traffic.experiments.common import distinct, run_all, run_or_reuse
 from enn_traffic.io import write_csv
 from enn_traffic.report.plots import draw_paths, learning_curves, save_figure
 from enn_traffic.scenario import Scenario, load_scenario
+from enn_traffic.shipped import shipped_scenario
 from enn_traffic.sim.world import EpisodeResults, World
 from enn_traffic.worlds import make_world
 
@@ -97,7 +98,7 @@ class Family:
     def scenario(self, strategy: int) -> Scenario:
         """A strategy's scenario, with the quick overrides in quick mode and the family's
         hidden layers if it sets them."""
-        sc, overrides = scenario(self.name(strategy)), self.overrides()
+        sc, overrides = shipped_scenario(self.name(strategy)), self.overrides()
         return sc.with_overrides(**overrides) if overrides else sc
 
     @property

@@ -11,9 +11,10 @@ import pandas as pd
 
 from enn_traffic.evolution.backends import ProcessEvaluator
 from enn_traffic.evolution.ga import GAState
-from enn_traffic.experiments.common import run_or_reuse, scenario
+from enn_traffic.experiments.common import run_or_reuse
 from enn_traffic.io import write_csv
 from enn_traffic.report.plots import draw_paths, learning_curves, save_figure
+from enn_traffic.shipped import shipped_scenario
 from enn_traffic.sim.world import CAPPED
 from enn_traffic.worlds import make_world
 
@@ -33,7 +34,7 @@ ROADS = {
 def lane_keeping(out: Path, quick: bool = False, progress: bool = True) -> list[str]:
     """Evolve on the training road (process pool), then drive the best controller of each
     run on every road: ``lane_keeping.csv``, ``lane_keeping.png``, ``lane_keeping_paths.png``."""
-    base = scenario("lane_keeping")
+    base = shipped_scenario("lane_keeping")
     seeds = SEEDS[:1] if quick else SEEDS
     runs, best, wall = {}, {}, {}
     for seed in seeds:

@@ -11,9 +11,10 @@ import pandas as pd
 
 from enn_traffic.controller import Controller
 from enn_traffic.deploy import controller_trace, evaluate_controller
-from enn_traffic.experiments.common import first_generation, run_all, scenario, seed_runs
+from enn_traffic.experiments.common import first_generation, run_all, seed_runs
 from enn_traffic.io import write_csv
 from enn_traffic.report.plots import draw_paths, learning_curves, save_figure
+from enn_traffic.shipped import shipped_scenario
 
 # Best fitness at which the vehicle has reached the far dead end of the narrow track
 # (location B, ≈1.3 km of corridor; docs/design.md, "The authors' code" 1).
@@ -59,7 +60,7 @@ def fig8(out: Path, quick: bool = False, progress: bool = True) -> list[str]:
     """Wide track, 5 seeds: back and forth without collision up to the step cap."""
     seeds = SEEDS[:2] if quick else SEEDS
     runs = _seed_runs("navigation_wide", out, seeds, quick, progress)
-    cap = scenario("navigation_wide").episode.max_steps
+    cap = shipped_scenario("navigation_wide").episode.max_steps
     rows = [{
         "seed": seed,
         "generations": len(table),
@@ -86,7 +87,7 @@ SENSORS = [(1, 180.0), (3, 180.0), (5, 180.0), (10, 180.0), (19, 180.0), (3, 90.
 def fig9(out: Path, quick: bool = False, progress: bool = True) -> list[str]:
     """Sensor resolution: 1, 3, 5, 10, 19 beams over 180° on the narrow track."""
     seeds = SEEDS[:1] if quick else SEEDS
-    base = scenario("navigation_narrow")
+    base = shipped_scenario("navigation_narrow")
     jobs = {}  # every sensor's runs at once: side by side on Ray
     for beams, span in SENSORS:
         label = "navigation_narrow" if beams == 19 else f"navigation_narrow_{beams}beams"
@@ -145,7 +146,7 @@ def generalization(out: Path, quick: bool = False, progress: bool = True) -> lis
     rows = []
     for run, controller in controllers.items():
         for name in tracks:
-            row = evaluate_controller(controller, scenario(name)).iloc[0].to_dict()
+            row = evaluate_controller(controller, shipped_scenario(name)).iloc[0].to_dict()
             rows.append({"controller": run, "trained_fitness": controller.fitness, **row})
     table = pd.DataFrame(rows)
     write_csv(out / "generalization.csv", table)
@@ -154,7 +155,8 @@ def generalization(out: Path, quick: bool = False, progress: bool = True) -> lis
     shown = capped_runs.iloc[0] if len(capped_runs) else next(iter(controllers))
     figure, axes = plt.subplots(1, len(tracks), figsize=(4 * len(tracks), 4.2))
     for ax, name in zip(axes, tracks, strict=True):
-        world, poses, _ = controller_trace(controllers[shown], scenario(name), max_steps=3000)
+        world, poses, _ = controller_trace(controllers[shown], shipped_scenario(name),
+                                           max_steps=3000)
         draw_paths(ax, world.track.walls, [poses[:, 0]], colors=["C0"], start=world.start,
                    width=0.8)
         ax.set_title(name, fontsize=9)

@@ -44,10 +44,11 @@ import pandas as pd
 from enn_traffic import keys
 from enn_traffic.evolution.online import Evidence, OnlineLearning, VehicleGA
 from enn_traffic.experiments import dynamic
-from enn_traffic.experiments.common import distinct, scenario
+from enn_traffic.experiments.common import distinct
 from enn_traffic.io import write_csv
 from enn_traffic.report.plots import draw_paths, save_figure
 from enn_traffic.runner import ga_params
+from enn_traffic.shipped import shipped_scenario
 from enn_traffic.sim.arena import ArenaWorld
 from enn_traffic.sim.crowd import Crowd, CrowdRun
 from enn_traffic.traffic.strategies import NETWORK, STRATEGIES
@@ -157,7 +158,7 @@ def _measure(out: Path, quick: bool, progress: bool) -> tuple[pd.DataFrame, pd.D
     candidates = dynamic.evolved_candidates(out, quick, progress)
     rows, situations, paths = [], [], {}
     for strategy in dynamic.STRATEGIES:
-        world = ArenaWorld(scenario(dynamic.ARENA.name(strategy)))
+        world = ArenaWorld(shipped_scenario(dynamic.ARENA.name(strategy)))
         ranked, validation = _ranked(world, candidates[strategy])
         winner = ranked[0]
         population = _evolved_population(

@@ -1,0 +1,94 @@
+"""The scenario reference (docs/scenarios.md), written from the schema's own field descriptions.
+
+``python -m enn_traffic.scenario_reference`` rewrites the tables between the
+``<!-- reference:NAME -->`` and ``<!-- /reference -->`` markers of docs/scenarios.md; a test
+keeps the file in step with the schema.
+"""
+
+from __future__ import annotations
+
+import re
+import sys
+from pathlib import Path
+
+from pydantic import BaseModel
+from pydantic_core import PydanticUndefined
+
+from enn_traffic.scenario import (
+    EpisodeConfig,
+    GAConfig,
+    LaneKeepingConfig,
+    NetworkConfig,
+    Scenario,
+    SensorConfig,
+    TrackConfig,
+    TrafficConfig,
+    VehicleConfig,
+)
+
+DOCUMENT = Path(__file__).resolve().parents[1] / "docs" / "scenarios.md"
+SECTIONS = {"track": TrackConfig, "vehicle": VehicleConfig, "sensor": SensorConfig,
+            "network": NetworkConfig, "ga": GAConfig, "episode": EpisodeConfig,
+            "traffic": TrafficConfig}
+_MARKED = re.compile(r"(<!-- reference:(\w+) -->\n)(.*?)(<!-- /reference -->)", re.S)
+
+
+def _value(value) -> str:
+    """A default as it is written in TOML."""
+    if value is PydanticUndefined:
+        return "—"
+    if value is None:
+        return "none"
+    if isinstance(value, bool):
+        return str(value).lower()
+    if isinstance(value, str):
+        return f'"{value}"'
+    if isinstance(value, list | tuple):
+        return "[" + ", ".join(_value(v) for v in value) + "]"
+    if isinstance(value, float):
+        return f"{value:g}"
+    return str(value)
+
+
+def _rows(model: type[BaseModel], section: str | None) -> list[str]:
+    rows = []
+    for name, field in model.model_fields.items():
+        if field.exclude or (isinstance(field.annotation, type)
+                             and issubclass(field.annotation, BaseModel)):
+            continue
+        if field.description is None:
+            continue
+        key = f"[{section}] {name}" if section else name
+        rows.append(f"| `{key}` | `{_value(field.default)}` | {field.description} |")
+    return rows
+
+
+def tables() -> dict[str, str]:
+    """Each marked table of the reference: ``scenario`` and ``lane_keeping``."""
+    head = ["| key | default | meaning |", "|---|---|---|"]
+    scenario = _rows(Scenario, None)
+    for section, model in SECTIONS.items():
+        scenario += _rows(model, section)
+    return {"scenario": "\n".join(head + scenario) + "\n",
+            "lane_keeping": "\n".join(head + _rows(LaneKeepingConfig, "lane_keeping")) + "\n"}
+
+
+def undocumented() -> list[str]:
+    """Fields of the schema without a description (each must have one)."""
+    missing = [f"{name}" for name, f in Scenario.model_fields.items()
+               if f.description is None and name not in (*SECTIONS, "lane_keeping", "source")]
+    for section, model in {**SECTIONS, "lane_keeping": LaneKeepingConfig}.items():
+        missing += [f"{section}.{name}" for name, f in model.model_fields.items()
+                    if f.description is None]
+    return missing
+
+
+def rewritten(text: str) -> str:
+    """``text`` (docs/scenarios.md) with its marked tables written afresh."""
+    generated = tables()
+    return _MARKED.sub(lambda m: m[1] + generated[m[2]] + m[4], text)
+
+
+if __name__ == "__main__":
+    DOCUMENT.write_text(rewritten(DOCUMENT.read_text()))
+    print(f"wrote {DOCUMENT}", file=sys.stderr)

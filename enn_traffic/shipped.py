@@ -1,0 +1,41 @@
+"""The scenarios and road networks that ship with enn-traffic.
+
+They install inside the package (``enn_traffic/scenarios``, ``enn_traffic/sumo_nets``), so an
+installed enn-traffic finds them from any directory; in a source checkout they are the
+top-level ``scenarios/`` and ``sumo_nets/`` folders.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from enn_traffic.scenario import Scenario, load_scenario
+
+_PACKAGE = Path(__file__).resolve().parent
+
+
+def shipped_folder(name: str) -> Path:
+    """The installed folder ``name`` (``scenarios``, ``sumo_nets``), or the checkout's."""
+    installed = _PACKAGE / name
+    return installed if installed.is_dir() else _PACKAGE.parent / name
+
+
+SCENARIOS = shipped_folder("scenarios")
+NETWORKS = shipped_folder("sumo_nets")
+
+
+def shipped_scenario(name: str) -> Scenario:
+    """A shipped scenario by name (``scenarios/NAME.toml``)."""
+    return load_scenario(SCENARIOS / f"{name}.toml")
+
+
+def scenario_path(argument: str | Path) -> Path:
+    """A scenario file as a user names it: a path, or the name of a shipped scenario
+    (``navigation_narrow``) when no such file exists here."""
+    path = Path(argument)
+    if path.exists():
+        return path
+    shipped = SCENARIOS / f"{path.stem}.toml"
+    if path.parent in (Path("."), Path("scenarios")) and shipped.exists():
+        return shipped
+    return path

@@ -1,0 +1,30 @@
+"""Every traffic-key range is named once and no two overlap (docs/design.md, "Traffic keys")."""
+
+from itertools import combinations
+
+from enn_traffic import keys
+from enn_traffic.scenario import GAConfig
+
+
+def test_key_ranges_are_disjoint():
+    for (a, first), (b, second) in combinations(keys.RANGES.items(), 2):
+        overlap = range(max(first.start, second.start), min(first.stop, second.stop))
+        assert len(overlap) == 0, f"{a} and {b} share keys"
+
+
+def test_no_training_run_reaches_a_held_out_key():
+    most = GAConfig.model_fields["generations"].metadata
+    limit = next(m.le for m in most if hasattr(m, "le"))
+    assert limit < keys.TRAINING.stop
+    assert not keys.is_training(keys.TEST.start) and keys.is_training(limit)
+
+
+def test_experiments_draw_from_their_named_ranges():
+    from enn_traffic import deploy
+    from enn_traffic.experiments import dynamic, simultaneous
+
+    assert deploy.EVALUATION_KEY in keys.TEST
+    assert dynamic.VALIDATION_KEY in keys.VALIDATION
+    assert dynamic.ACCEPTANCE_KEY in keys.ACCEPTANCE
+    assert simultaneous.VALIDATION_KEY in keys.CROWD_VALIDATION
+    assert simultaneous.SITUATION_KEY in keys.CROWD_TEST
