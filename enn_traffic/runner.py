@@ -1,7 +1,8 @@
 """One evolutionary run: GA + evaluator + outputs, checkpointed after every generation.
 
 Writes into the run folder: ``scenario.toml`` (resolved), ``generations.csv``, ``best.npz``,
-``learning_curve.png`` and ``checkpoint.npz``. ``resume=True`` continues from the checkpoint
+``learning_curve.png``, ``outputs.npz`` (:class:`RunOutputs`: what others read of the run) and
+``checkpoint.npz`` (the run's own, for resuming). ``resume=True`` continues from the checkpoint
 to exactly the result of an uninterrupted run: the GA's generator state is checkpointed and
 evaluation is deterministic.
 """
@@ -11,6 +12,7 @@ from __future__ import annotations
 import hashlib
 import time
 from collections.abc import Callable, Sequence
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
@@ -21,18 +23,59 @@ from enn_traffic.controller import Controller
 from enn_traffic.errors import InputError
 from enn_traffic.evolution import ga
 from enn_traffic.evolution.backends import Evaluator, make_evaluator
-from enn_traffic.io import write_csv, write_text
+from enn_traffic.io import write_atomic, write_csv, write_text
 from enn_traffic.network import NetworkSpec
 from enn_traffic.report.plots import learning_curve
 from enn_traffic.scenario import Scenario
 from enn_traffic.sim.world import CAPPED, COLLIDED, LEFT_LANE, LEFT_NETWORK, SPUN
 
 CHECKPOINT = "checkpoint.npz"
+OUTPUTS = "outputs.npz"  # what a run leaves for others to read: RunOutputs
 COLUMNS = [
     "generation", "best_fitness", "mean_fitness", "median_fitness", "min_fitness",
     "vehicle_steps", "collisions", "spins", "capped", "left_network", "left_lane", "suffered",
     "traffic_at_start", "traffic_near_mean", "traffic_near_max", "elapsed_s",
 ]  # fmt: skip
+
+
+@dataclass(frozen=True)
+class RunOutputs:
+    """What a run writes for others to read, besides ``best.npz`` and ``generations.csv``
+    (its checkpoint is its own, for resuming): each generation's best chromosome, and the
+    population it ends with, whose first ``elite_count`` rows are the last generation's
+    elites (kept unchanged by the GA); ``stopped``: it ended early, by ``ga.target_fitness``
+    or its ``stop`` rule."""
+
+    champions: np.ndarray  # (generations, G)
+    population: np.ndarray  # (P, G)
+    elite_count: int
+    stopped: bool = False
+
+    @classmethod
+    def of(cls, state: ga.GAState, scenario: Scenario) -> RunOutputs:
+        champions = state.champions
+        if champions is None:  # a run from before runs kept them
+            champions = (state.population[:0] if state.best_chromosome is None
+                         else state.best_chromosome[None, :])
+        return cls(champions, state.population, scenario.ga.elite_count,
+                   bool(state.extra.get("target_reached", False)))
+
+    def save(self, run_dir: Path) -> None:
+        def write(handle):
+            np.savez(handle, champions=self.champions, population=self.population,
+                     elite_count=self.elite_count, stopped=self.stopped)
+
+        write_atomic(Path(run_dir) / OUTPUTS, write, binary=True)
+
+    @classmethod
+    def load(cls, run_dir: str | Path) -> RunOutputs:
+        path = Path(run_dir) / OUTPUTS
+        try:
+            with np.load(path) as data:
+                return cls(data["champions"], data["population"], int(data["elite_count"]),
+                           bool(data["stopped"]))
+        except (OSError, KeyError, ValueError) as exc:
+            raise InputError(f"not a run's outputs ({exc})", path) from None
 
 
 def ga_params(scenario: Scenario) -> ga.GAParams:
@@ -132,6 +175,8 @@ def evolve(
     if state.generation >= total or state.extra.get("target_reached", False):
         if not (out / "learning_curve.png").exists():
             learning_curve(done, out / "learning_curve.png", title=scenario.name)
+        if not (out / OUTPUTS).exists():  # a run from before runs wrote them
+            RunOutputs.of(state, scenario).save(out)
         return done  # nothing to compute, nothing rewritten
     rows = done.to_dict("records")
     write_text(out / "scenario.toml", scenario.to_toml())
@@ -177,6 +222,7 @@ def evolve(
             state.generation += 1
             write_csv(table_path, pd.DataFrame(rows, columns=COLUMNS))
             state.save(out / CHECKPOINT)
+            RunOutputs.of(state, scenario).save(out)
             bar.update(1)
             bar.set_postfix(best=int(fitness.max()), mean=round(float(fitness.mean()), 1))
             target = scenario.ga.target_fitness

@@ -13,6 +13,13 @@ def root() -> Path:
     return ROOT
 
 
+@pytest.fixture
+def small(root):
+    """The narrow track with a small, quick GA."""
+    return load_scenario(root / "scenarios" / "navigation_narrow.toml").with_overrides(
+        ga={"population_size": 30, "generations": 40})
+
+
 @pytest.fixture(scope="session")
 def quick_fig7(tmp_path_factory) -> Path:
     """``reproduce --quick --only fig7`` run once, uninterrupted, through the command line."""

@@ -21,10 +21,10 @@ def test_no_training_run_reaches_a_held_out_key():
 
 def test_experiments_draw_from_their_named_ranges():
     from enn_traffic import deploy
-    from enn_traffic.experiments import dynamic, simultaneous
+    from enn_traffic.experiments import choosing, simultaneous
 
     assert deploy.EVALUATION_KEY in keys.TEST
-    assert dynamic.VALIDATION_KEY in keys.VALIDATION
-    assert dynamic.ACCEPTANCE_KEY in keys.ACCEPTANCE
+    assert choosing.VALIDATION_KEY in keys.VALIDATION
+    assert choosing.ACCEPTANCE_KEY in keys.ACCEPTANCE
     assert simultaneous.VALIDATION_KEY in keys.CROWD_VALIDATION
     assert simultaneous.SITUATION_KEY in keys.CROWD_TEST

@@ -1,21 +1,31 @@
 """One module per paper experiment; each writes its tables and figures into the reproduce folder.
 
 ``EXPERIMENTS`` maps the names that ``enn-traffic reproduce --only`` takes to functions
-``(out: Path, quick: bool, progress: bool) -> list[str]`` that return summary lines.
+``(out: Path, quick: bool, progress: bool) -> list[str]`` that return summary lines. The
+dynamic-traffic experiments share their protocol (:mod:`~enn_traffic.experiments.protocol`) and
+the statistics of choosing controllers (:mod:`~enn_traffic.experiments.choosing`).
 """
 
-from enn_traffic.experiments import dynamic, lanekeeping, navigation, simultaneous
+from enn_traffic.experiments import (
+    fig11,
+    lanekeeping,
+    navigation,
+    simultaneous,
+    sumo_family,
+    table1,
+    table2,
+)
 
 EXPERIMENTS = {
     "fig7": navigation.fig7,
     "fig8": navigation.fig8,
     "fig9": navigation.fig9,
     "generalization": navigation.generalization,
-    "fig11": dynamic.fig11,
-    "table1": dynamic.table1,
-    "table2": dynamic.table2,
+    "fig11": fig11.fig11,
+    "table1": table1.table1,
+    "table2": table2.table2,
     "table3": simultaneous.table3,
     "table4": simultaneous.table4,
-    "sumo": dynamic.sumo,
+    "sumo": sumo_family.sumo,
     "lane_keeping": lanekeeping.lane_keeping,
 }

@@ -9,8 +9,8 @@ from pathlib import Path
 import matplotlib.pyplot as plt
 import pandas as pd
 
+from enn_traffic.controller import Controller
 from enn_traffic.evolution.backends import ProcessEvaluator
-from enn_traffic.evolution.ga import GAState
 from enn_traffic.experiments.common import run_or_reuse
 from enn_traffic.io import write_csv
 from enn_traffic.report.plots import draw_paths, learning_curves, save_figure
@@ -47,7 +47,7 @@ def lane_keeping(out: Path, quick: bool = False, progress: bool = True) -> list[
             wall[seed] = time.perf_counter() - started
         finally:
             evaluator.close()
-        best[seed] = GAState.load(run_dir / "checkpoint.npz").best_chromosome
+        best[seed] = Controller.load(run_dir / "best.npz").chromosome
     learning_curves({f"seed {s}": t for s, t in runs.items()}, out / "lane_keeping.png",
                     title="Lane keeping (highway-env): best steps in lane per generation",
                     hline=base.episode.max_steps)

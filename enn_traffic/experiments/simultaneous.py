@@ -43,15 +43,17 @@ import pandas as pd
 
 from enn_traffic import keys
 from enn_traffic.evolution.online import Evidence, OnlineLearning, VehicleGA
-from enn_traffic.experiments import dynamic
+from enn_traffic.experiments.choosing import evolved_candidates, final_population
 from enn_traffic.experiments.common import distinct
+from enn_traffic.experiments.protocol import ARENA, STRATEGIES
 from enn_traffic.io import write_csv
 from enn_traffic.report.plots import draw_paths, save_figure
 from enn_traffic.runner import ga_params
 from enn_traffic.shipped import shipped_scenario
 from enn_traffic.sim.arena import ArenaWorld
 from enn_traffic.sim.crowd import Crowd, CrowdRun
-from enn_traffic.traffic.strategies import NETWORK, STRATEGIES
+from enn_traffic.traffic.strategies import NETWORK
+from enn_traffic.traffic.strategies import STRATEGIES as DRIVERS
 
 SECONDS = 100.0  # the paper's training time, and each measuring period
 SITUATIONS = 20
@@ -68,7 +70,7 @@ def _arena(world: ArenaWorld, situation: int, kinds=None, key: int = SITUATION_K
     """The arena of one traffic situation: 8 start poses; ``kinds`` default to the strategy's
     own drivers; and the drivers' random genes (random-network strategy)."""
     episode = world.episodes(key + situation)[0]
-    strategy = STRATEGIES[world.scenario.traffic.strategy_list[0]]
+    strategy = DRIVERS[world.scenario.traffic.strategy_list[0]]
     kinds = np.full(world.vehicles, strategy) if kinds is None else kinds
     return Crowd(world, episode.start, kinds, int(episode.seed)), episode.traffic_genes.copy()
 
@@ -155,14 +157,14 @@ def _measure(out: Path, quick: bool, progress: bool) -> tuple[pd.DataFrame, pd.D
     """Every strategy's rates, once per process (Tables 3 and 4 share them): the means, also
     written to ``simultaneous.csv`` with the simulated and wall time they took, and each
     situation's, written to ``simultaneous_situations.csv``."""
-    candidates = dynamic.evolved_candidates(out, quick, progress)
+    candidates = evolved_candidates(out, quick, progress)
     rows, situations, paths = [], [], {}
-    for strategy in dynamic.STRATEGIES:
-        world = ArenaWorld(shipped_scenario(dynamic.ARENA.name(strategy)))
+    for strategy in STRATEGIES:
+        world = ArenaWorld(shipped_scenario(ARENA.name(strategy)))
         ranked, validation = _ranked(world, candidates[strategy])
         winner = ranked[0]
         population = _evolved_population(
-            ranked, dynamic.final_population(dynamic.ARENA, out, strategy, winner, quick),
+            ranked, final_population(ARENA, out, strategy, winner, quick),
             world.scenario.ga.population_size)
         means, each = _strategy_rows(world, strategy, winner, population, validation, paths)
         rows.append(means)

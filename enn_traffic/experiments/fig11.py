@@ -1,0 +1,57 @@
+"""Fig. 11 (paper §5.3): learning curves among each traffic strategy, one run per seed."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+from enn_traffic.experiments.choosing import held_out
+from enn_traffic.experiments.protocol import ARENA, STRATEGIES, Family, family_runs, title
+from enn_traffic.io import write_csv
+from enn_traffic.report.figures import fig11_figure
+
+
+def fig11(out: Path, quick: bool = False, progress: bool = True,
+          family: Family = ARENA) -> list[str]:
+    """Learning curves, one run per seed and strategy, one panel per strategy: each
+    generation's best training fitness (solid) and the same chromosome on test traffic
+    (dashed)."""
+    family = family.settings(quick)
+    out = out / family.folder
+    rows = []
+    runs_by_strategy = family_runs(family, out, progress)
+    scores = {}
+    for strategy, runs in runs_by_strategy.items():
+        for seed, table in runs.items():
+            best, mean = table["best_fitness"], table["mean_fitness"]
+            scores[strategy, seed] = held_out(family, out, strategy, seed)
+            on_test = (scores[strategy, seed] if scores[strategy, seed] is not None
+                       else np.full(len(table), np.nan))
+            rows.append({
+                "strategy": strategy, "seed": seed, "generations": len(table),
+                "first_best": best.iloc[0], "last_best": best.iloc[-1],
+                "last5_mean_best": best.tail(5).mean(), "max_best": best.max(),
+                "rise": best.tail(5).mean() / max(best.iloc[0], 1.0),
+                "first_mean": mean.iloc[0], "last5_mean_mean": mean.tail(5).mean(),
+                "mean_rise": mean.tail(5).mean() / max(mean.iloc[0], 1.0),
+                "first_held_out": on_test[0], "last5_mean_held_out": on_test[-5:].mean(),
+                "held_out_rise": on_test[-5:].mean() / max(on_test[0], 1.0),
+            })  # fmt: skip
+    fig11_figure(runs_by_strategy, scores, {s: title(family, s) for s in STRATEGIES},
+                 f"Fig. 11 ({family.prefix}1-4): the learner among traffic, "
+                 f"{len(family.seeds)} runs per strategy\nsolid: each generation's best "
+                 f"fitness; dashed: the same chromosome on {family.test_episodes} test "
+                 "situations", out / "fig11.png")
+    table = pd.DataFrame(rows)
+    write_csv(out / "fig11.csv", table)
+    rise = table.groupby("strategy")[["rise", "mean_rise", "held_out_rise"]].median()
+    label = f"{family.folder}/fig11" if family.folder else "fig11"
+    return [f"{label}: best fitness, mean of the last 5 generations over the first generation's "
+            "(median of the runs): "
+            + ", ".join(f"strategy {s}: {r.rise:.1f}x" for s, r in rise.iterrows())
+            + "; population mean fitness: "
+            + ", ".join(f"{r.mean_rise:.1f}x" for _, r in rise.iterrows())
+            + "; each generation's best on test traffic: "
+            + ", ".join(f"{r.held_out_rise:.1f}x" for _, r in rise.iterrows())]

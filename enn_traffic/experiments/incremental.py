@@ -1,0 +1,71 @@
+"""Incremental evolution (paper §5.4.1): one controller for all four strategies, evolved a
+strategy at a time. Iteration k evolves on strategies 1..k together (fitness: the mean over
+them), starting from the population iteration k − 1 ended with, and stops once a candidate is
+accepted on every included strategy (:func:`enn_traffic.experiments.choosing.accepts`)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from enn_traffic.evolution.backends import MeanOverWorlds
+from enn_traffic.experiments.choosing import (
+    ACCEPTANCE_ERRORS,
+    TOP_CANDIDATES,
+    accepts,
+    candidates,
+    scored_pick,
+)
+from enn_traffic.experiments.common import run_or_reuse
+from enn_traffic.experiments.protocol import STRATEGIES, Family
+from enn_traffic.runner import RunOutputs
+from enn_traffic.worlds import make_world
+
+
+@dataclass(frozen=True)
+class Iteration:
+    """One iteration's result: the strategies it evolved on, its generations, whether it was
+    accepted before its generations ran out, the controller chosen from its candidates on
+    validation traffic and that controller's worst included strategy there."""
+
+    included: list[int]
+    generations: int
+    accepted: bool
+    chosen: np.ndarray
+    worst: float
+
+
+def incremental_evolution(family: Family, out: Path, seed: int, progress: bool
+                          ) -> list[Iteration]:
+    """One incremental evolution from GA seed ``seed``, its runs in ``out/iterationK``."""
+    threshold = family.threshold
+    base = family.scenario(1)
+    population, iterations = None, []
+    for iteration in range(1, len(STRATEGIES) + 1):
+        ga = {"generations": family.incremental_max_generations, **family.ga()}
+        # the acceptance rule is part of the run's settings: a run stopped by another is redone
+        rule = (f"Incremental evolution (§5.4.1), iteration {iteration}: stops when one of the "
+                f"{TOP_CANDIDATES} fittest reaches {threshold:g} steps on every included "
+                f"strategy in {family.test_episodes} validation situations, and by its mean "
+                f"less {ACCEPTANCE_ERRORS:g} standard errors in {family.recheck_episodes} "
+                "others.")
+        sc = base.with_overrides(name=f"incremental_{iteration}", description=rule, seed=seed,
+                                 ga=ga)
+        included = STRATEGIES[:iteration]
+        scenarios = [family.scenario(s) for s in included]
+        worlds = [make_world(sc) for sc in scenarios]
+
+        def accepted(population, fitness, included=included):
+            fittest = population[np.argsort(-fitness, kind="stable")[:TOP_CANDIDATES]]
+            return accepts(family, fittest, included, threshold)
+
+        folder = out / f"iteration{iteration}"
+        table = run_or_reuse(sc, folder, progress, evaluator=MeanOverWorlds(worlds),
+                             initial_population=population, stop=accepted, others=scenarios)
+        outputs = RunOutputs.load(folder)
+        population = outputs.population
+        chosen, worst = scored_pick(family, candidates(folder), included)
+        iterations.append(Iteration(included, len(table), outputs.stopped, chosen, worst))
+    return iterations

@@ -1,0 +1,50 @@
+"""SUMO traffic replayed against closed loop (docs/sumo.md): each SUMO strategy's Table 1
+controller, trained on replayed traffic, on the same test situations with SUMO's drivers
+reacting to it; and the SUMO family's Fig. 11 and Tables 1–2."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pandas as pd
+
+from enn_traffic.deploy import EVALUATION_KEY
+from enn_traffic.experiments.choosing import trained_controllers
+from enn_traffic.experiments.fig11 import fig11
+from enn_traffic.experiments.protocol import STRATEGIES, SUMO, test_world
+from enn_traffic.experiments.table1 import table1
+from enn_traffic.experiments.table2 import table2
+from enn_traffic.io import write_csv
+from enn_traffic.worlds import make_world
+
+
+def replay_against_closed_loop(out: Path, quick: bool = False, progress: bool = True
+                               ) -> list[str]:
+    """Each SUMO strategy's Table 1 controller (trained on replayed traffic) on the same test
+    situations with the traffic replayed and in closed loop: lifetimes side by side."""
+    controllers = trained_controllers(out, quick, progress, SUMO)
+    rows = []
+    for strategy in STRATEGIES:
+        test = test_world(SUMO.settings(quick), strategy).scenario
+        lifetimes = {}
+        for mode in ("replay", "closed-loop"):
+            world = make_world(test.with_overrides(traffic={"mode": mode}))
+            lifetimes[mode] = world.evaluate(controllers[strategy][None, :], EVALUATION_KEY)
+        for episode in range(test.traffic.episodes):
+            rows.append({"strategy": strategy, "episode": episode,
+                         "replay_steps": int(lifetimes["replay"].steps[0, episode]),
+                         "closed_loop_steps": int(lifetimes["closed-loop"].steps[0, episode])})
+    table = pd.DataFrame(rows)
+    write_csv(out / SUMO.folder / "closed_loop.csv", table)
+    means = table.groupby("strategy")[["replay_steps", "closed_loop_steps"]].mean()
+    return ["sumo/closed_loop: mean lifetime of each strategy's controller, replayed vs closed "
+            "loop: " + ", ".join(f"strategy {s}: {r.replay_steps:.0f} vs {r.closed_loop_steps:.0f}"
+                                 for s, r in means.iterrows())]
+
+
+def sumo(out: Path, quick: bool = False, progress: bool = True) -> list[str]:
+    """Fig. 11, Table 1 and Table 2 over the SUMO traffic strategies, and the replayed against
+    the closed-loop lifetimes, into ``out/sumo/``."""
+    return [*fig11(out, quick, progress, SUMO), *table1(out, quick, progress, SUMO),
+            *table2(out, quick, progress, SUMO),
+            *replay_against_closed_loop(out, quick, progress)]

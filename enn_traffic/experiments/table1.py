@@ -1,0 +1,52 @@
+"""Table 1 and Fig. 12 (paper §5.3): each strategy's controller deployed among every
+strategy's traffic."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+from enn_traffic.deploy import EVALUATION_KEY
+from enn_traffic.experiments.choosing import specialists, test_fitness
+from enn_traffic.experiments.protocol import ARENA, STRATEGIES, Family, test_world
+from enn_traffic.io import write_csv
+from enn_traffic.report.figures import fig12_figure, specialist_paths
+
+
+def _draw_specialists(family: Family, controllers: dict[int, np.ndarray], path: Path,
+                      steps: int = 400) -> None:
+    """Table 1 as paths: each strategy's chosen controller among each strategy's traffic, the
+    first test episode."""
+    traces, walls = {}, {}
+    for deployed in STRATEGIES:
+        world = test_world(family, deployed)
+        walls[deployed] = world.track.walls
+        for trained in STRATEGIES:
+            traces[trained, deployed], _ = world.trace(controllers[trained], EVALUATION_KEY,
+                                                       max_steps=steps)
+    specialist_paths(traces, walls, STRATEGIES, steps, path)
+
+
+def table1(out: Path, quick: bool = False, progress: bool = True,
+           family: Family = ARENA) -> list[str]:
+    """Train on each strategy, deploy on each (Table 1), and the colour map (Fig. 12)."""
+    family = family.settings(quick)
+    out = out / family.folder
+    controllers = specialists(family, out, progress)
+    matrix = np.array([[test_fitness(family, controllers[trained], deployed)
+                        for deployed in STRATEGIES] for trained in STRATEGIES])
+    table = pd.DataFrame(matrix.round(1), columns=[f"deploy_{s}" for s in STRATEGIES])
+    table.insert(0, "training_strategy", STRATEGIES)
+    write_csv(out / "table1.csv", table)
+    fig12_figure(matrix, STRATEGIES, out / "fig12.png")
+    _draw_specialists(family, controllers,
+                      out / ("arena_paths.png" if family is ARENA else "paths.png"))
+    diagonal = np.diag(matrix)
+    off = matrix[~np.eye(4, dtype=bool)]
+    rows_ok = sum(diagonal[i] > np.delete(matrix[i], i).max() for i in range(4))
+    label = f"{family.folder}/table1" if family.folder else "table1"
+    return [f"{label}: mean diagonal {diagonal.mean():.0f}, mean off-diagonal {off.mean():.0f} "
+            f"(ratio {diagonal.mean() / off.mean():.2f}; paper 4.9); diagonal above the rest "
+            f"of its row in {rows_ok} of 4 rows (paper: 4 of 4)"]

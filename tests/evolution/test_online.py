@@ -1,0 +1,44 @@
+"""Learning while driving: each vehicle's own GA, the shared elites, the pooled evidence
+(paper §5.5)."""
+
+import numpy as np
+import pytest
+from conftest import two_cars
+
+from enn_traffic.evolution import ga
+from enn_traffic.evolution.online import Evidence, VehicleGA, global_elites
+
+
+@pytest.fixture
+def world(tmp_path, root):
+    return two_cars(tmp_path, root, (20.0, 50.0), (40.0, 50.0), 180.0)
+
+
+def test_exhausted_population_breeds_with_the_global_elites(world):
+    rng = np.random.default_rng(4)
+    length = world.spec.chromosome_length
+    learners = [VehicleGA(rng.uniform(-1, 1, (6, length)), np.random.default_rng(v))
+                for v in range(2)]
+    learners[0].fitness[:] = [1, 2, 3, 4, 5, 6]
+    learners[1].fitness[:] = [10, 0, 0, 0, 0, 0]
+    elites = global_elites(learners, 2)
+    np.testing.assert_array_equal(elites[0], learners[1].population[0])
+    np.testing.assert_array_equal(elites[1], learners[0].population[5])
+    learners[0].index = 6
+    learners[0].advance(ga.GAParams(population_size=6, tournament_size=2, elite_count=2), elites)
+    np.testing.assert_array_equal(learners[0].population[:2], elites)
+    assert learners[0].generation == 1 and learners[0].index == 0
+
+
+def test_evidence_trusts_a_chromosome_driven_long_over_one_lucky_life():
+    """Loss rate = (lives lost + 1) / (steps + 1), pooled over every vehicle that drove it."""
+    driven_long, lucky, flawless = np.zeros(3), np.ones(3), np.full(3, 2.0)
+    evidence = Evidence()
+    evidence.record(lucky, 300, losses=0)
+    evidence.record(driven_long, 500, losses=1)
+    evidence.record(driven_long, 400, losses=0)  # another vehicle, life still going
+    assert evidence.loss_rate(driven_long.tobytes()) == pytest.approx(2 / 901)
+    assert evidence.loss_rate(lucky.tobytes()) == pytest.approx(1 / 301)
+    np.testing.assert_array_equal(evidence.best(), driven_long)
+    evidence.record(flawless, 2000, losses=0)
+    np.testing.assert_array_equal(evidence.best(), flawless)

@@ -1,0 +1,62 @@
+"""Choosing and accepting controllers (paper §5.3–5.4), through the experiments' public
+functions."""
+
+import math
+from dataclasses import replace
+
+import numpy as np
+import pytest
+
+from enn_traffic.evolution.ga import GAState
+from enn_traffic.experiments import choosing, protocol
+from enn_traffic.runner import evolve
+
+
+def test_candidates_are_every_generations_best_and_the_final_elites_each_once(small, tmp_path):
+    evolve(small.with_overrides(ga={"generations": 4, "elite_count": 3}), tmp_path,
+           progress=False)
+    state = GAState.load(tmp_path / "checkpoint.npz")
+    candidates = choosing.candidates(tmp_path)
+    expected = {row.tobytes() for row in np.concatenate([state.champions,
+                                                         state.population[:3]])}
+    assert {row.tobytes() for row in candidates} == expected
+    assert len(candidates) == len(expected)
+    # the last generation's best is also the first elite, and comes once
+    np.testing.assert_array_equal(state.champions[-1], state.population[0])
+    assert len(candidates) <= 6
+
+
+def test_the_pick_rechecks_its_short_list_and_keeps_the_best_worst_strategy():
+    """Table 1 and 2 choose by the worst included strategy, on more traffic for the short list."""
+
+    family = replace(protocol.ARENA, test_episodes=2, recheck_episodes=3)
+    length = protocol.test_world(family, 1).spec.chromosome_length
+    candidates = np.random.default_rng(0).uniform(-1, 1, size=(16, length))
+    strategies = [1, 3]
+    picked = choosing.pick(family, candidates, strategies)
+    short = choosing.validation(family, candidates, strategies).min(axis=1)
+    listed = candidates[np.argsort(-short, kind="stable")[: choosing.RECHECKED]]
+    rechecked = choosing.validation(family, listed, strategies, 3).min(axis=1)
+    assert any(np.array_equal(picked, row) for row in listed)
+    assert choosing.validation(family, picked, strategies, 3).min() == rechecked.max()
+    assert len(set(np.round(rechecked, 6))) > 1  # the recheck tells the short list apart
+
+
+def test_table2_accepts_by_the_mean_less_standard_errors_on_other_situations():
+    """§5.4.1's acceptance: the screen on validation traffic, then the bound on other traffic;
+    a threshold between a candidate's bound and its mean there is refused."""
+    from enn_traffic.sim.world import SPUN
+
+    family = replace(protocol.ARENA, test_episodes=2, recheck_episodes=6)
+    world = protocol.test_world(family, 1, 6)
+    candidate = np.random.default_rng(3).uniform(-1, 1, size=(1, world.spec.chromosome_length))
+    results = world.evaluate(candidate, choosing.ACCEPTANCE_KEY)
+    fitness = np.where(results.outcome[0] == SPUN, 0.0, results.steps[0])
+    mean, error = fitness.mean(), fitness.std(ddof=1) / math.sqrt(6)
+    bound = choosing.lower_bound(family, candidate, 1, choosing.ACCEPTANCE_KEY, 6)
+    assert bound[0] == pytest.approx(mean - choosing.ACCEPTANCE_ERRORS * error) and error > 0
+    screen = choosing.validation(family, candidate, [1]).min()
+    assert bound[0] < min(mean, screen)  # this candidate tells the bound from the mean
+    assert choosing.accepts(family, candidate, [1], bound[0])
+    assert not choosing.accepts(family, candidate, [1], 0.5 * (bound[0] + min(mean, screen)))
+    assert not choosing.accepts(family, candidate, [1], screen + 1e-6)  # the screen refuses
