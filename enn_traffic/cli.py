@@ -46,7 +46,8 @@ def build_parser() -> argparse.ArgumentParser:
 
     run = commands.add_parser("run", help="evolve a controller on a scenario", epilog=EPILOG,
                               description="Evolve a controller; writes scenario.toml, "
-                              "generations.csv, best.npz, learning_curve.png and a checkpoint.")
+                              "generations.csv, best.npz, learning_curve.png, outputs.npz and "
+                              "a checkpoint.")
     run.add_argument("scenario", type=Path, metavar="SCENARIO.toml",
                      help="a scenario file, or a shipped scenario's name (navigation_narrow)")
     run.add_argument("--out", type=Path, help="run folder (default: results/<scenario name>)")
