@@ -167,9 +167,8 @@ class MeanOverWorlds:
         steps, outcome, suffered, traffic = (
             np.concatenate([getattr(p, f) for p in parts], axis=1)
             for f in ("steps", "outcome", "suffered", "traffic"))
-        fitness = EpisodeResults.lifetime_fitness(steps, outcome).mean(axis=1)
         vehicles = round(float(np.mean([p.vehicles for p in parts])))
-        return EpisodeResults(fitness, steps, outcome, suffered, vehicles, traffic)
+        return EpisodeResults.of_lives(steps, outcome, suffered, vehicles, traffic)
 
     def close(self) -> None:
         pass

@@ -90,8 +90,7 @@ class LaneKeepingWorld:
             for e in range(episodes):
                 steps[p, e], outcome[p, e], _ = self.episode(
                     row, self._rng(key, e), self.scenario.episode.max_steps)
-        fitness = EpisodeResults.lifetime_fitness(steps, outcome).mean(axis=1)
-        return EpisodeResults(fitness, steps, outcome, np.zeros_like(steps), 1)
+        return EpisodeResults.of_lives(steps, outcome)
 
     def offsets(self, chromosome: np.ndarray, key: int = 0) -> list[tuple[int, int, float]]:
         """Per episode: (steps, outcome, mean |lateral offset|) of one chromosome."""

@@ -227,11 +227,8 @@ class ArenaWorld:
                 runs.append(run_population(
                     genes, self.layer_sizes, episode.start, episode.kinds, episode.traffic_genes,
                     self.physics, episode.seed, self.max_steps))  # fmt: skip
-        steps, outcome, suffered, near_steps, near_max = (
-            np.stack([r[i] for r in runs], axis=1) for i in range(5))
-        fitness = EpisodeResults.lifetime_fitness(steps, outcome).mean(axis=1)
-        traffic = EpisodeResults.traffic_met(self.vehicles - 1, near_steps, near_max)
-        return EpisodeResults(fitness, steps, outcome, suffered, self.vehicles, traffic)
+        return EpisodeResults.of_situations(runs, self.vehicles,
+                                            [self.vehicles - 1] * len(runs))
 
     def trace(self, chromosome: np.ndarray, key: int = 0, episode: int = 0,
               max_steps: int | None = None) -> tuple[np.ndarray, int]:

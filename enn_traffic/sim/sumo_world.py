@@ -132,13 +132,8 @@ class SumoWorld(ArenaWorld):
                     genes, self.layer_sizes, self._learner_physics(record.radius), start,
                     record.ids, record.corners, record.centres, self.max_steps))
         self.vehicles = 1 + round(float(np.mean(vehicles))) if vehicles else self.vehicles
-        steps, outcome, suffered, near_steps, near_max = (
-            np.stack([r[i] for r in runs], axis=1) for i in range(5))
-        fitness = EpisodeResults.lifetime_fitness(steps, outcome).mean(axis=1)
-        start_counts = np.column_stack([np.broadcast_to(a, len(genes)) for a in at_start])
-        traffic = EpisodeResults.traffic_met(start_counts, near_steps, near_max)
-        return EpisodeResults(fitness, steps, outcome, suffered, self.vehicles, traffic,
-                              np.stack(safety, axis=1) if safety else None)
+        return EpisodeResults.of_situations(runs, self.vehicles, at_start,
+                                            np.stack(safety, axis=1) if safety else None)
 
     def _closed_loop_population(self, genes: np.ndarray, seed: int, start: np.ndarray
                                 ) -> tuple:

@@ -74,6 +74,28 @@ class EpisodeResults:
         if self.traffic is None:  # no traffic: nothing met
             object.__setattr__(self, "traffic", np.zeros((*self.steps.shape, 3)))
 
+    @classmethod
+    def of_lives(cls, steps: np.ndarray, outcome: np.ndarray, suffered: np.ndarray | None = None,
+                 vehicles: int = 1, traffic: np.ndarray | None = None,
+                 safety: np.ndarray | None = None) -> EpisodeResults:
+        """From every life (P, E): fitness is the mean over the situations of
+        :meth:`lifetime_fitness`."""
+        fitness = cls.lifetime_fitness(steps, outcome).mean(axis=1)
+        suffered = np.zeros_like(steps) if suffered is None else suffered
+        return cls(fitness, steps, outcome, suffered, vehicles, traffic, safety)
+
+    @classmethod
+    def of_situations(cls, runs: list[tuple], vehicles: int, at_start: list,
+                      safety: np.ndarray | None = None) -> EpisodeResults:
+        """From a compiled batch's (steps, outcome, suffered, vehicle-steps within range, most
+        within range), each (P,), per situation; ``at_start``: the vehicles in the world at the
+        learner's start, per situation (a number, or one per world)."""
+        steps, outcome, suffered, near_steps, near_max = (
+            np.stack([r[i] for r in runs], axis=1) for i in range(5))
+        start = np.column_stack([np.broadcast_to(a, len(steps)) for a in at_start])
+        return cls.of_lives(steps, outcome, suffered, vehicles,
+                            cls.traffic_met(start, near_steps, near_max), safety)
+
     @staticmethod
     def traffic_met(start: np.ndarray, near_steps: np.ndarray, near_max: np.ndarray
                     ) -> np.ndarray:
