@@ -10,7 +10,7 @@ replay or closed loop) and :class:`~enn_traffic.lanekeeping.world.LaneKeepingWor
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Protocol
+from typing import Protocol, runtime_checkable
 
 import numpy as np
 
@@ -32,6 +32,7 @@ MET_START, MET_NEAR_STEPS, MET_NEAR_MAX = range(3)
 SAFETY_MIN_TTC, SAFETY_TTC, SAFETY_DRAC, SAFETY_PET = range(4)
 
 
+@runtime_checkable
 class World(Protocol):
     """A scenario's worlds, ready to evaluate populations of controllers.
 

@@ -1,0 +1,24 @@
+"""Every kind of world a scenario can describe is a :class:`World`, with outcomes named for
+what happened."""
+
+import pytest
+
+from enn_traffic.scenario import load_scenario
+from enn_traffic.sim.world import OUTCOMES, World
+from enn_traffic.worlds import make_world
+
+
+@pytest.mark.parametrize("name, kind", [("navigation_narrow", "ArenaWorld"),
+                                        ("arena_strategy1", "ArenaWorld"),
+                                        ("sumo_strategy1", "SumoWorld"),
+                                        ("lane_keeping", "LaneKeepingWorld")])
+def test_every_scenario_gives_a_world(root, name, kind):
+    world = make_world(load_scenario(root / "scenarios" / f"{name}.toml"))
+    assert type(world).__name__ == kind
+    assert isinstance(world, World)
+    assert world.episode_labels() and world.spec.chromosome_length > 0
+
+
+def test_outcome_names_are_distinct():
+    assert len(set(OUTCOMES.values())) == len(OUTCOMES)
+    assert OUTCOMES[4] == "left lane" and OUTCOMES[1] == "collision"
