@@ -12,7 +12,7 @@ import numpy as np
 from numba import njit
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def body_corners(x, y, heading, length, width, out):
     """Fill ``out`` (4, 2) with the corners front-right, front-left, rear-left, rear-right."""
     cos_h, sin_h = math.cos(heading), math.sin(heading)
@@ -63,7 +63,7 @@ def box_hits_segment(corners, x1, y1, x2, y2) -> bool:
     return point_in_box(x1, y1, corners)
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def box_hits_walls(corners, walls, candidates, count) -> bool:
     """Does the body touch any of the first ``count`` wall indices in ``candidates``?"""
     for k in range(count):

@@ -87,8 +87,8 @@ class NetworkSpec:
         activation, scratch = network_buffers(layer_sizes)
         outputs = np.empty((len(genes), self.layer_sizes[-1]))
         for p, row in enumerate(genes):
-            outputs[p] = network_outputs(row, layer_sizes, inputs[p], activation,
-                                         scratch)[: self.layer_sizes[-1]]
+            network_outputs(row, layer_sizes, inputs[p], activation, scratch)
+            outputs[p] = activation[: self.layer_sizes[-1]]
         return outputs
 
 
@@ -99,10 +99,10 @@ def network_buffers(layer_sizes):
     return np.empty(width), np.empty(width)
 
 
-@njit(cache=True)
-def network_outputs(genes, layer_sizes, inputs, activation, scratch):
-    """Forward pass of one source-layout chromosome on ``inputs``; the outputs are the first
-    ``layer_sizes[-1]`` entries of the returned ``activation`` (sigmoid at every layer)."""
+@njit(cache=True, inline="always")
+def network_outputs(genes, layer_sizes, inputs, activation, scratch) -> None:
+    """Forward pass of one source-layout chromosome on ``inputs``; the outputs are left in the
+    first ``layer_sizes[-1]`` entries of ``activation`` (sigmoid at every layer)."""
     for i in range(layer_sizes[0]):
         activation[i] = inputs[i]
     offset = 0
@@ -119,11 +119,10 @@ def network_outputs(genes, layer_sizes, inputs, activation, scratch):
         for j in range(n_out):
             activation[j] = 1.0 / (1.0 + math.exp(-scratch[j]))
         offset = bias + n_out
-    return activation
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def steering(genes, layer_sizes, readings, activation, scratch, gain):
     """Steering angle = gain · (left − right) of the network's two outputs (paper §3)."""
-    out = network_outputs(genes, layer_sizes, readings, activation, scratch)
-    return gain * (out[1] - out[0])
+    network_outputs(genes, layer_sizes, readings, activation, scratch)
+    return gain * (activation[1] - activation[0])

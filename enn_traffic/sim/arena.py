@@ -32,7 +32,7 @@ from enn_traffic.roads.network import start_poses as start_lane_poses
 from enn_traffic.scenario import Scenario
 from enn_traffic.sim.rules import (
     NO_HIT,
-    Physics,
+    build_constants,
     drive_all,
     place,
     respawn,
@@ -49,7 +49,8 @@ START_STREAM = 5  # the last key of the seed that draws a situation's start from
 
 
 @njit(cache=True)
-def run_episode(genes, layer_sizes, start, kinds, traffic_genes, physics, seed, max_steps, trace):
+def run_episode(genes, layer_sizes, start, kinds, traffic_genes, physics, geometry, seed, max_steps,
+                trace):
     """Drive one chromosome (source layout) as vehicle 0 among ``start.shape[0] - 1``
     uncontrolled vehicles (``kinds``; ``traffic_genes`` drive the network ones).
 
@@ -67,7 +68,8 @@ def run_episode(genes, layer_sizes, start, kinds, traffic_genes, physics, seed, 
     drivers = traffic_genes.copy()
     drivers[0] = genes
     rng = np.full(1, seed, dtype=np.uint64)
-    readings = np.empty(physics.beam_cos.shape[0])
+    beam_cos, beam_sin, walls, cell_start, cell_walls, all_walls, _ = geometry
+    readings = np.empty(beam_cos.shape[0])
     activation, scratch = network_buffers(layer_sizes)
     recent = np.empty((physics.spin_window, 2))
     for v in range(count):
@@ -81,17 +83,17 @@ def run_episode(genes, layer_sizes, start, kinds, traffic_genes, physics, seed, 
         if steps < trace.shape[0]:
             trace[steps] = pose
         # 1. collisions by the blame rule
-        if responsible(0, pose, corners, centres, previous, previous_centres, fresh, 0,
-                       physics) != NO_HIT:
+        if responsible(0, pose, corners, centres, previous, previous_centres, fresh, 0, physics,
+                       walls, cell_start, cell_walls, all_walls) != NO_HIT:
             return steps, COLLIDED, suffered, near_steps, near_max
         for v in range(1, count):
             hit = responsible(v, pose, corners, centres, previous, previous_centres, fresh, v,
-                              physics)
+                              physics, walls, cell_start, cell_walls, all_walls)
             if hit == 0:
                 suffered += 1
             if hit != NO_HIT:
-                respawn(v, kinds[v], physics, pose, corners, centres, previous,
-                        previous_centres, fresh, memory, rng)
+                respawn(v, kinds[v], physics, walls, cell_start, cell_walls, all_walls, pose,
+                        corners, centres, previous, previous_centres, fresh, memory, rng)
         # 2. spin test and step cap for the learner
         if spun(recent, steps, pose[0, 0], pose[0, 1], physics.spin_variance):
             return steps, SPUN, suffered, near_steps, near_max
@@ -101,13 +103,14 @@ def run_episode(genes, layer_sizes, start, kinds, traffic_genes, physics, seed, 
         near_steps += within
         near_max = max(near_max, within)
         # 3. sense and decide, 4. move
-        drive_all(kinds, drivers, layer_sizes, physics, pose, corners, centres, previous,
-                  previous_centres, fresh, memory, rng, readings, activation, scratch, steering)
+        drive_all(kinds, drivers, layer_sizes, physics, beam_cos, beam_sin, walls, cell_start,
+                  cell_walls, all_walls, pose, corners, centres, previous, previous_centres,
+                  fresh, memory, rng, readings, activation, scratch, steering)
         steps += 1
 
 
 @njit(cache=True, parallel=True)
-def run_population(population, layer_sizes, start, kinds, traffic_genes, physics, seed,
+def run_population(population, layer_sizes, start, kinds, traffic_genes, physics, geometry, seed,
                    max_steps):
     """Run every chromosome of ``population`` (P, G) in its own world; per world
     (steps, outcome, collisions suffered, vehicle-steps within sensor range, most at once)."""
@@ -120,8 +123,8 @@ def run_population(population, layer_sizes, start, kinds, traffic_genes, physics
     no_trace = np.empty((0, start.shape[0], 3))
     for p in prange(size):
         steps[p], outcome[p], suffered[p], near_steps[p], near_max[p] = run_episode(
-            population[p], layer_sizes, start, kinds, traffic_genes, physics, seed, max_steps,
-            no_trace)
+            population[p], layer_sizes, start, kinds, traffic_genes, physics, geometry, seed,
+            max_steps, no_trace)
     return steps, outcome, suffered, near_steps, near_max
 
 
@@ -157,20 +160,16 @@ class ArenaWorld:
         self.vehicles = 1 + len(self.traffic_starts)
         self.layer_sizes = np.asarray(scenario.layer_sizes, dtype=np.int64)
         episode = scenario.episode
-        self.physics = Physics.build(
-            self.grid,
+        self.physics, self.geometry = build_constants(
+            self.grid, self.track.bounds, scenario.beam_angles, self.exits,
             strategy_settings(traffic),
             length=vehicle.length,
             width=vehicle.width,
             wheelbase=vehicle.wheelbase,
             distance=vehicle.speed * vehicle.dt,
             radius=0.5 * math.hypot(vehicle.length, vehicle.width),
-            beam_cos=np.cos(scenario.beam_angles),
-            beam_sin=np.sin(scenario.beam_angles),
             max_range=sensor.range,
             gain=math.radians(scenario.network.steering_gain_deg),
-            bounds=np.asarray(self.track.bounds, dtype=np.float64),
-            exits=np.ascontiguousarray(self.exits, dtype=np.float64),
             spin_window=episode.spin_window,
             spin_variance=episode.spin_variance,
             clearance=traffic.respawn_clearance,
@@ -226,7 +225,7 @@ class ArenaWorld:
             for episode in self.episodes(key):
                 runs.append(run_population(
                     genes, self.layer_sizes, episode.start, episode.kinds, episode.traffic_genes,
-                    self.physics, episode.seed, self.max_steps))  # fmt: skip
+                    self.physics, self.geometry, episode.seed, self.max_steps))  # fmt: skip
         return EpisodeResults.of_situations(runs, self.vehicles,
                                             [self.vehicles - 1] * len(runs))
 
@@ -238,7 +237,8 @@ class ArenaWorld:
         trace = np.full((limit + 1, self.vehicles, 3), np.nan)
         steps, outcome, *_ = run_episode(
             self.spec.in_source_layout(chromosome)[0], self.layer_sizes, chosen.start,
-            chosen.kinds, chosen.traffic_genes, self.physics, chosen.seed, limit, trace)
+            chosen.kinds, chosen.traffic_genes, self.physics, self.geometry, chosen.seed, limit,
+            trace)
         return trace[: steps + 1], int(outcome)
 
 

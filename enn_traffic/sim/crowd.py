@@ -56,13 +56,14 @@ class Learning(Protocol):
 
 @njit(cache=True)
 def detect(pose, corners, centres, previous, previous_centres, fresh, spin_checked, life, recent,
-           physics, events) -> None:
+           physics, geometry, events) -> None:
     """Fill ``events`` (V,): ``COLLIDED`` for a responsible collision, ``SPUN`` for a
     ``spin_checked`` vehicle spinning in place, else ``ALIVE``."""
+    _, _, walls, cell_start, cell_walls, all_walls, _ = geometry
     for v in range(pose.shape[0]):
         events[v] = ALIVE
-        if responsible(v, pose, corners, centres, previous, previous_centres, fresh, v,
-                       physics) != NO_HIT:
+        if responsible(v, pose, corners, centres, previous, previous_centres, fresh, v, physics,
+                       walls, cell_start, cell_walls, all_walls) != NO_HIT:
             events[v] = COLLIDED
         elif spin_checked[v] and spun(recent[v], life[v], pose[v, 0], pose[v, 1],
                                       physics.spin_variance):
@@ -70,11 +71,14 @@ def detect(pose, corners, centres, previous, previous_centres, fresh, spin_check
 
 
 @njit(cache=True)
-def drive(kinds, genes, layer_sizes, physics, pose, corners, centres, previous, previous_centres,
-          fresh, memory, rng, readings, activation, scratch, steering, life) -> None:
+def drive(kinds, genes, layer_sizes, physics, geometry, pose, corners, centres, previous,
+          previous_centres, fresh, memory, rng, readings, activation, scratch, steering, life
+          ) -> None:
     """Every vehicle senses, decides (its own genes, or its scripted strategy) and moves."""
-    drive_all(kinds, genes, layer_sizes, physics, pose, corners, centres, previous,
-              previous_centres, fresh, memory, rng, readings, activation, scratch, steering)
+    beam_cos, beam_sin, walls, cell_start, cell_walls, all_walls, _ = geometry
+    drive_all(kinds, genes, layer_sizes, physics, beam_cos, beam_sin, walls, cell_start,
+              cell_walls, all_walls, pose, corners, centres, previous, previous_centres, fresh,
+              memory, rng, readings, activation, scratch, steering)
     life += 1
 
 
@@ -125,7 +129,8 @@ class Crowd:
         self.life = np.zeros(count, dtype=np.int64)
         self.recent = np.zeros((count, p.spin_window, 2))
         self.events = np.empty(count, dtype=np.int64)
-        self._work = (np.empty(len(p.beam_cos)), *network_buffers(world.layer_sizes),
+        self.geometry = world.geometry
+        self._work = (np.empty(len(self.geometry.beam_cos)), *network_buffers(world.layer_sizes),
                       np.zeros(count))
 
     def run(self, seconds: float, genes: np.ndarray, learning: Learning | None = None,
@@ -147,7 +152,8 @@ class Crowd:
         for t in range(steps + 1):
             trace[t] = self.pose
             detect(self.pose, self.corners, self.centres, self.previous, self.previous_centres,
-                   self.fresh, spin_checked, self.life, self.recent, p, self.events)
+                   self.fresh, spin_checked, self.life, self.recent, p, self.geometry,
+                   self.events)
             for v in np.nonzero(self.events != ALIVE)[0]:
                 spun = bool(self.events[v] == SPUN)
                 spins[v] += spun
@@ -156,14 +162,15 @@ class Crowd:
                     genes[v] = learning.life_ended(v, int(self.life[v]),
                                                    int(self.life[v] - unseen_from[v]), spun)
                 unseen_from[v] = 0
-                respawn(v, self.kinds[v], p, self.pose, self.corners, self.centres,
-                        self.previous, self.previous_centres, self.fresh, self.memory, self.rng)
+                respawn(v, self.kinds[v], p, *self.geometry[2:6], self.pose, self.corners,
+                        self.centres, self.previous, self.previous_centres, self.fresh,
+                        self.memory, self.rng)
                 self.life[v] = 0
             if t == steps:
                 break
-            drive(self.kinds, genes, self.world.layer_sizes, p, self.pose, self.corners,
-                  self.centres, self.previous, self.previous_centres, self.fresh, self.memory,
-                  self.rng, *self._work, self.life)
+            drive(self.kinds, genes, self.world.layer_sizes, p, self.geometry, self.pose,
+                  self.corners, self.centres, self.previous, self.previous_centres, self.fresh,
+                  self.memory, self.rng, *self._work, self.life)
         for v in np.flatnonzero(learns):  # a life still going counts what it has shown
             learning.still_driving(v, int(self.life[v] - unseen_from[v]))
         return CrowdRun(collisions, spins, steps * self.world.scenario.vehicle.dt, trace)

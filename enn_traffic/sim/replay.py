@@ -23,17 +23,18 @@ import math
 import numpy as np
 from numba import njit, prange
 
+from enn_traffic.geometry import boxes_overlap
 from enn_traffic.network import network_buffers
 from enn_traffic.network import steering as network_steering
 from enn_traffic.sim.rules import (
     NO_HIT,
+    close,
     left_network,
     move_all,
     place,
     responsible,
     sense,
     spun,
-    touches,
     within_range,
 )
 from enn_traffic.sim.world import CAPPED, COLLIDED, LEFT_NETWORK, SPUN
@@ -57,7 +58,7 @@ def clear_start(centre, ids, centres, gone, clearance) -> None:
 
 
 @njit(cache=True)
-def learner_state(start, physics, layer_sizes, slots):
+def learner_state(start, physics, beams, layer_sizes, slots):
     """Fresh per-episode arrays for :func:`learner_step`: the learner as a world of one
     vehicle (pose, body, centre, body and centre before the step, fresh, steering), its recent
     positions, collisions suffered, traffic met (vehicle-steps within sensor range, most at
@@ -70,35 +71,37 @@ def learner_state(start, physics, layer_sizes, slots):
     activation, scratch = network_buffers(layer_sizes)
     return (pose, body, centre, body.copy(), centre.copy(), np.zeros(1, np.bool_), np.zeros(1),
             np.empty((physics.spin_window, 2)), np.zeros(1, np.int64), np.zeros(2, np.int64),
-            np.empty(physics.beam_cos.shape[0]), activation, scratch,
+            np.empty(beams), activation, scratch,
             np.full(slots, -1, np.int64), np.empty((slots, 2)), np.empty(slots, np.bool_))
 
 
-@njit(cache=True)
-def learner_step(t, genes, layer_sizes, physics, before, now, max_steps, state):
+@njit(cache=True, inline="always")
+def learner_step(t, genes, layer_sizes, physics, geometry, before, now, max_steps, state):
     """One step of the learner among the traffic ``before`` the step and ``now`` (each (ids,
     corners, centres)): the fringe, collisions, spin test and step cap, then sense, decide and
     move. Returns an outcome code, or ``RUNNING``; updates ``state``
     (:func:`learner_state`) in place."""
     (pose, body, centre, body_before, centre_before, fresh, steering, recent, suffered, met,
      readings, activation, scratch, gone, visible, absent) = state
+    beam_cos, beam_sin, walls, cell_start, cell_walls, all_walls, exits = geometry
     ids_before, corners_before, centres_before = before
     ids_now, corners_now, centres_now = now
     # 0. the fringe: an exit reached ends the life, whatever else the body touches
-    if left_network(body[0], physics.exits):
+    if left_network(body[0], exits):
         return LEFT_NETWORK
     # 1. collisions by the blame rule
     for s in range(ids_before.shape[0]):
         absent[s] = t == 0 or not _visible(ids_before, gone, s)
-    if responsible(0, pose, body, centre, corners_before, centres_before, absent, -1,
-                   physics) != NO_HIT:
+    if responsible(0, pose, body, centre, corners_before, centres_before, absent, -1, physics,
+                   walls, cell_start, cell_walls, all_walls) != NO_HIT:
         return COLLIDED
     if t > 0:
         near = 4.0 * physics.radius * physics.radius
         for s in range(ids_now.shape[0]):
             if (_visible(ids_now, gone, s)
-                    and touches(corners_now, centres_now, s, body_before, centre_before, 0,
-                                near)):
+                    and close(centres_now[s, 0], centres_now[s, 1], centre_before[0, 0],
+                              centre_before[0, 1], near)
+                    and boxes_overlap(corners_now[s], body_before[0])):
                 gone[s] = ids_now[s]
                 suffered[0] += 1
     # 2. spin test and step cap
@@ -115,7 +118,8 @@ def learner_step(t, genes, layer_sizes, physics, before, now, max_steps, state):
     within = within_range(pose[0, 0], pose[0, 1], visible, 0, physics.max_range + physics.radius)
     met[0] += within
     met[1] = max(met[1], within)
-    sense(0, pose, physics, True, corners_now, visible, -1, readings)
+    sense(0, pose, physics, beam_cos, beam_sin, walls, cell_start, cell_walls, all_walls, True,
+          corners_now, visible, -1, readings)
     steering[0] = network_steering(genes, layer_sizes, readings, activation, scratch,
                                    physics.gain)
     # 4. move
@@ -124,13 +128,13 @@ def learner_step(t, genes, layer_sizes, physics, before, now, max_steps, state):
 
 
 @njit(cache=True)
-def run_replay_episode(genes, layer_sizes, physics, start, ids, corners, centres, max_steps,
-                       trace):
+def run_replay_episode(genes, layer_sizes, physics, geometry, start, ids, corners, centres,
+                       max_steps, trace):
     """Drive one chromosome through a recorded traffic run (``ids`` etc. hold at least
     ``max_steps + 1`` steps). Returns (steps moved, outcome, collisions suffered, vehicle-steps
     within sensor range, most at once); ``trace`` (n, 3) receives the learner's poses of steps
     0..n-1 when n > 0."""
-    state = learner_state(start, physics, layer_sizes, ids.shape[1])
+    state = learner_state(start, physics, geometry.beam_cos.shape[0], layer_sizes, ids.shape[1])
     pose, centre, suffered, met, gone = state[0], state[2], state[8], state[9], state[13]
     clear_start(centre, ids[0], centres[0], gone, physics.clearance)
     t = 0
@@ -138,7 +142,7 @@ def run_replay_episode(genes, layer_sizes, physics, start, ids, corners, centres
         if t < trace.shape[0]:
             trace[t] = pose[0]
         before = max(t - 1, 0)
-        outcome = learner_step(t, genes, layer_sizes, physics,
+        outcome = learner_step(t, genes, layer_sizes, physics, geometry,
                                (ids[before], corners[before], centres[before]),
                                (ids[t], corners[t], centres[t]), max_steps, state)
         if outcome != RUNNING:
@@ -147,8 +151,8 @@ def run_replay_episode(genes, layer_sizes, physics, start, ids, corners, centres
 
 
 @njit(cache=True, parallel=True)
-def run_replay_population(population, layer_sizes, physics, start, ids, corners, centres,
-                          max_steps):
+def run_replay_population(population, layer_sizes, physics, geometry, start, ids, corners,
+                          centres, max_steps):
     """:func:`run_replay_episode` for every chromosome of ``population`` (P, G), spread over
     the cores; per world (steps, outcome, collisions suffered, vehicle-steps within sensor
     range, most at once)."""
@@ -161,6 +165,6 @@ def run_replay_population(population, layer_sizes, physics, start, ids, corners,
     no_trace = np.empty((0, 3))
     for p in prange(size):
         steps[p], outcome[p], suffered[p], near_steps[p], near_max[p] = run_replay_episode(
-            population[p], layer_sizes, physics, start, ids, corners, centres, max_steps,
-            no_trace)
+            population[p], layer_sizes, physics, geometry, start, ids, corners, centres,
+            max_steps, no_trace)
     return steps, outcome, suffered, near_steps, near_max

@@ -15,8 +15,8 @@ is:
 4. **move** (:func:`move_all`): the bicycle model, and the body that goes with the new pose;
 
 and a vehicle that is responsible (other than the one being evaluated) **respawns**
-(:func:`respawn`) at a free spot. The constants of all of them travel in one
-:class:`Physics`.
+(:func:`respawn`) at a free spot. Their constants travel in one :class:`Physics` (the numbers)
+and one :class:`Geometry` (the arrays).
 """
 
 from __future__ import annotations
@@ -45,30 +45,29 @@ NO_HIT, HIT_WALL = -1, -2
 
 
 class Physics(NamedTuple):
-    """Every constant a step needs, in the one form the compiled rules take: flat, since a
-    compiled parallel loop cannot take a tuple within a tuple. It is also the wall grid
-    (:class:`~enn_traffic.sim.sensors.WallGrid`'s fields) and the scripted strategies'
-    settings (:data:`~enn_traffic.traffic.strategies.STRATEGY_FIELDS`)."""
+    """Every number a step needs, in the one form the compiled rules take. Flat and numbers
+    only: a compiled parallel loop cannot take a tuple within a tuple, and a compiled function
+    that takes an array out of a tuple it was given is many times slower (the arrays travel in
+    :class:`Geometry`, unpacked whole). It also holds the wall grid's numbers
+    (:class:`~enn_traffic.sim.sensors.WallGrid`) and the scripted strategies' settings
+    (:data:`~enn_traffic.traffic.strategies.STRATEGY_FIELDS`)."""
 
     length: float  # body, m
     width: float
     wheelbase: float
     distance: float  # metres moved per step
     radius: float  # half diagonal of the largest body: farther apart, bodies cannot touch
-    beam_cos: np.ndarray  # cos and sin of each beam angle (right to left)
-    beam_sin: np.ndarray
     max_range: float
     gain: float  # steering angle per unit of (left − right) network output, rad
-    walls: np.ndarray  # (S, 4)
-    cell_origin: np.ndarray  # the wall grid: walls within reach of each cell
+    cell_x0: float  # the wall grid: lower-left corner, cell size, cells along x and y
+    cell_y0: float
     cell_size: float
     cells_x: int
     cells_y: int
-    cell_start: np.ndarray
-    cell_walls: np.ndarray
-    all_walls: np.ndarray
-    bounds: np.ndarray  # (xmin, ymin, xmax, ymax) of the drivable area
-    exits: np.ndarray  # (X, 4) segments that end a life as "left network"
+    x_min: float  # the drivable area's bounding box, where respawns are drawn
+    y_min: float
+    x_max: float
+    y_max: float
     spin_window: int
     spin_variance: float
     clearance: float  # a respawned vehicle's least distance to every other
@@ -83,15 +82,37 @@ class Physics(NamedTuple):
     turn_side: float
     sees_vehicles: bool
 
-    @classmethod
-    def build(cls, grid: WallGrid, strategy: dict, **constants) -> Physics:
-        """From the wall grid, the strategies' settings
-        (:func:`~enn_traffic.traffic.strategies.strategy_settings`) and the other fields."""
-        walls = {name: getattr(grid, name) for name in WallGrid._fields}
-        return cls(**walls, **strategy, **constants)
+
+class Geometry(NamedTuple):
+    """The arrays a step needs: beam directions, walls, the wall grid's cells and the exits.
+    The loops unpack it once (``beam_cos, beam_sin, ... = geometry``) and hand the rules the
+    arrays themselves: a compiled call that takes a tuple of arrays is many times slower."""
+
+    beam_cos: np.ndarray  # cos and sin of each beam angle (right to left)
+    beam_sin: np.ndarray
+    walls: np.ndarray  # (S, 4)
+    cell_start: np.ndarray  # the wall grid (WallGrid)
+    cell_walls: np.ndarray
+    all_walls: np.ndarray
+    exits: np.ndarray  # (X, 4) segments that end a life as "left network"
 
 
-@njit(cache=True)
+def build_constants(grid: WallGrid, bounds, beam_angles, exits: np.ndarray, strategy: dict,
+                    **numbers) -> tuple[Physics, Geometry]:
+    """The :class:`Physics` and :class:`Geometry` of a world, from its wall grid, the drivable
+    area's bounds, the beam angles, the exits, the strategies' settings
+    (:func:`~enn_traffic.traffic.strategies.strategy_settings`) and the other numbers."""
+    x_min, y_min, x_max, y_max = map(float, bounds)
+    physics = Physics(cell_x0=grid.cell_x0, cell_y0=grid.cell_y0, cell_size=grid.cell_size,
+                      cells_x=grid.cells_x, cells_y=grid.cells_y, x_min=x_min, y_min=y_min,
+                      x_max=x_max, y_max=y_max, **strategy, **numbers)
+    geometry = Geometry(np.cos(beam_angles), np.sin(beam_angles), grid.walls, grid.cell_start,
+                        grid.cell_walls, grid.all_walls,
+                        np.ascontiguousarray(exits, dtype=np.float64).reshape(-1, 4))
+    return physics, geometry
+
+
+@njit(cache=True, inline="always")
 def place(v, x, y, heading, physics, pose, corners, centres):
     """Put vehicle ``v`` at (x, y, heading): its pose, body corners and body centre."""
     pose[v, 0], pose[v, 1], pose[v, 2] = x, y, heading
@@ -101,32 +122,36 @@ def place(v, x, y, heading, physics, pose, corners, centres):
 
 
 @njit(cache=True)
-def touches(corners, centres, a, others, other_centres, b, near) -> bool:
-    """Does body ``a`` touch (earlier) body ``b``? ``near``: the squared distance of body
-    centres beyond which bodies cannot touch."""
-    dx = centres[a, 0] - other_centres[b, 0]
-    dy = centres[a, 1] - other_centres[b, 1]
-    return dx * dx + dy * dy <= near and boxes_overlap(corners[a], others[b])
+def close(ax, ay, bx, by, near) -> bool:
+    """Are body centres (ax, ay) and (bx, by) near enough for the bodies to touch? ``near``:
+    the squared distance beyond which they cannot. (Numbers, not arrays: the rules' innermost
+    loops call it, and a compiled call that takes arrays costs far more.)"""
+    dx = ax - bx
+    dy = ay - by
+    return dx * dx + dy * dy <= near
 
 
-@njit(cache=True)
-def responsible(v, pose, corners, centres, before, before_centres, absent, me, physics) -> int:
+@njit(cache=True, inline="always")
+def responsible(v, pose, corners, centres, before, before_centres, absent, me, physics, walls,
+                cell_start, cell_walls, all_walls) -> int:
     """The blame rule for vehicle ``v`` (``pose``, ``corners`` and ``centres`` hold its body):
     ``HIT_WALL`` if its body touches a wall, else the first vehicle of ``before`` (the bodies
     from before the step; ``absent`` ones and ``me``, its own, skipped) it touches, else
     ``NO_HIT``."""
-    candidates = nearby_walls(pose[v, 0], pose[v, 1], physics)
-    if box_hits_walls(corners[v], physics.walls, candidates, candidates.shape[0]):
+    candidates = nearby_walls(pose[v, 0], pose[v, 1], physics, cell_start, cell_walls, all_walls)
+    if box_hits_walls(corners[v], walls, candidates, candidates.shape[0]):
         return HIT_WALL
     near = 4.0 * physics.radius * physics.radius
     for other in range(before.shape[0]):
         if (other != me and not absent[other]
-                and touches(corners, centres, v, before, before_centres, other, near)):
+                and close(centres[v, 0], centres[v, 1], before_centres[other, 0],
+                          before_centres[other, 1], near)
+                and boxes_overlap(corners[v], before[other])):
             return other
     return NO_HIT
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def left_network(body, exits) -> bool:
     """Does the body touch an exit (the network's fringe, docs/sumo.md)?"""
     for e in range(exits.shape[0]):
@@ -135,7 +160,7 @@ def left_network(body, exits) -> bool:
     return False
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def spun(recent, life, x, y, spin_variance) -> bool:
     """Record (x, y) as step ``life`` of a life in the ring ``recent`` (window, 2); is the
     vehicle spinning in place: a full window whose x and y each vary by at most
@@ -146,7 +171,7 @@ def spun(recent, life, x, y, spin_variance) -> bool:
     return life + 1 >= window and _small_spread(recent, spin_variance)
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _small_spread(points, limit) -> bool:
     """Population variance of x and of y both at most ``limit``."""
     n = points.shape[0]
@@ -157,21 +182,22 @@ def _small_spread(points, limit) -> bool:
     return vx <= limit and vy <= limit
 
 
-@njit(cache=True)
-def sense(v, pose, physics, bodies, corners, centres, me, readings) -> None:
+@njit(cache=True, inline="always")
+def sense(v, pose, physics, beam_cos, beam_sin, walls, cell_start, cell_walls, all_walls, bodies,
+          corners, centres, me, readings) -> None:
     """Rangefinder readings of vehicle ``v`` (paper §3): the nearest wall along each beam and,
     when ``bodies``, the nearest edge of any other body (``corners``, ``centres``; ``me``, its
     own there, skipped)."""
     x, y, heading = pose[v, 0], pose[v, 1], pose[v, 2]
-    candidates = nearby_walls(x, y, physics)
-    sense_walls(x, y, heading, physics.beam_cos, physics.beam_sin, physics.max_range,
-                physics.walls, candidates, readings)
+    candidates = nearby_walls(x, y, physics, cell_start, cell_walls, all_walls)
+    sense_walls(x, y, heading, beam_cos, beam_sin, physics.max_range, walls, candidates,
+                readings)
     if bodies:
-        sense_bodies(me, x, y, heading, physics.beam_cos, physics.beam_sin, corners, centres,
-                     physics.radius, readings)
+        sense_bodies(me, x, y, heading, beam_cos, beam_sin, corners, centres, physics.radius,
+                     readings)
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def sense_bodies(me, x, y, heading, beam_cos, beam_sin, corners, centres, radius, readings):
     """Lower ``readings`` of a vehicle at (x, y, heading) to the nearest edge of any body but
     ``me``."""
@@ -198,35 +224,37 @@ def sense_bodies(me, x, y, heading, beam_cos, beam_sin, corners, centres, radius
                     readings[b] = d
 
 
-@njit(cache=True)
-def decide(kind, genes, layer_sizes, readings, physics, memory, rng, activation, scratch):
+@njit(cache=True, inline="always")
+def decide(kind, genes, layer_sizes, readings, physics, beam_cos, beam_sin, memory, rng,
+           activation, scratch):
     """The steering angle of a vehicle driven by ``kind``: its network (``genes``, source
     layout) or its scripted strategy (``memory``: the strategy's state for this life)."""
     if kind == NETWORK:
         return network_steering(genes, layer_sizes, readings, activation, scratch, physics.gain)
     if kind != NONE:
-        return scripted_steering(kind, readings, physics.beam_cos, physics.beam_sin,
-                                 physics.max_range, physics, memory, rng)
+        return scripted_steering(kind, readings, beam_cos, beam_sin, physics.max_range, physics,
+                                 memory, rng)
     return 0.0
 
 
-@njit(cache=True)
-def drive_all(kinds, genes, layer_sizes, physics, pose, corners, centres, previous,
-              previous_centres, fresh, memory, rng, readings, activation, scratch, steering):
+@njit(cache=True, inline="always")
+def drive_all(kinds, genes, layer_sizes, physics, beam_cos, beam_sin, walls, cell_start,
+              cell_walls, all_walls, pose, corners, centres, previous, previous_centres, fresh,
+              memory, rng, readings, activation, scratch, steering):
     """Every vehicle senses and decides (``genes[v]`` for a network driver), then all move at
     once: the bodies before the move become ``previous``, and no body is ``fresh`` any more."""
     count = pose.shape[0]
     for v in range(count):
         kind = kinds[v]
         if kind != NONE:
-            sense(v, pose, physics, count > 1 and senses_vehicles(kind, physics),
-                  corners, centres, v, readings)
-        steering[v] = decide(kind, genes[v], layer_sizes, readings, physics, memory[v], rng,
-                             activation, scratch)
+            sense(v, pose, physics, beam_cos, beam_sin, walls, cell_start, cell_walls, all_walls,
+                  count > 1 and senses_vehicles(kind, physics), corners, centres, v, readings)
+        steering[v] = decide(kind, genes[v], layer_sizes, readings, physics, beam_cos, beam_sin,
+                             memory[v], rng, activation, scratch)
     move_all(steering, physics, pose, corners, centres, previous, previous_centres, fresh)
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def move_all(steering, physics, pose, corners, centres, previous, previous_centres, fresh):
     """Every vehicle moves one step by the bicycle model (paper §4)."""
     previous[:] = corners
@@ -239,22 +267,21 @@ def move_all(steering, physics, pose, corners, centres, previous, previous_centr
 
 
 @njit(cache=True)
-def respawn(v, kind, physics, pose, corners, centres, previous, previous_centres, fresh, memory,
-            rng) -> bool:
+def respawn(v, kind, physics, walls, cell_start, cell_walls, all_walls, pose, corners, centres,
+            previous, previous_centres, fresh, memory, rng) -> bool:
     """Move vehicle ``v`` to a random free pose with a fresh life: on the drivable area,
     touching no wall, at least ``clearance`` from every other vehicle, with no earlier body to
     blame against and its strategy's state reset. False (nothing changed) if no such pose
     was found in 200 draws."""
     trial = np.empty((4, 2))
-    bounds, walls = physics.bounds, physics.walls
     for _ in range(200):
-        x = bounds[0] + (bounds[2] - bounds[0]) * next_uniform(rng)
-        y = bounds[1] + (bounds[3] - bounds[1]) * next_uniform(rng)
+        x = physics.x_min + (physics.x_max - physics.x_min) * next_uniform(rng)
+        y = physics.y_min + (physics.y_max - physics.y_min) * next_uniform(rng)
         heading = math.pi * (2.0 * next_uniform(rng) - 1.0)
         if not inside(x, y, walls):
             continue
         body_corners(x, y, heading, physics.length, physics.width, trial)
-        candidates = nearby_walls(x, y, physics)
+        candidates = nearby_walls(x, y, physics, cell_start, cell_walls, all_walls)
         if box_hits_walls(trial, walls, candidates, candidates.shape[0]):
             continue
         if not inside(trial[2, 0], trial[2, 1], walls):
@@ -286,7 +313,7 @@ def inside(x, y, walls) -> bool:
     return result
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def within_range(x, y, centres, first, reach) -> int:
     """How many of ``centres[first:]`` lie within ``reach`` of (x, y) (traffic met)."""
     count = 0
@@ -294,3 +321,4 @@ def within_range(x, y, centres, first, reach) -> int:
         if (centres[v, 0] - x) ** 2 + (centres[v, 1] - y) ** 2 <= reach * reach:
             count += 1
     return count
+

@@ -18,12 +18,14 @@ from numba import njit
 
 
 class WallGrid(NamedTuple):
-    """Walls and, per grid cell, the indices of the walls within ``reach`` of the cell; the
-    compiled kernels take it as it is (or any tuple with these fields, such as
-    :class:`enn_traffic.sim.rules.Physics`)."""
+    """Walls and, per grid cell, the indices of the walls within ``reach`` of the cell. The
+    compiled kernels take its numbers as fields of a tuple (:class:`WallGrid` itself, or
+    :class:`enn_traffic.sim.rules.Physics`) and its arrays as arguments: a compiled function
+    that takes an array out of a tuple it was given is many times slower."""
 
     walls: np.ndarray  # (S, 4)
-    cell_origin: np.ndarray  # (2,) lower-left corner of cell (0, 0)
+    cell_x0: float  # lower-left corner of cell (0, 0)
+    cell_y0: float
     cell_size: float
     cells_x: int
     cells_y: int
@@ -52,7 +54,8 @@ class WallGrid(NamedTuple):
         cell_walls = np.concatenate(members) if members else np.empty(0, dtype=np.int64)
         return cls(
             walls=walls,
-            cell_origin=low,
+            cell_x0=float(low[0]),
+            cell_y0=float(low[1]),
             cell_size=float(cell_size),
             cells_x=int(nx),
             cells_y=int(ny),
@@ -72,15 +75,16 @@ def point_segment_distance(points: np.ndarray, walls: np.ndarray) -> np.ndarray:
     return np.linalg.norm(p - closest, axis=-1)
 
 
-@njit(cache=True)
-def nearby_walls(x, y, grid):
-    """The wall indices to test for a vehicle at (x, y) (``grid``: a :class:`WallGrid`)."""
-    i = int(math.floor((x - grid.cell_origin[0]) / grid.cell_size))
-    j = int(math.floor((y - grid.cell_origin[1]) / grid.cell_size))
+@njit(cache=True, inline="always")
+def nearby_walls(x, y, grid, cell_start, cell_walls, all_walls):
+    """The wall indices to test for a vehicle at (x, y) (``grid``: the numbers of a
+    :class:`WallGrid`, the other arguments its arrays)."""
+    i = int(math.floor((x - grid.cell_x0) / grid.cell_size))
+    j = int(math.floor((y - grid.cell_y0) / grid.cell_size))
     if i < 0 or j < 0 or i >= grid.cells_x or j >= grid.cells_y:
-        return grid.all_walls
+        return all_walls
     cell = i * grid.cells_y + j
-    return grid.cell_walls[grid.cell_start[cell] : grid.cell_start[cell + 1]]
+    return cell_walls[cell_start[cell] : cell_start[cell + 1]]
 
 
 @njit(cache=True)
@@ -99,7 +103,7 @@ def ray_segment_distance(x, y, ux, uy, max_range, x1, y1, x2, y2) -> float:
     return max_range
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def sense_walls(x, y, heading, beam_cos, beam_sin, max_range, walls, candidates, readings):
     """Fill ``readings`` with each beam's distance to the nearest candidate wall.
 

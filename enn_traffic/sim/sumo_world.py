@@ -129,8 +129,8 @@ class SumoWorld(ArenaWorld):
             at_start.append(int((record.ids[0] >= 0).sum()))
             with numba.parallel_chunksize(1):
                 runs.append(run_replay_population(
-                    genes, self.layer_sizes, self._learner_physics(record.radius), start,
-                    record.ids, record.corners, record.centres, self.max_steps))
+                    genes, self.layer_sizes, self._learner_physics(record.radius), self.geometry,
+                    start, record.ids, record.corners, record.centres, self.max_steps))
         self.vehicles = 1 + round(float(np.mean(vehicles))) if vehicles else self.vehicles
         return EpisodeResults.of_situations(runs, self.vehicles, at_start,
                                             np.stack(safety, axis=1) if safety else None)
@@ -172,7 +172,8 @@ class SumoWorld(ArenaWorld):
             physics = self._learner_physics(simulation.largest_radius())
             ids, corners, centres = sumo.slot_arrays(2, 64)  # rows: the step before, now
             before, now = 0, 1  # they swap roles every step, instead of copying
-            state = learner_state(start, physics, self.layer_sizes, ids.shape[1])
+            state = learner_state(start, physics, len(self.geometry.beam_cos), self.layer_sizes,
+                                  ids.shape[1])
             pose, suffered, met = state[0], state[8], state[9]
             ids, corners, centres, state, radius = self._read(
                 simulation, now, ids, corners, centres, state)
@@ -192,7 +193,7 @@ class SumoWorld(ArenaWorld):
                 if frames is not None:
                     frames.append((pose[0].copy(), ids[now].copy(), corners[now].copy()))
                 outcome = learner_step(
-                    t, genes, self.layer_sizes, physics,
+                    t, genes, self.layer_sizes, physics, self.geometry,
                     (ids[before], corners[before], centres[before]),
                     (ids[now], corners[now], centres[now]), limit, state)
                 if outcome != RUNNING:
@@ -253,8 +254,8 @@ class SumoWorld(ArenaWorld):
             record = self.recording(seed)
             learner = np.full((limit + 1, 3), np.nan)
             steps, outcome, *_ = run_replay_episode(
-                genes, self.layer_sizes, self._learner_physics(record.radius), start,
-                record.ids, record.corners, record.centres, limit, learner)
+                genes, self.layer_sizes, self._learner_physics(record.radius), self.geometry,
+                start, record.ids, record.corners, record.centres, limit, learner)
             ids, corners = record.ids[: steps + 1], record.corners[: steps + 1]
             learner = learner[: steps + 1]
         front = 0.5 * (corners[:, :, 0] + corners[:, :, 1])

@@ -102,7 +102,7 @@ def reset_memory(kind, params, rng, memory) -> None:
         memory[0] = side * circle_steering(radius, params.wheelbase)
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def senses_vehicles(kind, params) -> bool:
     """Does an uncontrolled vehicle of ``kind`` sense other vehicles' bodies? A network
     always does; a scripted driver only with ``sees_vehicles``."""

@@ -80,7 +80,7 @@ def test_grid_culling_gives_the_same_readings_as_all_walls(root):
     for _ in range(300):
         x, y = rng.uniform(-240, 40), rng.uniform(-35, 225)
         heading = rng.uniform(-math.pi, math.pi)
-        near = nearby_walls(x, y, grid)
+        near = nearby_walls(x, y, grid, grid.cell_start, grid.cell_walls, grid.all_walls)
         culled = np.empty(19)
         sense_walls(x, y, heading, np.cos(angles), np.sin(angles), 25.0, track.walls, near,
                     culled)
