@@ -19,7 +19,7 @@ from enn_traffic.experiments.protocol import (
     Family,
     family_runs,
     run_dir,
-    test_world,
+    strategy_world,
 )
 from enn_traffic.runner import RunOutputs
 from enn_traffic.sim.world import EpisodeResults
@@ -41,21 +41,21 @@ RECHECKED = 10
 
 
 def episode_results(family: Family, candidates: np.ndarray, strategy: int, key: int,
-             episodes: int | None = None) -> EpisodeResults:
+                    episodes: int | None = None) -> EpisodeResults:
     """Each candidate driven in the episodes (``test_episodes`` unless given) drawn from
     ``key``."""
-    return test_world(family, strategy, episodes).evaluate(np.atleast_2d(candidates), key)
+    return strategy_world(family, strategy, episodes).evaluate(np.atleast_2d(candidates), key)
 
 
 def mean_fitness(family: Family, candidates: np.ndarray, strategy: int, key: int,
-                  episodes: int | None = None) -> np.ndarray:
+                 episodes: int | None = None) -> np.ndarray:
     """Mean fitness of each candidate over the episodes (``test_episodes`` unless given)
     drawn from ``key``."""
     return episode_results(family, candidates, strategy, key, episodes).fitness
 
 
 def lower_bound(family: Family, candidates: np.ndarray, strategy: int, key: int,
-                 episodes: int) -> np.ndarray:
+                episodes: int) -> np.ndarray:
     """Each candidate's mean fitness over ``episodes`` situations drawn from ``key``, less
     ``ACCEPTANCE_ERRORS`` standard errors of that mean."""
     results = episode_results(family, candidates, strategy, key, episodes)
@@ -64,17 +64,17 @@ def lower_bound(family: Family, candidates: np.ndarray, strategy: int, key: int,
     return fitness.mean(axis=1) - ACCEPTANCE_ERRORS * error
 
 
-def candidates(run_dir: Path) -> np.ndarray:
+def candidates(folder: Path) -> np.ndarray:
     """A run's controllers to choose from: every generation's best chromosome (the run's best
     alone for a run that kept none) and the elites at the head of its final population, each
     once."""
-    outputs = RunOutputs.load(run_dir)
+    outputs = RunOutputs.load(folder)
     elites = outputs.population[: max(outputs.elite_count, 1)]
     return distinct(np.concatenate([outputs.champions, elites]))
 
 
 def validation(family: Family, candidates: np.ndarray, strategies: list[int],
-                episodes: int | None = None) -> np.ndarray:
+               episodes: int | None = None) -> np.ndarray:
     """Mean fitness (candidates, strategies) on validation traffic."""
     return np.stack([mean_fitness(family, candidates, s, VALIDATION_KEY, episodes)
                      for s in strategies], axis=1)
@@ -88,7 +88,7 @@ def pick(family: Family, candidates: np.ndarray, strategies: list[int]) -> np.nd
 
 
 def scored_pick(family: Family, candidates: np.ndarray, strategies: list[int]
-                 ) -> tuple[np.ndarray, float]:
+                ) -> tuple[np.ndarray, float]:
     """:func:`pick`, and the picked candidate's worst strategy on the recheck."""
     worst = validation(family, candidates, strategies).min(axis=1)
     best = candidates[np.argsort(-worst, kind="stable")[:RECHECKED]]
@@ -97,7 +97,7 @@ def scored_pick(family: Family, candidates: np.ndarray, strategies: list[int]
 
 
 def accepts(family: Family, candidates: np.ndarray, strategies: list[int],
-             threshold: float) -> bool:
+            threshold: float) -> bool:
     """Table 2's acceptance (§5.4.1): one of ``candidates`` reaches ``threshold`` on every
     strategy in ``test_episodes`` validation situations, and its mean less
     ``ACCEPTANCE_ERRORS`` standard errors does so in ``recheck_episodes`` others."""
@@ -110,15 +110,15 @@ def accepts(family: Family, candidates: np.ndarray, strategies: list[int],
     return bool((bounds.min(axis=1) >= threshold).any())
 
 
-def test_fitness(family: Family, chromosome: np.ndarray, strategy: int) -> float:
+def fitness_on_test_traffic(family: Family, chromosome: np.ndarray, strategy: int) -> float:
     """Mean fitness over the ``table_episodes`` test situations of a strategy's traffic."""
     return float(mean_fitness(family, chromosome, strategy, EVALUATION_KEY,
-                               family.table_episodes)[0])
+                              family.table_episodes)[0])
 
 
 def held_out(family: Family, out: Path, strategy: int, seed: int) -> np.ndarray | None:
     """Each generation's best chromosome of a run, scored again on the strategy's test traffic
-    (None for a run that kept no champions): what the run learned, apart from the luck of its
+    (None for a run without any): what the run learned, apart from the luck of its
     own traffic, which inflates a generation's best training fitness."""
     champions = RunOutputs.load(run_dir(family, out, strategy, seed)).champions
     return mean_fitness(family, champions, strategy, EVALUATION_KEY) if len(champions) else None
@@ -127,9 +127,8 @@ def held_out(family: Family, out: Path, strategy: int, seed: int) -> np.ndarray 
 def specialists(family: Family, out: Path, progress: bool) -> dict[int, np.ndarray]:
     """Per strategy: the best of its runs' candidates, judged on validation traffic of that
     same strategy."""
-    candidates = _evolved_candidates(family, out, progress)
-    return {strategy: pick(family, candidates[strategy], [strategy])
-            for strategy in STRATEGIES}
+    pools = _evolved_candidates(family, out, progress)
+    return {strategy: pick(family, pools[strategy], [strategy]) for strategy in STRATEGIES}
 
 
 def _evolved_candidates(family: Family, out: Path, progress: bool) -> dict[int, np.ndarray]:

@@ -118,7 +118,7 @@ def family_runs(family: Family, out: Path, progress: bool) -> dict[int, dict[int
             for strategy in STRATEGIES}
 
 
-def test_world(family: Family, strategy: int, episodes: int | None = None) -> World:
+def strategy_world(family: Family, strategy: int, episodes: int | None = None) -> World:
     """The world of a strategy with ``episodes`` traffic situations (``test_episodes`` unless
     given), built once for each count."""
     return _world(family, strategy, episodes or family.test_episodes)

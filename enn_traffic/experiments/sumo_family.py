@@ -11,7 +11,7 @@ import pandas as pd
 from enn_traffic.deploy import EVALUATION_KEY
 from enn_traffic.experiments.choosing import trained_controllers
 from enn_traffic.experiments.fig11 import fig11
-from enn_traffic.experiments.protocol import STRATEGIES, SUMO, test_world
+from enn_traffic.experiments.protocol import STRATEGIES, SUMO, strategy_world
 from enn_traffic.experiments.table1 import table1
 from enn_traffic.experiments.table2 import table2
 from enn_traffic.io import write_csv
@@ -25,7 +25,7 @@ def replay_against_closed_loop(out: Path, quick: bool = False, progress: bool = 
     controllers = trained_controllers(out, quick, progress, SUMO)
     rows = []
     for strategy in STRATEGIES:
-        test = test_world(SUMO.settings(quick), strategy).scenario
+        test = strategy_world(SUMO.settings(quick), strategy).scenario
         lifetimes = {}
         for mode in ("replay", "closed-loop"):
             world = make_world(test.with_overrides(traffic={"mode": mode}))

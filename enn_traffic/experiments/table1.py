@@ -9,8 +9,8 @@ import numpy as np
 import pandas as pd
 
 from enn_traffic.deploy import EVALUATION_KEY
-from enn_traffic.experiments.choosing import specialists, test_fitness
-from enn_traffic.experiments.protocol import ARENA, STRATEGIES, Family, test_world
+from enn_traffic.experiments.choosing import fitness_on_test_traffic, specialists
+from enn_traffic.experiments.protocol import ARENA, STRATEGIES, Family, strategy_world
 from enn_traffic.io import write_csv
 from enn_traffic.report.figures import fig12_figure, specialist_paths
 
@@ -21,7 +21,7 @@ def _draw_specialists(family: Family, controllers: dict[int, np.ndarray], path: 
     first test episode."""
     traces, walls = {}, {}
     for deployed in STRATEGIES:
-        world = test_world(family, deployed)
+        world = strategy_world(family, deployed)
         walls[deployed] = world.track.walls
         for trained in STRATEGIES:
             traces[trained, deployed], _ = world.trace(controllers[trained], EVALUATION_KEY,
@@ -35,7 +35,7 @@ def table1(out: Path, quick: bool = False, progress: bool = True,
     family = family.settings(quick)
     out = out / family.folder
     controllers = specialists(family, out, progress)
-    matrix = np.array([[test_fitness(family, controllers[trained], deployed)
+    matrix = np.array([[fitness_on_test_traffic(family, controllers[trained], deployed)
                         for deployed in STRATEGIES] for trained in STRATEGIES])
     table = pd.DataFrame(matrix.round(1), columns=[f"deploy_{s}" for s in STRATEGIES])
     table.insert(0, "training_strategy", STRATEGIES)

@@ -8,7 +8,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from enn_traffic.experiments.choosing import test_fitness
+from enn_traffic.experiments.choosing import fitness_on_test_traffic
 from enn_traffic.experiments.incremental import Iteration, incremental_evolution
 from enn_traffic.experiments.protocol import ARENA, STRATEGIES, Family
 from enn_traffic.io import write_csv
@@ -22,8 +22,9 @@ def _rows(family: Family, seed: int, iterations: list[Iteration]) -> tuple[list[
         row = {"seed": seed, "iteration": number, "generations": iteration.generations,
                "reached_threshold": iteration.accepted}
         for strategy in STRATEGIES:
-            row[f"strategy_{strategy}"] = (test_fitness(family, iteration.chosen, strategy)
-                                           if strategy in iteration.included else np.nan)
+            row[f"strategy_{strategy}"] = (
+                fitness_on_test_traffic(family, iteration.chosen, strategy)
+                if strategy in iteration.included else np.nan)
         row["average"] = float(np.nanmean([row[f"strategy_{s}"] for s in iteration.included]))
         rows.append(row)
     return rows, iterations[-1].worst

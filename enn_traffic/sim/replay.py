@@ -19,6 +19,7 @@ whose body touches an exit (the network's fringe, docs/sumo.md) has left the net
 from __future__ import annotations
 
 import math
+from typing import NamedTuple
 
 import numpy as np
 from numba import njit, prange
@@ -57,22 +58,49 @@ def clear_start(centre, ids, centres, gone, clearance) -> None:
             gone[s] = ids[s]
 
 
+class LearnerState(NamedTuple):
+    """One episode's arrays for :func:`learner_step`: the learner as a world of one vehicle,
+    what it has met, its work arrays, and one entry per traffic slot."""
+
+    pose: np.ndarray  # (1, 3)
+    body: np.ndarray  # (1, 4, 2)
+    centre: np.ndarray  # (1, 2)
+    body_before: np.ndarray  # the body and centre before the step
+    centre_before: np.ndarray
+    fresh: np.ndarray  # (1,) always False: the learner never respawns
+    steering: np.ndarray  # (1,)
+    recent: np.ndarray  # (spin_window, 2) positions for the spin test
+    suffered: np.ndarray  # (1,) collisions suffered
+    met: np.ndarray  # (2,) vehicle-steps within sensor range, most at once
+    readings: np.ndarray
+    activation: np.ndarray
+    scratch: np.ndarray
+    gone: np.ndarray  # (S,) the id a slot held when it left the learner's world, or -1
+    visible: np.ndarray  # (S, 2) the centres the learner sees (far off: not seen)
+    absent: np.ndarray  # (S,) not in the learner's world before the step
+
+
 @njit(cache=True)
-def learner_state(start, physics, beams, layer_sizes, slots):
-    """Fresh per-episode arrays for :func:`learner_step`: the learner as a world of one
-    vehicle (pose, body, centre, body and centre before the step, fresh, steering), its recent
-    positions, collisions suffered, traffic met (vehicle-steps within sensor range, most at
-    once), readings, the network's work arrays, and per traffic slot: gone, the centres it
-    sees, absent."""
+def learner_state(start, physics, beams, layer_sizes, slots) -> LearnerState:
+    """A fresh :class:`LearnerState` at pose ``start`` among ``slots`` traffic slots."""
     pose = np.empty((1, 3))
     body = np.empty((1, 4, 2))
     centre = np.empty((1, 2))
     place(0, start[0], start[1], start[2], physics, pose, body, centre)
     activation, scratch = network_buffers(layer_sizes)
-    return (pose, body, centre, body.copy(), centre.copy(), np.zeros(1, np.bool_), np.zeros(1),
-            np.empty((physics.spin_window, 2)), np.zeros(1, np.int64), np.zeros(2, np.int64),
-            np.empty(beams), activation, scratch,
-            np.full(slots, -1, np.int64), np.empty((slots, 2)), np.empty(slots, np.bool_))
+    return LearnerState(pose, body, centre, body.copy(), centre.copy(), np.zeros(1, np.bool_),
+                        np.zeros(1), np.empty((physics.spin_window, 2)), np.zeros(1, np.int64),
+                        np.zeros(2, np.int64), np.empty(beams), activation, scratch,
+                        np.full(slots, -1, np.int64), np.empty((slots, 2)),
+                        np.empty(slots, np.bool_))
+
+
+def with_slots(state: LearnerState, slots: int) -> LearnerState:
+    """``state`` with room for ``slots`` traffic slots (the new ones never gone)."""
+    gone = np.full(slots, -1, dtype=np.int64)
+    gone[: len(state.gone)] = state.gone
+    return state._replace(gone=gone, visible=np.empty((slots, 2)),
+                          absent=np.empty(slots, np.bool_))
 
 
 @njit(cache=True, inline="always")
@@ -80,7 +108,7 @@ def learner_step(t, genes, layer_sizes, physics, geometry, before, now, max_step
     """One step of the learner among the traffic ``before`` the step and ``now`` (each (ids,
     corners, centres)): the fringe, collisions, spin test and step cap, then sense, decide and
     move. Returns an outcome code, or ``RUNNING``; updates ``state``
-    (:func:`learner_state`) in place."""
+    (a :class:`LearnerState`) in place."""
     (pose, body, centre, body_before, centre_before, fresh, steering, recent, suffered, met,
      readings, activation, scratch, gone, visible, absent) = state
     beam_cos, beam_sin, walls, cell_start, cell_walls, all_walls, exits = geometry
@@ -135,7 +163,8 @@ def run_replay_episode(genes, layer_sizes, physics, geometry, start, ids, corner
     within sensor range, most at once); ``trace`` (n, 3) receives the learner's poses of steps
     0..n-1 when n > 0."""
     state = learner_state(start, physics, geometry.beam_cos.shape[0], layer_sizes, ids.shape[1])
-    pose, centre, suffered, met, gone = state[0], state[2], state[8], state[9], state[13]
+    pose, centre, suffered, met, gone = (state.pose, state.centre, state.suffered, state.met,
+                                         state.gone)
     clear_start(centre, ids[0], centres[0], gone, physics.clearance)
     t = 0
     while True:

@@ -232,8 +232,7 @@ def decide(kind, genes, layer_sizes, readings, physics, beam_cos, beam_sin, memo
     if kind == NETWORK:
         return network_steering(genes, layer_sizes, readings, activation, scratch, physics.gain)
     if kind != NONE:
-        return scripted_steering(kind, readings, beam_cos, beam_sin, physics.max_range, physics,
-                                 memory, rng)
+        return scripted_steering(kind, readings, beam_cos, beam_sin, physics, memory, rng)
     return 0.0
 
 

@@ -35,6 +35,7 @@ from enn_traffic.sim.replay import (
     learner_step,
     run_replay_episode,
     run_replay_population,
+    with_slots,
 )
 from enn_traffic.sim.rules import Physics
 from enn_traffic.sim.world import EpisodeResults
@@ -174,13 +175,12 @@ class SumoWorld(ArenaWorld):
             before, now = 0, 1  # they swap roles every step, instead of copying
             state = learner_state(start, physics, len(self.geometry.beam_cos), self.layer_sizes,
                                   ids.shape[1])
-            pose, suffered, met = state[0], state[8], state[9]
             ids, corners, centres, state, radius = self._read(
                 simulation, now, ids, corners, centres, state)
             at_start = int((ids[now] >= 0).sum())
             # a body larger than its type said
             physics = physics._replace(radius=max(physics.radius, radius))
-            clear_start(state[2], ids[now], centres[now], state[13], physics.clearance)
+            clear_start(state.centre, ids[now], centres[now], state.gone, physics.clearance)
             sumo.add_learner(vehicle.length, vehicle.width, vehicle.speed)
             # Vehicles farther than this from the learner's front bumper can neither be seen
             # nor be hit within a step: the sensor's range, two bodies and two steps of both
@@ -191,19 +191,18 @@ class SumoWorld(ArenaWorld):
             t = 0
             while True:
                 if frames is not None:
-                    frames.append((pose[0].copy(), ids[now].copy(), corners[now].copy()))
+                    frames.append((state.pose[0].copy(), ids[now].copy(), corners[now].copy()))
                 outcome = learner_step(
                     t, genes, self.layer_sizes, physics, self.geometry,
                     (ids[before], corners[before], centres[before]),
                     (ids[now], corners[now], centres[now]), limit, state)
                 if outcome != RUNNING:
                     break
-                sumo.move_learner(pose[0, 0], pose[0, 1], pose[0, 2])
+                sumo.move_learner(*state.pose[0])
                 simulation.step()
                 before, now = now, before
                 ids, corners, centres, state, radius = self._read(
                     simulation, now, ids, corners, centres, state)
-                pose, suffered, met = state[0], state[8], state[9]
                 if radius > physics.radius:  # a body larger than its type said
                     physics = physics._replace(radius=radius)
                     simulation.follow_learner(reach + 4.0 * physics.radius)
@@ -212,8 +211,8 @@ class SumoWorld(ArenaWorld):
             simulation.close()  # SUMO writes the SSM file as it closes
             conflicts = sumo.read_conflicts(Path(ssm_file))
             os.unlink(ssm_file)
-        return ClosedLoopLife(t, int(outcome), int(suffered[0]), int(met[0]), int(met[1]),
-                              at_start, conflicts)
+        return ClosedLoopLife(t, int(outcome), int(state.suffered[0]), int(state.met[0]),
+                              int(state.met[1]), at_start, conflicts)
 
     @staticmethod
     def _read(simulation: sumo.Simulation, row: int, ids, corners, centres, state):
@@ -227,9 +226,7 @@ class SumoWorld(ArenaWorld):
             for new, old in zip(grown, (ids, corners, centres), strict=True):
                 new[:, : old.shape[1]] = old
             ids, corners, centres = grown
-            gone = state[13]
-            gone = np.concatenate([gone, np.full(size - gone.shape[0], -1, dtype=np.int64)])
-            state = (*state[:13], gone, np.empty((size, 2)), np.empty(size, np.bool_))
+            state = with_slots(state, size)
         radius = sumo.fill_frame(rows, ids[row], corners[row], centres[row])
         return ids, corners, centres, state, radius
 

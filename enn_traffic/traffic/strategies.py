@@ -44,7 +44,8 @@ TURN_SIDES = {"open": 0.0, "left": 1.0, "right": -1.0}
 
 
 # The scripted strategies' settings (``[traffic]``) travel in the world's constants
-# (:class:`enn_traffic.sim.rules.Physics`), the ``params`` of the kernels below, as these fields.
+# (:class:`enn_traffic.sim.rules.Physics`), the ``params`` of the kernels below, as these fields;
+# the kernels also read its ``max_range`` and ``wheelbase``.
 STRATEGY_FIELDS = ("turn_distance", "turn_steering", "turn_cone", "circle_radius_min",
                    "circle_radius_max", "wander_sigma", "wander_decay", "wander_max",
                    "turn_side", "sees_vehicles")
@@ -118,8 +119,7 @@ def circle_steering(radius, wheelbase) -> float:
 
 
 @njit(cache=True)
-def scripted_steering(kind, readings, beam_cos, beam_sin, max_range, params, memory, rng
-                      ) -> float:
+def scripted_steering(kind, readings, beam_cos, beam_sin, params, memory, rng) -> float:
     """Steering of a scripted (non-network) strategy: a turn away from a wall when there is
     one, else the strategy's own steering ``memory[0]`` (0 when driving straight, the circle's,
     or the wander process's, updated here)."""
@@ -128,13 +128,13 @@ def scripted_steering(kind, readings, beam_cos, beam_sin, max_range, params, mem
         value = params.wander_decay * memory[0] + params.wander_sigma * next_normal(rng)
         memory[0] = min(max(value, -limit), limit)
     if kind in (STRAIGHT, CIRCLING, WANDER):
-        turn = wall_turn(readings, beam_cos, beam_sin, max_range, params, memory)
+        turn = wall_turn(readings, beam_cos, beam_sin, params, memory)
         return turn if turn != 0.0 else memory[0]
     return 0.0
 
 
 @njit(cache=True)
-def wall_turn(readings, beam_cos, beam_sin, max_range, params, memory) -> float:
+def wall_turn(readings, beam_cos, beam_sin, params, memory) -> float:
     """Turn away from what is ahead: start when something is nearer than ``turn_distance`` in
     the cone ahead, keep turning the same way until nothing at all is in range there (a vehicle
     that meets a wall head-on turns about 90° and drives on along it). The way is the more open
@@ -154,6 +154,6 @@ def wall_turn(readings, beam_cos, beam_sin, max_range, params, memory) -> float:
         if side == 0.0:
             side = 1.0 if left >= right else -1.0
         memory[1] = side * params.turn_steering
-    elif memory[1] != 0.0 and nearest >= max_range:
+    elif memory[1] != 0.0 and nearest >= params.max_range:
         memory[1] = 0.0
     return memory[1]

@@ -30,7 +30,7 @@ def test_the_pick_rechecks_its_short_list_and_keeps_the_best_worst_strategy():
     """Table 1 and 2 choose by the worst included strategy, on more traffic for the short list."""
 
     family = replace(protocol.ARENA, test_episodes=2, recheck_episodes=3)
-    length = protocol.test_world(family, 1).spec.chromosome_length
+    length = protocol.strategy_world(family, 1).spec.chromosome_length
     candidates = np.random.default_rng(0).uniform(-1, 1, size=(16, length))
     strategies = [1, 3]
     picked = choosing.pick(family, candidates, strategies)
@@ -48,7 +48,7 @@ def test_table2_accepts_by_the_mean_less_standard_errors_on_other_situations():
     from enn_traffic.sim.world import SPUN
 
     family = replace(protocol.ARENA, test_episodes=2, recheck_episodes=6)
-    world = protocol.test_world(family, 1, 6)
+    world = protocol.strategy_world(family, 1, 6)
     candidate = np.random.default_rng(3).uniform(-1, 1, size=(1, world.spec.chromosome_length))
     results = world.evaluate(candidate, choosing.ACCEPTANCE_KEY)
     fitness = np.where(results.outcome[0] == SPUN, 0.0, results.steps[0])

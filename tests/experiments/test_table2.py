@@ -13,9 +13,9 @@ def test_table2_evolves_a_wider_network_than_table1():
     (hidden,) = protocol.ARENA.incremental_hidden
     assert protocol.ARENA.scenario(2).network.hidden == [3] and hidden != 3
     # (19 beams + bias) x hidden + (hidden + bias) x 2 outputs
-    assert protocol.test_world(incremental, 2, 1).spec.chromosome_length == 20 * hidden + (
+    assert protocol.strategy_world(incremental, 2, 1).spec.chromosome_length == 20 * hidden + (
         hidden + 1) * 2
-    assert protocol.test_world(protocol.ARENA, 2, 1).spec.chromosome_length == 20 * 3 + 4 * 2
+    assert protocol.strategy_world(protocol.ARENA, 2, 1).spec.chromosome_length == 20 * 3 + 4 * 2
 
 
 def test_table2_reports_the_evolution_whose_last_controller_does_best_on_validation(tmp_path):
