@@ -44,6 +44,11 @@ class NetworkSpec:
         return [(n_in + 1, n_out) for n_in, n_out in pairwise(self.layer_sizes)]
 
     @property
+    def layer_array(self) -> np.ndarray:
+        """The layer sizes as the compiled pass takes them (int64 array)."""
+        return np.asarray(self.layer_sizes, dtype=np.int64)
+
+    @property
     def chromosome_length(self) -> int:
         return sum(rows * cols for rows, cols in self.layer_shapes)
 
@@ -83,7 +88,7 @@ class NetworkSpec:
         compiled pass the worlds drive with."""
         genes = self.in_source_layout(population)
         inputs = np.atleast_2d(np.asarray(inputs, dtype=np.float64))
-        layer_sizes = np.asarray(self.layer_sizes, dtype=np.int64)
+        layer_sizes = self.layer_array
         activation, scratch = network_buffers(layer_sizes)
         outputs = np.empty((len(genes), self.layer_sizes[-1]))
         for p, row in enumerate(genes):

@@ -53,10 +53,7 @@ def _value(value) -> str:
 def _rows(model: type[BaseModel], section: str | None) -> list[str]:
     rows = []
     for name, field in model.model_fields.items():
-        if field.exclude or (isinstance(field.annotation, type)
-                             and issubclass(field.annotation, BaseModel)):
-            continue
-        if field.description is None:
+        if field.description is None:  # a section, or ``source`` (see :func:`undocumented`)
             continue
         key = f"[{section}] {name}" if section else name
         rows.append(f"| `{key}` | `{_value(field.default)}` | {field.description} |")

@@ -38,7 +38,7 @@ class LaneKeepingWorld:
         self.scenario = scenario
         self.config = scenario.lane_keeping
         self.spec = NetworkSpec(scenario.layer_sizes, scenario.network.layout)
-        self.layer_sizes = np.asarray(scenario.layer_sizes, dtype=np.int64)
+        self.layer_sizes = self.spec.layer_array
         self.env = make_env(self.config)
         self._track: Road | None = None
         self.start = (0.0, 0.0, 0.0)

@@ -34,6 +34,7 @@ from enn_traffic.sim.rules import (
     NO_HIT,
     build_constants,
     drive_all,
+    life_columns,
     place,
     respawn,
     responsible,
@@ -115,11 +116,7 @@ def run_population(population, layer_sizes, start, kinds, traffic_genes, physics
     """Run every chromosome of ``population`` (P, G) in its own world; per world
     (steps, outcome, collisions suffered, vehicle-steps within sensor range, most at once)."""
     size = population.shape[0]
-    steps = np.zeros(size, dtype=np.int64)
-    outcome = np.zeros(size, dtype=np.int64)
-    suffered = np.zeros(size, dtype=np.int64)
-    near_steps = np.zeros(size, dtype=np.int64)
-    near_max = np.zeros(size, dtype=np.int64)
+    steps, outcome, suffered, near_steps, near_max = life_columns(size)
     no_trace = np.empty((0, start.shape[0], 3))
     for p in prange(size):
         steps[p], outcome[p], suffered[p], near_steps[p], near_max[p] = run_episode(
@@ -158,7 +155,7 @@ class ArenaWorld:
                 raise InputError(f"start ({x:g}, {y:g}) is off the drivable area",
                                  scenario.source, f"traffic.starts_xy[{index}]")
         self.vehicles = 1 + len(self.traffic_starts)
-        self.layer_sizes = np.asarray(scenario.layer_sizes, dtype=np.int64)
+        self.layer_sizes = self.spec.layer_array
         episode = scenario.episode
         self.physics, self.geometry = build_constants(
             self.grid, self.track.bounds, scenario.beam_angles, self.exits,

@@ -31,6 +31,7 @@ from enn_traffic.sim.rules import (
     NO_HIT,
     close,
     left_network,
+    life_columns,
     move_all,
     place,
     responsible,
@@ -186,11 +187,7 @@ def run_replay_population(population, layer_sizes, physics, geometry, start, ids
     the cores; per world (steps, outcome, collisions suffered, vehicle-steps within sensor
     range, most at once)."""
     size = population.shape[0]
-    steps = np.zeros(size, dtype=np.int64)
-    outcome = np.zeros(size, dtype=np.int64)
-    suffered = np.zeros(size, dtype=np.int64)
-    near_steps = np.zeros(size, dtype=np.int64)
-    near_max = np.zeros(size, dtype=np.int64)
+    steps, outcome, suffered, near_steps, near_max = life_columns(size)
     no_trace = np.empty((0, 3))
     for p in prange(size):
         steps[p], outcome[p], suffered[p], near_steps[p], near_max[p] = run_replay_episode(

@@ -321,3 +321,12 @@ def within_range(x, y, centres, first, reach) -> int:
             count += 1
     return count
 
+
+
+@njit(cache=True)
+def life_columns(size):
+    """Per world of a batch: steps, outcome, collisions suffered, vehicle-steps within sensor
+    range, most within range at once (zeros, to be filled)."""
+    return (np.zeros(size, dtype=np.int64), np.zeros(size, dtype=np.int64),
+            np.zeros(size, dtype=np.int64), np.zeros(size, dtype=np.int64),
+            np.zeros(size, dtype=np.int64))
