@@ -42,8 +42,9 @@ def evaluate_controller(controller: Controller, scenario: Scenario, episodes: in
     """One row per traffic strategy and episode: lifetime in steps and seconds, distance, how
     it ended, and the collisions the controller suffered without causing them.
 
-    Episodes draw their traffic from the evaluation stream, never from training's; scenarios
-    without traffic are deterministic, so their episodes repeat one another.
+    Episodes draw their traffic from the test keys (:data:`EVALUATION_KEY`), never from
+    training's; scenarios without traffic are deterministic, so their episodes repeat one
+    another.
     """
     world = make_world(evaluation_scenario(controller, scenario, episodes))
     vehicle = scenario.vehicle

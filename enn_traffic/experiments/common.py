@@ -62,8 +62,7 @@ def _run_in_folder_files(scenario: Scenario, files: dict[str, bytes]
 class RayRuns:
     """Whole runs as Ray tasks, one core each (docs/design.md, "Scale-out"). A run's folder
     travels to the task and back, so an interrupted run resumes there and workers need no
-    shared disk;
-    a run's result depends on its scenario only, never on where it ran."""
+    shared disk; a run's result depends on its scenario only, never on where it ran."""
 
     def __init__(self, address: str | None = None):
         from enn_traffic.evolution.backends import connect_ray
