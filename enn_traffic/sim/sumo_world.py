@@ -31,8 +31,8 @@ from enn_traffic.sim.arena import ArenaWorld
 from enn_traffic.sim.replay import (
     RUNNING,
     clear_start,
+    compiled_step,
     learner_state,
-    learner_step,
     run_replay_episode,
     run_replay_population,
     with_slots,
@@ -70,6 +70,7 @@ class SumoWorld(ArenaWorld):
         self.max_steps = sumo.episode_steps(scenario)  # or where the .sumocfg ends
         self._checked = False  # closed loop: has some traffic been seen on the network?
         self._states: dict[int, Path] = {}  # closed loop: each situation's saved warm-up
+        self._steps: dict = {}  # closed loop: the compiled step, by the genes' numba type
 
     def seeds(self, key: int) -> list[int]:
         """The SUMO seed of each traffic situation of a traffic key."""
@@ -188,14 +189,18 @@ class SumoWorld(ArenaWorld):
             travel = (simulation.largest_speed() + vehicle.speed) * vehicle.dt
             reach = self.scenario.sensor.range + 2.0 * travel
             simulation.follow_learner(reach + 4.0 * physics.radius)
+            kind = numba.typeof(genes)  # the other arguments' types are the world's own
+            if kind not in self._steps:
+                self._steps[kind] = compiled_step(0, genes, self.layer_sizes, physics,
+                                                  self.geometry, ids, corners, centres, before,
+                                                  now, limit, state)
+            step = self._steps[kind]
             t = 0
             while True:
                 if frames is not None:
                     frames.append((state.pose[0].copy(), ids[now].copy(), corners[now].copy()))
-                outcome = learner_step(
-                    t, genes, self.layer_sizes, physics, self.geometry,
-                    (ids[before], corners[before], centres[before]),
-                    (ids[now], corners[now], centres[now]), limit, state)
+                outcome = step(t, genes, self.layer_sizes, physics, self.geometry, ids, corners,
+                               centres, before, now, limit, state)
                 if outcome != RUNNING:
                     break
                 sumo.move_learner(*state.pose[0])
