@@ -220,6 +220,9 @@ class TrafficConfig(_Section):
         None, description="`strategy = \"sumo\"`: alternatively (or as well: `routes` are added to "
         "its route files) a SUMO `.sumocfg`, run as SUMO runs it — its begin and end, route and "
         "additional files; `[track] net`, when given, replaces its `net-file`")
+    learners: int = Field(
+        8, ge=1, le=64, description="`strategy = \"sumo\"`: learners that drive at once in one "
+        "SUMO, every vehicle a learner (Tables 3–4, paper §5.5)")
     mode: Literal["replay", "closed-loop"] = Field(
         "replay", description="SUMO traffic: `replay` (SUMO runs once per traffic situation "
         "without the learner; every chromosome meets the recording) or `closed-loop` (the learner "

@@ -47,7 +47,9 @@ RUNNING = -1
 
 
 @njit(cache=True)
-def _visible(ids, gone, s) -> bool:
+def in_world(ids, gone, s) -> bool:
+    """Is the vehicle in slot ``s`` on the network and in the learner's world (not
+    ``gone``)?"""
     return ids[s] >= 0 and ids[s] != gone[s]
 
 
@@ -122,14 +124,14 @@ def learner_step(t, genes, layer_sizes, physics, geometry, ids, corners, centres
         return LEFT_NETWORK
     # 1. collisions by the blame rule
     for s in range(ids_before.shape[0]):
-        absent[s] = t == 0 or not _visible(ids_before, gone, s)
+        absent[s] = t == 0 or not in_world(ids_before, gone, s)
     if responsible(0, pose, body, centre, corners_before, centres_before, absent, -1, physics,
                    walls, cell_start, cell_walls, all_walls) != NO_HIT:
         return COLLIDED
     if t > 0:
         near = 4.0 * physics.radius * physics.radius
         for s in range(ids_now.shape[0]):
-            if (_visible(ids_now, gone, s)
+            if (in_world(ids_now, gone, s)
                     and close(centres_now[s, 0], centres_now[s, 1], centre_before[0, 0],
                               centre_before[0, 1], near)
                     and boxes_overlap(corners_now[s], body_before[0])):
@@ -142,7 +144,7 @@ def learner_step(t, genes, layer_sizes, physics, geometry, ids, corners, centres
         return CAPPED
     # 3. sense walls and the visible vehicles, decide
     for s in range(ids_now.shape[0]):
-        if _visible(ids_now, gone, s):
+        if in_world(ids_now, gone, s):
             visible[s, 0], visible[s, 1] = centres_now[s, 0], centres_now[s, 1]
         else:
             visible[s, 0], visible[s, 1] = FAR, FAR

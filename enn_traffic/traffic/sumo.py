@@ -171,6 +171,7 @@ class Simulation:
         self.vehicles: dict[str, tuple[int, int, float, float]] = {}
         self.numbered = 0  # vehicles given a number so far
         self.following = False
+        self.learners: tuple[str, ...] = (LEARNER,)  # SUMO ids that :meth:`read` leaves out
         self.slots_used = 0  # one more than the highest slot given so far
         self._free = list(range(MAX_SLOTS - 1, -1, -1))
         for vehicle in libsumo.vehicle.getIDList():  # on the network in a loaded state
@@ -211,7 +212,8 @@ class Simulation:
         if not self._stepped:  # results of the last simulation may linger until a step
             present = set(libsumo.vehicle.getIDList())
             results = {v: value for v, value in results.items() if v in present}
-        results.pop(LEARNER, None)
+        for learner in self.learners:
+            results.pop(learner, None)
         vehicles = self.vehicles
         if len(results) != len(vehicles) or any(v not in vehicles for v in results):
             if not self.following:  # every vehicle on the network is read: absent ones left
@@ -258,6 +260,11 @@ class Simulation:
     def largest_speed(self) -> float:
         """The top speed of the fastest traffic vehicle type (SUMO never exceeds it)."""
         return max(libsumo.vehicletype.getMaxSpeed(kind) for kind in self._traffic_types())
+
+    @staticmethod
+    def time() -> float:
+        """SUMO's simulation time (s)."""
+        return libsumo.simulation.getTime()
 
     @staticmethod
     def vehicle_count() -> int:
@@ -402,9 +409,10 @@ SSM_THRESHOLDS = {"TTC": 1.5, "DRAC": 3.0, "PET": 2.0}
 SSM_RANGE_M = 50.0
 
 
-def ssm_options(output: Path) -> tuple[str, ...]:
-    """SUMO options that equip the learner with an SSM device writing to ``output``."""
-    return ("--device.ssm.explicit", LEARNER,
+def ssm_options(output: Path, learners: tuple[str, ...] = (LEARNER,)) -> tuple[str, ...]:
+    """SUMO options that equip the learners (their SUMO ids) with SSM devices writing to
+    ``output``."""
+    return ("--device.ssm.explicit", ",".join(learners),
             "--device.ssm.measures", " ".join(SSM_THRESHOLDS),
             "--device.ssm.thresholds", " ".join(f"{v:g}" for v in SSM_THRESHOLDS.values()),
             "--device.ssm.range", f"{SSM_RANGE_M:g}", "--device.ssm.trajectories", "false",
@@ -449,10 +457,38 @@ def read_conflicts(path: Path) -> Conflicts:
                      sum(v < SSM_THRESHOLDS["PET"] for v in pet))
 
 
-def add_learner(length: float, width: float, speed: float) -> None:
-    """Put the learner into the running SUMO as a vehicle with no route, that obeys no speed
+def ttc_conflict_times(path: Path) -> np.ndarray:
+    """The SUMO times of the conflicts in an SSM output file whose lowest time-to-collision
+    fell below its threshold (none for an empty or missing file)."""
+    import xml.etree.ElementTree as ElementTree
+
+    try:
+        root = ElementTree.parse(path).getroot()
+    except (ElementTree.ParseError, OSError):
+        return np.empty(0)
+    times = []
+    for conflict in root.findall("conflict"):
+        element = conflict.find("minTTC")
+        try:
+            if float(element.get("value")) < SSM_THRESHOLDS["TTC"]:
+                times.append(float(element.get("time")))
+        except (AttributeError, TypeError, ValueError):  # none, or "NA"
+            continue
+    return np.array(times)
+
+
+def learner_id(index: int) -> str:
+    """The SUMO id of learner ``index`` (the first, or only, is :data:`LEARNER`)."""
+    return LEARNER if index == 0 else f"{LEARNER}_{index}"
+
+
+def add_learner(length: float, width: float, speed: float, vehicle: str = LEARNER) -> None:
+    """Put a learner into the running SUMO as a vehicle with no route, that obeys no speed
     or lane-change rule and is moved by :func:`move_learner`."""
     kind = LEARNER + "_type"
+    if kind in libsumo.vehicletype.getIDList():  # another learner's
+        _add_moved_vehicle(vehicle, kind, speed)
+        return
     libsumo.vehicletype.copy("DEFAULT_VEHTYPE", kind)
     libsumo.vehicletype.setLength(kind, length)
     libsumo.vehicletype.setWidth(kind, width)
@@ -462,20 +498,24 @@ def add_learner(length: float, width: float, speed: float) -> None:
     # It enters SUMO at its own speed (so that SSM sees it moving from the start) whatever the
     # first edge's speed limit: its speed factor binds nothing else, as it is moved by moveToXY.
     libsumo.vehicletype.setSpeedFactor(kind, 100.0)
-    libsumo.vehicle.add(LEARNER, "", typeID=kind, departSpeed=f"{speed:g}")
-    libsumo.vehicle.setSpeedMode(LEARNER, 0)
-    libsumo.vehicle.setLaneChangeMode(LEARNER, 0)
-    libsumo.vehicle.setSpeed(LEARNER, speed)  # for its first step; then SUMO derives it
+    _add_moved_vehicle(vehicle, kind, speed)
 
 
-def move_learner(x: float, y: float, heading: float) -> None:
+def _add_moved_vehicle(vehicle: str, kind: str, speed: float) -> None:
+    libsumo.vehicle.add(vehicle, "", typeID=kind, departSpeed=f"{speed:g}")
+    libsumo.vehicle.setSpeedMode(vehicle, 0)
+    libsumo.vehicle.setLaneChangeMode(vehicle, 0)
+    libsumo.vehicle.setSpeed(vehicle, speed)  # for its first step; then SUMO derives it
+
+
+def move_learner(x: float, y: float, heading: float, vehicle: str = LEARNER) -> None:
     """Place the learner for SUMO's next step (keepRoute=2: anywhere, on a lane or not); SUMO
     takes its speed from the distance moved. Lanes are looked for within MATCH_M first (the
     learner is on the drivable area, so one is that near; a wider search costs twice as
     much), then anywhere."""
     try:
-        libsumo.vehicle.moveToXY(LEARNER, "", -1, x, y, to_angle(heading), keepRoute=2,
+        libsumo.vehicle.moveToXY(vehicle, "", -1, x, y, to_angle(heading), keepRoute=2,
                                  matchThreshold=MATCH_M)
     except libsumo.TraCIException:
-        libsumo.vehicle.moveToXY(LEARNER, "", -1, x, y, to_angle(heading), keepRoute=2,
+        libsumo.vehicle.moveToXY(vehicle, "", -1, x, y, to_angle(heading), keepRoute=2,
                                  matchThreshold=1e6)

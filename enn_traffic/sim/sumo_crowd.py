@@ -1,0 +1,351 @@
+"""Several learners at once in a live SUMO (paper §5.5 among SUMO traffic; docs/sumo.md).
+
+K vehicles, each driven by a network, move through ``moveToXY`` among SUMO's own traffic,
+which sees and reacts to them. Each learner senses the walls, SUMO's vehicles and the other
+learners. The blame rule is the arena's and the closed loop's (:mod:`enn_traffic.sim.rules`,
+:mod:`enn_traffic.sim.replay`):
+
+- a learner whose body touches a wall, the body a SUMO vehicle had before the step, or the
+  body another learner had before the step is responsible: its life ends and it re-enters at
+  a free spot of the network (no wall, no vehicle within ``respawn_clearance``);
+- a SUMO vehicle whose body touches a learner's body from before the step is responsible: the
+  learner suffers the collision and the vehicle leaves that learner's world, as in the closed
+  loop with one learner (it stays in SUMO and in the other learners' worlds);
+- a learner that reaches an exit of the network has left it, and re-enters as after a
+  collision; learners are held to §5.3's spin test.
+
+Each SUMO step makes two compiled calls, whatever K: :func:`detect` (blame, exits, spins of
+all learners) and :func:`drive` (all learners sense, decide and move). Python respawns the
+learners whose lives ended, calls their learning back (:class:`~enn_traffic.sim.crowd.Learning`),
+moves them in SUMO and steps SUMO.
+"""
+
+from __future__ import annotations
+
+import os
+import tempfile
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+from numba import njit
+
+from enn_traffic.geometry import boxes_overlap
+from enn_traffic.network import network_buffers
+from enn_traffic.network import steering as network_steering
+from enn_traffic.sim.crowd import ALIVE, Learning
+from enn_traffic.sim.replay import in_world
+from enn_traffic.sim.rules import (
+    NO_HIT,
+    close,
+    left_network,
+    move_all,
+    place,
+    respawn,
+    responsible,
+    sense,
+    sense_bodies,
+    spun,
+)
+from enn_traffic.sim.sumo_world import SumoWorld
+from enn_traffic.sim.world import COLLIDED, LEFT_NETWORK, SPUN
+from enn_traffic.traffic import sumo
+from enn_traffic.traffic.strategies import NETWORK
+from enn_traffic.traffic.sumo import FAR
+
+RESPAWN_TRIES = 50  # free spots drawn before a learner re-enters beside SUMO's vehicles anyway
+
+
+@njit(cache=True)
+def detect(t, pose, body, centre, body_before, centre_before, fresh, life, recent,
+           spin_checked, physics, geometry, ids, corners, centres, before, now, gone, absent,
+           suffered, events) -> bool:
+    """Fill ``events`` (K,): ``COLLIDED`` for a learner responsible for a collision,
+    ``LEFT_NETWORK`` at an exit, ``SPUN`` for a spin, else ``ALIVE``; count the collisions SUMO
+    vehicles cause (``suffered``) and take those vehicles out of the learner's world
+    (``gone[k]``). Did any life end?"""
+    _, _, walls, cell_start, cell_walls, all_walls, exits = geometry
+    ids_before, corners_before, centres_before = ids[before], corners[before], centres[before]
+    ids_now, corners_now, centres_now = ids[now], corners[now], centres[now]
+    near = 4.0 * physics.radius * physics.radius
+    ended = False
+    for k in range(pose.shape[0]):
+        events[k] = ALIVE
+        if left_network(body[k], exits):
+            events[k] = LEFT_NETWORK
+            ended = True
+            continue
+        for s in range(ids_before.shape[0]):
+            absent[s] = t == 0 or not in_world(ids_before, gone[k], s)
+        if (responsible(k, pose, body, centre, corners_before, centres_before, absent, -1,
+                        physics, walls, cell_start, cell_walls, all_walls) != NO_HIT
+                or responsible(k, pose, body, centre, body_before, centre_before, fresh, k,
+                               physics, walls, cell_start, cell_walls, all_walls) != NO_HIT):
+            events[k] = COLLIDED
+            ended = True
+            continue
+        if t > 0 and not fresh[k]:
+            for s in range(ids_now.shape[0]):
+                if (in_world(ids_now, gone[k], s)
+                        and close(centres_now[s, 0], centres_now[s, 1], centre_before[k, 0],
+                                  centre_before[k, 1], near)
+                        and boxes_overlap(corners_now[s], body_before[k])):
+                    gone[k, s] = ids_now[s]
+                    suffered[k] += 1
+        if spin_checked[k] and spun(recent[k], life[k], pose[k, 0], pose[k, 1],
+                                    physics.spin_variance):
+            events[k] = SPUN
+            ended = True
+    return ended
+
+
+@njit(cache=True)
+def drive(genes, layer_sizes, physics, geometry, ids, corners, centres, now, pose, body,
+          centre, body_before, centre_before, fresh, life, gone, visible, readings, activation,
+          scratch, steering) -> None:
+    """Every learner senses the walls, the SUMO vehicles in its world and the other
+    learners, its network (``genes[k]``) steers, and all move at once."""
+    beam_cos, beam_sin, walls, cell_start, cell_walls, all_walls, _ = geometry
+    ids_now, corners_now, centres_now = ids[now], corners[now], centres[now]
+    for k in range(pose.shape[0]):
+        for s in range(ids_now.shape[0]):
+            if in_world(ids_now, gone[k], s):
+                visible[s, 0], visible[s, 1] = centres_now[s, 0], centres_now[s, 1]
+            else:
+                visible[s, 0], visible[s, 1] = FAR, FAR
+        sense(k, pose, physics, beam_cos, beam_sin, walls, cell_start, cell_walls, all_walls,
+              True, corners_now, visible, -1, readings)
+        sense_bodies(k, pose[k, 0], pose[k, 1], pose[k, 2], beam_cos, beam_sin, body, centre,
+                     physics.radius, readings)
+        steering[k] = network_steering(genes[k], layer_sizes, readings, activation, scratch,
+                                       physics.gain)
+    move_all(steering, physics, pose, body, centre, body_before, centre_before, fresh)
+    life += 1
+
+
+@dataclass
+class SumoCrowdRun:
+    """What a stretch of SUMO time produced, per learner: responsible collisions (lives ended
+    by the blame rule), spins, exits reached and collisions SUMO vehicles caused, over
+    ``seconds`` from SUMO time ``begin``; and the learners' SSM conflicts (TTC below its
+    threshold, docs/sumo.md), counted when the crowd closes (SUMO writes them then)."""
+
+    collisions: np.ndarray  # (K,)
+    spins: np.ndarray
+    exits: np.ndarray
+    suffered: np.ndarray
+    begin: float
+    seconds: float
+    trace: np.ndarray  # (steps + 1, K, 3) the learners' poses
+    ttc_conflicts: int = 0
+
+    @property
+    def collision_rate(self) -> float:
+        """Responsible collisions per learner-second (the metric of Tables 3–4)."""
+        return float(self.collisions.sum()) / (len(self.collisions) * self.seconds)
+
+    @property
+    def spin_rate(self) -> float:
+        """Spins in place per learner-second."""
+        return float(self.spins.sum()) / (len(self.spins) * self.seconds)
+
+    @property
+    def conflict_rate(self) -> float:
+        """SSM conflicts (TTC below 1.5 s) per learner-hour."""
+        return self.ttc_conflicts / (len(self.collisions) * self.seconds / 3600.0)
+
+
+class SumoCrowd:
+    """``scenario.traffic.learners`` learners in the live SUMO of the traffic situation
+    ``seed``, after the scenario's warm-up; one SUMO for consecutive runs, as the arena's
+    :class:`~enn_traffic.sim.crowd.Crowd` keeps its vehicles. Use it as a context manager:
+    SUMO closes, and the runs' SSM conflicts are counted, on leaving it."""
+
+    def __init__(self, world: SumoWorld, seed: int, starts: np.ndarray | None = None):
+        """The learners enter at ``starts`` (K, 3: x, y, heading), or at free spots drawn
+        from ``seed``."""
+        self.world = world
+        self.seed = seed
+        self.count = world.scenario.traffic.learners
+        self.ids = tuple(sumo.learner_id(k) for k in range(self.count))
+        self._starts = starts
+        self._simulation: sumo.Simulation | None = None
+        self._runs: list[SumoCrowdRun] = []
+
+    def __enter__(self) -> SumoCrowd:
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.close()
+
+    def _start(self) -> None:
+        world, scenario = self.world, self.world.scenario
+        vehicle = scenario.vehicle
+        state = world.warm_state(self.seed) or sumo.warm_state(scenario, self.seed,
+                                                               keep_rng=True)
+        handle, ssm_file = tempfile.mkstemp(suffix=".xml", prefix="enn-ssm-")
+        os.close(handle)
+        self._ssm_file = Path(ssm_file)
+        self._simulation = simulation = sumo.Simulation(
+            scenario, self.seed, state, extra=sumo.ssm_options(self._ssm_file, self.ids))
+        simulation.learners = self.ids
+        self.physics = world._learner_physics(simulation.largest_radius())
+        self.slots = sumo.slot_arrays(2, 64)
+        self.before, self.now = 0, 1  # rows of the slot arrays; they swap every step
+        self._read()
+        self.lives = lives = _Lives(self.count, self.physics, len(world.geometry.beam_cos),
+                                    world.layer_sizes, self.slots[0].shape[1], self.seed)
+        for k in range(self.count):
+            if self._starts is None:
+                lives.enter(k, self.physics, world.geometry, self.slots, self.now)
+            else:
+                lives.place(k, self._starts[k], self.physics)
+            sumo.add_learner(vehicle.length, vehicle.width, vehicle.speed, self.ids[k])
+            sumo.move_learner(*lives.pose[k], self.ids[k])
+        self.t = 0  # steps since the learners entered
+
+    def close(self) -> None:
+        """End SUMO and count each run's SSM conflicts."""
+        if self._simulation is None:
+            return
+        self._simulation.close()
+        self._simulation = None
+        times = sumo.ttc_conflict_times(self._ssm_file)
+        self._ssm_file.unlink(missing_ok=True)
+        for run in self._runs:
+            end = run.begin + run.seconds
+            run.ttc_conflicts = int(((times >= run.begin) & (times < end)).sum())
+
+    def _read(self) -> None:
+        """SUMO's vehicles into the ``now`` row of the slot arrays, growing them (and the
+        learners' per-slot arrays) as needed; bodies larger than their type said widen the
+        radius beyond which bodies cannot touch."""
+        rows = self._simulation.read()
+        ids, corners, centres = self.slots
+        while self._simulation.slots_used > ids.shape[1]:
+            size = 2 * ids.shape[1]
+            grown = sumo.slot_arrays(2, size)
+            for new, old in zip(grown, (ids, corners, centres), strict=True):
+                new[:, : old.shape[1]] = old
+            ids, corners, centres = self.slots = grown
+            if hasattr(self, "lives"):
+                self.lives.grow(size)
+        radius = sumo.fill_frame(rows, ids[self.now], corners[self.now], centres[self.now])
+        if radius > self.physics.radius:
+            self.physics = self.physics._replace(radius=radius)
+
+    def run(self, seconds: float, genes: np.ndarray, learning: Learning | None = None
+            ) -> SumoCrowdRun:
+        """Drive on for ``seconds`` of SUMO time; ``genes`` (K, G, source layout) drive the
+        learners, and a learner that ``learning`` learns drives with its current chromosome
+        and tells it of every life it ends."""
+        if self._simulation is None:
+            self._start()
+        world, count, lives = self.world, self.count, self.lives
+        genes = np.array(genes, dtype=np.float64)
+        learns = [learning is not None and learning.learns(k) for k in range(count)]
+        for k in np.flatnonzero(learns):
+            genes[k] = learning.current(k)
+        steps = round(seconds / world.scenario.vehicle.dt)
+        outcomes = {COLLIDED: np.zeros(count, np.int64), SPUN: np.zeros(count, np.int64),
+                    LEFT_NETWORK: np.zeros(count, np.int64)}
+        suffered = lives.suffered.copy()
+        unseen_from = lives.life.copy()  # steps of a life going on that an earlier run showed
+        begin = self._simulation.time()
+        trace = np.empty((steps + 1, count, 3))
+        for step in range(steps + 1):
+            trace[step] = lives.pose
+            ids, corners, centres = self.slots
+            if detect(self.t, lives.pose, lives.body, lives.centre, lives.body_before,
+                      lives.centre_before, lives.fresh, lives.life, lives.recent,
+                      lives.spin_checked, self.physics, world.geometry, ids, corners, centres,
+                      self.before, self.now, lives.gone, lives.absent, lives.suffered,
+                      lives.events):
+                for k in np.flatnonzero(lives.events != ALIVE):
+                    outcome = int(lives.events[k])
+                    outcomes[outcome][k] += 1
+                    if learns[k]:
+                        genes[k] = learning.life_ended(k, int(lives.life[k]),
+                                                       int(lives.life[k] - unseen_from[k]),
+                                                       outcome == SPUN)
+                    unseen_from[k] = 0
+                    lives.enter(k, self.physics, world.geometry, self.slots, self.now)
+            if step == steps:
+                break
+            drive(genes, world.layer_sizes, self.physics, world.geometry, ids, corners,
+                  centres, self.now, lives.pose, lives.body, lives.centre, lives.body_before,
+                  lives.centre_before, lives.fresh, lives.life, lives.gone, lives.visible,
+                  lives.readings, lives.activation, lives.scratch, lives.steering)
+            for k in range(count):
+                sumo.move_learner(*lives.pose[k], self.ids[k])
+            self._simulation.step()
+            self.before, self.now = self.now, self.before
+            self._read()
+            self.t += 1
+        for k in np.flatnonzero(learns):  # a life still going counts what it has shown
+            learning.still_driving(k, int(lives.life[k] - unseen_from[k]))
+        run = SumoCrowdRun(outcomes[COLLIDED], outcomes[SPUN], outcomes[LEFT_NETWORK],
+                           lives.suffered - suffered, begin, steps * world.scenario.vehicle.dt,
+                           trace)
+        self._runs.append(run)
+        return run
+
+
+class _Lives:
+    """The learners' arrays: poses and bodies (as a world of K vehicles), each one's life so
+    far, and per SUMO slot the vehicles that left its world."""
+
+    def __init__(self, count: int, physics, beams: int, layer_sizes: np.ndarray, slots: int,
+                 seed: int):
+        self.pose = np.full((count, 3), FAR)  # not on the network yet
+        self.body = np.zeros((count, 4, 2))
+        self.centre = np.full((count, 2), FAR)
+        self.body_before, self.centre_before = self.body.copy(), self.centre.copy()
+        self.fresh = np.ones(count, dtype=np.bool_)
+        self.life = np.zeros(count, dtype=np.int64)
+        self.recent = np.zeros((count, physics.spin_window, 2))
+        self.spin_checked = np.ones(count, dtype=np.bool_)
+        self.gone = np.full((count, slots), -1, dtype=np.int64)
+        self.absent = np.empty(slots, dtype=np.bool_)
+        self.visible = np.empty((slots, 2))
+        self.suffered = np.zeros(count, dtype=np.int64)
+        self.events = np.full(count, ALIVE, dtype=np.int64)
+        self.memory = np.zeros((count, 2))
+        self.readings = np.empty(beams)
+        self.activation, self.scratch = network_buffers(layer_sizes)
+        self.steering = np.zeros(count)
+        self.rng = np.full(1, np.uint64(seed), dtype=np.uint64)
+        self.placed = np.zeros(count, dtype=np.bool_)
+
+    def grow(self, slots: int) -> None:
+        gone = np.full((len(self.gone), slots), -1, dtype=np.int64)
+        gone[:, : self.gone.shape[1]] = self.gone
+        self.gone = gone
+        self.absent = np.empty(slots, dtype=np.bool_)
+        self.visible = np.empty((slots, 2))
+
+    def place(self, k: int, pose: np.ndarray, physics) -> None:
+        """Learner ``k`` starts a life at ``pose``."""
+        place(k, *pose, physics, self.pose, self.body, self.centre)
+        self.body_before[k], self.centre_before[k] = self.body[k], self.centre[k]
+        self.fresh[k] = True
+        self.life[k] = 0
+        self.gone[k] = -1
+
+    def enter(self, k: int, physics, geometry, slots: tuple, row: int) -> None:
+        """Learner ``k`` starts a life at a free spot: on the drivable area, touching no wall,
+        ``respawn_clearance`` from every learner and, if one is found within
+        :data:`RESPAWN_TRIES` draws, from every SUMO vehicle."""
+        _, _, walls, cell_start, cell_walls, all_walls, _ = geometry
+        ids, _, centres = slots
+        present = ids[row] >= 0
+        for _ in range(RESPAWN_TRIES):
+            if not respawn(k, NETWORK, physics, walls, cell_start, cell_walls, all_walls,
+                           self.pose, self.body, self.centre, self.body_before,
+                           self.centre_before, self.fresh, self.memory, self.rng):
+                raise RuntimeError("no free spot on the network for a learner")
+            gaps = np.hypot(*(centres[row][present] - self.centre[k]).T)
+            if not np.any(gaps < physics.clearance):
+                break
+        self.life[k] = 0
+        self.gone[k] = -1

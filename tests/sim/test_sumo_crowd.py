@@ -1,0 +1,88 @@
+"""Several learners at once in a live SUMO (paper §5.5 among SUMO traffic), through the real
+libsumo, on the ring road's south side: y from -15 (outer wall) to 15 (inner wall) between
+x = 15 and 145, learners 1 m a step (10 m/s, 0.1 s)."""
+
+import numpy as np
+import pytest
+
+from enn_traffic.evolution import ga
+from enn_traffic.evolution.online import OnlineLearning, VehicleGA
+from enn_traffic.scenario import load_scenario
+from enn_traffic.sim.sumo_crowd import SumoCrowd
+from enn_traffic.worlds import make_world
+
+SCENARIO = """
+name = "sumo_crowd_test"
+[track]
+net = "{net}"
+start_lane = "g0_0to1_0_2"
+[traffic]
+strategy = "sumo"
+routes = ["routes.rou.xml"]
+mode = "closed-loop"
+warmup_s = 0.0
+learners = 2
+"""
+# One car that departs long after every test ends: SUMO's traffic stays out of the way.
+LATE_CAR = """<routes>
+    <vType id="car" length="4.5" width="1.8" sigma="0"/>
+    <vehicle id="late" type="car" depart="1000"><route edges="g0_0to1_0"/></vehicle>
+</routes>
+"""
+
+
+@pytest.fixture
+def world(tmp_path, root):
+    (tmp_path / "routes.rou.xml").write_text(LATE_CAR)
+    path = tmp_path / "scenario.toml"
+    path.write_text(SCENARIO.format(net=root / "sumo_nets" / "sumo_ring.net.xml"))
+    return make_world(load_scenario(path))
+
+
+def straight(world) -> np.ndarray:
+    """Zero genes: both outputs 0.5, no steering."""
+    return np.zeros((2, world.spec.chromosome_length))
+
+
+def test_head_on_learners_are_both_responsible_at_the_hand_computed_step(world):
+    """Nose to nose 20 m apart, closing at 2 m a step: at step 11 each new body reaches into
+    the other's body from before the step (60 + 11 = 81 > 80 - 10), never at step 10."""
+    starts = np.array([[60.0, 5.0, 0.0], [80.0, 5.0, np.pi]])
+    with SumoCrowd(world, seed=1, starts=starts) as crowd:
+        assert crowd.run(1.0, straight(world)).collisions.tolist() == [0, 0]
+        run = crowd.run(0.1, straight(world))  # step 11
+    assert run.collisions.tolist() == [1, 1]
+    assert run.collision_rate == pytest.approx(2 / (2 * 0.1))
+
+
+def test_a_learner_that_hits_a_wall_re_enters_at_a_free_spot(world):
+    """Heading south from y = 5.5, the front reaches the outer wall (y = -15) at step 21
+    (5.5 - 21 = -15.5); the learner then drives on from a free spot on the road, at least the
+    respawn clearance from the other learner."""
+    starts = np.array([[80.0, 5.5, -np.pi / 2], [30.0, 5.0, 0.0]])
+    with SumoCrowd(world, seed=1, starts=starts) as crowd:
+        assert crowd.run(2.0, straight(world)).collisions.tolist() == [0, 0]
+    with SumoCrowd(world, seed=1, starts=starts) as crowd:
+        run = crowd.run(2.5, straight(world))
+    assert run.collisions.tolist() == [1, 0]
+    assert run.trace[21, 0, 1] == pytest.approx(-15.5)
+    again = run.trace[22, 0]
+    assert np.hypot(again[0] - 80.0, again[1] + 16.5) > 5.0
+    assert world.track.contains(again[0], again[1])
+    clearance = world.scenario.traffic.respawn_clearance
+    assert np.hypot(*(again[:2] - run.trace[22, 1, :2])) >= clearance - 2.0  # one step each
+
+
+def test_learners_move_through_their_populations(world):
+    """Each learner's own GA: the first chromosome's life ends at the wall (the hand-computed
+    21 steps for the learner heading south), its fitness recorded, the next one takes over."""
+    length = world.spec.chromosome_length
+    learners = [VehicleGA(np.zeros((3, length)), np.random.default_rng(k)) for k in range(2)]
+    learning = OnlineLearning(learners, ga.GAParams(population_size=3, tournament_size=2))
+    starts = np.array([[80.0, 5.5, -np.pi / 2], [30.0, 5.0, 0.0]])
+    with SumoCrowd(world, seed=1, starts=starts) as crowd:
+        run = crowd.run(2.5, straight(world), learning)
+    assert run.collisions[0] == 1
+    assert learners[0].index == 1
+    assert learners[0].fitness[0] == pytest.approx(21.0)
+    assert learners[1].index == 0  # still on its first life
