@@ -26,6 +26,7 @@ from enn_traffic.evolution.backends import Evaluator
 from enn_traffic.runner import ga_params
 from enn_traffic.shipped import shipped_scenario
 from enn_traffic.sim.reference import reference_episode
+from enn_traffic.sim.sumo_crowd import SumoCrowd
 from enn_traffic.sim.world import World
 from enn_traffic.traffic import sumo
 from enn_traffic.worlds import make_world
@@ -127,7 +128,26 @@ def sumo_bench(generations: int = 10, closed_loop_steps: int = 10_000) -> pd.Dat
     steps, seconds = _closed_loop(world.scenario, best, generations, closed_loop_steps)
     rows.append(("sumo closed loop: the best controller, strategy 1",
                  "libsumo step by step, 1 process", 1, steps, steps, seconds))
+    steps, seconds = _crowd(world.scenario, best, generations, closed_loop_steps)
+    learners = world.scenario.traffic.learners
+    rows.append((f"sumo crowd: {learners} learners driving the best controller, strategy 1",
+                 "libsumo step by step, 1 process", 1, steps, steps, seconds))
     return _rate_table(rows)
+
+
+def _crowd(scenario, chromosome, generation: int, learner_steps: int) -> tuple[int, float]:
+    """Learner steps and seconds of ``chromosome`` driving every learner of a SUMO crowd
+    (:mod:`enn_traffic.sim.sumo_crowd`) in the first situation after ``generation`` until
+    ``learner_steps`` steps; SUMO's start and the learners' entry are not timed."""
+    world = make_world(scenario.with_overrides(traffic={"mode": "closed-loop"}))
+    genes = np.tile(world.spec.in_source_layout(chromosome)[0], (scenario.traffic.learners, 1))
+    seconds = learner_steps / scenario.traffic.learners * scenario.vehicle.dt
+    with SumoCrowd(world, world.seeds(generation + 1)[0]) as crowd:
+        crowd.run(scenario.vehicle.dt, genes)  # start SUMO, let the learners enter
+        started = time.perf_counter()
+        run = crowd.run(seconds, genes)
+        elapsed = time.perf_counter() - started
+    return (run.trace.shape[0] - 1) * scenario.traffic.learners, elapsed
 
 
 def _timed_generations(world, params, rng, population, generations: range) -> tuple:

@@ -12,6 +12,7 @@ from enn_traffic.deploy import EVALUATION_KEY
 from enn_traffic.experiments.choosing import trained_controllers
 from enn_traffic.experiments.fig11 import fig11
 from enn_traffic.experiments.protocol import STRATEGIES, SUMO, strategy_world
+from enn_traffic.experiments.sumo_crowds import sumo_tables
 from enn_traffic.experiments.table1 import table1
 from enn_traffic.experiments.table2 import table2
 from enn_traffic.io import write_csv
@@ -43,8 +44,9 @@ def replay_against_closed_loop(out: Path, quick: bool = False, progress: bool = 
 
 
 def sumo(out: Path, quick: bool = False, progress: bool = True) -> list[str]:
-    """Fig. 11, Table 1 and Table 2 over the SUMO traffic strategies, and the replayed against
-    the closed-loop lifetimes, into ``out/sumo/``."""
+    """Fig. 11 and Tables 1–4 over the SUMO traffic strategies, and the replayed against the
+    closed-loop lifetimes, into ``out/sumo/``."""
     return [*fig11(out, quick, progress, SUMO), *table1(out, quick, progress, SUMO),
             *table2(out, quick, progress, SUMO),
-            *replay_against_closed_loop(out, quick, progress)]
+            *replay_against_closed_loop(out, quick, progress),
+            *sumo_tables(out, quick, progress)]

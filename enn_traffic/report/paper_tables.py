@@ -68,8 +68,31 @@ def paper_tables(out: Path) -> list[str]:
             sections += _table1(base / "table1.csv", f"Table 1, {label}")
         if (base / "table2.csv").exists():
             sections += _table2(base / "table2.csv", f"Table 2, {label}")
+    sumo = out / "sumo"
+    if (sumo / "table3.csv").exists():
+        sections += _sumo_rates(sumo / "table3.csv", "Table 3", PAPER_TABLE3, "initial", "winner")
+    if (sumo / "table4.csv").exists():
+        sections += _sumo_rates(sumo / "table4.csv", "Table 4 (the second span)", PAPER_TABLE4,
+                                "initial_next", "population")
     if (out / "table3.csv").exists():
         sections += _rates(out / "table3.csv", "Table 3", PAPER_TABLE3)
     if (out / "table4.csv").exists():
         sections += _rates(out / "table4.csv", "Table 4", PAPER_TABLE4)
     return ["## The paper's tables beside these", "", *sections] if sections else []
+
+
+def _sumo_rates(path: Path, title: str, paper, before: str, after: str) -> list[str]:
+    table = pd.read_csv(path)
+    lines = [f"### {title}, SUMO traffic: collisions per second, paper (its count) / here (per "
+             "learner, 90% interval over situations); SSM conflicts per learner-hour", "",
+             "| strategy | initial | after | conflicts, initial -> after |", "|---|---|---|---|"]
+
+    def cell(row, span: str, value: float) -> str:
+        return (f"{_pair(value, row[f'{span}_collisions_per_s'])} "
+                f"({row[f'{span}_low']:g}–{row[f'{span}_high']:g})")
+
+    for i, row in table.iterrows():
+        lines.append(f"| {int(row['strategy'])} | {cell(row, before, paper[i][0])} | "
+                     f"{cell(row, after, paper[i][1])} | {row[f'{before}_conflicts_per_h']:g} -> "
+                     f"{row[f'{after}_conflicts_per_h']:g} |")
+    return [*lines, ""]

@@ -86,3 +86,17 @@ def test_learners_move_through_their_populations(world):
     assert learners[0].index == 1
     assert learners[0].fitness[0] == pytest.approx(21.0)
     assert learners[1].index == 0  # still on its first life
+
+
+def test_one_situation_of_the_sumo_tables_is_the_same_run_again(world):
+    """Every span of a situation (initial drivers, winner, learning, after learning) from the
+    situation's seed alone: the same call gives the same rates, and a winner that drives
+    straight into walls loses lives in every span it drives."""
+    from enn_traffic.experiments.sumo_crowds import SPANS, situation_rates
+
+    winner = straight(world)[0]
+    evolved = np.random.default_rng(0).uniform(-1, 1, (4, world.spec.chromosome_length))
+    first = situation_rates(world, winner, evolved, situation=0, seconds=3.0)
+    assert set(first) == set(SPANS) | {f"{span}_conflicts" for span in SPANS}
+    assert first == situation_rates(world, winner, evolved, situation=0, seconds=3.0)
+    assert first["winner"] > 0 and first["winner_next"] > 0

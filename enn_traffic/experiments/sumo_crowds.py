@@ -1,0 +1,152 @@
+"""Tables 3–4 among SUMO traffic (paper §5.5 on ``sumo_strategy1..4``; docs/sumo.md).
+
+``traffic.learners`` learners (8) drive at once in one live SUMO, among its own traffic
+(:mod:`enn_traffic.sim.sumo_crowd`). For each strategy and each of ``SITUATIONS`` traffic
+situations, over spans of ``SECONDS`` of SUMO time:
+
+- initial drivers: every learner a random network (drawn per situation), two spans one after
+  the other (``initial``, ``initial_next``);
+- Table 3 (§5.5.1): every learner drives the winning chromosome, two spans (``winner``,
+  ``winner_next``). The winner is the strategy's Table 1 controller, chosen among the
+  controllers individual learning evolved on validation traffic: ranking every candidate by
+  broadcasting it, as the arena does, would cost about 10 min of SUMO time per strategy;
+- Table 4 (§5.5.2): every learner starts from a copy of the evolved population (the final
+  population of the winner's run) and all learn at once for a span, each its own GA sharing
+  the best chromosomes (``learning``); then all drive the chromosome that lost fewest lives
+  per step while they learned (``population``), over the span after it. Its like-for-like
+  comparisons are the second spans of the initial drivers and of the winner.
+
+Rates are responsible collisions per learner-second (:attr:`SumoCrowdRun.collision_rate`) and
+SUMO's SSM conflicts, time-to-collision below 1.5 s, per learner-hour, each with a 90%
+bootstrap interval over the situations. The situations' SUMO seeds come from the crowd test
+keys (:data:`enn_traffic.keys.CROWD_TEST`), which no choice looked at.
+"""
+
+from __future__ import annotations
+
+from functools import cache
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+from enn_traffic import keys
+from enn_traffic.evolution.online import OnlineLearning, VehicleGA
+from enn_traffic.experiments.choosing import final_population, trained_controllers
+from enn_traffic.experiments.protocol import STRATEGIES, SUMO
+from enn_traffic.io import write_csv
+from enn_traffic.runner import ga_params
+from enn_traffic.sim.sumo_crowd import SumoCrowd
+from enn_traffic.sim.sumo_world import SumoWorld
+from enn_traffic.worlds import make_world
+
+SECONDS = 100.0  # the paper's learning time, and each measured span
+SITUATIONS = 10
+QUICK_SECONDS, QUICK_SITUATIONS = 20.0, 2
+SITUATION_KEY = keys.CROWD_TEST.start
+SPANS = ["initial", "initial_next", "winner", "winner_next", "learning", "population"]
+
+
+def situation_rates(world: SumoWorld, winner: np.ndarray, evolved: np.ndarray, situation: int,
+                    seconds: float) -> dict[str, float]:
+    """One situation's spans (``SPANS``): collisions per learner-second and SSM conflicts per
+    learner-hour (``<span>_conflicts``). ``winner`` (G,) and ``evolved`` (N, G) in the source
+    layout."""
+    scenario = world.scenario
+    count = scenario.traffic.learners
+    seed = world.seeds(SITUATION_KEY + situation)[0]
+    rng = np.random.default_rng([scenario.traffic.seed, SITUATION_KEY, situation])
+    runs = {}
+    drivers = world.spec.in_source_layout(
+        rng.uniform(-1, 1, (count, world.spec.chromosome_length)))
+    with SumoCrowd(world, seed) as crowd:
+        runs["initial"] = crowd.run(seconds, drivers)
+        runs["initial_next"] = crowd.run(seconds, drivers)
+    broadcast = np.tile(winner, (count, 1))
+    with SumoCrowd(world, seed) as crowd:
+        runs["winner"] = crowd.run(seconds, broadcast)
+        runs["winner_next"] = crowd.run(seconds, broadcast)
+    learners = [VehicleGA(evolved.copy(), np.random.default_rng([scenario.seed, situation, k]))
+                for k in range(count)]
+    learning = OnlineLearning(learners, ga_params(scenario), share_elites=True,
+                              elite_count=scenario.ga.elite_count)
+    with SumoCrowd(world, seed) as crowd:
+        runs["learning"] = crowd.run(seconds, broadcast, learning)
+        runs["population"] = crowd.run(seconds, np.tile(learning.evidence.best(), (count, 1)))
+    rates = {span: run.collision_rate for span, run in runs.items()}
+    rates |= {f"{span}_conflicts": run.conflict_rate for span, run in runs.items()}
+    return rates
+
+
+def interval(values: np.ndarray, rng: np.random.Generator, draws: int = 2000,
+             level: float = 0.9) -> tuple[float, float]:
+    """The central ``level`` interval of the mean of ``values`` when they are drawn again
+    with replacement (bootstrap)."""
+    values = np.asarray(values, dtype=np.float64)
+    means = values[rng.integers(0, len(values), (draws, len(values)))].mean(axis=1)
+    low, high = np.quantile(means, [(1 - level) / 2, (1 + level) / 2])
+    return float(low), float(high)
+
+
+def crowd_world(strategy: int, quick: bool) -> SumoWorld:
+    """The strategy's test world with its SUMO in closed loop (the learners are in it)."""
+    scenario = SUMO.settings(quick).scenario(strategy)
+    return make_world(scenario.with_overrides(traffic={"mode": "closed-loop"}))
+
+
+@cache
+def measure(out: Path, quick: bool, progress: bool) -> pd.DataFrame:
+    """Every strategy's situations (once per process: Tables 3 and 4 share them), written to
+    ``sumo/crowd_situations.csv``."""
+    controllers = trained_controllers(out, quick, progress, SUMO)
+    seconds, situations = (QUICK_SECONDS, QUICK_SITUATIONS) if quick else (SECONDS, SITUATIONS)
+    rows = []
+    for strategy in STRATEGIES:
+        world = crowd_world(strategy, quick)
+        winner = controllers[strategy]
+        evolved = final_population(SUMO, out, strategy, winner, quick)
+        source = world.spec.in_source_layout(np.vstack([winner, evolved]))
+        for situation in range(situations):
+            rows.append({"strategy": strategy, "situation": situation,
+                         **situation_rates(world, source[0], source[1:], situation, seconds)})
+    table = pd.DataFrame(rows)
+    write_csv(out / SUMO.folder / "crowd_situations.csv", table)
+    return table
+
+
+def table(situations: pd.DataFrame, columns: list[str]) -> pd.DataFrame:
+    """Per strategy: the mean of each span's collision and conflict rates, with the 90%
+    interval of the collision rate over the situations."""
+    rng = np.random.default_rng(0)
+    rows = []
+    for strategy, group in situations.groupby("strategy"):
+        row = {"strategy": strategy}
+        for span in columns:
+            low, high = interval(group[span].to_numpy(), rng)
+            row |= {f"{span}_collisions_per_s": round(group[span].mean(), 4),
+                    f"{span}_low": round(low, 4), f"{span}_high": round(high, 4),
+                    f"{span}_conflicts_per_h": round(group[f"{span}_conflicts"].mean(), 1)}
+        rows.append(row)
+    return pd.DataFrame(rows)
+
+
+def sumo_tables(out: Path, quick: bool = False, progress: bool = True) -> list[str]:
+    """SUMO Table 3 (the winner broadcast, against the initial drivers, from the learners'
+    entry) and Table 4 (after learning together, against both drivers' second spans), into
+    ``out/sumo/table3.csv`` and ``table4.csv``."""
+    situations = measure(out, quick, progress)
+    table3 = table(situations, ["initial", "winner"])
+    table4 = table(situations, ["initial_next", "winner_next", "population"])
+    write_csv(out / SUMO.folder / "table3.csv", table3)
+    write_csv(out / SUMO.folder / "table4.csv", table4)
+
+    def entries(frame: pd.DataFrame, before: str, after: str) -> str:
+        return ", ".join(
+            f"strategy {int(r['strategy'])}: {r[f'{before}_collisions_per_s']:.3f} -> "
+            f"{r[f'{after}_collisions_per_s']:.3f}" for _, r in frame.iterrows())
+
+    return [f"sumo/table3: collisions per learner-second, initial drivers -> winner: "
+            f"{entries(table3, 'initial', 'winner')}",
+            f"sumo/table4: collisions per learner-second over the second span, initial "
+            f"drivers -> after learning together: {entries(table4, 'initial_next', 'population')}"
+            f"; the winner driving on: {entries(table4, 'initial_next', 'winner_next')}"]

@@ -1,0 +1,30 @@
+"""The SUMO Tables 3–4 builder: means and bootstrap intervals over situations."""
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from enn_traffic.experiments.sumo_crowds import interval, table
+
+
+def test_interval_of_equal_values_is_that_value_and_brackets_the_mean_otherwise():
+    rng = np.random.default_rng(0)
+    assert interval(np.full(5, 0.2), rng) == pytest.approx((0.2, 0.2))
+    values = np.array([0.0, 0.1, 0.2, 0.3, 1.0])
+    low, high = interval(values, rng)
+    assert 0.0 <= low < values.mean() < high <= 1.0
+
+
+def test_table_gives_each_strategys_means_over_its_situations():
+    """Strategy 1: collision rates 0.1 and 0.3 (mean 0.2), conflicts 10 and 20 per hour;
+    strategy 2: a single situation."""
+    situations = pd.DataFrame({
+        "strategy": [1, 1, 2], "situation": [0, 1, 0],
+        "initial": [0.1, 0.3, 0.5], "initial_conflicts": [10.0, 20.0, 30.0],
+        "winner": [0.0, 0.1, 0.2], "winner_conflicts": [0.0, 4.0, 2.0]})
+    result = table(situations, ["initial", "winner"]).set_index("strategy")
+    assert result.loc[1, "initial_collisions_per_s"] == pytest.approx(0.2)
+    assert result.loc[1, "initial_conflicts_per_h"] == pytest.approx(15.0)
+    assert result.loc[1, "winner_collisions_per_s"] == pytest.approx(0.05)
+    assert result.loc[2, "initial_low"] == result.loc[2, "initial_high"] == pytest.approx(0.5)
+    assert result.loc[1, "initial_low"] <= 0.2 <= result.loc[1, "initial_high"]
