@@ -33,7 +33,7 @@ from numba import njit
 from enn_traffic.geometry import boxes_overlap
 from enn_traffic.network import network_buffers
 from enn_traffic.network import steering as network_steering
-from enn_traffic.sim.crowd import ALIVE, Learning
+from enn_traffic.sim.crowd import ALIVE, CrowdRun, Learning
 from enn_traffic.sim.replay import in_world
 from enn_traffic.sim.rules import (
     NO_HIT,
@@ -124,30 +124,17 @@ def drive(genes, layer_sizes, physics, geometry, ids, corners, centres, now, pos
 
 
 @dataclass
-class SumoCrowdRun:
-    """What a stretch of SUMO time produced, per learner: responsible collisions (lives ended
-    by the blame rule), spins, exits reached and collisions SUMO vehicles caused, over
-    ``seconds`` from SUMO time ``begin``; and the learners' SSM conflicts (TTC below its
-    threshold, docs/sumo.md), counted when the crowd closes (SUMO writes them then)."""
+class SumoCrowdRun(CrowdRun):
+    """A :class:`~enn_traffic.sim.crowd.CrowdRun` of learners among SUMO's traffic (the
+    trace holds the learners' poses), with, per learner, the exits reached and the collisions
+    SUMO vehicles caused; the span began at SUMO time ``begin``. The learners' SSM conflicts
+    (TTC below its threshold, docs/sumo.md) are counted when the crowd closes (SUMO writes
+    them then)."""
 
-    collisions: np.ndarray  # (K,)
-    spins: np.ndarray
-    exits: np.ndarray
-    suffered: np.ndarray
-    begin: float
-    seconds: float
-    trace: np.ndarray  # (steps + 1, K, 3) the learners' poses
+    exits: np.ndarray = None  # (K,)
+    suffered: np.ndarray = None
+    begin: float = 0.0
     ttc_conflicts: int = 0
-
-    @property
-    def collision_rate(self) -> float:
-        """Responsible collisions per learner-second (the metric of Tables 3–4)."""
-        return float(self.collisions.sum()) / (len(self.collisions) * self.seconds)
-
-    @property
-    def spin_rate(self) -> float:
-        """Spins in place per learner-second."""
-        return float(self.spins.sum()) / (len(self.spins) * self.seconds)
 
     @property
     def conflict_rate(self) -> float:
@@ -284,9 +271,9 @@ class SumoCrowd:
             self.t += 1
         for k in np.flatnonzero(learns):  # a life still going counts what it has shown
             learning.still_driving(k, int(lives.life[k] - unseen_from[k]))
-        run = SumoCrowdRun(outcomes[COLLIDED], outcomes[SPUN], outcomes[LEFT_NETWORK],
-                           lives.suffered - suffered, begin, steps * world.scenario.vehicle.dt,
-                           trace)
+        run = SumoCrowdRun(outcomes[COLLIDED], outcomes[SPUN], steps * world.scenario.vehicle.dt,
+                           trace, exits=outcomes[LEFT_NETWORK], suffered=lives.suffered - suffered,
+                           begin=begin)
         self._runs.append(run)
         return run
 
