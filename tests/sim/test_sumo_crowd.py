@@ -100,3 +100,41 @@ def test_one_situation_of_the_sumo_tables_is_the_same_run_again(world):
     assert set(first) == set(SPANS) | {f"{span}_conflicts" for span in SPANS}
     assert first == situation_rates(world, winner, evolved, situation=0, seconds=3.0)
     assert first["winner"] > 0 and first["winner_next"] > 0
+
+
+def test_a_sumo_vehicle_that_drives_into_a_learner_leaves_that_learners_world_only(world):
+    """Learner 0 moved 1 m east to a front at x = 80; a SUMO car behind it moved from a front
+    0.5 m behind the learner's old rear to 1 m into the learner's old body: the car is
+    responsible (the learner suffers one collision, lives on) and leaves learner 0's world,
+    not learner 1's."""
+    from enn_traffic.geometry import body_corners
+    from enn_traffic.sim.sumo_crowd import ALIVE, detect
+    from enn_traffic.traffic import sumo
+
+    length, width = world.scenario.vehicle.length, world.scenario.vehicle.width
+
+    def body(front_x, car_length=length):
+        corners = np.empty((4, 2))
+        body_corners(front_x, 5.0, 0.0, car_length, width, corners)
+        return corners, corners[[0, 2]].mean(axis=0)
+
+    pose = np.array([[80.0, 5.0, 0.0], [30.0, 5.0, 0.0]])
+    now_bodies = [body(80.0), body(30.0)]
+    before_bodies = [body(79.0), body(29.0)]
+    ids, corners, centres = sumo.slot_arrays(2, 4)
+    old_rear = 79.0 - length
+    for row, front in ((0, old_rear - 0.5), (1, old_rear + 1.0)):  # before, now
+        ids[row, 0] = 7
+        corners[row, 0], centres[row, 0] = body(front, 4.5)
+    gone = np.full((2, 4), -1)
+    suffered, events = np.zeros(2, dtype=np.int64), np.zeros(2, dtype=np.int64)
+    physics = world._learner_physics(2.5)
+    ended = detect(5, pose, np.array([b[0] for b in now_bodies]),
+                   np.array([b[1] for b in now_bodies]), np.array([b[0] for b in before_bodies]),
+                   np.array([b[1] for b in before_bodies]), np.zeros(2, dtype=np.bool_),
+                   np.full(2, 5), np.zeros((2, physics.spin_window, 2)),
+                   np.zeros(2, dtype=np.bool_), physics, world.geometry, ids, corners, centres,
+                   0, 1, gone, np.empty(4, dtype=np.bool_), suffered, events)
+    assert not ended and events.tolist() == [ALIVE, ALIVE]
+    assert suffered.tolist() == [1, 0]
+    assert gone[:, 0].tolist() == [7, -1]
