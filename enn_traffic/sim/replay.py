@@ -53,6 +53,42 @@ def in_world(ids, gone, s) -> bool:
     return ids[s] >= 0 and ids[s] != gone[s]
 
 
+@njit(cache=True, inline="always")
+def mark_absent(t, ids_before, gone, absent) -> None:
+    """``absent[s]``: slot ``s`` held no body in the learner's world before the step (nothing
+    did at step 0)."""
+    for s in range(ids_before.shape[0]):
+        absent[s] = t == 0 or not in_world(ids_before, gone, s)
+
+
+@njit(cache=True, inline="always")
+def struck_by_traffic(v, body_before, centre_before, ids_now, corners_now, centres_now, gone,
+                      near) -> int:
+    """The traffic's half of the blame rule: every vehicle whose body now touches learner
+    ``v``'s body from before the step is responsible and leaves the learner's world
+    (``gone``). How many did?"""
+    struck = 0
+    for s in range(ids_now.shape[0]):
+        if (in_world(ids_now, gone, s)
+                and close(centres_now[s, 0], centres_now[s, 1], centre_before[v, 0],
+                          centre_before[v, 1], near)
+                and boxes_overlap(corners_now[s], body_before[v])):
+            gone[s] = ids_now[s]
+            struck += 1
+    return struck
+
+
+@njit(cache=True, inline="always")
+def visible_centres(ids_now, centres_now, gone, visible) -> None:
+    """The centres the learner sees: those of the vehicles in its world, the others far
+    off."""
+    for s in range(ids_now.shape[0]):
+        if in_world(ids_now, gone, s):
+            visible[s, 0], visible[s, 1] = centres_now[s, 0], centres_now[s, 1]
+        else:
+            visible[s, 0], visible[s, 1] = FAR, FAR
+
+
 @njit(cache=True)
 def clear_start(centre, ids, centres, gone, clearance) -> None:
     """Take vehicles within ``clearance`` of the learner's body centre out of the world."""
@@ -123,31 +159,20 @@ def learner_step(t, genes, layer_sizes, physics, geometry, ids, corners, centres
     if left_network(body[0], exits):
         return LEFT_NETWORK
     # 1. collisions by the blame rule
-    for s in range(ids_before.shape[0]):
-        absent[s] = t == 0 or not in_world(ids_before, gone, s)
+    mark_absent(t, ids_before, gone, absent)
     if responsible(0, pose, body, centre, corners_before, centres_before, absent, -1, physics,
                    walls, cell_start, cell_walls, all_walls) != NO_HIT:
         return COLLIDED
     if t > 0:
-        near = 4.0 * physics.radius * physics.radius
-        for s in range(ids_now.shape[0]):
-            if (in_world(ids_now, gone, s)
-                    and close(centres_now[s, 0], centres_now[s, 1], centre_before[0, 0],
-                              centre_before[0, 1], near)
-                    and boxes_overlap(corners_now[s], body_before[0])):
-                gone[s] = ids_now[s]
-                suffered[0] += 1
+        suffered[0] += struck_by_traffic(0, body_before, centre_before, ids_now, corners_now,
+                                         centres_now, gone, 4.0 * physics.radius * physics.radius)
     # 2. spin test and step cap
     if spun(recent, t, pose[0, 0], pose[0, 1], physics.spin_variance):
         return SPUN
     if t >= max_steps:
         return CAPPED
     # 3. sense walls and the visible vehicles, decide
-    for s in range(ids_now.shape[0]):
-        if in_world(ids_now, gone, s):
-            visible[s, 0], visible[s, 1] = centres_now[s, 0], centres_now[s, 1]
-        else:
-            visible[s, 0], visible[s, 1] = FAR, FAR
+    visible_centres(ids_now, centres_now, gone, visible)
     within = within_range(pose[0, 0], pose[0, 1], visible, 0, physics.max_range + physics.radius)
     met[0] += within
     met[1] = max(met[1], within)

@@ -141,7 +141,15 @@ def responsible(v, pose, corners, centres, before, before_centres, absent, me, p
     candidates = nearby_walls(pose[v, 0], pose[v, 1], physics, cell_start, cell_walls, all_walls)
     if box_hits_walls(corners[v], walls, candidates, candidates.shape[0]):
         return HIT_WALL
-    near = 4.0 * physics.radius * physics.radius
+    return hits_earlier_body(v, corners, centres, before, before_centres, absent, me,
+                             4.0 * physics.radius * physics.radius)
+
+
+@njit(cache=True, inline="always")
+def hits_earlier_body(v, corners, centres, before, before_centres, absent, me, near) -> int:
+    """The vehicles' half of the blame rule: the first body of ``before`` (``absent`` ones and
+    ``me`` skipped) that vehicle ``v``'s body touches, else ``NO_HIT``. ``near``: the squared
+    distance of body centres beyond which bodies cannot touch."""
     for other in range(before.shape[0]):
         if (other != me and not absent[other]
                 and close(centres[v, 0], centres[v, 1], before_centres[other, 0],
@@ -323,7 +331,6 @@ def within_range(x, y, centres, first, reach) -> int:
         if (centres[v, 0] - x) ** 2 + (centres[v, 1] - y) ** 2 <= reach * reach:
             count += 1
     return count
-
 
 
 @njit(cache=True)

@@ -30,14 +30,13 @@ from pathlib import Path
 import numpy as np
 from numba import njit
 
-from enn_traffic.geometry import boxes_overlap
 from enn_traffic.network import network_buffers
 from enn_traffic.network import steering as network_steering
 from enn_traffic.sim.crowd import ALIVE, CrowdRun, Learning
-from enn_traffic.sim.replay import in_world
+from enn_traffic.sim.replay import mark_absent, struck_by_traffic, visible_centres
 from enn_traffic.sim.rules import (
     NO_HIT,
-    close,
+    hits_earlier_body,
     left_network,
     move_all,
     place,
@@ -75,23 +74,17 @@ def detect(t, pose, body, centre, body_before, centre_before, fresh, life, recen
             events[k] = LEFT_NETWORK
             ended = True
             continue
-        for s in range(ids_before.shape[0]):
-            absent[s] = t == 0 or not in_world(ids_before, gone[k], s)
+        mark_absent(t, ids_before, gone[k], absent)
         if (responsible(k, pose, body, centre, corners_before, centres_before, absent, -1,
                         physics, walls, cell_start, cell_walls, all_walls) != NO_HIT
-                or responsible(k, pose, body, centre, body_before, centre_before, fresh, k,
-                               physics, walls, cell_start, cell_walls, all_walls) != NO_HIT):
+                or hits_earlier_body(k, body, centre, body_before, centre_before, fresh, k,
+                                     near) != NO_HIT):
             events[k] = COLLIDED
             ended = True
             continue
         if t > 0 and not fresh[k]:
-            for s in range(ids_now.shape[0]):
-                if (in_world(ids_now, gone[k], s)
-                        and close(centres_now[s, 0], centres_now[s, 1], centre_before[k, 0],
-                                  centre_before[k, 1], near)
-                        and boxes_overlap(corners_now[s], body_before[k])):
-                    gone[k, s] = ids_now[s]
-                    suffered[k] += 1
+            suffered[k] += struck_by_traffic(k, body_before, centre_before, ids_now, corners_now,
+                                             centres_now, gone[k], near)
         if spin_checked[k] and spun(recent[k], life[k], pose[k, 0], pose[k, 1],
                                     physics.spin_variance):
             events[k] = SPUN
@@ -108,11 +101,7 @@ def drive(genes, layer_sizes, physics, geometry, ids, corners, centres, now, pos
     beam_cos, beam_sin, walls, cell_start, cell_walls, all_walls, _ = geometry
     ids_now, corners_now, centres_now = ids[now], corners[now], centres[now]
     for k in range(pose.shape[0]):
-        for s in range(ids_now.shape[0]):
-            if in_world(ids_now, gone[k], s):
-                visible[s, 0], visible[s, 1] = centres_now[s, 0], centres_now[s, 1]
-            else:
-                visible[s, 0], visible[s, 1] = FAR, FAR
+        visible_centres(ids_now, centres_now, gone[k], visible)
         sense(k, pose, physics, beam_cos, beam_sin, walls, cell_start, cell_walls, all_walls,
               True, corners_now, visible, -1, readings)
         sense_bodies(k, pose[k, 0], pose[k, 1], pose[k, 2], beam_cos, beam_sin, body, centre,
