@@ -30,6 +30,7 @@ from pathlib import Path
 import numpy as np
 from numba import njit
 
+from enn_traffic.errors import InputError
 from enn_traffic.network import network_buffers
 from enn_traffic.network import steering as network_steering
 from enn_traffic.sim.crowd import ALIVE, CrowdRun, Learning
@@ -120,9 +121,9 @@ class SumoCrowdRun(CrowdRun):
     (TTC below its threshold, docs/sumo.md) are counted when the crowd closes (SUMO writes
     them then)."""
 
-    exits: np.ndarray = None  # (K,)
-    suffered: np.ndarray = None
-    begin: float = 0.0
+    exits: np.ndarray  # (K,)
+    suffered: np.ndarray
+    begin: float
     ttc_conflicts: int = 0
 
     @property
@@ -163,22 +164,27 @@ class SumoCrowd:
         os.close(handle)
         self._ssm_file = Path(ssm_file)
         self._simulation = simulation = sumo.Simulation(
-            scenario, self.seed, state, extra=sumo.ssm_options(self._ssm_file, self.ids))
-        simulation.learners = self.ids
+            scenario, self.seed, state, extra=sumo.ssm_options(self._ssm_file, self.ids),
+            learners=self.ids)
         self.physics = world._learner_physics(simulation.largest_radius())
         self.slots = sumo.slot_arrays(2, 64)
         self.before, self.now = 0, 1  # rows of the slot arrays; they swap every step
-        self._read()
         self.lives = lives = _Lives(self.count, self.physics, len(world.geometry.beam_cos),
                                     world.layer_sizes, self.slots[0].shape[1], self.seed)
+        self._read()
         for k in range(self.count):
             if self._starts is None:
-                lives.enter(k, self.physics, world.geometry, self.slots, self.now)
+                lives.enter(k, self.physics, world.geometry, self.slots, self.now, scenario)
             else:
                 lives.place(k, self._starts[k], self.physics)
             sumo.add_learner(vehicle.length, vehicle.width, vehicle.speed, self.ids[k])
-            sumo.move_learner(*lives.pose[k], self.ids[k])
+        self._move_learners()
         self.t = 0  # steps since the learners entered
+
+    def _move_learners(self) -> None:
+        """Place every learner in SUMO for its next step (libsumo moves one vehicle a call)."""
+        for vehicle, (x, y, heading) in zip(self.ids, self.lives.pose.tolist(), strict=True):
+            sumo.move_learner(x, y, heading, vehicle)
 
     def close(self) -> None:
         """End SUMO and count each run's SSM conflicts."""
@@ -193,20 +199,12 @@ class SumoCrowd:
             run.ttc_conflicts = int(((times >= run.begin) & (times < end)).sum())
 
     def _read(self) -> None:
-        """SUMO's vehicles into the ``now`` row of the slot arrays, growing them (and the
-        learners' per-slot arrays) as needed; bodies larger than their type said widen the
-        radius beyond which bodies cannot touch."""
-        rows = self._simulation.read()
-        ids, corners, centres = self.slots
-        while self._simulation.slots_used > ids.shape[1]:
-            size = 2 * ids.shape[1]
-            grown = sumo.slot_arrays(2, size)
-            for new, old in zip(grown, (ids, corners, centres), strict=True):
-                new[:, : old.shape[1]] = old
-            ids, corners, centres = self.slots = grown
-            if hasattr(self, "lives"):
-                self.lives.grow(size)
-        radius = sumo.fill_frame(rows, ids[self.now], corners[self.now], centres[self.now])
+        """SUMO's vehicles into the ``now`` row of the slot arrays (:func:`sumo.read_frame`),
+        the learners' per-slot arrays growing with them; bodies larger than their type said
+        widen the radius beyond which bodies cannot touch."""
+        self.slots, radius = sumo.read_frame(self._simulation, self.now, self.slots)
+        if self.slots[0].shape[1] > self.lives.gone.shape[1]:
+            self.lives.grow(self.slots[0].shape[1])
         if radius > self.physics.radius:
             self.physics = self.physics._replace(radius=radius)
 
@@ -245,15 +243,15 @@ class SumoCrowd:
                                                        int(lives.life[k] - unseen_from[k]),
                                                        outcome == SPUN)
                     unseen_from[k] = 0
-                    lives.enter(k, self.physics, world.geometry, self.slots, self.now)
+                    lives.enter(k, self.physics, world.geometry, self.slots, self.now,
+                                world.scenario)
             if step == steps:
                 break
             drive(genes, world.layer_sizes, self.physics, world.geometry, ids, corners,
                   centres, self.now, lives.pose, lives.body, lives.centre, lives.body_before,
                   lives.centre_before, lives.fresh, lives.life, lives.gone, lives.visible,
                   lives.readings, lives.activation, lives.scratch, lives.steering)
-            for k in range(count):
-                sumo.move_learner(*lives.pose[k], self.ids[k])
+            self._move_learners()
             self._simulation.step()
             self.before, self.now = self.now, self.before
             self._read()
@@ -291,9 +289,9 @@ class _Lives:
         self.activation, self.scratch = network_buffers(layer_sizes)
         self.steering = np.zeros(count)
         self.rng = np.full(1, np.uint64(seed), dtype=np.uint64)
-        self.placed = np.zeros(count, dtype=np.bool_)
 
     def grow(self, slots: int) -> None:
+        """Room for ``slots`` SUMO slots (the new ones in every learner's world)."""
         gone = np.full((len(self.gone), slots), -1, dtype=np.int64)
         gone[:, : self.gone.shape[1]] = self.gone
         self.gone = gone
@@ -308,7 +306,7 @@ class _Lives:
         self.life[k] = 0
         self.gone[k] = -1
 
-    def enter(self, k: int, physics, geometry, slots: tuple, row: int) -> None:
+    def enter(self, k: int, physics, geometry, slots: tuple, row: int, scenario) -> None:
         """Learner ``k`` starts a life at a free spot: on the drivable area, touching no wall,
         ``respawn_clearance`` from every learner and, if one is found within
         :data:`RESPAWN_TRIES` draws, from every SUMO vehicle."""
@@ -319,7 +317,9 @@ class _Lives:
             if not respawn(k, NETWORK, physics, walls, cell_start, cell_walls, all_walls,
                            self.pose, self.body, self.centre, self.body_before,
                            self.centre_before, self.fresh, self.memory, self.rng):
-                raise RuntimeError("no free spot on the network for a learner")
+                raise InputError("no free spot for a learner on the drivable area in 200 "
+                                 "draws (a network whose roads fill little of its bounding "
+                                 "box)", scenario.source, "track.net")
             gaps = np.hypot(*(centres[row][present] - self.centre[k]).T)
             if not np.any(gaps < physics.clearance):
                 break

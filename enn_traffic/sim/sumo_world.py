@@ -221,18 +221,12 @@ class SumoWorld(ArenaWorld):
 
     @staticmethod
     def _read(simulation: sumo.Simulation, row: int, ids, corners, centres, state):
-        """Read SUMO's vehicles into row ``row`` of the slot arrays, doubling the number of
-        slots (and the learner state's per-slot arrays) when a vehicle's slot lies beyond
-        them; also the largest body's half diagonal."""
-        rows = simulation.read()
-        while simulation.slots_used > ids.shape[1]:
-            size = 2 * ids.shape[1]
-            grown = sumo.slot_arrays(2, size)
-            for new, old in zip(grown, (ids, corners, centres), strict=True):
-                new[:, : old.shape[1]] = old
-            ids, corners, centres = grown
-            state = with_slots(state, size)
-        radius = sumo.fill_frame(rows, ids[row], corners[row], centres[row])
+        """Read SUMO's vehicles into row ``row`` of the slot arrays (:func:`sumo.read_frame`),
+        growing the learner state's per-slot arrays with them; also the largest body's half
+        diagonal."""
+        (ids, corners, centres), radius = sumo.read_frame(simulation, row, (ids, corners, centres))
+        if ids.shape[1] > len(state.gone):
+            state = with_slots(state, ids.shape[1])
         return ids, corners, centres, state, radius
 
     def trace(self, chromosome: np.ndarray, key: int = 0, episode: int = 0,

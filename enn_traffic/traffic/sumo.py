@@ -159,7 +159,8 @@ class Simulation:
     stable slots (a vehicle keeps its slot while it is on the network)."""
 
     def __init__(self, scenario: Scenario, seed: int, state: Path | None = None,
-                 save_rng: bool = False, extra: tuple[str, ...] = ()):
+                 save_rng: bool = False, extra: tuple[str, ...] = (),
+                 learners: tuple[str, ...] = (LEARNER,)):
         self.scenario = scenario
         self._log = tempfile.NamedTemporaryFile("r", suffix=".log", prefix="enn-sumo-")  # noqa: SIM115 (open for the run)
         command = sumo_command(scenario, seed, Path(self._log.name), state, save_rng)
@@ -171,7 +172,7 @@ class Simulation:
         self.vehicles: dict[str, tuple[int, int, float, float]] = {}
         self.numbered = 0  # vehicles given a number so far
         self.following = False
-        self.learners: tuple[str, ...] = (LEARNER,)  # SUMO ids that :meth:`read` leaves out
+        self.learners = learners  # SUMO ids that :meth:`read` leaves out
         self.slots_used = 0  # one more than the highest slot given so far
         self._free = list(range(MAX_SLOTS - 1, -1, -1))
         for vehicle in libsumo.vehicle.getIDList():  # on the network in a loaded state
@@ -379,6 +380,20 @@ def slot_arrays(steps: int, slots: int) -> tuple[np.ndarray, np.ndarray, np.ndar
             np.full((steps, slots, 2), FAR))
 
 
+def read_frame(simulation: Simulation, row: int, slots: tuple) -> tuple[tuple, float]:
+    """SUMO's vehicles now into row ``row`` of the slot arrays ``slots`` (ids, corners,
+    centres), which double in width while a vehicle's slot lies beyond them. Returns the slot
+    arrays (the same, or grown) and the largest body's half diagonal."""
+    rows = simulation.read()
+    ids, corners, centres = slots
+    while simulation.slots_used > ids.shape[1]:
+        grown = slot_arrays(ids.shape[0], 2 * ids.shape[1])
+        for new, old in zip(grown, (ids, corners, centres), strict=True):
+            new[:, : old.shape[1]] = old
+        ids, corners, centres = grown
+    return (ids, corners, centres), fill_frame(rows, ids[row], corners[row], centres[row])
+
+
 def record(scenario: Scenario, seed: int, steps: int, state: Path | None = None) -> Recording:
     """Run SUMO for the warm-up (or load its ``state``) and then ``steps`` steps; keep steps
     0..steps. An InputError if no vehicle is on the network at any of them."""
@@ -431,26 +446,32 @@ class Conflicts:
     pet: int = 0
 
 
-def read_conflicts(path: Path) -> Conflicts:
-    """Read an SSM output file (an empty or missing one: no conflict)."""
+def _conflicts(path: Path) -> list:
+    """The conflict elements of an SSM output file (none for an empty or missing one)."""
     import xml.etree.ElementTree as ElementTree
 
     try:
-        root = ElementTree.parse(path).getroot()
+        return ElementTree.parse(path).getroot().findall("conflict")
     except (ElementTree.ParseError, OSError):
-        return Conflicts()
+        return []
 
-    def value(conflict, tag: str) -> float | None:
-        element = conflict.find(tag)
-        try:
-            return float(element.get("value")) if element is not None else None
-        except (TypeError, ValueError):  # "NA"
-            return None
 
-    conflicts = root.findall("conflict")
-    ttc = [v for c in conflicts if (v := value(c, "minTTC")) is not None]
-    drac = [v for c in conflicts if (v := value(c, "maxDRAC")) is not None]
-    pet = [v for c in conflicts if (v := value(c, "PET")) is not None]
+def _measure(conflict, tag: str, attribute: str = "value") -> float | None:
+    """An attribute of a conflict's measure (``minTTC``, ``maxDRAC``, ``PET``), or None when it
+    has none or it is "NA"."""
+    element = conflict.find(tag)
+    try:
+        return float(element.get(attribute)) if element is not None else None
+    except (TypeError, ValueError):  # "NA"
+        return None
+
+
+def read_conflicts(path: Path) -> Conflicts:
+    """Read an SSM output file (an empty or missing one: no conflict)."""
+    conflicts = _conflicts(path)
+    ttc = [v for c in conflicts if (v := _measure(c, "minTTC")) is not None]
+    drac = [v for c in conflicts if (v := _measure(c, "maxDRAC")) is not None]
+    pet = [v for c in conflicts if (v := _measure(c, "PET")) is not None]
     return Conflicts(len(conflicts), min(ttc, default=math.inf),
                      sum(v < SSM_THRESHOLDS["TTC"] for v in ttc),
                      sum(v > SSM_THRESHOLDS["DRAC"] for v in drac),
@@ -459,22 +480,10 @@ def read_conflicts(path: Path) -> Conflicts:
 
 def ttc_conflict_times(path: Path) -> np.ndarray:
     """The SUMO times of the conflicts in an SSM output file whose lowest time-to-collision
-    fell below its threshold (none for an empty or missing file)."""
-    import xml.etree.ElementTree as ElementTree
-
-    try:
-        root = ElementTree.parse(path).getroot()
-    except (ElementTree.ParseError, OSError):
-        return np.empty(0)
-    times = []
-    for conflict in root.findall("conflict"):
-        element = conflict.find("minTTC")
-        try:
-            if float(element.get("value")) < SSM_THRESHOLDS["TTC"]:
-                times.append(float(element.get("time")))
-        except (AttributeError, TypeError, ValueError):  # none, or "NA"
-            continue
-    return np.array(times)
+    fell below its threshold."""
+    return np.array([_measure(c, "minTTC", "time") for c in _conflicts(path)
+                     if (ttc := _measure(c, "minTTC")) is not None
+                     and ttc < SSM_THRESHOLDS["TTC"]], dtype=np.float64)
 
 
 def learner_id(index: int) -> str:
@@ -484,24 +493,20 @@ def learner_id(index: int) -> str:
 
 def add_learner(length: float, width: float, speed: float, vehicle: str = LEARNER) -> None:
     """Put a learner into the running SUMO as a vehicle with no route, that obeys no speed
-    or lane-change rule and is moved by :func:`move_learner`."""
+    or lane-change rule and is moved by :func:`move_learner` (the learners share one
+    vehicle type, made with the first)."""
     kind = LEARNER + "_type"
-    if kind in libsumo.vehicletype.getIDList():  # another learner's
-        _add_moved_vehicle(vehicle, kind, speed)
-        return
-    libsumo.vehicletype.copy("DEFAULT_VEHTYPE", kind)
-    libsumo.vehicletype.setLength(kind, length)
-    libsumo.vehicletype.setWidth(kind, width)
-    libsumo.vehicletype.setMaxSpeed(kind, max(speed, 1e-3))
-    libsumo.vehicletype.setSpeedDeviation(kind, 0.0)
-    libsumo.vehicletype.setImperfection(kind, 0.0)
-    # It enters SUMO at its own speed (so that SSM sees it moving from the start) whatever the
-    # first edge's speed limit: its speed factor binds nothing else, as it is moved by moveToXY.
-    libsumo.vehicletype.setSpeedFactor(kind, 100.0)
-    _add_moved_vehicle(vehicle, kind, speed)
-
-
-def _add_moved_vehicle(vehicle: str, kind: str, speed: float) -> None:
+    if kind not in libsumo.vehicletype.getIDList():
+        libsumo.vehicletype.copy("DEFAULT_VEHTYPE", kind)
+        libsumo.vehicletype.setLength(kind, length)
+        libsumo.vehicletype.setWidth(kind, width)
+        libsumo.vehicletype.setMaxSpeed(kind, max(speed, 1e-3))
+        libsumo.vehicletype.setSpeedDeviation(kind, 0.0)
+        libsumo.vehicletype.setImperfection(kind, 0.0)
+        # It enters SUMO at its own speed (so that SSM sees it moving from the start) whatever
+        # the first edge's speed limit: its speed factor binds nothing else, as it is moved by
+        # moveToXY.
+        libsumo.vehicletype.setSpeedFactor(kind, 100.0)
     libsumo.vehicle.add(vehicle, "", typeID=kind, departSpeed=f"{speed:g}")
     libsumo.vehicle.setSpeedMode(vehicle, 0)
     libsumo.vehicle.setLaneChangeMode(vehicle, 0)
