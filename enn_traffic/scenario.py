@@ -162,6 +162,50 @@ class EpisodeConfig(_Section):
 
 
 Strategy = Literal["random_network", "straight", "circling", "wander", "sumo"]
+CarFollowing = Literal["Krauss", "KraussPS", "KraussOrig1", "IDM", "EIDM", "IDMM", "ACC", "CACC",
+                       "W99", "Wiedemann", "SmartSK", "PWagner2009", "BKerner"]
+
+
+class DriversConfig(_Section):
+    """How SUMO's drivers drive, in SUMO's own driver models (docs/sumo.md, "Driver models"):
+    set on every traffic vehicle type (a vehicle type's own values are replaced; the learners
+    are not traffic). Unset keys leave the scenario's files as they are."""
+
+    car_following: CarFollowing | None = Field(
+        None, description="car-following model of the vehicle types that name none (SUMO's "
+        "`--default.carfollowmodel`; SUMO's own default is `Krauss`)")
+    imperfection: float | None = Field(
+        None, ge=0, le=1, description="driver imperfection `sigma` of the Krauss-family models "
+        "(SUMO's default 0.5): random dawdling, 0 = perfect driving")
+    tau_s: PositiveFloat | None = Field(
+        None, description="desired time headway `tau` (s; SUMO's default 1)")
+    accel: PositiveFloat | None = Field(None, description="acceleration ability (m/s²)")
+    decel: PositiveFloat | None = Field(None, description="comfortable deceleration (m/s²)")
+    speed_factor: PositiveFloat | None = Field(
+        None, description="mean factor on the lanes' speed limits that drivers aim at")
+    lc_speed_gain: float | None = Field(
+        None, ge=0, description="lane-change eagerness for speed (`lcSpeedGain`, default 1); "
+        "set on each vehicle as it departs")
+    lc_cooperative: float | None = Field(
+        None, ge=0, le=1, description="willingness to change lanes to let others in "
+        "(`lcCooperative`, default 1)")
+    lc_assertive: PositiveFloat | None = Field(
+        None, description="acceptance of small gaps when changing lanes (`lcAssertive`, "
+        "default 1)")
+    lc_keep_right: float | None = Field(
+        None, ge=0, description="eagerness to keep to the right lane (`lcKeepRight`, default 1)")
+    demand_scale: PositiveFloat | None = Field(
+        None, description="demand scaled by this factor (SUMO's `--scale`): 2 = twice the "
+        "vehicles")
+
+    def lane_change(self) -> dict[str, str]:
+        """The lane-change parameters set, as SUMO's vehicle parameters
+        (``laneChangeModel.lcSpeedGain`` ...) with their values."""
+        names = {"lc_speed_gain": "lcSpeedGain", "lc_cooperative": "lcCooperative",
+                 "lc_assertive": "lcAssertive", "lc_keep_right": "lcKeepRight"}
+        return {f"laneChangeModel.{sumo}": f"{getattr(self, key):g}"
+                for key, sumo in names.items() if getattr(self, key) is not None}
+
 
 
 class TrafficConfig(_Section):
@@ -233,6 +277,9 @@ class TrafficConfig(_Section):
     warmup_s: float = Field(
         60.0, ge=0, le=86_400, allow_inf_nan=False, description="SUMO time simulated after the "
         "begin before the learner starts; a life also ends at the `.sumocfg`'s end")
+    drivers: DriversConfig = Field(
+        DriversConfig(), description="`strategy = \"sumo\"`: SUMO's driver models and demand "
+        "([sumo.md](sumo.md#driver-models)); the keys are listed under `[traffic.drivers]`")
     warmup_states: int = Field(
         0, ge=0, le=1000, description="`N` > 0: `N` warm-ups, simulated once and saved as SUMO "
         "states, shared by every traffic situation (each then drives on with its own seed); `0`: "
@@ -251,6 +298,8 @@ class TrafficConfig(_Section):
                                  "leave starts_xy empty")
         elif self.routes or self.sumocfg is not None:
             raise ValueError('routes and sumocfg are for strategy = "sumo"')
+        elif self.drivers != DriversConfig():
+            raise ValueError('[traffic.drivers] is for strategy = "sumo"')
         return self
 
     @property

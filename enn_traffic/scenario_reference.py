@@ -15,6 +15,7 @@ from pydantic import BaseModel
 from pydantic_core import PydanticUndefined
 
 from enn_traffic.scenario import (
+    DriversConfig,
     EpisodeConfig,
     GAConfig,
     LaneKeepingConfig,
@@ -29,7 +30,7 @@ from enn_traffic.scenario import (
 DOCUMENT = Path(__file__).resolve().parents[1] / "docs" / "scenarios.md"
 SECTIONS = {"track": TrackConfig, "vehicle": VehicleConfig, "sensor": SensorConfig,
             "network": NetworkConfig, "ga": GAConfig, "episode": EpisodeConfig,
-            "traffic": TrafficConfig}
+            "traffic": TrafficConfig, "traffic.drivers": DriversConfig}
 _MARKED = re.compile(r"(<!-- reference:(\w+) -->\n)(.*?)(<!-- /reference -->)", re.S)
 
 
@@ -53,8 +54,8 @@ def _value(value) -> str:
 def _rows(model: type[BaseModel], section: str | None) -> list[str]:
     rows = []
     for name, field in model.model_fields.items():
-        if field.description is None:  # a section, or ``source`` (see :func:`undocumented`)
-            continue
+        if field.description is None or isinstance(field.default, BaseModel):
+            continue  # a section (listed by its own keys), or ``source``
         key = f"[{section}] {name}" if section else name
         rows.append(f"| `{key}` | `{_value(field.default)}` | {field.description} |")
     return rows

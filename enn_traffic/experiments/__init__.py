@@ -27,5 +27,6 @@ EXPERIMENTS = {
     "table3": simultaneous.table3,
     "table4": simultaneous.table4,
     "sumo": sumo_family.sumo,
+    "city": sumo_family.city,
     "lane_keeping": lanekeeping.lane_keeping,
 }

@@ -1,4 +1,5 @@
-"""Tables 3–4 among SUMO traffic (paper §5.5 on ``sumo_strategy1..4``; docs/sumo.md).
+"""Tables 3–4 among SUMO traffic (paper §5.5 on a SUMO family of strategies: ``sumo_strategy1..4``
+or the city's; docs/sumo.md).
 
 ``traffic.learners`` learners (8) drive at once in one live SUMO, among its own traffic
 (:mod:`enn_traffic.sim.sumo_crowd`). For each strategy and each of ``SITUATIONS`` traffic
@@ -33,7 +34,7 @@ import pandas as pd
 from enn_traffic import keys
 from enn_traffic.evolution.online import OnlineLearning, VehicleGA
 from enn_traffic.experiments.choosing import final_population, trained_controllers
-from enn_traffic.experiments.protocol import STRATEGIES, SUMO
+from enn_traffic.experiments.protocol import STRATEGIES, SUMO, Family
 from enn_traffic.io import write_csv
 from enn_traffic.runner import ga_params
 from enn_traffic.sim.sumo_crowd import SumoCrowd
@@ -88,29 +89,29 @@ def interval(values: np.ndarray, rng: np.random.Generator, draws: int = 2000,
     return float(low), float(high)
 
 
-def crowd_world(strategy: int, quick: bool) -> SumoWorld:
+def crowd_world(family: Family, strategy: int, quick: bool) -> SumoWorld:
     """The strategy's test world with its SUMO in closed loop (the learners are in it)."""
-    scenario = SUMO.settings(quick).scenario(strategy)
+    scenario = family.settings(quick).scenario(strategy)
     return make_world(scenario.with_overrides(traffic={"mode": "closed-loop"}))
 
 
 @cache
-def measure(out: Path, quick: bool, progress: bool) -> pd.DataFrame:
+def measure(family: Family, out: Path, quick: bool, progress: bool) -> pd.DataFrame:
     """Every strategy's situations (once per process: Tables 3 and 4 share them), written to
-    ``sumo/crowd_situations.csv``."""
-    controllers = trained_controllers(out, quick, progress, SUMO)
+    ``<family folder>/crowd_situations.csv``."""
+    controllers = trained_controllers(out, quick, progress, family)
     seconds, situations = (QUICK_SECONDS, QUICK_SITUATIONS) if quick else (SECONDS, SITUATIONS)
     rows = []
     for strategy in STRATEGIES:
-        world = crowd_world(strategy, quick)
+        world = crowd_world(family, strategy, quick)
         winner = controllers[strategy]
-        evolved = final_population(SUMO, out, strategy, winner, quick)
+        evolved = final_population(family, out, strategy, winner, quick)
         source = world.spec.in_source_layout(np.vstack([winner, evolved]))
         for situation in range(situations):
             rows.append({"strategy": strategy, "situation": situation,
                          **situation_rates(world, source[0], source[1:], situation, seconds)})
     table = pd.DataFrame(rows)
-    write_csv(out / SUMO.folder / "crowd_situations.csv", table)
+    write_csv(out / family.folder / "crowd_situations.csv", table)
     return table
 
 
@@ -130,23 +131,24 @@ def table(situations: pd.DataFrame, columns: list[str]) -> pd.DataFrame:
     return pd.DataFrame(rows)
 
 
-def sumo_tables(out: Path, quick: bool = False, progress: bool = True) -> list[str]:
-    """SUMO Table 3 (the winner broadcast, against the initial drivers, from the learners'
-    entry) and Table 4 (after learning together, against both drivers' second spans), into
-    ``out/sumo/table3.csv`` and ``table4.csv``."""
-    situations = measure(out, quick, progress)
+def sumo_tables(out: Path, quick: bool = False, progress: bool = True, family: Family = SUMO
+                ) -> list[str]:
+    """A SUMO family's Table 3 (the winner broadcast, against the initial drivers, from the
+    learners' entry) and Table 4 (after learning together, against both drivers' second
+    spans), into ``out/<family folder>/table3.csv`` and ``table4.csv``."""
+    situations = measure(family, out, quick, progress)
     table3 = table(situations, ["initial", "winner"])
     table4 = table(situations, ["initial_next", "winner_next", "population"])
-    write_csv(out / SUMO.folder / "table3.csv", table3)
-    write_csv(out / SUMO.folder / "table4.csv", table4)
+    write_csv(out / family.folder / "table3.csv", table3)
+    write_csv(out / family.folder / "table4.csv", table4)
 
     def entries(frame: pd.DataFrame, before: str, after: str) -> str:
         return ", ".join(
             f"strategy {int(r['strategy'])}: {r[f'{before}_collisions_per_s']:.3f} -> "
             f"{r[f'{after}_collisions_per_s']:.3f}" for _, r in frame.iterrows())
 
-    return [f"sumo/table3: collisions per learner-second, initial drivers -> winner: "
+    return [f"{family.folder}/table3: collisions per learner-second, initial drivers -> winner: "
             f"{entries(table3, 'initial', 'winner')}",
-            f"sumo/table4: collisions per learner-second over the second span, initial "
+            f"{family.folder}/table4: collisions per learner-second over the second span, initial "
             f"drivers -> after learning together: {entries(table4, 'initial_next', 'population')}"
             f"; the winner driving on: {entries(table4, 'initial_next', 'winner_next')}"]

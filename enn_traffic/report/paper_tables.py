@@ -62,18 +62,21 @@ def _rates(path: Path, title: str, paper) -> list[str]:
 def paper_tables(out: Path) -> list[str]:
     """Markdown for every reproduced table found in ``out``."""
     sections = []
-    for folder, label in (("", "arena"), ("sumo", "SUMO traffic")):
+    families = (("", "arena"), ("sumo", "SUMO traffic"), ("city", "Cologne city traffic"))
+    for folder, label in families:
         base = out / folder
         if (base / "table1.csv").exists():
             sections += _table1(base / "table1.csv", f"Table 1, {label}")
         if (base / "table2.csv").exists():
             sections += _table2(base / "table2.csv", f"Table 2, {label}")
-    sumo = out / "sumo"
-    if (sumo / "table3.csv").exists():
-        sections += _sumo_rates(sumo / "table3.csv", "Table 3", PAPER_TABLE3, "initial", "winner")
-    if (sumo / "table4.csv").exists():
-        sections += _sumo_rates(sumo / "table4.csv", "Table 4 (the second span)", PAPER_TABLE4,
-                                "initial_next", "population")
+    for folder, label in families[1:]:
+        base = out / folder
+        if (base / "table3.csv").exists():
+            sections += _sumo_rates(base / "table3.csv", f"Table 3, {label}", PAPER_TABLE3,
+                                    "initial", "winner")
+        if (base / "table4.csv").exists():
+            sections += _sumo_rates(base / "table4.csv", f"Table 4 (the second span), {label}",
+                                    PAPER_TABLE4, "initial_next", "population")
     if (out / "table3.csv").exists():
         sections += _rates(out / "table3.csv", "Table 3", PAPER_TABLE3)
     if (out / "table4.csv").exists():
@@ -83,7 +86,7 @@ def paper_tables(out: Path) -> list[str]:
 
 def _sumo_rates(path: Path, title: str, paper, before: str, after: str) -> list[str]:
     table = pd.read_csv(path)
-    lines = [f"### {title}, SUMO traffic: collisions per second, paper (its count) / here (per "
+    lines = [f"### {title}: collisions per second, paper (its count) / here (per "
              "learner, 90% interval over situations); SSM conflicts per learner-hour", "",
              "| strategy | initial | after | conflicts, initial -> after |", "|---|---|---|---|"]
 

@@ -40,6 +40,7 @@ from enn_traffic.scenario import Scenario
 from enn_traffic.traffic.sumocfg import SumoConfig, departure_span, read_sumocfg
 
 LEARNER = "enn_learner"
+LEARNER_TYPE = LEARNER + "_type"  # the learners' vehicle type (:func:`add_learner`)
 FAR = 1e12  # where an empty slot's centre is put, out of every range
 _POSITION, _ANGLE = libsumo.VAR_POSITION, libsumo.VAR_ANGLE
 _VARIABLES = [_POSITION, _ANGLE]  # a vehicle's length and width are read once
@@ -141,6 +142,11 @@ def sumo_command(scenario: Scenario, seed: int, error_log: Path, state: Path | N
         source += ["--begin", f"{begin_time(scenario):g}"]
     if save_rng:
         source += ["--save-state.rng", "true"]
+    drivers = traffic.drivers
+    if drivers.car_following is not None:
+        source += ["--default.carfollowmodel", drivers.car_following]
+    if drivers.demand_scale is not None:
+        source += ["--scale", f"{drivers.demand_scale:g}"]
     return [
         "sumo", *source, "-n", str(scenario.track.net),
         "--seed", str(seed), "--step-length", f"{scenario.vehicle.dt:g}",
@@ -175,9 +181,33 @@ class Simulation:
         self.learners = learners  # SUMO ids that :meth:`read` leaves out
         self.slots_used = 0  # one more than the highest slot given so far
         self._free = list(range(MAX_SLOTS - 1, -1, -1))
+        self._lane_change = scenario.traffic.drivers.lane_change()
+        self._set_driver_types()
         for vehicle in libsumo.vehicle.getIDList():  # on the network in a loaded state
             libsumo.vehicle.subscribe(vehicle, _VARIABLES)
+            self._set_lane_change(vehicle)
         self._stepped = False  # libsumo refreshes subscription results only with a step
+
+    def _set_driver_types(self) -> None:
+        """``[traffic.drivers]``: the driver-model values on every traffic vehicle type (a
+        vehicle of a type takes the type's values, whenever it departs)."""
+        drivers = self.scenario.traffic.drivers
+        setters = {libsumo.vehicletype.setImperfection: drivers.imperfection,
+                   libsumo.vehicletype.setTau: drivers.tau_s,
+                   libsumo.vehicletype.setAccel: drivers.accel,
+                   libsumo.vehicletype.setDecel: drivers.decel,
+                   libsumo.vehicletype.setSpeedFactor: drivers.speed_factor}
+        for kind in self._traffic_types():
+            for setter, value in setters.items():
+                if value is not None:
+                    setter(kind, value)
+
+    def _set_lane_change(self, vehicle: str) -> None:
+        """``[traffic.drivers]``'s lane-change values on one traffic vehicle (SUMO takes them
+        per vehicle only, not from its type)."""
+        if vehicle not in self.learners:
+            for name, value in self._lane_change.items():
+                libsumo.vehicle.setParameter(vehicle, name, value)
     def _fail(self, what: str, exc: Exception | None = None) -> None:
         detail = self._log.read().strip().replace("\n", "; ") or str(exc or "")
         self.close()
@@ -192,9 +222,13 @@ class Simulation:
                     for vehicle in libsumo.simulation.getArrivedIDList():
                         if vehicle in self.vehicles:
                             self._free.append(self.vehicles.pop(vehicle)[ROW_SLOT])
+                    if self._lane_change:
+                        for vehicle in libsumo.simulation.getDepartedIDList():
+                            self._set_lane_change(vehicle)
                 else:
                     for vehicle in libsumo.simulation.getDepartedIDList():
                         libsumo.vehicle.subscribe(vehicle, _VARIABLES)
+                        self._set_lane_change(vehicle)
         except Exception as exc:
             self._fail("SUMO stopped", exc)
 
@@ -250,7 +284,8 @@ class Simulation:
         """The vehicle types the traffic may use: the scenario's and DEFAULT_VEHTYPE, not
         SUMO's other built-in defaults (a 135 m train would make every vehicle "near")."""
         return [kind for kind in libsumo.vehicletype.getIDList()
-                if not kind.startswith("DEFAULT_") or kind == "DEFAULT_VEHTYPE"]
+                if (not kind.startswith("DEFAULT_") or kind == "DEFAULT_VEHTYPE")
+                and kind != LEARNER_TYPE]
 
     def largest_radius(self) -> float:
         """A bounding radius: half the diagonal of the largest traffic vehicle type."""
@@ -296,6 +331,7 @@ def warmup_steps(scenario: Scenario) -> int:
 
 
 STATE_FOLDER = Path(tempfile.gettempdir()) / "enn-traffic-sumo-states"
+STATE_VERSION = 2  # raised when the code that simulates and saves a warm-up changes
 
 
 def _inputs_key(scenario: Scenario) -> list[str]:
@@ -310,6 +346,7 @@ def _inputs_key(scenario: Scenario) -> list[str]:
         stat = Path(file).stat()
         stamps.append(f"{Path(file).resolve()}:{stat.st_size}:{stat.st_mtime_ns}")
     return [*stamps, repr(begin_time(scenario)), repr(scenario.traffic.warmup_s),
+            scenario.traffic.drivers.model_dump_json(), str(STATE_VERSION),
             repr(scenario.vehicle.dt), libsumo.getVersion()[1]]
 
 
@@ -329,11 +366,27 @@ def warm_state(scenario: Scenario, seed: int, keep_rng: bool) -> Path:
     partial = path.with_name(f"{key}.{os.getpid()}.partial.xml.gz")
     try:
         simulation.step(warmup_steps(scenario))
+        if scenario.traffic.drivers.demand_scale is not None:
+            _name_routes()
         libsumo.simulation.saveState(str(partial))
     finally:
         simulation.close()
     os.replace(partial, path)  # whole or not at all, whichever process wrote it first
     return path
+
+
+def _name_routes() -> None:
+    """Give every vehicle's embedded route (``!id``) a name of its own, as the same edges (the
+    vehicles on the network and those waiting to depart).
+
+    With ``--scale`` above 1, SUMO's copies of a vehicle share its embedded route, and SUMO
+    1.28 saves no such shared route in a state, which then fails to load ("The route '!id'
+    for vehicle 'id.1' is not known"); named routes are saved."""
+    for vehicle in (*libsumo.vehicle.getIDList(), *libsumo.simulation.getPendingVehicles()):
+        if libsumo.vehicle.getRouteID(vehicle).startswith("!"):
+            name = f"{LEARNER}_route_{vehicle}"
+            libsumo.route.add(name, libsumo.vehicle.getRoute(vehicle))
+            libsumo.vehicle.setRouteID(vehicle, name)
 
 
 def no_traffic_error(scenario: Scenario, steps: int) -> InputError:
@@ -495,7 +548,7 @@ def add_learner(length: float, width: float, speed: float, vehicle: str = LEARNE
     """Put a learner into the running SUMO as a vehicle with no route, that obeys no speed
     or lane-change rule and is moved by :func:`move_learner` (the learners share one
     vehicle type, made with the first)."""
-    kind = LEARNER + "_type"
+    kind = LEARNER_TYPE
     if kind not in libsumo.vehicletype.getIDList():
         libsumo.vehicletype.copy("DEFAULT_VEHTYPE", kind)
         libsumo.vehicletype.setLength(kind, length)

@@ -1,0 +1,133 @@
+"""``[traffic.drivers]`` through a real libsumo: SUMO's driver models and demand set on every
+traffic vehicle (docs/sumo.md, "Driver models"), never on the learners, and kept apart in the
+warm-ups saved on disk."""
+
+import libsumo
+import pytest
+
+from enn_traffic.errors import InputError
+from enn_traffic.scenario import load_scenario
+from enn_traffic.shipped import shipped_scenario
+from enn_traffic.traffic import sumo
+
+# The ring road of sumo_strategy1: 32 cars of one type ("car": Krauss, sigma 0.5, tau 1).
+DRIVERS = {"imperfection": 0.9, "tau_s": 0.6, "accel": 1.5, "decel": 3.0, "speed_factor": 1.2,
+           "lc_speed_gain": 8.0, "lc_cooperative": 0.2}
+
+
+def ring(**drivers):
+    return shipped_scenario("sumo_strategy1").with_overrides(
+        traffic={"drivers": drivers, "warmup_s": 2.0})
+
+
+def traffic_after(scenario, steps: int = 20, learner: bool = False) -> list[str]:
+    """Start the scenario's SUMO (with a learner when asked), step it, return its vehicles."""
+    simulation = sumo.Simulation(scenario, seed=1)
+    if learner:
+        sumo.add_learner(4.5, 1.7, 10.0)
+    simulation.step(steps)
+    return [v for v in libsumo.vehicle.getIDList() if v != sumo.LEARNER]
+
+
+def test_driver_values_reach_every_traffic_vehicle_but_not_the_learner():
+    try:
+        vehicles = traffic_after(ring(**DRIVERS), learner=True)
+        assert len(vehicles) == 32
+        for vehicle in vehicles:
+            assert libsumo.vehicle.getImperfection(vehicle) == pytest.approx(0.9)
+            assert libsumo.vehicle.getTau(vehicle) == pytest.approx(0.6)
+            assert libsumo.vehicle.getAccel(vehicle) == pytest.approx(1.5)
+            assert libsumo.vehicle.getDecel(vehicle) == pytest.approx(3.0)
+            assert float(libsumo.vehicle.getParameter(
+                vehicle, "laneChangeModel.lcSpeedGain")) == 8.0
+            assert float(libsumo.vehicle.getParameter(
+                vehicle, "laneChangeModel.lcCooperative")) == pytest.approx(0.2)
+        assert libsumo.vehicletype.getSpeedFactor("car") == pytest.approx(1.2)
+        # The learner keeps its own type: a perfect driver, SUMO's default lane-change values.
+        assert libsumo.vehicle.getImperfection(sumo.LEARNER) == 0.0
+        assert float(libsumo.vehicle.getParameter(
+            sumo.LEARNER, "laneChangeModel.lcSpeedGain")) == 1.0
+    finally:
+        libsumo.close()
+
+
+def test_without_drivers_the_route_files_values_stand():
+    try:
+        for vehicle in traffic_after(ring()):
+            assert libsumo.vehicle.getImperfection(vehicle) == pytest.approx(0.5)
+            assert libsumo.vehicle.getTau(vehicle) == pytest.approx(1.0)
+    finally:
+        libsumo.close()
+
+
+def test_demand_scale_and_car_following_model():
+    """``demand_scale = 2``: SUMO inserts each of the 32 cars twice. ``car_following = "IDM"``:
+    the cars follow the Intelligent Driver Model, which has no Krauss imperfection (SUMO
+    reports -1)."""
+    try:
+        vehicles = traffic_after(ring(demand_scale=2.0, car_following="IDM"))
+        assert len(vehicles) == 64
+        assert all(libsumo.vehicle.getImperfection(v) == -1.0 for v in vehicles)
+    finally:
+        libsumo.close()
+
+
+def test_a_warm_up_is_kept_per_driver_model_and_loads_with_it():
+    """Warm-ups saved on disk are named by the drivers too (a stale warm-up of other drivers
+    is never loaded), and a run from a saved warm-up drives with the scenario's drivers."""
+    calm, dawdling = ring(), ring(imperfection=0.9)
+    state = sumo.warm_state(dawdling, seed=1, keep_rng=False)
+    assert state != sumo.warm_state(calm, seed=1, keep_rng=False)
+    simulation = sumo.Simulation(dawdling, seed=2, state=state)
+    try:
+        vehicles = libsumo.vehicle.getIDList()
+        assert len(vehicles) == 32
+        assert all(libsumo.vehicle.getImperfection(v) == pytest.approx(0.9) for v in vehicles)
+    finally:
+        simulation.close()
+
+
+RING = """name = "ring"
+[track]
+net = "{root}/sumo_nets/sumo_ring.net.xml"
+start_lane = "g0_0to1_0_1"
+[traffic]
+strategy = "{strategy}"
+{routes}
+[traffic.drivers]
+{drivers}
+"""
+
+
+@pytest.mark.parametrize("strategy, drivers, key, message", [
+    ("sumo", "imperfection = 1.5", "traffic.drivers.imperfection", "less than or equal to 1"),
+    ("sumo", 'car_following = "Kraus"', "traffic.drivers.car_following", "'Krauss'"),
+    ("sumo", "lc_speed_gain = -1", "traffic.drivers.lc_speed_gain", "greater than or equal"),
+    ("wander", "tau_s = 0.5", "traffic", 'is for strategy = "sumo"'),
+])
+def test_bad_driver_values_name_file_and_key(tmp_path, root, strategy, drivers, key, message):
+    routes = (f'routes = ["{root}/scenarios/routes/ring_steady.rou.xml"]' if strategy == "sumo"
+              else "")
+    path = tmp_path / "s.toml"
+    path.write_text(RING.format(root=root, strategy=strategy, routes=routes, drivers=drivers))
+    with pytest.raises(InputError) as info:
+        load_scenario(path)
+    assert info.value.key == key
+    assert message in info.value.message
+
+
+def test_a_scaled_city_warm_up_loads(root):
+    """Cologne's demand scaled by 1.5: SUMO's copies of a vehicle share its embedded route,
+    which SUMO does not save in a state; the warm-up names the routes so the state loads and
+    the copies drive on."""
+    scenario = shipped_scenario("city_cologne3").with_overrides(
+        traffic={"drivers": {"demand_scale": 1.5}, "warmup_s": 600.0})
+    state = sumo.warm_state(scenario, seed=3, keep_rng=True)
+    simulation = sumo.Simulation(scenario, seed=3, state=state)
+    try:
+        copies = [v for v in libsumo.vehicle.getIDList() if v.endswith(".1")]
+        assert copies
+        simulation.step(60)
+        assert libsumo.vehicle.getIDCount() > 0
+    finally:
+        simulation.close()
