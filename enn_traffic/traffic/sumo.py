@@ -23,9 +23,11 @@ from __future__ import annotations
 
 import contextlib
 import functools
+import gzip
 import hashlib
 import math
 import os
+import re
 import tempfile
 from dataclasses import dataclass
 from pathlib import Path
@@ -331,7 +333,7 @@ def warmup_steps(scenario: Scenario) -> int:
 
 
 STATE_FOLDER = Path(tempfile.gettempdir()) / "enn-traffic-sumo-states"
-STATE_VERSION = 2  # raised when the code that simulates and saves a warm-up changes
+STATE_VERSION = 3  # raised when the code that simulates and saves a warm-up changes
 
 
 def _inputs_key(scenario: Scenario) -> list[str]:
@@ -366,27 +368,38 @@ def warm_state(scenario: Scenario, seed: int, keep_rng: bool) -> Path:
     partial = path.with_name(f"{key}.{os.getpid()}.partial.xml.gz")
     try:
         simulation.step(warmup_steps(scenario))
-        if scenario.traffic.drivers.demand_scale is not None:
-            _name_routes()
-        libsumo.simulation.saveState(str(partial))
+        save_state(partial)
     finally:
         simulation.close()
     os.replace(partial, path)  # whole or not at all, whichever process wrote it first
     return path
 
 
-def _name_routes() -> None:
-    """Give every vehicle's embedded route (``!id``) a name of its own, as the same edges (the
-    vehicles on the network and those waiting to depart).
+def save_state(path: Path) -> None:
+    """Save the running SUMO's state to ``path`` (gzipped if it ends in ``.gz``) so that it
+    loads again.
 
-    With ``--scale`` above 1, SUMO's copies of a vehicle share its embedded route, and SUMO
-    1.28 saves no such shared route in a state, which then fails to load ("The route '!id'
-    for vehicle 'id.1' is not known"); named routes are saved."""
+    With a demand scaled above 1 (``--scale``), SUMO's copies of a vehicle share its embedded
+    route (``!id``), and SUMO 1.28 may leave such a route out of the state, which then fails to
+    load ("The route '!id' for vehicle 'id.1' is not known"). The routes a saved vehicle names
+    but the state lacks are written into it, with the edges that vehicle drives."""
+    edges = {}
     for vehicle in (*libsumo.vehicle.getIDList(), *libsumo.simulation.getPendingVehicles()):
-        if libsumo.vehicle.getRouteID(vehicle).startswith("!"):
-            name = f"{LEARNER}_route_{vehicle}"
-            libsumo.route.add(name, libsumo.vehicle.getRoute(vehicle))
-            libsumo.vehicle.setRouteID(vehicle, name)
+        edges[libsumo.vehicle.getRouteID(vehicle)] = libsumo.vehicle.getRoute(vehicle)
+    libsumo.simulation.saveState(str(path))
+    opener = gzip.open if path.name.endswith(".gz") else open
+    with opener(path, "rt", encoding="utf-8") as file:
+        text = file.read()
+    defined = set(re.findall(r'<route id="([^"]*)"', text))
+    missing = sorted(set(re.findall(r'<vehicle [^>]*?route="([^"]*)"', text)) - defined)
+    if not missing:
+        return
+    routes = "".join(f'    <route id="{route}" state="0" edges="{" ".join(edges[route])}"/>\n'
+                     for route in missing)
+    first = text.index("<snapshot")
+    first = text.index("\n", first) + 1  # routes come first in the snapshot
+    with opener(path, "wt", encoding="utf-8") as file:
+        file.write(text[:first] + routes + text[first:])
 
 
 def no_traffic_error(scenario: Scenario, steps: int) -> InputError:

@@ -118,7 +118,7 @@ def test_bad_driver_values_name_file_and_key(tmp_path, root, strategy, drivers, 
 
 def test_a_scaled_city_warm_up_loads(root):
     """Cologne's demand scaled by 1.5: SUMO's copies of a vehicle share its embedded route,
-    which SUMO does not save in a state; the warm-up names the routes so the state loads and
+    which SUMO may leave out of a state; the warm-up writes them into it, so the state loads and
     the copies drive on."""
     scenario = shipped_scenario("city_cologne3").with_overrides(
         traffic={"drivers": {"demand_scale": 1.5}, "warmup_s": 600.0})
