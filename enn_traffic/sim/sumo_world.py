@@ -248,6 +248,7 @@ class SumoWorld(ArenaWorld):
                 ids[t, : len(frame_ids)], corners[t, : len(frame_ids)] = frame_ids, frame_corners
         else:
             record = self.recording(seed)
+            limit = min(limit, record.ids.shape[0] - 1)  # a replay ends with its recording
             learner = np.full((limit + 1, 3), np.nan)
             steps, outcome, *_ = run_replay_episode(
                 genes, self.layer_sizes, self._learner_physics(record.radius), self.geometry,

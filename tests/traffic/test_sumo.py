@@ -147,6 +147,18 @@ def test_replay_and_closed_loop_agree_where_traffic_does_not_react(tmp_path, roo
     assert (alone.steps[own_side] != replayed.steps[own_side]).any()
 
 
+def test_a_replayed_trace_ends_with_its_recording(tmp_path, root):
+    """A replay records ``max_steps`` (50) steps; a trace asked for 400 ends there, as long as
+    the life it shows (all genes 0: straight ahead, round the ring's corner into a wall or
+    on to the cap), and agrees with evaluate."""
+    world = make_world(sumo_scenario(tmp_path, root, CLOCKWISE, steps=50))
+    straight = np.zeros((1, world.spec.chromosome_length))
+    poses, outcome = world.trace(straight, key=3, max_steps=400)
+    results = world.evaluate(straight, key=3)
+    assert poses.shape[0] == int(results.steps[0, 0]) + 1 <= 51
+    assert outcome == int(results.outcome[0, 0])
+
+
 def test_closed_loop_driver_brakes_for_the_learner(tmp_path, root):
     """A 20 m/s car starts 30 m behind the learner (10 m/s, steering straight). Replayed, it
     drives into the learner (a collision the learner suffers); in closed loop it brakes and
