@@ -40,7 +40,7 @@ def fig11(out: Path, quick: bool = False, progress: bool = True,
                 "held_out_rise": on_test[-5:].mean() / max(on_test[0], 1.0),
             })  # fmt: skip
     fig11_figure(runs_by_strategy, scores, {s: title(family, s) for s in STRATEGIES},
-                 f"Fig. 11 ({family.prefix}1-4): the learner among traffic, "
+                 f"Fig. 11 ({family.label}): the learner among traffic, "
                  f"{len(family.seeds)} runs per strategy\nsolid: each generation's best "
                  f"fitness; dashed: the same chromosome on {family.test_episodes} test "
                  "situations", out / "fig11.png")

@@ -52,6 +52,14 @@ class Family:
     def name(self, strategy: int) -> str:
         return self.names[strategy - 1]
 
+    @property
+    def label(self) -> str:
+        """The four scenarios in a few words: ``sumo_strategy1-4``, or their names."""
+        prefix = self.names[0].removesuffix("1")
+        if self.names == tuple(f"{prefix}{strategy}" for strategy in STRATEGIES):
+            return f"{prefix}1-4"
+        return ", ".join(self.names)
+
     def settings(self, quick: bool) -> Family:
         """This family as ``--quick`` runs it, or unchanged."""
         if not quick or self.quick_mode:
