@@ -90,9 +90,11 @@ def interval(values: np.ndarray, rng: np.random.Generator, draws: int = 2000,
 
 
 def crowd_world(family: Family, strategy: int, quick: bool) -> SumoWorld:
-    """The strategy's test world with its SUMO in closed loop (the learners are in it)."""
-    scenario = family.settings(quick).scenario(strategy)
-    return make_world(scenario.with_overrides(traffic={"mode": "closed-loop"}))
+    """The strategy's test world with its SUMO in closed loop (the learners are in it), and the
+    GA settings its populations evolved with (the quick ones in quick mode)."""
+    settings = family.settings(quick)
+    return make_world(settings.scenario(strategy).with_overrides(
+        ga=settings.ga(), traffic={"mode": "closed-loop"}))
 
 
 @cache

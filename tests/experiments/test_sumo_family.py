@@ -1,0 +1,53 @@
+"""A SUMO family's experiments end to end on a tiny budget (real libsumo, ring and grid
+networks): Fig. 11, Tables 1–4 and replay against closed loop write their files, and Tables
+3–4 are the means of the situations they list."""
+
+from dataclasses import replace
+
+import pandas as pd
+import pytest
+
+from enn_traffic.experiments.protocol import STRATEGIES, SUMO
+from enn_traffic.experiments.sumo_family import family_experiments
+
+TINY = replace(SUMO, folder="tiny", seeds=(1,), incremental_max_generations=2,
+               quick=(("population_size", 10), ("generations", 2), ("elite_count", 2)),
+               quick_test_episodes=1,
+               quick_scenario=(("episode", (("max_steps", 100),)),
+                               ("traffic", (("warmup_s", 5.0), ("episodes", 1)))))
+
+
+@pytest.fixture(scope="module")
+def tiny(tmp_path_factory):
+    out = tmp_path_factory.mktemp("reproduce")
+    lines = family_experiments(TINY, out, quick=True, progress=False)
+    return out / "tiny", lines
+
+
+def test_every_table_and_figure_is_written(tiny):
+    folder, lines = tiny
+    for name in ("fig11.csv", "fig11.png", "table1.csv", "fig12.png", "table2.csv",
+                 "closed_loop.csv", "table3.csv", "table4.csv", "crowd_situations.csv"):
+        assert (folder / name).is_file(), name
+    table1 = pd.read_csv(folder / "table1.csv")
+    assert table1.shape == (4, 5)
+    assert ((table1.filter(like="deploy_") >= 0) & (table1.filter(like="deploy_") <= 100)).all(
+        axis=None)  # lifetimes of at most max_steps = 100
+    assert any(line.startswith("tiny/table3:") for line in lines)
+
+
+def test_tables_3_and_4_are_the_means_of_the_situations(tiny):
+    folder, _ = tiny
+    situations = pd.read_csv(folder / "crowd_situations.csv")
+    assert sorted(situations.strategy.unique()) == STRATEGIES
+    means = situations.groupby("strategy").mean()
+    table3 = pd.read_csv(folder / "table3.csv").set_index("strategy")
+    table4 = pd.read_csv(folder / "table4.csv").set_index("strategy")
+    for table, spans in ((table3, ("initial", "winner")),
+                         (table4, ("initial_next", "winner_next", "population"))):
+        for span in spans:
+            assert table[f"{span}_collisions_per_s"].to_numpy() == pytest.approx(
+                means[span].to_numpy(), abs=1e-4)
+            assert table[f"{span}_conflicts_per_h"].to_numpy() == pytest.approx(
+                means[f"{span}_conflicts"].to_numpy(), abs=0.051)  # rounded to 0.1
+            assert (table[f"{span}_low"] <= table[f"{span}_collisions_per_s"] + 1e-4).all()
