@@ -175,8 +175,10 @@ def evolve(
     if state.generation >= total or state.extra.get("target_reached", False):
         if not (out / "learning_curve.png").exists():
             learning_curve(done, out / "learning_curve.png", title=scenario.name)
-        if not (out / OUTPUTS).exists():  # a run from before runs wrote them
-            RunOutputs.of(state, scenario).save(out)
+        outputs = RunOutputs.of(state, scenario)
+        # a run from before runs wrote them, or stopped before they said so
+        if not (out / OUTPUTS).exists() or RunOutputs.load(out).stopped != outputs.stopped:
+            outputs.save(out)
         return done  # nothing to compute, nothing rewritten
     rows = done.to_dict("records")
     write_text(out / "scenario.toml", scenario.to_toml())
@@ -230,6 +232,7 @@ def evolve(
                     stop is not None and stop(evaluated, fitness)):
                 state.extra["target_reached"] = True
                 state.save(out / CHECKPOINT)
+                RunOutputs.of(state, scenario).save(out)  # now stopped
     finally:
         bar.close()
         if own_evaluator:

@@ -5,7 +5,7 @@ import pytest
 
 from enn_traffic.errors import InputError
 from enn_traffic.evolution.ga import GAState
-from enn_traffic.runner import evolve
+from enn_traffic.runner import RunOutputs, evolve
 from enn_traffic.scenario import load_scenario
 
 
@@ -14,8 +14,14 @@ def test_target_fitness_stops_the_run_and_resume_keeps_it_stopped(small, tmp_pat
     table = evolve(scenario, tmp_path, progress=False)
     assert table["best_fitness"].iloc[-1] >= 40 and (table["best_fitness"].iloc[:-1] < 40).all()
     assert len(table) < 40
+    assert RunOutputs.load(tmp_path).stopped
     again = evolve(scenario, tmp_path, resume=True, progress=False)
     pd.testing.assert_frame_equal(table, again)
+    unstopped = RunOutputs.load(tmp_path)
+    RunOutputs(unstopped.champions, unstopped.population, unstopped.elite_count,
+               stopped=False).save(tmp_path)  # as the code before this test wrote it
+    evolve(scenario, tmp_path, resume=True, progress=False)
+    assert RunOutputs.load(tmp_path).stopped
 
 
 def test_initial_population_seeds_a_fresh_run(small, tmp_path):
@@ -39,6 +45,7 @@ def test_stop_hook_sees_the_evaluated_population_and_champions_are_its_fittest(s
 
     table = evolve(small, tmp_path, progress=False, stop=stop)
     assert len(table) == 3
+    assert RunOutputs.load(tmp_path).stopped  # what Table 2 reads as "accepted"
     assert all(p.shape == (30, 68) and f.shape == (30,) for p, f in seen)
     assert [f.max() for _, f in seen] == table["best_fitness"].tolist()
     champions = GAState.load(tmp_path / "checkpoint.npz").champions
