@@ -44,6 +44,17 @@ def reproduce(out: Path, quick: bool = False, only: list[str] | None = None,
                              "settings": "quick" if quick else "full"}
             write_text(record_path, json.dumps(records, indent=1))
             tqdm.write("\n".join(lines))
+    write_summary(out, records)
+    for name in names:
+        print(f"{name:>16}: {records[name]['seconds']:7.1f} s")
+    return records
+
+
+def write_summary(out: Path, records: dict) -> None:
+    """``summary.md`` from every experiment's record (``summary.json``) and the tables in
+    ``out``."""
+    from enn_traffic.experiments import EXPERIMENTS
+
     done = [n for n in EXPERIMENTS if n in records]
     summary = ["# enn-traffic: reproduction of Eraqi et al. (2016)", ""]
     summary += [f"- {line}" for n in done for line in records[n]["lines"]]
@@ -52,6 +63,3 @@ def reproduce(out: Path, quick: bool = False, only: list[str] | None = None,
     summary += ["", "A call reuses finished runs: its wall time can be far below the compute.", ""]
     summary += paper_tables(out)
     write_text(out / "summary.md", "\n".join(summary) + "\n")
-    for name in names:
-        print(f"{name:>16}: {records[name]['seconds']:7.1f} s")
-    return records
