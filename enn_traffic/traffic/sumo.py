@@ -187,7 +187,8 @@ class Simulation:
         self._set_driver_types()
         for vehicle in libsumo.vehicle.getIDList():  # on the network in a loaded state
             libsumo.vehicle.subscribe(vehicle, _VARIABLES)
-            self._set_lane_change(vehicle)
+            if self._lane_change:
+                self._set_lane_change(vehicle)
         self._stepped = False  # libsumo refreshes subscription results only with a step
 
     def _set_driver_types(self) -> None:
@@ -210,6 +211,7 @@ class Simulation:
         if vehicle not in self.learners:
             for name, value in self._lane_change.items():
                 libsumo.vehicle.setParameter(vehicle, name, value)
+
     def _fail(self, what: str, exc: Exception | None = None) -> None:
         detail = self._log.read().strip().replace("\n", "; ") or str(exc or "")
         self.close()
@@ -224,12 +226,11 @@ class Simulation:
                     for vehicle in libsumo.simulation.getArrivedIDList():
                         if vehicle in self.vehicles:
                             self._free.append(self.vehicles.pop(vehicle)[ROW_SLOT])
-                    if self._lane_change:
-                        for vehicle in libsumo.simulation.getDepartedIDList():
-                            self._set_lane_change(vehicle)
                 else:
                     for vehicle in libsumo.simulation.getDepartedIDList():
                         libsumo.vehicle.subscribe(vehicle, _VARIABLES)
+                if self._lane_change:
+                    for vehicle in libsumo.simulation.getDepartedIDList():
                         self._set_lane_change(vehicle)
         except Exception as exc:
             self._fail("SUMO stopped", exc)
@@ -382,20 +383,21 @@ def save_state(path: Path) -> None:
     With a demand scaled above 1 (``--scale``), SUMO's copies of a vehicle share its embedded
     route (``!id``), and SUMO 1.28 may leave such a route out of the state, which then fails to
     load ("The route '!id' for vehicle 'id.1' is not known"). The routes a saved vehicle names
-    but the state lacks are written into it, with the edges that vehicle drives."""
-    edges = {}
-    for vehicle in (*libsumo.vehicle.getIDList(), *libsumo.simulation.getPendingVehicles()):
-        edges[libsumo.vehicle.getRouteID(vehicle)] = libsumo.vehicle.getRoute(vehicle)
+    but the state lacks are written into it, with the edges of a vehicle that drives it (SUMO
+    is still running: the vehicles are asked only when a route is missing)."""
     libsumo.simulation.saveState(str(path))
     opener = gzip.open if path.name.endswith(".gz") else open
     with opener(path, "rt", encoding="utf-8") as file:
         text = file.read()
     defined = set(re.findall(r'<route id="([^"]*)"', text))
-    missing = sorted(set(re.findall(r'<vehicle [^>]*?route="([^"]*)"', text)) - defined)
-    if not missing:
+    drivers = {route: vehicle for vehicle, route
+               in re.findall(r'<vehicle id="([^"]*)"[^>]*? route="([^"]*)"', text)
+               if route not in defined}
+    if not drivers:
         return
-    routes = "".join(f'    <route id="{route}" state="0" edges="{" ".join(edges[route])}"/>\n'
-                     for route in missing)
+    routes = "".join(f'    <route id="{route}" state="0" '
+                     f'edges="{" ".join(libsumo.vehicle.getRoute(vehicle))}"/>\n'
+                     for route, vehicle in sorted(drivers.items()))
     first = text.index("<snapshot")
     first = text.index("\n", first) + 1  # routes come first in the snapshot
     with opener(path, "wt", encoding="utf-8") as file:
