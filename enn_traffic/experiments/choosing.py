@@ -6,6 +6,7 @@ files it leaves (:class:`enn_traffic.runner.RunOutputs`)."""
 
 from __future__ import annotations
 
+from functools import cache
 from pathlib import Path
 
 import numpy as np
@@ -126,8 +127,16 @@ def held_out(family: Family, out: Path, strategy: int, seed: int) -> np.ndarray 
 
 def specialists(family: Family, out: Path, progress: bool) -> dict[int, np.ndarray]:
     """Per strategy: the best of its runs' candidates, judged on validation traffic of that
-    same strategy."""
-    pools = _evolved_candidates(family, out, progress)
+    same strategy (the runs done first if need be)."""
+    _evolved_candidates(family, out, progress)
+    return dict(_specialists(family, out))
+
+
+@cache
+def _specialists(family: Family, out: Path) -> dict[int, np.ndarray]:
+    """:func:`specialists` of finished runs, chosen once per process: Table 1, the replay
+    against closed loop and Tables 3–4 deploy the same controllers."""
+    pools = _evolved_candidates(family, out, progress=False)
     return {strategy: pick(family, pools[strategy], [strategy]) for strategy in STRATEGIES}
 
 
