@@ -44,8 +44,11 @@ def evaluate_controller(controller: Controller, scenario: Scenario, episodes: in
 
     Episodes draw their traffic from the test keys (:data:`EVALUATION_KEY`), never from
     training's; scenarios without traffic are deterministic, so their episodes repeat one
-    another.
+    another. A scenario of several tracks gives each track's rows in turn.
     """
+    if isinstance(scenario.track, list):
+        return pd.concat([evaluate_controller(controller, scenario.on_track(index), episodes)
+                          for index in range(len(scenario.track))], ignore_index=True)
     world = make_world(evaluation_scenario(controller, scenario, episodes))
     vehicle = scenario.vehicle
     results = world.evaluate(controller.chromosome[None, :], EVALUATION_KEY)

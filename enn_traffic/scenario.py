@@ -12,10 +12,18 @@ import math
 import re
 import tomllib
 from pathlib import Path
-from typing import Annotated, Literal
+from typing import Annotated, Any, Literal
 
 import tomli_w
-from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_validator
+from pydantic import (
+    BaseModel,
+    ConfigDict,
+    Discriminator,
+    Field,
+    Tag,
+    ValidationError,
+    model_validator,
+)
 
 from enn_traffic.errors import InputError
 
@@ -56,6 +64,10 @@ class TrackConfig(_Section):
         "leaves the map) are exits, and reaching one ends a life as `left network`, its steps "
         "counted as fitness; `wall`: they are walls. Default: `exit` with SUMO traffic, `wall` "
         "otherwise (the only choice there)")
+    traffic: dict[str, Any] = Field(
+        {}, description="with several tracks (`[[track]]`): the `[traffic]` keys that differ on "
+        "this one (`[track.traffic]`: its `starts_xy`, `routes`, `sumocfg` ...), replacing the "
+        "scenario's")
 
     @model_validator(mode="after")
     def _one_start(self) -> TrackConfig:
@@ -291,8 +303,6 @@ class TrafficConfig(_Section):
         if "sumo" in names:
             if names != ["sumo"]:
                 raise ValueError('"sumo" cannot be mixed with other strategies in one scenario')
-            if not self.routes and self.sumocfg is None:
-                raise ValueError('strategy "sumo" needs routes (route files) or a sumocfg')
             if self.starts_xy:
                 raise ValueError('strategy "sumo" takes its vehicles from SUMO; '
                                  "leave starts_xy empty")
@@ -348,8 +358,9 @@ class LaneKeepingConfig(_Section):
 
 
 class Scenario(_Section):
-    """A whole scenario file: a SUMO ``[track]`` (navigation, arena, SUMO traffic) or a
-    highway-env ``[lane_keeping]`` road."""
+    """A whole scenario file: a SUMO ``[track]`` (navigation, arena, SUMO traffic), or several
+    (``[[track]]``: fitness is the mean over them all, docs/scenarios.md "Several tracks"), or
+    a highway-env ``[lane_keeping]`` road."""
 
     name: str = Field(
         min_length=1, pattern=r"^[A-Za-z0-9_.-]+$", description="run name (letters, digits, "
@@ -357,7 +368,10 @@ class Scenario(_Section):
     description: str = Field("", description="free text")
     seed: int = Field(
         0, ge=0, description="seed of the run's random generator; same seed, same run")
-    track: TrackConfig | None = None
+    track: Annotated[
+        Annotated[TrackConfig, Tag("one")] | Annotated[list[TrackConfig], Tag("several")],
+        Discriminator(lambda value: "several" if isinstance(value, list) else "one"),
+    ] | None = None
     lane_keeping: LaneKeepingConfig | None = None
     vehicle: VehicleConfig = VehicleConfig()
     sensor: SensorConfig = SensorConfig()
@@ -375,22 +389,56 @@ class Scenario(_Section):
 
     @model_validator(mode="after")
     def _track_net(self) -> Scenario:
-        if self.track is not None and self.track.net is None and self.traffic.sumocfg is None:
+        if (isinstance(self.track, TrackConfig) and self.track.net is None
+                and self.traffic.sumocfg is None):
             raise ValueError("track.net: required unless traffic.sumocfg names the network")
         return self
 
     @model_validator(mode="after")
+    def _sumo_sources(self) -> Scenario:
+        traffic = self.traffic  # several tracks: each track's own traffic is checked
+        if (not isinstance(self.track, list) and traffic.is_sumo and not traffic.routes
+                and traffic.sumocfg is None):
+            raise ValueError('traffic: strategy "sumo" needs routes (route files) or a sumocfg')
+        return self
+
+    @model_validator(mode="after")
     def _fringe_exits(self) -> Scenario:
-        if self.track is not None and self.track.fringe == "exit" and not self.traffic.is_sumo:
+        if (isinstance(self.track, TrackConfig) and self.track.fringe == "exit"
+                and not self.traffic.is_sumo):
             raise ValueError('track.fringe: "exit" needs SUMO traffic (strategy = "sumo"); '
                              "scripted vehicles would drive off the map")
         return self
 
+    @model_validator(mode="after")
+    def _several_tracks(self) -> Scenario:
+        if isinstance(self.track, TrackConfig) and self.track.traffic:
+            raise ValueError("track.traffic: only with several tracks ([[track]]); with one, "
+                             "these keys go in [traffic]")
+        if self.track == []:
+            raise ValueError("track: name at least one track")
+        return self
+
+    @property
+    def tracks(self) -> list[TrackConfig]:
+        """The tracks the learner drives: one, or each of ``[[track]]``."""
+        if self.track is None:
+            return []
+        return [self.track] if isinstance(self.track, TrackConfig) else list(self.track)
+
+    def on_track(self, index: int) -> Scenario:
+        """The scenario on its ``index``-th track alone, with that track's ``[traffic]`` keys."""
+        track = self.tracks[index]
+        data = self.model_dump()
+        data["track"] = {**track.model_dump(), "traffic": {}}
+        data["traffic"] = {**data["traffic"], **track.traffic}
+        return _validate(data, self.source)
+
     @property
     def fringe_exits(self) -> bool:
         """Does reaching the network's fringe end a life as "left the network" (the default
-        with SUMO traffic) rather than count as a wall?"""
-        fringe = self.track.fringe if self.track is not None else None
+        with SUMO traffic) rather than count as a wall? (A single-track scenario's.)"""
+        fringe = self.track.fringe if isinstance(self.track, TrackConfig) else None
         return fringe == "exit" or (fringe is None and self.traffic.is_sumo)
 
     @property
@@ -424,18 +472,23 @@ class Scenario(_Section):
 
     def to_toml(self) -> str:
         data = self.model_dump(mode="json", exclude_none=True)
+        for track in data["track"] if isinstance(data.get("track"), list) else []:
+            if not track["traffic"]:
+                del track["traffic"]
         return tomli_w.dumps(data)
 
 
 def _key_of(error: dict) -> tuple[str, str]:
     """The key an error names, and its message. A whole-scenario check names its key as the
     message's prefix (``"track.net: required ..."``)."""
-    key = ".".join(str(part) for part in error["loc"])
+    parts = [part for part in error["loc"] if part not in ("one", "several")]
+    key = "".join(f"[{part}]" if isinstance(part, int) else f".{part}" for part in parts)
+    key = key.removeprefix(".")
     message = error["msg"].removeprefix("Value error, ")
     prefix, _, rest = message.partition(": ")
     if not key and rest and re.fullmatch(r"[a-z_]+(\.[a-z_]+)*", prefix):
         return prefix, rest
-    return key or "(top level)", error["msg"]
+    return key or "(top level)", message
 
 
 def _validate(data: dict, source: Path | None) -> Scenario:
@@ -457,7 +510,28 @@ def _validate(data: dict, source: Path | None) -> Scenario:
             message = "required key is missing"
         extra = f" (and {exc.error_count() - 1} more problems)" if exc.error_count() > 1 else ""
         raise InputError(message + extra, source, key) from None
-    return scenario.model_copy(update={"source": source})
+    scenario = scenario.model_copy(update={"source": source})
+    if isinstance(scenario.track, list):  # each track with its own traffic keys
+        for index in range(len(scenario.track)):
+            try:
+                scenario.on_track(index)
+            except InputError as exc:
+                raise InputError(exc.message, source,
+                                 _in_track(exc.key, index, scenario.track[index])) from None
+    return scenario
+
+
+def _in_track(key: str | None, index: int, track: TrackConfig) -> str:
+    """The key of the scenario file that a single-track scenario's ``key`` came from: the
+    ``index``-th ``[[track]]``, its ``[track.traffic]`` or the shared ``[traffic]``."""
+    key = key or ""
+    if key.startswith("track"):
+        return f"track[{index}]{key.removeprefix('track')}"
+    name = re.split(r"[.\[]", key.removeprefix("traffic."))[0]
+    if (key.startswith("traffic.") and name in track.traffic) or (key == "traffic"
+                                                                   and track.traffic):
+        return f"track[{index}].{key}"
+    return key or f"track[{index}]"
 
 
 PACKAGE_PREFIX = "pkg:"
@@ -511,10 +585,32 @@ def load_scenario(path: str | Path) -> Scenario:
         data = tomllib.loads(path.read_text())
     except (tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
         raise InputError(f"not valid TOML: {exc}", path) from None
-    _resolve(path, data.get("track"), "net")
+    tracks = data.get("track")
+    for track in tracks if isinstance(tracks, list) else [tracks]:
+        _resolve(path, track, "net")
+        if isinstance(track, dict):
+            _resolve(path, track.get("traffic"), "routes")
+            _resolve(path, track.get("traffic"), "sumocfg")
     _resolve(path, data.get("traffic"), "routes")
     _resolve(path, data.get("traffic"), "sumocfg")
     scenario = _validate(data, path.resolve())
+    if not isinstance(scenario.track, list):
+        return _with_files(scenario, path)
+    tracks = []
+    for index in range(len(scenario.track)):
+        try:
+            tracks.append(_with_files(scenario.on_track(index), path).track)
+        except InputError as exc:
+            raise InputError(exc.message, path,
+                             _in_track(exc.key, index, scenario.track[index])) from None
+    return scenario.model_copy(update={"track": [
+        track.model_copy(update={"traffic": listed.traffic})
+        for track, listed in zip(tracks, scenario.track, strict=True)]})
+
+
+def _with_files(scenario: Scenario, path: Path) -> Scenario:
+    """Check that a single-track scenario's files exist (a clear error naming the key if
+    not), and read its ``.sumocfg``."""
     traffic = scenario.traffic
     for index, route in enumerate(traffic.routes):
         if not route.is_file():

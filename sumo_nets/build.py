@@ -58,6 +58,52 @@ TRACKS = {
     ),
 }
 
+# Tracks for training across tracks (scenarios/navigation_mixed.toml) and the unseen ones it is
+# measured on (``unseen_*``; never trained on). Widths 12–30 m; bends from 30° to 135°; loops,
+# junctions and dead ends, where the vehicle must turn round within the track's width.
+MIXED_TRACKS = {
+    # 12 m, dead-ended both ends; bends of 30°, 60°, 90°, 120°, alternately left and right.
+    "train_bends12": dict(
+        points=[(0, -10), (0, 60), (-30, 112), (-30, 172), (60, 172), (60, 232), (8, 262),
+                (8, 330)],
+        width=12.0),
+    # 18 m closed loop: corners from 45° to 110°.
+    "train_loop18": dict(
+        points=[(0, 0), (160, 0), (220, 60), (180, 160), (60, 120), (0, 180), (-60, 90)],
+        width=18.0, closed=True),
+    # 24 m dead-ended course with 60° bends.
+    "train_zigzag24": dict(
+        points=[(0, -10), (0, 70), (70, 110), (70, 190), (0, 230), (0, 310)], width=24.0),
+    # 30 m U-turn course, dead-ended both ends: two 90° bends close together.
+    "train_hairpin30": dict(
+        points=[(0, -10), (0, 150), (80, 150), (80, -10)], width=30.0),
+    # Unseen: a 14 m dead-ended zigzag with 45° bends (a dead end to turn round in 14 m).
+    "unseen_zigzag14": dict(
+        points=[(0, -10), (0, 60), (40, 100), (40, 170), (0, 210), (-50, 210), (-90, 250),
+                (-90, 320)],
+        width=14.0),
+    # Unseen: a 16 m loop with two sharp and two gentle corners.
+    "unseen_loop16": dict(
+        points=[(0, 0), (180, 0), (120, 100), (180, 200), (0, 200), (-40, 100)], width=16.0,
+        closed=True),
+}
+# Junction networks of one lane per road (its width the road's), dead ends at their arms' ends.
+JUNCTION_TRACKS = {
+    # 16 m roads: a crossroads and a T junction, five dead-ended arms.
+    "train_junctions16": dict(
+        nodes={"c": (0, 0), "w": (-110, 0), "n": (0, 110), "s": (0, -110), "t": (110, 0),
+               "tn": (110, 80), "ts": (110, -80)},
+        roads=[("w", "c"), ("c", "n"), ("c", "s"), ("c", "t"), ("t", "tn"), ("t", "ts")],
+        width=16.0),
+    # Unseen, 20 m roads: a loop with a crossroads in it and two dead-ended spurs.
+    "unseen_junctions20": dict(
+        nodes={"a": (0, 0), "b": (160, 0), "c": (160, 160), "d": (0, 160), "m": (80, 80),
+               "e": (-90, 0), "f": (160, 250)},
+        roads=[("a", "b"), ("b", "c"), ("c", "d"), ("d", "a"), ("a", "m"), ("m", "c"),
+               ("b", "m"), ("m", "d"), ("e", "a"), ("c", "f")],
+        width=20.0),
+}
+
 
 def _fmt(v: float) -> str:
     return f"{v:g}"
@@ -91,6 +137,24 @@ def corridor_xml(points, width, square_corners, closed=False) -> tuple[str, str]
         )
     edges.append("</edges>")
     return "\n".join(nodes) + "\n", "\n".join(edges) + "\n"
+
+
+def junctions_xml(nodes: dict[str, tuple[float, float]], roads: list[tuple[str, str]],
+                  width: float) -> tuple[str, str]:
+    """Plain XML of a network of one-lane roads ``width`` wide between named ``nodes``: a node
+    on one road is a dead end, the others junctions with netconvert's own shapes."""
+    degree = {name: sum(name in road for road in roads) for name in nodes}
+    lines = ["<nodes>"]
+    for name, (x, y) in nodes.items():
+        kind = "dead_end" if degree[name] == 1 else "priority"
+        lines.append(f'    <node id="{name}" x="{_fmt(x)}" y="{_fmt(y)}" type="{kind}"/>')
+    lines.append("</nodes>")
+    edges = ["<edges>"]
+    for a, b in roads:
+        edges.append(f'    <edge id="{a}{b}" from="{a}" to="{b}" numLanes="1" '
+                     f'width="{_fmt(width)}" speed="13.89" spreadType="center"/>')
+    edges.append("</edges>")
+    return "\n".join(lines) + "\n", "\n".join(edges) + "\n"
 
 
 def grid_xml(blocks: int = 3, block_length: float = 120.0, lanes: int = 3,
@@ -153,6 +217,9 @@ TRAFFIC_NETS = {
 
 def main() -> int:
     sources = {name: corridor_xml(**spec) for name, spec in TRACKS.items()}
+    sources.update({name: corridor_xml(square_corners=False, **spec)
+                    for name, spec in MIXED_TRACKS.items()})
+    sources.update({name: junctions_xml(**spec) for name, spec in JUNCTION_TRACKS.items()})
     sources["track_grid"] = grid_xml()
     sources.update({name: grid_xml(**spec) for name, spec in TRAFFIC_NETS.items()})
     for name, (nod, edg) in sources.items():

@@ -26,7 +26,8 @@ def load_text(tmp_path, text):
 def test_shipped_scenarios_load(root):
     for path in sorted((root / "scenarios").glob("*.toml")):
         scenario = load_scenario(path)
-        assert scenario.lane_keeping is not None or scenario.track.net.is_file(), path
+        assert scenario.lane_keeping is not None or scenario.tracks, path
+        assert all(track.net.is_file() for track in scenario.tracks), path
 
 
 def test_defaults_are_the_papers(tmp_path, net):
@@ -92,3 +93,66 @@ def test_start_off_the_road_is_refused(tmp_path, net):
     with pytest.raises(InputError, match="off the drivable area") as info:
         ArenaWorld(scenario)
     assert info.value.key == "track.start_xy"
+
+
+TWO_TRACKS = """
+name = "t"
+[[track]]
+net = "{net}"
+start_xy = [0.0, 0.0]
+start_heading_deg = 90.0
+[[track]]
+net = "{net}"
+start_xy = [-2.0, 100.0]
+{second}
+"""
+
+
+def test_several_tracks_each_with_its_own_traffic_keys(tmp_path, net):
+    (tmp_path / "nets").mkdir()
+    (tmp_path / "nets" / "n.net.xml").write_bytes(net.read_bytes())
+    text = TWO_TRACKS.format(net="nets/n.net.xml", second="[track.traffic]\nstarts_xy = [[1, 2]]")
+    scenario = load_text(tmp_path, text + "[traffic]\nstrategy = 'straight'\nseed = 7\n")
+    assert len(scenario.tracks) == 2
+    assert all(t.net == (tmp_path / "nets" / "n.net.xml").resolve() for t in scenario.tracks)
+    first, second = scenario.on_track(0), scenario.on_track(1)
+    assert first.track.start_xy == (0.0, 0.0) and first.traffic.starts_xy == []
+    assert second.track.start_xy == (-2.0, 100.0) and second.traffic.starts_xy == [(1.0, 2.0)]
+    assert second.traffic.seed == 7 and second.traffic.strategy == "straight"
+    again = load_text(tmp_path, scenario.to_toml())  # what a run folder keeps loads again
+    assert again.on_track(1).traffic.starts_xy == [(1.0, 2.0)]
+
+
+@pytest.mark.parametrize(
+    "second, key, message",
+    [
+        ("", "track[1]", "give exactly one of start_xy"),
+        ("start_heading_deg = 0\nlanes = 2", "track[1].lanes", "unknown key"),
+        ("start_heading_deg = 0\n[track.traffic]\nstarts = []", "track[1].traffic.starts",
+         "unknown key"),
+        ("start_heading_deg = 0\n[track.traffic]\nroutes = ['none.rou.xml']",
+         "track[1].traffic", 'routes and sumocfg are for strategy = "sumo"'),
+        ("start_heading_deg = 0\nfringe = 'exit'", "track[1].fringe", "needs SUMO traffic"),
+    ],
+)
+def test_a_bad_track_among_several_is_named(tmp_path, net, second, key, message):
+    text = TWO_TRACKS.format(net=net, second=second).replace("start_xy = [-2.0, 100.0]\n", (
+        "" if not second else "start_xy = [-2.0, 100.0]\n"))
+    with pytest.raises(InputError) as info:
+        load_text(tmp_path, text)
+    assert info.value.key == key
+    assert message in info.value.message
+
+
+def test_a_missing_network_of_a_second_track_is_named(tmp_path, net):
+    text = TWO_TRACKS.format(net=net, second="").replace(f'net = "{net}"\nstart_xy = [-2.0',
+                                                         'net = "gone.net.xml"\nstart_xy = [-2.0')
+    with pytest.raises(InputError) as info:
+        load_text(tmp_path, text)
+    assert info.value.key == "track[1].net" and "network file not found" in info.value.message
+
+
+def test_traffic_keys_of_a_single_track_belong_in_traffic(tmp_path, net):
+    with pytest.raises(InputError) as info:
+        load_text(tmp_path, GOOD.format(net=net) + "[track.traffic]\nseed = 3\n")
+    assert info.value.key == "track.traffic" and "[traffic]" in info.value.message

@@ -49,6 +49,8 @@ def heat_map(matrix: pd.DataFrame, path: str | Path, title: str, label: str) -> 
     ax.set_yticks(range(rows), [str(r) for r in matrix.index], fontsize=8)
     for i in range(rows):
         for j in range(columns):
+            if np.isnan(values[i, j]):
+                continue
             ax.text(j, i, f"{values[i, j]:.0f}", ha="center", va="center", fontsize=8,
                     color="black" if values[i, j] > middle else "white")
     figure.colorbar(image, label=label)

@@ -16,6 +16,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
+import shapely
 import sumolib
 from shapely.geometry import LineString, MultiPolygon, Point, Polygon
 from shapely.ops import unary_union
@@ -23,6 +24,7 @@ from shapely.ops import unary_union
 from enn_traffic.errors import InputError
 
 SLIVER_M = 0.2  # holes narrower than this are gaps between lanes, not walls
+SNAP_M = 0.05  # gaps between lane and junction shapes up to twice this are closed
 EXIT_MARGIN_M = 0.5  # a fringe cut reaches this far past the road's outer lane edges
 
 
@@ -42,6 +44,21 @@ class Track:
 
     def contains(self, x: float, y: float) -> bool:
         return bool(self.area.buffer(1e-9).contains(Point(x, y)))
+
+    def coverage(self, xy: np.ndarray, cell: float = 5.0) -> float:
+        """Share of the drivable area that the path ``xy`` (n, 2) passed over: of the
+        ``cell``-metre squares whose centre is on the area, those the path entered. A path
+        that reaches the step cap by circling in one place covers little of the track."""
+        x0, y0, x1, y1 = self.bounds
+        columns, rows = int((x1 - x0) // cell) + 1, int((y1 - y0) // cell) + 1
+        cx, cy = np.meshgrid(x0 + (np.arange(columns) + 0.5) * cell,
+                             y0 + (np.arange(rows) + 0.5) * cell)
+        on_area = shapely.contains_xy(self.area, cx, cy)
+        index = np.floor((np.asarray(xy)[:, :2] - (x0, y0)) / cell).astype(np.int64)
+        inside = ((index >= 0) & (index < (columns, rows))).all(axis=1)
+        visited = np.zeros_like(on_area)
+        visited[index[inside, 1], index[inside, 0]] = True
+        return float((visited & on_area).sum() / max(on_area.sum(), 1))
 
     def lane_pose(self, net_file: Path, lane_id: str, offset: float) -> tuple[float, float, float]:
         """(x, y, heading) at ``offset`` metres along the centre line of ``lane_id``."""
@@ -124,9 +141,11 @@ def drivable_area(net: sumolib.net.Net) -> Polygon | MultiPolygon:
         if len(shape) >= 3:
             polygon = Polygon(shape)
             pieces.append(polygon if polygon.is_valid else polygon.buffer(0))
-    # Snap away slivers between abutting shapes, then drop collinear vertices.
-    area = unary_union(pieces).buffer(1e-6, join_style="mitre").buffer(
-        -1e-6, join_style="mitre"
+    # Close the gaps between abutting shapes (netconvert rounds coordinates to 0.01 m, so a
+    # lane can miss its junction by a few millimetres at a sharp bend), then drop collinear
+    # vertices.
+    area = unary_union(pieces).buffer(SNAP_M, join_style="mitre").buffer(
+        -SNAP_M, join_style="mitre"
     ).simplify(1e-3)
     return _without_slivers(area)
 

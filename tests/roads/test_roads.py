@@ -69,3 +69,29 @@ def test_missing_network_and_empty_network(tmp_path):
                      'origBoundary="0,0,1,1" projParameter="!"/></net>')
     with pytest.raises(InputError, match="no drivable area"):
         load_track(empty)
+
+
+def test_coverage_counts_the_cells_a_path_enters(root):
+    """The arena is 10 x 10 cells of 10 m: a straight crossing enters one row of them."""
+    track = load_track(root / "sumo_nets" / "arena.net.xml")
+    across = np.column_stack([np.linspace(0.5, 99.5, 200), np.full(200, 55.0)])
+    assert track.coverage(across, cell=10.0) == pytest.approx(0.1)
+    assert track.coverage(np.vstack([across, across[::-1]]), cell=10.0) == pytest.approx(0.1)
+    circle = 50 + 3 * np.column_stack([np.cos(np.arange(300)), np.sin(np.arange(300))])
+    assert track.coverage(circle, cell=10.0) == pytest.approx(0.04)  # the 4 cells round (50, 50)
+    assert track.coverage(np.array([[-50.0, -50.0]]), cell=10.0) == 0.0
+
+
+def test_mixed_tracks_have_their_widths(root):
+    """Each corridor of sumo_nets/build.py is as wide as it says: its area is its width times
+    its centre line's length, to within the junctions' rounded corners."""
+    import importlib.util
+
+    spec = importlib.util.spec_from_file_location("build", root / "sumo_nets" / "build.py")
+    build = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(build)
+    for name, corridor in build.MIXED_TRACKS.items():
+        points = corridor["points"] + (corridor["points"][:1] if corridor.get("closed") else [])
+        length = LineString(points).length
+        area = load_track(root / "sumo_nets" / f"{name}.net.xml").area.area
+        assert area == pytest.approx(corridor["width"] * length, rel=0.04), name

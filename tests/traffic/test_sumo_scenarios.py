@@ -290,3 +290,39 @@ def test_city_scenario_runs_evaluates_and_meets_traffic(tmp_path, root):
                      "--out", str(tmp_path / f"{mode}.csv")]) == 0
         rows[mode] = pd.read_csv(tmp_path / f"{mode}.csv").iloc[0]
         assert rows[mode]["traffic_at_start"] > 20
+
+
+TWO_SUMO_TRACKS = """name = "two_cities"
+[traffic]
+strategy = "sumo"
+warmup_s = 10.0
+[episode]
+max_steps = 60
+[[track]]
+net = "{nets}/sumo_ring.net.xml"
+start_edge = ["g0_0to1_0", "g1_1to0_1"]
+[track.traffic]
+routes = ["{routes}/ring_steady.rou.xml"]
+[[track]]
+net = "{nets}/sumo_grid.net.xml"
+start_lane = "g0_1to1_1_1"
+[track.traffic]
+routes = ["{routes}/grid_crossing.rou.xml"]
+"""
+
+
+def test_sumo_traffic_on_several_tracks(tmp_path, root):
+    """docs/scenarios.md's example: each track with its own SUMO routes, through libsumo; each
+    track's lives are those of the scenario on that track alone."""
+    path = tmp_path / "two.toml"
+    path.write_text(TWO_SUMO_TRACKS.format(nets=root / "sumo_nets",
+                                           routes=root / "scenarios" / "routes"))
+    scenario = load_scenario(path)
+    world = make_world(scenario)
+    assert world.episode_labels() == ["sumo_ring: sumo (replay)", "sumo_grid: sumo (replay)"]
+    population = np.random.default_rng(5).uniform(-1, 1, (3, world.spec.chromosome_length))
+    results = world.evaluate(population, key=4)
+    for index in range(2):
+        alone = make_world(scenario.on_track(index)).evaluate(population, key=4)
+        np.testing.assert_array_equal(results.steps[:, index], alone.steps[:, 0])
+        assert alone.traffic[:, 0, 0].min() > 0  # SUMO's vehicles are there

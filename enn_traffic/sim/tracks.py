@@ -1,0 +1,61 @@
+"""Several tracks at once: a scenario with ``[[track]]`` entries trains one controller on all
+of them (docs/scenarios.md, "Several tracks").
+
+The paper trains on one track and reports that the controllers "navigate other tracks" (§5.1);
+training across tracks makes that a goal of the fitness rather than a hope. Each track is a
+world of its own kind (arena or SUMO traffic), built from the scenario on that track alone; a
+chromosome drives every situation of every track, and its fitness is the mean over all of them,
+as it is over traffic strategies (§5.4.1).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from enn_traffic.scenario import Scenario
+from enn_traffic.sim.world import EpisodeResults, World
+
+
+class TracksWorld:
+    """The worlds of a scenario's tracks, evaluated side by side: the per-situation arrays of
+    :meth:`evaluate` hold the first track's situations, then the second's, and so on."""
+
+    def __init__(self, scenario: Scenario, worlds: list[World]):
+        self.scenario = scenario
+        self.worlds = worlds
+        self.spec = worlds[0].spec
+        self.vehicles = max(world.vehicles for world in worlds)
+        self.track = worlds[0].track  # the first situation's, for drawing it
+        self._situations = [len(world.episode_labels()) for world in worlds]
+
+    def evaluate(self, population: np.ndarray, key: int = 0) -> EpisodeResults:
+        """Fitness of every chromosome: the mean over every track's situations of ``key``."""
+        parts = [world.evaluate(population, key) for world in self.worlds]
+        safety = (None if any(part.safety is None for part in parts)
+                  else np.concatenate([part.safety for part in parts], axis=1))
+        return EpisodeResults.of_lives(
+            *(np.concatenate([getattr(part, name) for part in parts], axis=1)
+              for name in ("steps", "outcome", "suffered")),
+            vehicles=self.vehicles,
+            traffic=np.concatenate([part.traffic for part in parts], axis=1), safety=safety)
+
+    def episode_labels(self) -> list[str]:
+        """``track: strategy`` of each column of :meth:`evaluate`'s per-situation arrays."""
+        return [f"{world.track.name}: {label}" for world in self.worlds
+                for label in world.episode_labels()]
+
+    def world_of(self, episode: int) -> tuple[World, int]:
+        """The world that situation ``episode`` (a column of :meth:`evaluate`) is on, and its
+        number there."""
+        for world, count in zip(self.worlds, self._situations, strict=True):
+            if episode < count:
+                return world, episode
+            episode -= count
+        raise IndexError(f"situation {episode} is beyond the scenario's "
+                         f"{sum(self._situations)}")
+
+    def trace(self, chromosome: np.ndarray, key: int = 0, episode: int = 0,
+              max_steps: int | None = None) -> tuple[np.ndarray, int]:
+        """Poses (n, V, 3) of one situation, and the learner's outcome code."""
+        world, episode = self.world_of(episode)
+        return world.trace(chromosome, key, episode, max_steps)
