@@ -334,6 +334,30 @@ class TrafficConfig(_Section):
         return [self.strategy] if isinstance(self.strategy, str) else list(self.strategy)
 
 
+Range = tuple[PositiveFloat, PositiveFloat]
+
+
+class RoadDraw(_Section):
+    """Lane keeping on roads drawn per traffic situation (each situation of each generation
+    its own road): the road's shape, size and turning direction drawn uniformly."""
+
+    roads: list[Literal["sine", "circle"]] = Field(
+        ["sine", "circle"], min_length=1, description="the road shapes drawn from")
+    amplitude: Range = Field((2.0, 7.0), description="sine roads: range of the amplitude (m)")
+    period: Range = Field((60.0, 160.0), description="sine roads: range of the period (m)")
+    radius: Range = Field((35.0, 90.0), description="circle roads: range of the radius (m)")
+    both_directions: bool = Field(
+        True, description="mirror half the roads (drawn), so that they turn the other way")
+
+    @model_validator(mode="after")
+    def _ordered(self) -> RoadDraw:
+        for name in ("amplitude", "period", "radius"):
+            low, high = getattr(self, name)
+            if low > high:
+                raise ValueError(f"{name} must be [smallest, largest]")
+        return self
+
+
 class LaneKeepingConfig(_Section):
     """Lane keeping on a highway-env road, steered from a camera's lane markings (paper §5.6):
     the lateral offsets of both markings at each look-ahead distance, in the vehicle frame."""
@@ -345,6 +369,9 @@ class LaneKeepingConfig(_Section):
     period: PositiveFloat = Field(100.0, description="sine road: period of the centre line (m)")
     length: PositiveFloat = Field(1000.0, description="sine road: length (m)")
     radius: PositiveFloat = Field(60.0, description="circle road: radius of the centre line (m)")
+    mirrored: bool = Field(
+        False, description="the road mirrored: its bends turn the other way (a circle driven "
+        "anticlockwise)")
     lane_width: PositiveFloat = Field(
         4.0, description="lane width (m); the life ends when the vehicle's centre leaves the lane")
     lookahead_m: list[PositiveFloat] = Field(
@@ -354,7 +381,11 @@ class LaneKeepingConfig(_Section):
     noise_m: float = Field(
         0.0, ge=0, allow_inf_nan=False, description="Gaussian noise on the offsets (m)")
     episodes: int = Field(1, ge=1, le=1000, description="episodes per chromosome")
-    seed: int = Field(0, ge=0, description="noise seed")
+    seed: int = Field(0, ge=0, description="noise and road-drawing seed")
+    draw: RoadDraw | None = Field(
+        None, description="`[lane_keeping.draw]`: each traffic situation draws its `road`, "
+        "`amplitude`, `period`, `radius` and `mirrored` (those keys above are then unused); "
+        "none = always the road above")
 
 
 class Scenario(_Section):

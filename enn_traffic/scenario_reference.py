@@ -20,6 +20,7 @@ from enn_traffic.scenario import (
     GAConfig,
     LaneKeepingConfig,
     NetworkConfig,
+    RoadDraw,
     Scenario,
     SensorConfig,
     TrackConfig,
@@ -68,14 +69,16 @@ def tables() -> dict[str, str]:
     for section, model in SECTIONS.items():
         scenario += _rows(model, section)
     return {"scenario": "\n".join(head + scenario) + "\n",
-            "lane_keeping": "\n".join(head + _rows(LaneKeepingConfig, "lane_keeping")) + "\n"}
+            "lane_keeping": "\n".join(head + _rows(LaneKeepingConfig, "lane_keeping")
+                                      + _rows(RoadDraw, "lane_keeping.draw")) + "\n"}
 
 
 def undocumented() -> list[str]:
     """Fields of the schema without a description (each must have one)."""
     missing = [f"{name}" for name, f in Scenario.model_fields.items()
                if f.description is None and name not in (*SECTIONS, "lane_keeping", "source")]
-    for section, model in {**SECTIONS, "lane_keeping": LaneKeepingConfig}.items():
+    for section, model in {**SECTIONS, "lane_keeping": LaneKeepingConfig,
+                           "lane_keeping.draw": RoadDraw}.items():
         missing += [f"{section}.{name}" for name, f in model.model_fields.items()
                     if f.description is None]
     return missing

@@ -3,11 +3,11 @@
 
 :class:`CameraLaneKeepingEnv` is highway-env's ``lane-keeping-v0`` (a dynamical bicycle model
 steered by a continuous action, at 10 Hz) on a sine road of any amplitude and period, or on a
-circle. :func:`lane_markings` is the camera: the lateral offsets, in the vehicle frame, of the
-lane's two markings at each look-ahead distance along the lane (positive to the vehicle's
-right, highway-env's lateral direction), with optional Gaussian noise. It reads the vehicle's
-state after the step, since highway-env's ``step()`` returns an observation taken before the
-action is applied.
+circle, either way round. :func:`lane_markings` is the camera: the lateral offsets, in the
+vehicle frame, of the lane's two markings at each look-ahead distance along the lane (positive
+to the vehicle's right, highway-env's lateral direction), with optional Gaussian noise. It
+reads the vehicle's state after the step, since highway-env's ``step()`` returns an
+observation taken before the action is applied.
 """
 
 from __future__ import annotations
@@ -32,16 +32,19 @@ class CameraLaneKeepingEnv(LaneKeepingEnv):
         road = LaneKeepingConfig(**self.config["road"])
         lines = [LineType.CONTINUOUS, LineType.CONTINUOUS]
         network = RoadNetwork()
+        side = -1.0 if road.mirrored else 1.0
         if road.road == "sine":
             network.add_lane("a", "b", SineLane(
-                [0.0, 0.0], [road.length, 0.0], amplitude=road.amplitude,
+                [0.0, 0.0], [road.length, 0.0], amplitude=side * road.amplitude,
                 pulsation=2 * math.pi / road.period, phase=0.0, width=road.lane_width,
                 line_types=lines))  # fmt: skip
-        else:
+        else:  # two half circles from (0, -radius); mirrored, the other way round
             for start, end, phase in (("a", "b", -math.pi / 2), ("b", "a", math.pi / 2)):
+                phase = phase if side > 0 else -phase - math.pi  # fmt: skip
                 network.add_lane(start, end, CircularLane(
-                    [0.0, 0.0], road.radius, phase, phase + math.pi, clockwise=True,
-                    width=road.lane_width, line_types=lines))  # fmt: skip
+                    [0.0, 0.0], road.radius, phase, phase + side * math.pi,
+                    clockwise=not road.mirrored, width=road.lane_width,
+                    line_types=lines))  # fmt: skip
         self.lanes, self.lane = [], network.get_lane(("a", "b", 0))
         self.road = Road(network=network, np_random=self.np_random,
                          record_history=self.config["show_trajectories"])

@@ -3,7 +3,9 @@
 The same genome and network as everywhere else: inputs are the camera's marking offsets, the
 two outputs map to highway-env's steering action as ``left − right`` (in [−1, 1], i.e. up to
 ±60° of steering). A life ends when the vehicle's centre leaves its lane (highway-env itself
-never ends this task); fitness = steps kept in the lane, up to ``episode.max_steps``.
+never ends this task); fitness = steps kept in the lane, up to ``episode.max_steps``, averaged
+over the situations, each on the scenario's road or on one drawn for it
+(``[lane_keeping.draw]``).
 highway-env is plain Python, so a population is evaluated one chromosome after another; use
 ``--executor process`` to spread it over the cores.
 """
@@ -17,8 +19,11 @@ import numpy as np
 from enn_traffic.lanekeeping.env import lane_markings, lane_offset, make_env, marking_segments
 from enn_traffic.network import NetworkSpec, network_buffers
 from enn_traffic.network import steering as network_steering
-from enn_traffic.scenario import Scenario
+from enn_traffic.scenario import LaneKeepingConfig, Scenario
 from enn_traffic.sim.world import CAPPED, LEFT_LANE, EpisodeResults
+
+ROAD_STREAM = 1  # the drawn roads' own stream, apart from the camera noise's
+KEPT_ENVS = 16
 
 
 @dataclass(frozen=True)
@@ -39,7 +44,7 @@ class LaneKeepingWorld:
         self.config = scenario.lane_keeping
         self.spec = NetworkSpec(scenario.layer_sizes, scenario.network.layout)
         self.layer_sizes = self.spec.layer_array
-        self.env = make_env(self.config)
+        self._envs: dict[tuple, object] = {}
         self._track: Road | None = None
         self.start = (0.0, 0.0, 0.0)
 
@@ -50,22 +55,48 @@ class LaneKeepingWorld:
         return self._track
 
     def episode_labels(self) -> list[str]:
-        return [f"{self.config.road} road"] * self.config.episodes
+        road = "drawn" if self.config.draw is not None else self.config.road
+        return [f"{road} road"] * self.config.episodes
 
     def _rng(self, key: int, episode: int) -> np.random.Generator:
         return np.random.default_rng([self.config.seed, key, episode])
 
+    def road_of(self, key: int, episode: int) -> LaneKeepingConfig:
+        """The road of situation (``key``, ``episode``): the scenario's, or with
+        ``[lane_keeping.draw]`` one drawn from (seed, key, episode) alone."""
+        draw = self.config.draw
+        if draw is None:
+            return self.config
+        rng = np.random.default_rng([self.config.seed, key, episode, ROAD_STREAM])
+        values = {"road": draw.roads[rng.integers(len(draw.roads))],
+                  "amplitude": rng.uniform(*draw.amplitude), "period": rng.uniform(*draw.period),
+                  "radius": rng.uniform(*draw.radius)}
+        values["mirrored"] = bool(rng.integers(2)) and draw.both_directions
+        return self.config.model_copy(update=values)
+
+    def _env(self, road: LaneKeepingConfig):
+        """highway-env on ``road``, made once (the last ``KEPT_ENVS`` roads are kept)."""
+        shape = (road.road, road.amplitude, road.period, road.radius, road.mirrored)
+        if shape not in self._envs:
+            if len(self._envs) >= KEPT_ENVS:
+                self._envs.pop(next(iter(self._envs))).close()
+            self._envs[shape] = make_env(road)
+        return self._envs[shape]
+
     def episode(self, genes: np.ndarray, rng: np.random.Generator, max_steps: int,
-                trace: list | None = None) -> tuple[int, int, float]:
-        """One life: (steps kept in the lane, outcome, mean |lateral offset| in metres)."""
-        self.env.reset(seed=0)
-        vehicle = self.env.unwrapped.vehicle
+                trace: list | None = None, road: LaneKeepingConfig | None = None
+                ) -> tuple[int, int, float]:
+        """One life on ``road`` (the scenario's by default): (steps kept in the lane, outcome,
+        mean |lateral offset| in metres)."""
+        env = self._env(self.config if road is None else road)
+        env.reset(seed=0)
+        vehicle = env.unwrapped.vehicle
         activation, scratch = network_buffers(self.layer_sizes)
         action = np.zeros(1)
         offsets = 0.0
         steps = 0
         while True:
-            vehicle = self.env.unwrapped.vehicle
+            vehicle = env.unwrapped.vehicle
             if trace is not None:
                 trace.append((*vehicle.position, vehicle.heading))
             offset, half_width = lane_offset(vehicle)
@@ -77,7 +108,7 @@ class LaneKeepingWorld:
             readings = lane_markings(vehicle, self.config.lookahead_m, self.config.noise_m, rng)
             action[0] = network_steering(genes, self.layer_sizes, readings, activation, scratch,
                                          1.0)
-            self.env.step(action)
+            env.step(action)
             steps += 1
 
     def evaluate(self, population: np.ndarray, key: int = 0) -> EpisodeResults:
@@ -89,13 +120,15 @@ class LaneKeepingWorld:
         for p, row in enumerate(genes):
             for e in range(episodes):
                 steps[p, e], outcome[p, e], _ = self.episode(
-                    row, self._rng(key, e), self.scenario.episode.max_steps)
+                    row, self._rng(key, e), self.scenario.episode.max_steps,
+                    road=self.road_of(key, e))
         return EpisodeResults.of_lives(steps, outcome)
 
     def offsets(self, chromosome: np.ndarray, key: int = 0) -> list[tuple[int, int, float]]:
         """Per episode: (steps, outcome, mean |lateral offset|) of one chromosome."""
         genes = self.spec.in_source_layout(chromosome)[0]
-        return [self.episode(genes, self._rng(key, e), self.scenario.episode.max_steps)
+        return [self.episode(genes, self._rng(key, e), self.scenario.episode.max_steps,
+                             road=self.road_of(key, e))
                 for e in range(self.config.episodes)]
 
     def trace(self, chromosome: np.ndarray, key: int = 0, episode: int = 0,
@@ -104,5 +137,6 @@ class LaneKeepingWorld:
         poses: list = []
         limit = self.scenario.episode.max_steps if max_steps is None else max_steps
         genes = self.spec.in_source_layout(chromosome)[0]
-        _, outcome, _ = self.episode(genes, self._rng(key, episode), limit, poses)
+        _, outcome, _ = self.episode(genes, self._rng(key, episode), limit, poses,
+                                     road=self.road_of(key, episode))
         return np.array(poses)[:, None, :], int(outcome)

@@ -98,3 +98,39 @@ def test_scenario_needs_exactly_one_task(tmp_path):
     with pytest.raises(InputError, match="exactly one"):
         load_scenario(path)
 
+
+
+@pytest.mark.parametrize("road", ["circle", "sine"])
+def test_a_mirrored_road_is_seen_mirrored(road):
+    """Mirrored, the road bends the other way: each marking's offset is the other marking's,
+    negated (left and right swap sides)."""
+    readings = {}
+    for mirrored in (False, True):
+        env = make_env(LaneKeepingConfig(road=road, radius=60.0, mirrored=mirrored))
+        env.reset(seed=0)
+        readings[mirrored] = lane_markings(env.unwrapped.vehicle, [5.0, 10.0], 0.0, None)
+    assert not np.allclose(readings[False], [-2.0, 2.0, -2.0, 2.0], atol=0.1)  # it bends
+    np.testing.assert_allclose(readings[True], -readings[False].reshape(2, 2)[:, ::-1].ravel(),
+                               atol=1e-9)
+
+
+def test_roads_drawn_per_situation(tmp_path):
+    path = tmp_path / "lk.toml"
+    path.write_text(SCENARIO.format(road="sine") + "[lane_keeping.draw]\nradius = [40.0, 50.0]\n")
+    world = make_world(load_scenario(path).with_overrides(lane_keeping={"episodes": 2}))
+    roads = [world.road_of(key, episode) for key in range(30) for episode in range(2)]
+    assert world.road_of(7, 1) == roads[15]  # a situation's road is its own, every time
+    assert {r.road for r in roads} == {"sine", "circle"}
+    assert {r.mirrored for r in roads} == {False, True}
+    assert all(40.0 <= r.radius <= 50.0 and 2.0 <= r.amplitude <= 7.0 for r in roads)
+    assert len({(r.road, r.radius, r.amplitude) for r in roads}) == len(roads)
+    results = world.evaluate(np.zeros((2, world.spec.chromosome_length)), key=3)
+    assert results.steps.shape == (2, 2) and world.episode_labels() == ["drawn road"] * 2
+
+
+def test_a_bad_draw_range_is_named(tmp_path):
+    path = tmp_path / "lk.toml"
+    path.write_text(SCENARIO.format(road="sine") + "[lane_keeping.draw]\nperiod = [90.0, 50.0]\n")
+    with pytest.raises(InputError) as info:
+        load_scenario(path)
+    assert info.value.key == "lane_keeping.draw" and "period" in info.value.message
