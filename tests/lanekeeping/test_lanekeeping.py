@@ -134,3 +134,28 @@ def test_a_bad_draw_range_is_named(tmp_path):
     with pytest.raises(InputError) as info:
         load_scenario(path)
     assert info.value.key == "lane_keeping.draw" and "period" in info.value.message
+
+
+def test_a_drawn_road_run_is_chosen_on_validation_roads(tmp_path, monkeypatch):
+    """Of a drawn-road run's candidates, the one kept is the best on validation roads: at
+    least as good there as ``best.npz``, which only one generation's roads chose."""
+    from enn_traffic import keys
+    from enn_traffic.controller import Controller
+    from enn_traffic.experiments import lanekeeping
+    from enn_traffic.experiments.choosing import candidates
+    from enn_traffic.runner import evolve
+
+    path = tmp_path / "lk.toml"
+    path.write_text(SCENARIO.format(road="sine").replace("generations = 5", "generations = 3")
+                    .replace("max_steps = 300", "max_steps = 80")
+                    + "[lane_keeping.draw]\n")
+    sc = load_scenario(path).with_overrides(lane_keeping={"episodes": 2})
+    evolve(sc, tmp_path / "run", progress=False)
+    monkeypatch.setattr(lanekeeping, "VALIDATION_ROADS", 3)
+    chosen = lanekeeping.chosen(sc, tmp_path / "run")
+    pool = candidates(tmp_path / "run")
+    assert any(np.array_equal(chosen, row) for row in pool)
+    world = make_world(sc.with_overrides(lane_keeping={"episodes": 3}))
+    best = Controller.load(tmp_path / "run" / "best.npz").chromosome
+    fitness = world.evaluate(np.vstack([chosen, best, pool]), keys.VALIDATION.start).fitness
+    assert fitness[0] == fitness[2:].max() >= fitness[1]
