@@ -177,8 +177,7 @@ def generalization(out: Path, quick: bool = False, progress: bool = True) -> lis
     table = pd.DataFrame(rows)
     write_csv(out / "generalization.csv", table)
     unseen = table[~table["seen"]]
-    matrix = unseen.pivot_table(index="trained_on", columns="track", values="capped",
-                                aggfunc="mean", sort=False).reindex(TRAINED)[UNSEEN_TRACKS]
+    matrix = unseen_matrix(table, TRAINED, UNSEEN_TRACKS)
     write_csv(out / "generalization_matrix.csv", matrix.reset_index())
     heat_map(100 * matrix, out / "generalization.png", label="% of seeds at the cap",
              title=f"Unseen tracks: controllers at the {STEP_CAP}-step cap, % of {len(seeds)} "
@@ -196,6 +195,15 @@ def generalization(out: Path, quick: bool = False, progress: bool = True) -> lis
         + ", ".join(f"{name}: {100 * r['capped']:.0f}% / {100 * r['coverage']:.0f}%"
                     for name, r in covered.iterrows()),
     ]
+
+
+def unseen_matrix(table: pd.DataFrame, trained: list[str], tracks: list[str]) -> pd.DataFrame:
+    """Share of each training's seeds at the step cap on each track (rows ``trained``, columns
+    ``tracks``), from generalization.csv's rows; NaN where the training drove that track."""
+    unseen = table[~table["seen"].astype(bool)]
+    shares = unseen.groupby(["trained_on", "track"])["capped"].mean().unstack("track")
+    return shares.reindex(index=trained, columns=tracks).rename_axis(index="trained_on",
+                                                                     columns=None)
 
 
 def _path_figure(traces: dict, path: Path, seed: int) -> None:
