@@ -102,8 +102,7 @@ net = "{net}"
 start_xy = [0.0, 0.0]
 start_heading_deg = 90.0
 [[track]]
-net = "{net}"
-start_xy = [-2.0, 100.0]
+net = "{second_net}"
 {second}
 """
 
@@ -111,7 +110,9 @@ start_xy = [-2.0, 100.0]
 def test_several_tracks_each_with_its_own_traffic_keys(tmp_path, net):
     (tmp_path / "nets").mkdir()
     (tmp_path / "nets" / "n.net.xml").write_bytes(net.read_bytes())
-    text = TWO_TRACKS.format(net="nets/n.net.xml", second="[track.traffic]\nstarts_xy = [[1, 2]]")
+    text = TWO_TRACKS.format(net="nets/n.net.xml", second_net="nets/n.net.xml",
+                             second="start_xy = [-2.0, 100.0]\n[track.traffic]\n"
+                             "starts_xy = [[1, 2]]")
     scenario = load_text(tmp_path, text + "[traffic]\nstrategy = 'straight'\nseed = 7\n")
     assert len(scenario.tracks) == 2
     assert all(t.net == (tmp_path / "nets" / "n.net.xml").resolve() for t in scenario.tracks)
@@ -127,26 +128,23 @@ def test_several_tracks_each_with_its_own_traffic_keys(tmp_path, net):
     "second, key, message",
     [
         ("", "track[1]", "give exactly one of start_xy"),
-        ("start_heading_deg = 0\nlanes = 2", "track[1].lanes", "unknown key"),
-        ("start_heading_deg = 0\n[track.traffic]\nstarts = []", "track[1].traffic.starts",
+        ("start_xy = [-2.0, 100.0]\nlanes = 2", "track[1].lanes", "unknown key"),
+        ("start_xy = [-2.0, 100.0]\n[track.traffic]\nstarts = []", "track[1].traffic.starts",
          "unknown key"),
-        ("start_heading_deg = 0\n[track.traffic]\nroutes = ['none.rou.xml']",
+        ("start_xy = [-2.0, 100.0]\n[track.traffic]\nroutes = ['none.rou.xml']",
          "track[1].traffic", 'routes and sumocfg are for strategy = "sumo"'),
-        ("start_heading_deg = 0\nfringe = 'exit'", "track[1].fringe", "needs SUMO traffic"),
+        ("start_xy = [-2.0, 100.0]\nfringe = 'exit'", "track[1].fringe", "needs SUMO traffic"),
     ],
 )
 def test_a_bad_track_among_several_is_named(tmp_path, net, second, key, message):
-    text = TWO_TRACKS.format(net=net, second=second).replace("start_xy = [-2.0, 100.0]\n", (
-        "" if not second else "start_xy = [-2.0, 100.0]\n"))
     with pytest.raises(InputError) as info:
-        load_text(tmp_path, text)
+        load_text(tmp_path, TWO_TRACKS.format(net=net, second_net=net, second=second))
     assert info.value.key == key
     assert message in info.value.message
 
 
 def test_a_missing_network_of_a_second_track_is_named(tmp_path, net):
-    text = TWO_TRACKS.format(net=net, second="").replace(f'net = "{net}"\nstart_xy = [-2.0',
-                                                         'net = "gone.net.xml"\nstart_xy = [-2.0')
+    text = TWO_TRACKS.format(net=net, second_net="gone.net.xml", second="start_xy = [-2.0, 100.0]")
     with pytest.raises(InputError) as info:
         load_text(tmp_path, text)
     assert info.value.key == "track[1].net" and "network file not found" in info.value.message

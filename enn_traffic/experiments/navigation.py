@@ -155,16 +155,18 @@ def generalization(out: Path, quick: bool = False, progress: bool = True) -> lis
         for seed in seeds:
             path = out / "runs" / name / f"seed{seed}" / "best.npz"
             controllers[name, seed] = Controller.load(path)
+    unseen = {track: shipped_scenario(track) for track in UNSEEN_TRACKS}
+    trainings = {name: shipped_scenario(name) for name in TRAINED}
+    # Each controller on every unseen track, and on its own training tracks at its training
+    # cap (how much of them it drives).
+    pairs = [(key, track, scenario) for key in controllers for track, scenario in unseen.items()]
+    pairs += [(key, track.net.name.removesuffix(".net.xml"), trainings[key[0]].on_track(i))
+              for key in controllers for i, track in enumerate(trainings[key[0]].tracks)]
     rows, traces = [], {}
-    pairs = [(key, track, shipped_scenario(track)) for key in controllers
-             for track in UNSEEN_TRACKS]
-    # ... and each on its own training tracks, at its training cap: how much of them it drives
-    pairs += [(key, track.net.name.removesuffix(".net.xml"), shipped_scenario(key[0]).on_track(i))
-              for key in controllers for i, track in enumerate(shipped_scenario(key[0]).tracks)]
     for (name, seed), track, scenario in tqdm(pairs, desc="generalization", unit="pair",
                                               disable=not progress, leave=False):
         world, poses, outcome = controller_trace(controllers[name, seed], scenario)
-        trained_on = {t.net for t in shipped_scenario(name).tracks}
+        trained_on = {t.net for t in trainings[name].tracks}
         rows.append({
             "trained_on": name, "seed": seed, "track": track,
             "seen": scenario.track.net in trained_on, "cap": scenario.episode.max_steps,
@@ -176,15 +178,15 @@ def generalization(out: Path, quick: bool = False, progress: bool = True) -> lis
             traces[name, track] = (world, poses[:PATH_STEPS + 1, 0])
     table = pd.DataFrame(rows)
     write_csv(out / "generalization.csv", table)
-    unseen = table[~table["seen"]]
     matrix = unseen_matrix(table, TRAINED, UNSEEN_TRACKS)
     write_csv(out / "generalization_matrix.csv", matrix.reset_index())
     heat_map(100 * matrix, out / "generalization.png", label="% of seeds at the cap",
              title=f"Unseen tracks: controllers at the {STEP_CAP}-step cap, % of {len(seeds)} "
              "seeds (blank: trained on it)")
     _path_figure(traces, out / "generalization_paths.png", seeds[0])
-    shares = unseen.groupby("trained_on", sort=False)["capped"].agg(["sum", "size"])
-    own = table[table["seen"] & table["track"].str.startswith(("track_", "train_"))]
+    shares = table[~table["seen"]].groupby("trained_on", sort=False)["capped"].agg(
+        ["sum", "size"])
+    own = table[~table["track"].isin(UNSEEN_TRACKS)]
     covered = own.groupby("trained_on", sort=False)[["capped", "coverage"]].mean()
     return [
         "generalization: (controller, unseen track) pairs at the step cap, by training: "

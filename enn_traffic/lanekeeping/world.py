@@ -117,11 +117,11 @@ class LaneKeepingWorld:
         episodes = self.config.episodes
         steps = np.zeros((len(genes), episodes), dtype=np.int64)
         outcome = np.zeros((len(genes), episodes), dtype=np.int64)
+        roads = [self.road_of(key, e) for e in range(episodes)]
         for p, row in enumerate(genes):
-            for e in range(episodes):
+            for e, road in enumerate(roads):
                 steps[p, e], outcome[p, e], _ = self.episode(
-                    row, self._rng(key, e), self.scenario.episode.max_steps,
-                    road=self.road_of(key, e))
+                    row, self._rng(key, e), self.scenario.episode.max_steps, road=road)
         return EpisodeResults.of_lives(steps, outcome)
 
     def offsets(self, chromosome: np.ndarray, key: int = 0) -> list[tuple[int, int, float]]:
