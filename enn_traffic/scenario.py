@@ -36,7 +36,8 @@ class _Section(BaseModel):
 
 class TrackConfig(_Section):
     """Where the vehicle drives: a SUMO network and a start pose on it. ``start_lane`` and
-    ``start_edge`` may list several; each traffic situation then draws one."""
+    ``start_edge`` may list several, and ``start_anywhere`` takes every lane; each traffic
+    situation then draws one."""
 
     net: Path | None = Field(
         None, description="SUMO `.net.xml`; the drivable area is the union of its lane and "
@@ -56,6 +57,10 @@ class TrackConfig(_Section):
     start_edge: str | list[str] | None = Field(
         None, description="start on this edge's rightmost lane that allows passenger cars. A list: "
         "each traffic situation draws one")
+    start_anywhere: bool = Field(
+        False, description="`true`: each traffic situation starts at a spot drawn from the whole "
+        "track: every 5 m along every passenger lane's centre line, facing either way, where the "
+        "vehicle's body has 1 m to the walls (instead of `start_xy`, `start_lane`, `start_edge`)")
     start_offset: float = Field(
         10.0, ge=0, allow_inf_nan=False, description="distance of a lane or edge start from the "
         "lane's beginning (m)")
@@ -72,9 +77,9 @@ class TrackConfig(_Section):
     @model_validator(mode="after")
     def _one_start(self) -> TrackConfig:
         given = [v for v in (self.start_xy, self.start_lane, self.start_edge) if v is not None]
-        if len(given) != 1:
-            raise ValueError("give exactly one of start_xy (with start_heading_deg), start_lane "
-                             "or start_edge")
+        if len(given) + self.start_anywhere != 1:
+            raise ValueError("give exactly one of start_xy (with start_heading_deg), start_lane, "
+                             "start_edge or start_anywhere = true")
         for name in ("start_lane", "start_edge"):
             if getattr(self, name) == []:
                 raise ValueError(f"{name} must name at least one {name.removeprefix('start_')}")
@@ -83,7 +88,7 @@ class TrackConfig(_Section):
     @property
     def start_names(self) -> list[tuple[str, str]]:
         """The start lanes and edges as (kind, id) pairs: ``("lane", id)`` or ``("edge", id)``;
-        empty for ``start_xy``."""
+        empty for ``start_xy`` and ``start_anywhere``."""
         for kind in ("lane", "edge"):
             value = getattr(self, f"start_{kind}")
             if value is not None:

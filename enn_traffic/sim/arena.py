@@ -28,6 +28,7 @@ from enn_traffic import keys
 from enn_traffic.errors import InputError
 from enn_traffic.network import NetworkSpec, network_buffers
 from enn_traffic.roads import Track, load_track
+from enn_traffic.roads.network import anywhere_poses
 from enn_traffic.roads.network import start_poses as start_lane_poses
 from enn_traffic.scenario import Scenario
 from enn_traffic.sim.rules import (
@@ -240,9 +241,17 @@ class ArenaWorld:
 
 
 def start_poses(scenario: Scenario, track: Track) -> list[tuple[float, float, float]]:
-    """The learner's start poses (one, or one per listed start lane or edge), each checked to
-    exist, allow passenger cars and lie on the drivable area."""
+    """The learner's start poses (one, one per listed start lane or edge, or every start of
+    ``start_anywhere``), each checked to exist, allow passenger cars and lie on the drivable
+    area."""
     config = scenario.track
+    if config.start_anywhere:
+        vehicle = scenario.vehicle
+        poses = anywhere_poses(config.net, track.area, vehicle.length, vehicle.width)
+        if not poses:
+            raise InputError(f"no lane of {track.name} has room for the vehicle",
+                             scenario.source, "track.start_anywhere")
+        return poses
     names = config.start_names
     key = "track.start_xy" if not names else f"track.start_{names[0][0]}"
 

@@ -2,9 +2,11 @@ import numpy as np
 import pytest
 from conftest import local_and_spread
 
+from enn_traffic.errors import InputError
 from enn_traffic.scenario import load_scenario
 from enn_traffic.sim.arena import ArenaWorld
 from enn_traffic.sim.reference import reference_episode
+from enn_traffic.sim.rules import spun
 from enn_traffic.sim.world import CAPPED, COLLIDED, SPUN
 
 ARENA = """
@@ -125,3 +127,64 @@ def test_process_pool_gives_the_local_results(root):
     local, spread = local_and_spread(scenario, population, 0, ProcessEvaluator(scenario, 2))
     np.testing.assert_array_equal(local.fitness, spread.fitness)
     np.testing.assert_array_equal(local.outcome, spread.outcome)
+
+
+ANYWHERE = """
+name = "anywhere"
+[track]
+net = "{net}"
+start_anywhere = true
+[traffic]
+episodes = 6
+"""
+
+
+def test_start_anywhere_takes_every_spot_with_room_along_the_lane(tmp_path, root):
+    # The arena is one 100 m-wide lane along y = 50 from x = 0 to 100: spots every 5 m from
+    # 2.5 m. Facing +x the 4.3 m body (behind the bumper) and 10 m ahead must keep 1 m from
+    # the walls: 5.3 <= x <= 89, so x = 7.5 ... 87.5; facing -x: 11 <= x <= 94.7, so
+    # x = 12.5 ... 92.5. Seventeen each way.
+    path = tmp_path / "anywhere.toml"
+    path.write_text(ANYWHERE.format(net=root / "sumo_nets" / "arena.net.xml"))
+    world = ArenaWorld(load_scenario(path))
+    starts = np.array(world.starts)
+    east, west = starts[np.cos(starts[:, 2]) > 0.99], starts[np.cos(starts[:, 2]) < -0.99]
+    assert len(east) == len(west) == 17 and len(starts) == 34
+    assert np.allclose(starts[:, 1], 50.0)
+    assert np.allclose(np.sort(east[:, 0]), np.arange(7.5, 88, 5))
+    assert np.allclose(np.sort(west[:, 0]), np.arange(12.5, 93, 5))
+    # each situation draws its start from the traffic key: the same key, the same starts
+    drawn = [tuple(e.start[0]) for e in world.episodes(3)]
+    assert drawn == [tuple(e.start[0]) for e in world.episodes(3)]
+    assert len(set(drawn)) > 1 and drawn != [tuple(e.start[0]) for e in world.episodes(4)]
+
+
+def test_start_anywhere_with_a_start_pose_is_refused(tmp_path, root):
+    path = tmp_path / "anywhere.toml"
+    text = ANYWHERE.format(net=root / "sumo_nets" / "arena.net.xml")
+    path.write_text(text.replace("[traffic]", "start_xy = [1.0, 2.0]\n[traffic]"))
+    with pytest.raises(InputError) as info:
+        load_scenario(path)
+    assert info.value.key == "track" and "start_anywhere" in info.value.message
+
+
+def u_turn(straight: int, radius: float) -> np.ndarray:
+    """Positions 1 m apart: ``straight`` m up a corridor, a half circle of ``radius`` m to the
+    left, and back down."""
+    up = [(0.0, float(y)) for y in range(straight)]
+    turn = [(-radius + radius * np.cos(a), straight + radius * np.sin(a))
+            for a in np.arange(0, np.pi, 1 / radius)]
+    down = [(-2 * radius, float(y)) for y in range(straight, -1, -1)]
+    return np.array(up + turn + down)
+
+
+@pytest.mark.parametrize("window, variance, straight, spin", [
+    (49, 64.0, 20, True),  # the paper's rule: 49 m of driving spread over ~21 x 6 m
+    (300, 300.0, 150, False),  # the arena's: 300 m cannot stay within 17 m of a dead end
+])
+def test_a_turn_round_in_a_dead_end_and_the_spin_rules(window, variance, straight, spin):
+    # docs/results.md, "Generalisation across tracks": turning round within 14 m
+    path = u_turn(straight, radius=3.0)[:window]
+    recent = np.empty((window, 2))
+    flags = [spun(recent, step, x, y, variance) for step, (x, y) in enumerate(path)]
+    assert len(path) == window and flags[-1] is spin and not any(flags[:-1])
