@@ -4,7 +4,14 @@ import math
 
 import pandas as pd
 
-from enn_traffic.experiments.navigation import unseen_matrix
+from enn_traffic.experiments.navigation import (
+    TEST_TRACKS,
+    TRAINED,
+    VALIDATION_TRACKS,
+    spin_rule,
+    unseen_matrix,
+)
+from enn_traffic.shipped import shipped_scenario
 
 
 def test_the_matrix_counts_unseen_tracks_only():
@@ -22,3 +29,17 @@ def test_the_matrix_counts_unseen_tracks_only():
     assert matrix.loc["narrow", "b"] == 0.5 and matrix.loc["mixed", "a"] == 1.0
     assert matrix.loc["mixed", "b"] == 0.0
     assert matrix["c"].isna().all()  # a track no one drove is blank, not an error
+
+
+def test_training_validation_and_test_tracks_are_apart():
+    nets = {name: {t.net.name for t in shipped_scenario(name).tracks}
+            for name in TRAINED + VALIDATION_TRACKS + TEST_TRACKS}
+    validation = set().union(*(nets[name] for name in VALIDATION_TRACKS))
+    test = set().union(*(nets[name] for name in TEST_TRACKS))
+    mixed = nets["navigation_mixed"]
+    assert len(test) == len(TEST_TRACKS) and not test & validation
+    assert not mixed & (validation | test)
+    # a track keeps its step cap and takes the training's spin rule
+    measured = spin_rule(shipped_scenario(TEST_TRACKS[0]), shipped_scenario("navigation_mixed"))
+    assert measured.episode.max_steps == 20_000
+    assert (measured.episode.spin_window, measured.episode.spin_variance) == (300, 300.0)
