@@ -29,9 +29,10 @@ QUICK = {"population_size": 20, "generations": 6, "elite_count": 2}
 # Trained on highway-env's road alone, or on roads drawn per situation (issue 25).
 TRAININGS = ["lane_keeping", "lane_keeping_mixed"]
 # Measured on fixed roads: highway-env's training road and roads neither training drove (the
-# mixed training draws sizes from ranges that hold these, never these roads themselves). These
-# seven were measured once before the drawn-road controller came to be chosen on validation
-# roads ...
+# mixed training draws sizes from ranges that hold most of these, never these roads
+# themselves). Each design read some of them before the present one; ``FRESH`` were read by
+# the present design alone (``fresh`` in lane_keeping.csv). The first seven were read by
+# the first design (best.npz of runs drawing periods of 60-160 m) ...
 READ_BEFORE = {
     "training sine (5 m, 100 m)": {},
     "gentle sine (3 m, 150 m)": {"amplitude": 3.0, "period": 150.0},
@@ -40,18 +41,24 @@ READ_BEFORE = {
     "circle, radius 60 m": {"road": "circle", "radius": 60.0},
     "circle, radius 40 m": {"road": "circle", "radius": 40.0},
     "circle, radius 40 m, anticlockwise": {"road": "circle", "radius": 40.0, "mirrored": True},
-}
-# ... and these are fresh for that design (``fresh`` in lane_keeping.csv).
-FRESH = {
+    # ... these five by the second (the controller chosen on validation roads) ...
     "sine (4 m, 80 m)": {"amplitude": 4.0, "period": 80.0},
     "sine (6.5 m, 90 m), mirrored": {"amplitude": 6.5, "period": 90.0, "mirrored": True},
     "sine (2.5 m, 65 m), mirrored": {"amplitude": 2.5, "period": 65.0, "mirrored": True},
     "circle, radius 45 m, anticlockwise": {"road": "circle", "radius": 45.0, "mirrored": True},
     "circle, radius 75 m": {"road": "circle", "radius": 75.0},
 }
+# ... and these by the present one (periods drawn from 50-110 m) alone.
+FRESH = {
+    "sine (7 m, 75 m)": {"amplitude": 7.0, "period": 75.0},
+    "sine (5 m, 60 m), mirrored": {"amplitude": 5.0, "period": 60.0, "mirrored": True},
+    "sine (3.5 m, 120 m)": {"amplitude": 3.5, "period": 120.0},
+    "circle, radius 35 m": {"road": "circle", "radius": 35.0},
+    "circle, radius 50 m, anticlockwise": {"road": "circle", "radius": 50.0, "mirrored": True},
+}
 ROADS = READ_BEFORE | FRESH
-# The camera's noise is drawn from a test key not used before the design changed.
-TEST_KEY = EVALUATION_KEY + 1
+# The camera's noise is drawn from a test key not used by an earlier design.
+TEST_KEY = EVALUATION_KEY + 2
 # A drawn-road run's controller is chosen on this many roads drawn from the validation key.
 VALIDATION_ROADS = 20
 NOISES = [0.0, 0.1]  # the camera's noise when measured (m)
