@@ -73,6 +73,23 @@ class NetworkSpec:
                              f"{self.layer_sizes} needs {self.chromosome_length}")
         return np.ascontiguousarray(population[:, self.source_order()])
 
+    def embed(self, population: np.ndarray, smaller: NetworkSpec) -> np.ndarray:
+        """Chromosomes (P, g) of the ``smaller`` network (its layout) as chromosomes of this
+        one in the source layout, computing the same outputs: each extra hidden neuron gets
+        zero weights in and out. Needs as many layers, none smaller."""
+        sizes, small = self.layer_sizes, smaller.layer_sizes
+        if len(sizes) != len(small) or any(s > b for s, b in zip(small, sizes, strict=True)) \
+                or (sizes[0], sizes[-1]) != (small[0], small[-1]):
+            raise ValueError(f"a network {small} does not fit in {sizes}")
+        blocks = []
+        for big, weights in zip(self.layer_shapes, smaller.weights(population), strict=True):
+            padded = np.zeros((len(weights), *big))
+            rows, cols = weights.shape[1:]
+            padded[:, : rows - 1, :cols] = weights[:, :-1]  # the neurons' weights
+            padded[:, -1, :cols] = weights[:, -1]  # the bias, the last source
+            blocks.append(padded.reshape(len(weights), -1))
+        return np.ascontiguousarray(np.concatenate(blocks, axis=1))
+
     def weights(self, population: np.ndarray) -> list[np.ndarray]:
         """Per-layer weight arrays of shape (P, sources + 1, targets)."""
         population = self.in_source_layout(population)

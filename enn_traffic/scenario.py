@@ -240,6 +240,10 @@ class TrafficConfig(_Section):
     start_heading_deg: tuple[float, float] = Field(
         (-90.0, 90.0), description="their start headings are drawn from this range")
     seed: int = Field(1000, ge=0, description="traffic seed")
+    network_hidden: list[Annotated[int, Field(ge=1, le=1024)]] = Field(
+        [3], description="`random_network`: hidden layer sizes of the traffic's random networks "
+        "(the paper's 19-3-2 traffic), whatever the learner's; the learner needs as many hidden "
+        "layers, each at least as large")
     vary: Literal["generation", "fixed"] = Field(
         "generation", description="`generation` draws new traffic every generation (the same for "
         "every chromosome of it), `fixed` keeps one")
@@ -439,6 +443,17 @@ class Scenario(_Section):
         return self
 
     @model_validator(mode="after")
+    def _traffic_network(self) -> Scenario:
+        hidden, traffic = self.network.hidden, self.traffic.network_hidden
+        fits = len(hidden) == len(traffic) and all(
+            t <= h for t, h in zip(traffic, hidden, strict=True))
+        if "random_network" in self.traffic.strategy_list and self.traffic.starts_xy and not fits:
+            raise ValueError(f"traffic.network_hidden: random-network traffic {traffic} runs "
+                             f"inside the learner's network {hidden}, which needs as many "
+                             "hidden layers, each at least as large")
+        return self
+
+    @model_validator(mode="after")
     def _fringe_exits(self) -> Scenario:
         if (isinstance(self.track, TrackConfig) and self.track.fringe == "exit"
                 and not self.traffic.is_sumo):
@@ -488,6 +503,11 @@ class Scenario(_Section):
     @property
     def layer_sizes(self) -> tuple[int, ...]:
         return (self.inputs, *self.network.hidden, 2)
+
+    @property
+    def traffic_layer_sizes(self) -> tuple[int, ...]:
+        """The random-network traffic's layer sizes (``traffic.network_hidden``)."""
+        return (self.inputs, *self.traffic.network_hidden, 2)
 
     @property
     def inputs(self) -> int:

@@ -57,3 +57,28 @@ def test_compiled_forward_pass_matches_hand_computation():
         out = [sigmoid(sum(hidden[i] * g[9 + 2 * i + k] for i in range(3)) + g[15 + k])
                for k in range(2)]
         np.testing.assert_allclose(got[p], out, rtol=1e-12)
+
+
+def test_a_smaller_network_embedded_computes_the_same_outputs():
+    rng = np.random.default_rng(5)
+    for layout in ("source", "target"):
+        small = NetworkSpec((19, 3, 2), layout)
+        big = NetworkSpec((19, 6, 2), layout)
+        genes = rng.uniform(-1, 1, (4, small.chromosome_length))
+        inputs = rng.uniform(0, 25, (4, 19))
+        embedded = big.embed(genes, small)  # source layout
+        as_big = NetworkSpec((19, 6, 2)).forward(embedded, inputs)
+        assert np.allclose(as_big, small.forward(genes, inputs))
+        assert embedded.shape == (4, NetworkSpec((19, 6, 2)).chromosome_length)
+    two = NetworkSpec((5, 2, 2, 2)), NetworkSpec((5, 4, 3, 2))
+    genes = rng.uniform(-1, 1, (3, two[0].chromosome_length))
+    inputs = rng.uniform(0, 1, (3, 5))
+    assert np.allclose(two[1].forward(two[1].embed(genes, two[0]), inputs),
+                       two[0].forward(genes, inputs))
+
+
+def test_a_network_does_not_fit_in_a_smaller_one():
+    import pytest
+
+    with pytest.raises(ValueError, match="does not fit"):
+        NetworkSpec((19, 2, 2)).embed(np.zeros((1, 68)), NetworkSpec((19, 3, 2)))

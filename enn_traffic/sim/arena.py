@@ -145,6 +145,7 @@ class ArenaWorld:
         self.track = track or load_track(scenario.track.net, exits=scenario.fringe_exits)
         self.exits = self.track.exits if scenario.fringe_exits else np.empty((0, 4))
         self.spec = NetworkSpec(scenario.layer_sizes, scenario.network.layout)
+        self.traffic_spec = NetworkSpec(scenario.traffic_layer_sizes, scenario.network.layout)
         vehicle, sensor, traffic = scenario.vehicle, scenario.sensor, scenario.traffic
         reach = max(sensor.range, math.hypot(vehicle.length, vehicle.width / 2)) + 1.0
         self.grid = WallGrid.build(self.track.walls, reach)
@@ -190,8 +191,9 @@ class ArenaWorld:
                     (x, y, rng.uniform(low, high)) for x, y in self.traffic_starts])
                 kind = strategies.STRATEGIES.get(name, strategies.NONE)
                 kinds = np.array([strategies.NETWORK] + [kind] * len(self.traffic_starts))
-                genes = rng.uniform(-1, 1, size=(self.vehicles, self.spec.chromosome_length))
-                result.append(Episode(start, kinds, self.spec.in_source_layout(genes),
+                genes = rng.uniform(-1, 1, size=(self.vehicles,
+                                                 self.traffic_spec.chromosome_length))
+                result.append(Episode(start, kinds, self.spec.embed(genes, self.traffic_spec),
                                       np.uint64(sequence.generate_state(1, np.uint64)[0])))
         return result
 

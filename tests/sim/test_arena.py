@@ -3,6 +3,7 @@ import pytest
 from conftest import local_and_spread
 
 from enn_traffic.errors import InputError
+from enn_traffic.network import NetworkSpec
 from enn_traffic.scenario import load_scenario
 from enn_traffic.sim.arena import ArenaWorld
 from enn_traffic.sim.reference import reference_episode
@@ -188,3 +189,24 @@ def test_a_turn_round_in_a_dead_end_and_the_spin_rules(window, variance, straigh
     recent = np.empty((window, 2))
     flags = [spun(recent, step, x, y, variance) for step, (x, y) in enumerate(path)]
     assert len(path) == window and flags[-1] is spin and not any(flags[:-1])
+
+
+def test_random_network_traffic_is_the_same_whatever_the_learners_network(root):
+    # Table 1's traffic (19-3-2 random networks) stays Table 1's when Table 2's learner has 6
+    # hidden neurons: the traffic's networks drive the same, vehicle for vehicle.
+    base = load_scenario(root / "scenarios" / "arena_strategy1.toml")
+    worlds = [ArenaWorld(base.with_overrides(network={"hidden": hidden})) for hidden in ([3], [6])]
+    situations = [world.episodes(7) for world in worlds]
+    specs = [NetworkSpec(world.spec.layer_sizes) for world in worlds]  # genes: source layout
+    for small, big in zip(*situations, strict=True):
+        assert np.array_equal(small.start, big.start) and small.seed == big.seed
+        inputs = np.random.default_rng(1).uniform(0, 25, (len(small.start) - 1, 19))
+        assert np.allclose(specs[0].forward(small.traffic_genes[1:], inputs),
+                           specs[1].forward(big.traffic_genes[1:], inputs))
+
+
+def test_traffic_networks_larger_than_the_learners_are_refused(root):
+    with pytest.raises(InputError) as info:
+        load_scenario(root / "scenarios" / "arena_strategy1.toml").with_overrides(
+            network={"hidden": [2]})
+    assert info.value.key == "traffic.network_hidden"
