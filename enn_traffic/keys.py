@@ -12,15 +12,22 @@ from __future__ import annotations
 SPAN = 1_000_000_000
 
 TRAINING = range(0, SPAN)  # generation g of a training run draws key g
-TEST = range(SPAN, 2 * SPAN)  # what is reported: `evaluate`, Tables 1–2, the figures
 VALIDATION = range(2 * SPAN, 3 * SPAN)  # choosing a controller among a run's candidates
 ACCEPTANCE = range(3 * SPAN, 4 * SPAN)  # Table 2: a candidate's acceptance by its lower bound
 CROWD_VALIDATION = range(4 * SPAN, 5 * SPAN)  # Tables 3–4: choosing the winning chromosome
-CROWD_TEST = range(5 * SPAN, 6 * SPAN)  # Tables 3–4: the situations whose rates are reported
+# What is reported, sealed: read once, by the final configuration (docs/design.md, "Traffic
+# keys"). `evaluate`, Tables 1–2, the figures; Tables 3–4's rates.
+TEST = range(6 * SPAN, 7 * SPAN)
+CROWD_TEST = range(7 * SPAN, 8 * SPAN)
+# The test ranges until issue 26: read while the design was still being chosen, so never used
+# again, for anything.
+RETIRED_TEST = range(SPAN, 2 * SPAN)
+RETIRED_CROWD_TEST = range(5 * SPAN, 6 * SPAN)
 
 RANGES = {"training": TRAINING, "test": TEST, "validation": VALIDATION,
           "acceptance": ACCEPTANCE, "crowd validation": CROWD_VALIDATION,
-          "crowd test": CROWD_TEST}
+          "crowd test": CROWD_TEST, "retired test": RETIRED_TEST,
+          "retired crowd test": RETIRED_CROWD_TEST}
 
 
 def is_training(key: int) -> bool:

@@ -1,19 +1,22 @@
 """``enn-traffic reproduce``: every experiment of the paper into one folder, with summary.md.
 
-Each experiment's headline lines and wall time are kept in ``summary.json``, so a call with
-``--only`` updates its own experiments and summary.md still lists every one done so far.
+Each experiment's headline lines, wall time, date and the code that ran it (commit and source
+digest, :mod:`enn_traffic.provenance`) are kept in ``summary.json``, so a call with ``--only``
+updates its own experiments and summary.md still lists every one done so far.
 """
 
 from __future__ import annotations
 
 import json
 import time
+from datetime import UTC, datetime
 from pathlib import Path
 
 from tqdm import tqdm
 
 from enn_traffic.errors import InputError
 from enn_traffic.io import write_text
+from enn_traffic.provenance import code_version, commit
 from enn_traffic.report.paper_tables import paper_tables
 
 
@@ -41,7 +44,9 @@ def reproduce(out: Path, quick: bool = False, only: list[str] | None = None,
             started = time.perf_counter()
             lines = EXPERIMENTS[name](out, quick=quick, progress=progress)
             records[name] = {"lines": lines, "seconds": round(time.perf_counter() - started, 1),
-                             "settings": "quick" if quick else "full"}
+                             "settings": "quick" if quick else "full", "commit": commit(),
+                             "code": code_version(),
+                             "date": datetime.now(UTC).strftime("%Y-%m-%d %H:%M UTC")}
             write_text(record_path, json.dumps(records, indent=1))
             tqdm.write("\n".join(lines))
     write_summary(out, records)
@@ -58,8 +63,15 @@ def write_summary(out: Path, records: dict) -> None:
     done = [n for n in EXPERIMENTS if n in records]
     summary = ["# enn-traffic: reproduction of Eraqi et al. (2016)", ""]
     summary += [f"- {line}" for n in done for line in records[n]["lines"]]
-    summary += ["", "| experiment | settings | wall time of its last call [s] |", "|---|---|---|"]
-    summary += [f"| {n} | {records[n]['settings']} | {records[n]['seconds']} |" for n in done]
-    summary += ["", "A call reuses finished runs: its wall time can be far below the compute.", ""]
+    summary += ["", "| experiment | settings | commit | code | date | wall time of its last call "
+                "[s] |", "|---|---|---|---|---|---|"]
+    summary += [f"| {n} | {records[n]['settings']} | {records[n].get('commit') or '-'} | "
+                f"{records[n].get('code', '-')} | {records[n].get('date', '-')} | "
+                f"{records[n]['seconds']} |" for n in done]
+    total = sum(records[n]["seconds"] for n in done)
+    summary += [f"| all | | | | | {total:.1f} |", "",
+                "A call reuses finished runs made by the same code (`code`: a digest of the "
+                "package's sources): its wall time can be far below the compute. From an empty "
+                "folder, the wall times are the compute.", ""]
     summary += paper_tables(out)
     write_text(out / "summary.md", "\n".join(summary) + "\n")

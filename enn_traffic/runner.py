@@ -25,6 +25,7 @@ from enn_traffic.evolution import ga
 from enn_traffic.evolution.backends import Evaluator, make_evaluator
 from enn_traffic.io import write_atomic, write_csv, write_text
 from enn_traffic.network import NetworkSpec
+from enn_traffic.provenance import code_version
 from enn_traffic.report.plots import learning_curve
 from enn_traffic.scenario import Scenario
 from enn_traffic.sim.world import CAPPED, COLLIDED, LEFT_LANE, LEFT_NETWORK, SPUN
@@ -85,15 +86,29 @@ def ga_params(scenario: Scenario) -> ga.GAParams:
 
 def fingerprint(scenario: Scenario, others: Sequence[Scenario] = (),
                 population: np.ndarray | None = None) -> str:
-    """Identifies a run's settings (everything but the number of generations), with the other
-    scenarios its evaluator runs (their worlds: not their own number of generations) and the
-    population it started from, where there are such."""
-    digest = hashlib.sha256(scenario.with_overrides(ga={"generations": 1}).to_toml().encode())
-    for other in others:
-        digest.update(other.with_overrides(ga={"generations": 1}).to_toml().encode())
+    """Identifies a run: its settings (everything but the number of generations) and the
+    contents of the files they name, with the other scenarios its evaluator runs (their
+    worlds: not their own number of generations), the population it started from, where there
+    are such, and the code that runs it (:func:`~enn_traffic.provenance.code_version`)."""
+    digest = hashlib.sha256(code_version().encode())
+    for one in (scenario, *others):
+        digest.update(one.with_overrides(ga={"generations": 1}).to_toml().encode())
+        for path in input_files(one):
+            digest.update(path.read_bytes() if path.is_file() else b"missing")
     if population is not None:
         digest.update(np.ascontiguousarray(population, dtype=np.float64).tobytes())
     return digest.hexdigest()[:16]
+
+
+def input_files(scenario: Scenario) -> list[Path]:
+    """The files a scenario reads: its tracks' networks, SUMO's route and configuration
+    files."""
+    traffic = scenario.traffic
+    files = [track.net for track in scenario.tracks if track.net is not None]
+    files += list(traffic.routes) + ([traffic.sumocfg] if traffic.sumocfg else [])
+    for track in scenario.tracks:
+        files += [Path(p) for p in track.traffic.get("routes", [])]
+    return files
 
 
 def _fresh_state(scenario: Scenario, key: str, population: np.ndarray | None = None
@@ -108,7 +123,7 @@ def _fresh_state(scenario: Scenario, key: str, population: np.ndarray | None = N
         raise ValueError(f"initial population has shape {population.shape}, the scenario "
                          f"needs ({scenario.ga.population_size}, {length})")
     return ga.GAState(generation=0, population=population, rng=rng, fingerprint=key,
-                      extra={"elapsed_s": 0.0})
+                      extra={"elapsed_s": 0.0, "code": code_version()})
 
 
 def _open_state(scenario: Scenario, out: Path, resume: bool, force: bool,
@@ -122,6 +137,10 @@ def _open_state(scenario: Scenario, out: Path, resume: bool, force: bool,
             "start over", out)
     state = ga.GAState.load(checkpoint)
     if state.fingerprint != key:
+        made_by = state.extra.get("code", "older")
+        if made_by != code_version():
+            raise InputError(f"the folder holds a run made by other code ({made_by}; this is "
+                             f"{code_version()}); use another --out or --force", out)
         raise InputError(
             "the folder holds a run of different settings; use another --out or --force", out)
     return state

@@ -28,3 +28,14 @@ def test_experiments_draw_from_their_named_ranges():
     assert choosing.ACCEPTANCE_KEY in keys.ACCEPTANCE
     assert simultaneous.VALIDATION_KEY in keys.CROWD_VALIDATION
     assert simultaneous.SITUATION_KEY in keys.CROWD_TEST
+
+
+def test_no_experiment_reads_a_retired_test_range():
+    from enn_traffic import deploy
+    from enn_traffic.experiments import choosing, lanekeeping, simultaneous
+
+    used = [deploy.EVALUATION_KEY, lanekeeping.TEST_KEY, choosing.VALIDATION_KEY,
+            choosing.ACCEPTANCE_KEY, simultaneous.VALIDATION_KEY, simultaneous.SITUATION_KEY]
+    for retired in (keys.RETIRED_TEST, keys.RETIRED_CROWD_TEST):
+        assert not any(key in retired for key in used)
+    assert lanekeeping.TEST_KEY in keys.TEST

@@ -77,3 +77,37 @@ def test_a_run_is_resumed_only_from_the_same_start_and_other_worlds(small, tmp_p
     for change in changes:
         with pytest.raises(InputError, match="different settings"):
             evolve(scenario, tmp_path, resume=True, progress=False, **change)
+
+
+def test_a_run_made_by_other_code_is_named_and_run_again(small, tmp_path):
+    """issue 26: a run's fingerprint holds the code that ran it; reproduce reruns a run that
+    other code made, and says so."""
+    from enn_traffic.experiments.common import run_or_reuse
+    from enn_traffic.provenance import code_version
+
+    scenario = small.with_overrides(ga={"generations": 2})
+    first = evolve(scenario, tmp_path, progress=False)
+    state = GAState.load(tmp_path / "checkpoint.npz")
+    assert state.extra["code"] == code_version()
+    # what a checkpoint written by other code holds
+    state.fingerprint, state.extra["code"] = "0" * 16, "0123456789ab"
+    state.generation = 1
+    state.save(tmp_path / "checkpoint.npz")
+    with pytest.raises(InputError, match=r"made by other code \(0123456789ab; this is"):
+        evolve(scenario, tmp_path, resume=True, progress=False)
+    again = run_or_reuse(scenario, tmp_path, progress=False)
+    assert GAState.load(tmp_path / "checkpoint.npz").extra["code"] == code_version()
+    pd.testing.assert_frame_equal(again.drop(columns="elapsed_s"),
+                                  first.drop(columns="elapsed_s"))
+
+
+def test_a_changed_network_file_changes_the_fingerprint(small, tmp_path, root):
+    from enn_traffic.runner import fingerprint
+
+    net = tmp_path / "track.net.xml"
+    net.write_bytes((root / "sumo_nets" / "track_narrow.net.xml").read_bytes())
+    scenario = small.with_overrides(track={"net": str(net)})
+    before = fingerprint(scenario)
+    assert fingerprint(scenario) == before
+    net.write_bytes(net.read_bytes() + b"<!-- edited -->\n")
+    assert fingerprint(scenario) != before

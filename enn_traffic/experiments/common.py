@@ -25,11 +25,12 @@ def distinct(rows: np.ndarray) -> np.ndarray:
 
 
 def run_or_reuse(scenario: Scenario, out: Path, progress: bool, **options) -> pd.DataFrame:
-    """Evolve into ``out``; a finished run there with the same settings is reused and an
-    interrupted one resumed."""
+    """Evolve into ``out``; a finished run there with the same settings, made by the same code,
+    is reused and an interrupted one resumed; any other is run again, and said so."""
     try:
         return evolve(scenario, out, resume=True, progress=progress, **options)
-    except InputError:
+    except InputError as error:
+        tqdm.write(f"{out}: {error.message.split(';')[0]}: running it again")
         return evolve(scenario, out, force=True, progress=progress, **options)
 
 

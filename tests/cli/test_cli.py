@@ -160,3 +160,16 @@ def test_summary_sets_the_papers_tables_beside_ours(tmp_path):
     assert "| 1 | 2115 / 100 | 544 / 2 | 558 / 3 | 432 / 4 |" in text
     assert "| 4 | 559 / 13 | 334 / 14 | 1080 / 15 | 2560 / 800 |" in text
     assert paper_tables(tmp_path / "empty") == []
+
+
+def test_the_summary_names_the_code_and_date_of_each_experiment(quick_fig7):
+    import json
+
+    from enn_traffic.provenance import code_version
+
+    record = json.loads((quick_fig7 / "summary.json").read_text())["fig7"]
+    assert record["code"] == code_version() and record["date"].endswith("UTC")
+    summary = (quick_fig7 / "summary.md").read_text()
+    row = next(line for line in summary.splitlines() if line.startswith("| fig7 |"))
+    assert f"| {code_version()} |" in row and f"| {record['seconds']} |" in row
+    assert f"| all | | | | | {record['seconds']:.1f} |" in summary
