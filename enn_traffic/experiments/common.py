@@ -11,11 +11,23 @@ import numpy as np
 import pandas as pd
 from tqdm import tqdm
 
+from enn_traffic.controller import Controller
 from enn_traffic.errors import InputError
 from enn_traffic.io import write_atomic
 from enn_traffic.runner import CHECKPOINT, evolve
 from enn_traffic.scenario import Scenario
 from enn_traffic.shipped import shipped_scenario
+
+
+def save_controller(out: Path, name: str, scenario: Scenario, chromosome: np.ndarray,
+                    fitness: float) -> Path:
+    """A controller behind a table as ``out/controllers/NAME.npz``, for ``enn-traffic
+    evaluate``; ``fitness``: what the table reports for it. Generation -1: it was chosen among
+    a run's candidates, not taken as one generation's best."""
+    path = out / "controllers" / f"{name}.npz"
+    path.parent.mkdir(parents=True, exist_ok=True)
+    Controller.from_scenario(scenario, chromosome, fitness, generation=-1).save(path)
+    return path
 
 
 def distinct(rows: np.ndarray) -> np.ndarray:

@@ -15,7 +15,7 @@ from enn_traffic.controller import Controller
 from enn_traffic.deploy import EVALUATION_KEY
 from enn_traffic.evolution.backends import ProcessEvaluator
 from enn_traffic.experiments.choosing import candidates
-from enn_traffic.experiments.common import run_or_reuse
+from enn_traffic.experiments.common import run_or_reuse, save_controller
 from enn_traffic.io import write_csv
 from enn_traffic.report.plots import draw_paths, learning_curves, save_figure
 from enn_traffic.scenario import Scenario
@@ -85,6 +85,8 @@ def lane_keeping(out: Path, quick: bool = False, progress: bool = True) -> list[
             finally:
                 evaluator.close()
             best[name, seed] = chosen(sc, run_dir)
+            save_controller(out, f"lane_keeping/{name}_seed{seed}", sc, best[name, seed],
+                            runs[name, seed]["best_fitness"].max())
     cap = shipped_scenario(TRAININGS[0]).episode.max_steps
     learning_curves({f"{name.removeprefix('lane_keeping').strip('_') or 'one road'}, seed {s}": t
                      for (name, s), t in runs.items()}, out / "lane_keeping.png",

@@ -13,7 +13,7 @@ from tqdm import tqdm
 
 from enn_traffic.controller import Controller
 from enn_traffic.deploy import controller_trace
-from enn_traffic.experiments.common import first_generation, run_all, seed_runs
+from enn_traffic.experiments.common import first_generation, run_all, save_controller, seed_runs
 from enn_traffic.io import write_csv
 from enn_traffic.report.plots import draw_paths, heat_map, learning_curves, save_figure
 from enn_traffic.scenario import Scenario
@@ -165,6 +165,8 @@ def generalization(out: Path, quick: bool = False, progress: bool = True) -> lis
         for seed in seeds:
             path = out / "runs" / name / f"seed{seed}" / "best.npz"
             controllers[name, seed] = Controller.load(path)
+            save_controller(out, f"generalization/{name}_seed{seed}", shipped_scenario(name),
+                            controllers[name, seed].chromosome, controllers[name, seed].fitness)
     unseen = {track: shipped_scenario(track) for track in UNSEEN_TRACKS}
     trainings = {name: shipped_scenario(name) for name in TRAINED}
     # Each controller on every unseen track, and on its own training tracks at its training

@@ -44,7 +44,7 @@ import pandas as pd
 from enn_traffic import keys
 from enn_traffic.evolution.online import Evidence, OnlineLearning, VehicleGA
 from enn_traffic.experiments.choosing import evolved_candidates, final_population
-from enn_traffic.experiments.common import distinct
+from enn_traffic.experiments.common import distinct, save_controller
 from enn_traffic.experiments.protocol import ARENA, STRATEGIES
 from enn_traffic.io import write_csv
 from enn_traffic.report.plots import draw_paths, save_figure
@@ -163,6 +163,8 @@ def _measure(out: Path, quick: bool, progress: bool) -> tuple[pd.DataFrame, pd.D
         world = ArenaWorld(shipped_scenario(ARENA.name(strategy)))
         ranked, validation = _ranked(world, candidates[strategy])
         winner = ranked[0]
+        save_controller(out, f"table3/strategy{strategy}", world.scenario, winner,
+                        float("nan"))  # chosen by lives lost, not by a fitness
         population = _evolved_population(
             ranked, final_population(ARENA, out, strategy, winner, quick),
             world.scenario.ga.population_size)

@@ -10,6 +10,7 @@ import pandas as pd
 
 from enn_traffic.deploy import EVALUATION_KEY
 from enn_traffic.experiments.choosing import fitness_on_test_traffic, specialists
+from enn_traffic.experiments.common import save_controller
 from enn_traffic.experiments.protocol import ARENA, STRATEGIES, Family, strategy_world
 from enn_traffic.io import write_csv
 from enn_traffic.report.figures import fig12_figure, specialist_paths
@@ -33,10 +34,13 @@ def table1(out: Path, quick: bool = False, progress: bool = True,
            family: Family = ARENA) -> list[str]:
     """Train on each strategy, deploy on each (Table 1), and the colour map (Fig. 12)."""
     family = family.settings(quick)
-    out = out / family.folder
+    root, out = out, out / family.folder
     controllers = specialists(family, out, progress)
     matrix = np.array([[fitness_on_test_traffic(family, controllers[trained], deployed)
                         for deployed in STRATEGIES] for trained in STRATEGIES])
+    for index, strategy in enumerate(STRATEGIES):
+        save_controller(root, (Path(family.folder) / "table1" / f"strategy{strategy}").as_posix(),
+                        family.scenario(strategy), controllers[strategy], matrix[index, index])
     table = pd.DataFrame(matrix.round(1), columns=[f"deploy_{s}" for s in STRATEGIES])
     table.insert(0, "training_strategy", STRATEGIES)
     write_csv(out / "table1.csv", table)

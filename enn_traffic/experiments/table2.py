@@ -9,6 +9,7 @@ import numpy as np
 import pandas as pd
 
 from enn_traffic.experiments.choosing import fitness_on_test_traffic
+from enn_traffic.experiments.common import save_controller
 from enn_traffic.experiments.incremental import Iteration, incremental_evolution
 from enn_traffic.experiments.protocol import ARENA, STRATEGIES, Family
 from enn_traffic.io import write_csv
@@ -37,12 +38,17 @@ def table2(out: Path, quick: bool = False, progress: bool = True,
     evolution per seed of ``incremental_seeds``; Table 2 is the one whose last controller's
     worst strategy does best on validation traffic, as Table 1 chooses among its seeds' runs."""
     family = family.settings(quick).incremental()
-    out = out / family.folder
+    root, out = out, out / family.folder
     threshold = family.threshold
-    chains = {seed: _rows(family, seed, incremental_evolution(
-                  family, out / "runs" / "incremental" / f"seed{seed}", seed, progress))
-              for seed in family.incremental_seeds}
+    evolutions = {seed: incremental_evolution(family, out / "runs" / "incremental" / f"seed{seed}",
+                                              seed, progress)
+                  for seed in family.incremental_seeds}
+    chains = {seed: _rows(family, seed, iterations) for seed, iterations in evolutions.items()}
     seed = max(chains, key=lambda s: chains[s][1])  # the first of equals, as argmax
+    last_row = chains[seed][0][-1]
+    save_controller(root, (Path(family.folder) / "table2" / "last_iteration").as_posix(),
+                    family.scenario(STRATEGIES[0]), evolutions[seed][-1].chosen,
+                    last_row["average"])
     every = pd.DataFrame([row for rows, _ in chains.values() for row in rows])
     write_csv(out / "table2_runs.csv", every.round(1))
     table = every[every["seed"] == seed].drop(columns="seed").reset_index(drop=True)

@@ -36,3 +36,17 @@ def test_table2_reports_the_evolution_whose_last_controller_does_best_on_validat
     best = max(worst, key=worst.get)
     expected = runs[runs["seed"] == best].drop(columns="seed").reset_index(drop=True)
     pd.testing.assert_frame_equal(pd.read_csv(tmp_path / "table2.csv"), expected)
+    # the controller behind the table is committed with it and evaluates (issue 26)
+    import subprocess
+    import sys
+
+    from enn_traffic.controller import Controller
+
+    path = tmp_path / "controllers" / "table2" / "last_iteration.npz"
+    saved = Controller.load(path)
+    assert saved.layer_sizes == (19, *family.incremental_hidden, 2)
+    assert round(saved.fitness, 1) == expected["average"].iloc[-1]
+    scenario = protocol.ARENA.scenario(4).source
+    result = subprocess.run([sys.executable, "-m", "enn_traffic", "evaluate", str(path),
+                             str(scenario), "--quiet"], capture_output=True, text=True)
+    assert result.returncode == 0, result.stderr
