@@ -25,20 +25,8 @@ def fig11(out: Path, quick: bool = False, progress: bool = True,
     scores = {}
     for strategy, runs in runs_by_strategy.items():
         for seed, table in runs.items():
-            best, mean = table["best_fitness"], table["mean_fitness"]
             scores[strategy, seed] = held_out(family, out, strategy, seed)
-            on_test = (scores[strategy, seed] if scores[strategy, seed] is not None
-                       else np.full(len(table), np.nan))
-            rows.append({
-                "strategy": strategy, "seed": seed, "generations": len(table),
-                "first_best": best.iloc[0], "last_best": best.iloc[-1],
-                "last5_mean_best": best.tail(5).mean(), "max_best": best.max(),
-                "rise": best.tail(5).mean() / max(best.iloc[0], 1.0),
-                "first_mean": mean.iloc[0], "last5_mean_mean": mean.tail(5).mean(),
-                "mean_rise": mean.tail(5).mean() / max(mean.iloc[0], 1.0),
-                "first_held_out": on_test[0], "last5_mean_held_out": on_test[-5:].mean(),
-                "held_out_rise": on_test[-5:].mean() / max(on_test[0], 1.0),
-            })  # fmt: skip
+            rows.append(run_row(strategy, seed, table, scores[strategy, seed]))
     fig11_figure(runs_by_strategy, scores, {s: title(family, s) for s in STRATEGIES},
                  f"Fig. 11 ({family.label}): the learner among traffic, "
                  f"{len(family.seeds)} runs per strategy\nsolid: each generation's best "
@@ -46,12 +34,35 @@ def fig11(out: Path, quick: bool = False, progress: bool = True,
                  "situations", out / "fig11.png")
     table = pd.DataFrame(rows)
     write_csv(out / "fig11.csv", table)
+    return [summary_line(table, f"{family.folder}/fig11" if family.folder else "fig11")]
+
+
+def run_row(strategy: int, seed: int, table: pd.DataFrame, on_test: np.ndarray | None
+            ) -> dict:
+    """A run's row of fig11.csv from its generations table and each generation's best on
+    test traffic (None: not measured). A rise is the mean of the last 5 generations over the
+    first generation's (at least 1 step)."""
+    best, mean = table["best_fitness"], table["mean_fitness"]
+    on_test = np.full(len(table), np.nan) if on_test is None else np.asarray(on_test)
+    return {
+        "strategy": strategy, "seed": seed, "generations": len(table),
+        "first_best": best.iloc[0], "last_best": best.iloc[-1],
+        "last5_mean_best": best.tail(5).mean(), "max_best": best.max(),
+        "rise": best.tail(5).mean() / max(best.iloc[0], 1.0),
+        "first_mean": mean.iloc[0], "last5_mean_mean": mean.tail(5).mean(),
+        "mean_rise": mean.tail(5).mean() / max(mean.iloc[0], 1.0),
+        "first_held_out": on_test[0], "last5_mean_held_out": on_test[-5:].mean(),
+        "held_out_rise": on_test[-5:].mean() / max(on_test[0], 1.0),
+    }  # fmt: skip
+
+
+def summary_line(table: pd.DataFrame, label: str) -> str:
+    """The summary's Fig. 11 line: each strategy's median rise over its runs."""
     rise = table.groupby("strategy")[["rise", "mean_rise", "held_out_rise"]].median()
-    label = f"{family.folder}/fig11" if family.folder else "fig11"
-    return [f"{label}: best fitness, mean of the last 5 generations over the first generation's "
+    return (f"{label}: best fitness, mean of the last 5 generations over the first generation's "
             "(median of the runs): "
             + ", ".join(f"strategy {s}: {r.rise:.1f}x" for s, r in rise.iterrows())
             + "; population mean fitness: "
             + ", ".join(f"{r.mean_rise:.1f}x" for _, r in rise.iterrows())
             + "; each generation's best on test traffic: "
-            + ", ".join(f"{r.held_out_rise:.1f}x" for _, r in rise.iterrows())]
+            + ", ".join(f"{r.held_out_rise:.1f}x" for _, r in rise.iterrows()))

@@ -47,10 +47,16 @@ def table1(out: Path, quick: bool = False, progress: bool = True,
     fig12_figure(matrix, STRATEGIES, out / "fig12.png")
     _draw_specialists(family, controllers,
                       out / ("arena_paths.png" if family is ARENA else "paths.png"))
+    return [summary_line(matrix, f"{family.folder}/table1" if family.folder else "table1")]
+
+
+def summary_line(matrix: np.ndarray, label: str) -> str:
+    """The summary's Table 1 line: the paper's pattern is a diagonal (trained and deployed on
+    the same strategy) above the rest of its row."""
+    size = len(matrix)
     diagonal = np.diag(matrix)
-    off = matrix[~np.eye(4, dtype=bool)]
-    rows_ok = sum(diagonal[i] > np.delete(matrix[i], i).max() for i in range(4))
-    label = f"{family.folder}/table1" if family.folder else "table1"
-    return [f"{label}: mean diagonal {diagonal.mean():.0f}, mean off-diagonal {off.mean():.0f} "
+    off = matrix[~np.eye(size, dtype=bool)]
+    rows_ok = sum(diagonal[i] > np.delete(matrix[i], i).max() for i in range(size))
+    return (f"{label}: mean diagonal {diagonal.mean():.0f}, mean off-diagonal {off.mean():.0f} "
             f"(ratio {diagonal.mean() / off.mean():.2f}; paper 4.9); diagonal above the rest "
-            f"of its row in {rows_ok} of 4 rows (paper: 4 of 4)"]
+            f"of its row in {rows_ok} of {size} rows (paper: 4 of 4)")

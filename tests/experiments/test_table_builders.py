@@ -1,0 +1,48 @@
+"""The table builders on hand-made inputs: Table 1's pattern line, Fig. 11's rises and the
+paper-beside-ours tables of summary.md (issue 26)."""
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from enn_traffic.experiments import fig11, table1
+from enn_traffic.report.paper_tables import paper_tables
+
+
+def test_table1_line_counts_the_rows_whose_diagonal_is_highest():
+    matrix = np.array([[900.0, 100, 100, 100],
+                       [200, 800, 900, 100],  # row 2: strategy 3 beats its own diagonal
+                       [100, 100, 700, 100],
+                       [100, 100, 100, 600]])
+    line = table1.summary_line(matrix, "table1")
+    # diagonal 750 on average; off-diagonal (300 + 1200 + 300 + 300) / 12 = 175
+    assert "mean diagonal 750, mean off-diagonal 175 (ratio 4.29" in line
+    assert "in 3 of 4 rows" in line
+
+
+def test_fig11_rise_is_the_last_five_over_the_first_generation():
+    generations = pd.DataFrame({"best_fitness": [100.0, 200, 300, 400, 500, 600, 700],
+                                "mean_fitness": [10.0, 10, 20, 20, 20, 20, 20]})
+    on_test = np.array([50.0, 60, 70, 80, 90, 100, 110])
+    row = fig11.run_row(2, 1, generations, on_test)
+    assert row["rise"] == pytest.approx(500 / 100)  # mean of 300..700
+    assert row["mean_rise"] == pytest.approx(2.0)
+    assert row["held_out_rise"] == pytest.approx(90 / 50)
+    assert np.isnan(fig11.run_row(2, 1, generations, None)["held_out_rise"])
+    rows = pd.DataFrame([row, {**row, "seed": 2, "rise": 1.0}, {**row, "seed": 3, "rise": 9.0}])
+    assert "strategy 2: 5.0x" in fig11.summary_line(rows, "fig11")  # the median run
+
+
+def test_paper_tables_set_ours_beside_the_papers(tmp_path):
+    pd.DataFrame({"training_strategy": [1, 2, 3, 4],
+                  **{f"deploy_{j}": [float(10 * i + j) for i in range(1, 5)]
+                     for j in range(1, 5)}}).to_csv(tmp_path / "table1.csv", index=False)
+    pd.DataFrame({"strategy": [1, 2, 3, 4], "initial_collisions_per_s": [0.1, 0.2, 0.3, 0.4],
+                  "after_collisions_per_s": [0.01, 0.02, 0.03, 0.04]}).to_csv(
+        tmp_path / "table4.csv", index=False)
+    text = "\n".join(paper_tables(tmp_path))
+    assert "### Table 1, arena" in text and "| 2 |" in text
+    row = next(line for line in text.splitlines() if line.startswith("| 2 |"))
+    assert row.count("/") == 4 and row.rstrip(" |").endswith(" 24")  # trained 2, deployed 4
+    table4 = text[text.index("### Table 4"):]
+    assert "| 3 |" in table4 and "0.3" in table4 and "0.03" in table4
