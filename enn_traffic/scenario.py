@@ -60,7 +60,8 @@ class TrackConfig(_Section):
     start_anywhere: bool = Field(
         False, description="`true`: each traffic situation starts at a spot drawn from the whole "
         "track: every 5 m along every passenger lane's centre line, facing either way, where the "
-        "vehicle's body has 1 m to the walls (instead of `start_xy`, `start_lane`, `start_edge`)")
+        "vehicle's body has 1 m to the walls and 10 m free ahead (instead of `start_xy`, "
+        "`start_lane`, `start_edge`)")
     start_offset: float = Field(
         10.0, ge=0, allow_inf_nan=False, description="distance of a lane or edge start from the "
         "lane's beginning (m)")

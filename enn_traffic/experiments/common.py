@@ -22,8 +22,10 @@ from enn_traffic.shipped import shipped_scenario
 def save_controller(out: Path, name: str, scenario: Scenario, chromosome: np.ndarray,
                     fitness: float) -> Path:
     """A controller behind a table as ``out/controllers/NAME.npz``, for ``enn-traffic
-    evaluate``; ``fitness``: what the table reports for it. Generation -1: it was chosen among
-    a run's candidates, not taken as one generation's best."""
+    evaluate``; ``fitness``: the figure it is known by (its table entry where the table has
+    one, else its run's best training fitness; NaN for Table 3's winner, chosen by lives
+    lost). Generation -1: it was chosen among a run's candidates, not read from one
+    generation."""
     path = out / "controllers" / f"{name}.npz"
     path.parent.mkdir(parents=True, exist_ok=True)
     Controller.from_scenario(scenario, chromosome, fitness, generation=-1).save(path)

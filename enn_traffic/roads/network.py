@@ -22,15 +22,16 @@ from shapely.geometry import LineString, MultiPolygon, Point, Polygon
 from shapely.ops import unary_union
 
 from enn_traffic.errors import InputError
+from enn_traffic.geometry import body_corners
 
 SLIVER_M = 0.2  # holes narrower than this are gaps between lanes, not walls
 SNAP_M = 0.05  # gaps between lane and junction shapes up to twice this are closed
-EXIT_MARGIN_M = 0.5
+EXIT_MARGIN_M = 0.5  # a fringe cut reaches this far past the road's outer lane edges
 # ``start_anywhere``: candidate starts this far apart along each lane, the body this far from
 # the walls, and this much room straight ahead (ten steps at 10 m/s: time to see and turn).
 ANYWHERE_SPACING_M = 5.0
 ANYWHERE_CLEARANCE_M = 1.0
-ANYWHERE_AHEAD_M = 10.0  # a fringe cut reaches this far past the road's outer lane edges
+ANYWHERE_AHEAD_M = 10.0
 
 
 @dataclass(frozen=True)
@@ -104,6 +105,7 @@ def anywhere_poses(net_file: Path, area: Polygon | MultiPolygon, length: float, 
     facing each way, where a ``length`` x ``width`` body, stretched ``ANYWHERE_AHEAD_M``
     forwards, lies ``ANYWHERE_CLEARANCE_M`` inside ``area``."""
     inner = area.buffer(-ANYWHERE_CLEARANCE_M)
+    corners = np.empty((4, 2))
     poses = []
     for edge in _read_net(net_file).getEdges():
         for lane in edge.getLanes():
@@ -114,20 +116,14 @@ def anywhere_poses(net_file: Path, area: Polygon | MultiPolygon, length: float, 
                 x, y, heading = _along(lane, float(offset))
                 for facing in (heading, heading + math.pi):
                     facing = math.remainder(facing, 2 * math.pi)
-                    swept = _body(x, y, facing, length, width, ANYWHERE_AHEAD_M)
-                    if inner.contains(swept):
+                    # the body with its front moved ANYWHERE_AHEAD_M forwards
+                    reach = (ANYWHERE_AHEAD_M * math.cos(facing),
+                             ANYWHERE_AHEAD_M * math.sin(facing))
+                    body_corners(x + reach[0], y + reach[1], facing, length + ANYWHERE_AHEAD_M,
+                                 width, corners)
+                    if inner.contains(Polygon(corners)):
                         poses.append((x, y, facing))
     return poses
-
-
-def _body(x: float, y: float, heading: float, length: float, width: float, reach: float = 0.0
-          ) -> Polygon:
-    """The body rectangle of a vehicle whose front-bumper centre is at (x, y), its front
-    moved ``reach`` m forwards."""
-    ahead = np.array([math.cos(heading), math.sin(heading)])
-    side = np.array([-ahead[1], ahead[0]]) * width / 2
-    front, rear = np.array([x, y]) + ahead * reach, np.array([x, y]) - ahead * length
-    return Polygon([front - side, front + side, rear + side, rear - side])
 
 
 def _lane(net: sumolib.net.Net, lane_id: str):
