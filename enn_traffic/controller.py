@@ -1,4 +1,5 @@
-"""Saved controllers (``best.npz``): a chromosome with the network and sensor it was made for."""
+"""Saved controllers (``best.npz``): a chromosome with the network and sensor it was made for,
+and the spin rule it was evolved under."""
 
 from __future__ import annotations
 
@@ -25,6 +26,9 @@ class Controller:
     fitness: float
     scenario_name: str
     generation: int
+    # The spin rule of its training (paper §5.3); None in files written before it was kept.
+    spin_window: int | None = None
+    spin_variance: float | None = None
 
     @classmethod
     def from_scenario(
@@ -40,6 +44,8 @@ class Controller:
             fitness=float(fitness),
             scenario_name=scenario.name,
             generation=int(generation),
+            spin_window=scenario.episode.spin_window,
+            spin_variance=scenario.episode.spin_variance,
         )
 
     def save(self, path: str | Path) -> None:
@@ -55,6 +61,8 @@ class Controller:
             fitness=self.fitness,
             scenario_name=self.scenario_name,
             generation=self.generation,
+            **({} if self.spin_window is None else
+               {"spin_window": self.spin_window, "spin_variance": self.spin_variance}),
         )
         write_atomic(path, lambda handle: handle.write(buffer.getvalue()), binary=True)
 
@@ -75,6 +83,9 @@ class Controller:
                     fitness=float(data["fitness"]),
                     scenario_name=str(data["scenario_name"]),
                     generation=int(data["generation"]),
+                    **({"spin_window": int(data["spin_window"]),
+                        "spin_variance": float(data["spin_variance"])}
+                       if "spin_window" in data.files else {}),
                 )
         except Exception as exc:  # numpy raises many types on a damaged archive
             raise InputError(f"not a readable controller file ({type(exc).__name__}: {exc})",
@@ -93,8 +104,11 @@ class Controller:
         return controller
 
     def fit(self, scenario: Scenario, path: str | Path | None = None) -> Scenario:
-        """``scenario`` with this controller's network and sensor; a clear error if the
-        scenario's rangefinder has another number of beams than the network has inputs."""
+        """``scenario`` with this controller's network and sensor, and the spin rule it was
+        evolved under: a controller is measured by the rules it learnt by (the paper's rule,
+        4.9 s within 8 m, calls a turn round in a narrow dead end a spin; docs/results.md,
+        "Generalisation across tracks"). A clear error if the scenario's rangefinder has another
+        number of beams than the network has inputs."""
         if scenario.lane_keeping is not None:
             if self.layer_sizes[0] != scenario.inputs:
                 raise InputError(
@@ -105,6 +119,9 @@ class Controller:
                 f"the controller's network takes {self.layer_sizes[0]} beams, the scenario's "
                 f"sensor has {scenario.sensor.beams}", path, "sensor.beams"
             )
+        spin = ({} if self.spin_window is None else
+                {"episode": {"spin_window": self.spin_window,
+                             "spin_variance": self.spin_variance}})
         return scenario.with_overrides(
             network={
                 "hidden": list(self.layer_sizes[1:-1]),
@@ -112,4 +129,5 @@ class Controller:
                 "steering_gain_deg": self.steering_gain_deg,
             },
             sensor={"span_deg": self.span_deg, "range": self.range},
+            **spin,
         )

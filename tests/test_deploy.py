@@ -76,3 +76,22 @@ def test_a_misfit_controller_is_refused_before_anything_runs(controllers, root, 
 def test_evaluate_needs_a_controller_and_a_scenario(root, capsys):
     assert main(["evaluate", str(root / "scenarios" / "unseen_loop.toml")]) == 2
     assert "at least one controller" in capsys.readouterr().err
+
+
+def test_a_controller_is_measured_by_the_spin_rule_it_was_evolved_under(root, tmp_path):
+    """The arena's spin rule (300 steps, 300 m²) travels with an arena controller onto a
+    navigation track, whose own rule is the paper's (49, 64); a file written before the rule
+    was kept leaves the scenario's rule."""
+    arena = load_scenario(root / "scenarios" / "arena_strategy1.toml")
+    track = load_scenario(root / "scenarios" / "unseen_zigzag14.toml")
+    genes = np.zeros(68)
+    saved = tmp_path / "arena.npz"
+    Controller.from_scenario(arena, genes, 1.0, 0).save(saved)
+    fitted = Controller.load(saved).fit(track).episode
+    assert (fitted.spin_window, fitted.spin_variance) == (300, 300.0)
+    assert fitted.max_steps == track.episode.max_steps
+    with np.load(saved) as data:
+        older = {k: data[k] for k in data.files if not k.startswith("spin_")}
+    np.savez(tmp_path / "older.npz", **older)
+    kept = Controller.load(tmp_path / "older.npz").fit(track).episode
+    assert (kept.spin_window, kept.spin_variance) == (49, 64.0)

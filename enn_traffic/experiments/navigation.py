@@ -16,7 +16,6 @@ from enn_traffic.deploy import controller_trace
 from enn_traffic.experiments.common import first_generation, run_all, save_controller, seed_runs
 from enn_traffic.io import write_csv
 from enn_traffic.report.plots import draw_paths, heat_map, learning_curves, save_figure
-from enn_traffic.scenario import Scenario
 from enn_traffic.shipped import shipped_scenario
 from enn_traffic.sim.world import CAPPED, OUTCOMES
 
@@ -156,8 +155,8 @@ def generalization(out: Path, quick: bool = False, progress: bool = True) -> lis
     """Controllers trained on one track (narrow, wide) or on five at once (mixed), 5 seeds
     each, on tracks they never trained on: the validation tracks (``VALIDATION_TRACKS``) and
     the test tracks (``TEST_TRACKS``), 12–30 m; steps to the cap and the share of the track
-    covered. A controller drives every track by its training's spin rule (``spin_rule``).
-    Pairs whose track a controller trained on are marked ``seen``."""
+    covered. A controller drives every track by its training's spin rule
+    (:meth:`Controller.fit`). Pairs whose track a controller trained on are marked ``seen``."""
     seeds = SEEDS[:2] if quick else SEEDS
     controllers = {}
     for name in TRAINED:
@@ -171,8 +170,7 @@ def generalization(out: Path, quick: bool = False, progress: bool = True) -> lis
     trainings = {name: shipped_scenario(name) for name in TRAINED}
     # Each controller on every unseen track, and on its own training tracks at its training
     # cap (how much of them it drives).
-    pairs = [(key, track, spin_rule(scenario, trainings[key[0]]))
-             for key in controllers for track, scenario in unseen.items()]
+    pairs = [(key, track, scenario) for key in controllers for track, scenario in unseen.items()]
     pairs += [(key, track.net.name.removesuffix(".net.xml"), trainings[key[0]].on_track(i))
               for key in controllers for i, track in enumerate(trainings[key[0]].tracks)]
     rows, traces = [], {}
@@ -215,15 +213,6 @@ def generalization(out: Path, quick: bool = False, progress: bool = True) -> lis
         + ", ".join(f"{name}: {100 * r['capped']:.0f}% / {100 * r['coverage']:.0f}%"
                     for name, r in covered.iterrows()),
     ]
-
-
-def spin_rule(track: Scenario, training: Scenario) -> Scenario:
-    """``track`` with the spin rule ``training`` learnt under: a controller is measured by the
-    rules it was evolved by. (The paper's rule, 4.9 s within 8 m, calls a turn round in a
-    narrow dead end a spin; measured: docs/results.md, "Generalisation across tracks".)"""
-    episode = training.episode
-    return track.with_overrides(episode={"spin_window": episode.spin_window,
-                                         "spin_variance": episode.spin_variance})
 
 
 def unseen_matrix(table: pd.DataFrame, trained: list[str], tracks: list[str]) -> pd.DataFrame:

@@ -2,15 +2,17 @@
 
 import math
 
+import numpy as np
 import pandas as pd
 
+from enn_traffic.controller import Controller
 from enn_traffic.experiments.navigation import (
     TEST_TRACKS,
     TRAINED,
     VALIDATION_TRACKS,
-    spin_rule,
     unseen_matrix,
 )
+from enn_traffic.network import NetworkSpec
 from enn_traffic.shipped import shipped_scenario
 
 
@@ -39,7 +41,10 @@ def test_training_validation_and_test_tracks_are_apart():
     mixed = nets["navigation_mixed"]
     assert len(test) == len(TEST_TRACKS) and not test & validation
     assert not mixed & (validation | test)
-    # a track keeps its step cap and takes the training's spin rule
-    measured = spin_rule(shipped_scenario(TEST_TRACKS[0]), shipped_scenario("navigation_mixed"))
+    # a track keeps its step cap and takes the spin rule of the controller's training
+    mixed = shipped_scenario("navigation_mixed")
+    controller = Controller.from_scenario(mixed, np.zeros(NetworkSpec(mixed.layer_sizes)
+                                                            .chromosome_length), 0.0, 0)
+    measured = controller.fit(shipped_scenario(TEST_TRACKS[0]))
     assert measured.episode.max_steps == 20_000
     assert (measured.episode.spin_window, measured.episode.spin_variance) == (300, 300.0)
