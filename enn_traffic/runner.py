@@ -101,13 +101,20 @@ def fingerprint(scenario: Scenario, others: Sequence[Scenario] = (),
 
 
 def input_files(scenario: Scenario) -> list[Path]:
-    """The files a scenario reads: its tracks' networks, SUMO's route and configuration
-    files."""
-    traffic = scenario.traffic
-    files = [track.net for track in scenario.tracks if track.net is not None]
-    files += list(traffic.routes) + ([traffic.sumocfg] if traffic.sumocfg else [])
-    for track in scenario.tracks:
-        files += [Path(p) for p in track.traffic.get("routes", [])]
+    """The files a scenario reads: its tracks' networks, SUMO's route files, and a
+    ``.sumocfg`` with every file it names; with several tracks, each track's own."""
+    from enn_traffic.traffic.sumocfg import read_sumocfg
+
+    parts = ([scenario.on_track(i) for i in range(len(scenario.tracks))]
+             if isinstance(scenario.track, list) else [scenario])
+    files = []
+    for part in parts:
+        traffic = part.traffic
+        files += [track.net for track in part.tracks if track.net is not None]
+        files += list(traffic.routes)
+        if traffic.sumocfg is not None:
+            config = read_sumocfg(traffic.sumocfg)
+            files += [traffic.sumocfg, *config.route_files, *config.additional_files]
     return files
 
 

@@ -326,3 +326,14 @@ def test_sumo_traffic_on_several_tracks(tmp_path, root):
         alone = make_world(scenario.on_track(index)).evaluate(population, key=4)
         np.testing.assert_array_equal(results.steps[:, index], alone.steps[:, 0])
         assert alone.traffic[:, 0, 0].min() > 0  # SUMO's vehicles are there
+
+
+def test_a_route_file_named_only_by_the_sumocfg_is_part_of_the_fingerprint(tmp_path, road_net):
+    """A run is redone when the traffic its .sumocfg names changes, not only its settings."""
+    from enn_traffic.runner import fingerprint
+
+    scenario = load_scenario(road_scenario(tmp_path, road_net))
+    before = fingerprint(scenario)
+    routes = tmp_path / "buses.rou.xml"
+    routes.write_text(routes.read_text().replace("</routes>", "<!-- one more -->\n</routes>"))
+    assert fingerprint(scenario) != before
