@@ -108,7 +108,7 @@ class LaneKeepingWorld:
             readings = lane_markings(vehicle, self.config.lookahead_m, self.config.noise_m, rng)
             action[0] = network_steering(genes, self.layer_sizes, readings, activation, scratch,
                                          1.0)
-            env.step(action)
+            env.unwrapped.drive(action)
             steps += 1
 
     def evaluate(self, population: np.ndarray, key: int = 0) -> EpisodeResults:

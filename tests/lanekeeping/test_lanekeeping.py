@@ -57,6 +57,20 @@ def test_camera_on_a_circle_against_hand_computed_offsets():
     np.testing.assert_allclose(readings, expected, atol=1e-9)
 
 
+def test_drive_moves_the_vehicle_exactly_as_step():
+    """``drive`` skips highway-env's observation and log, nothing of the motion: the same
+    steering sequence leaves two environments in the same state, bit for bit."""
+    road = LaneKeepingConfig(amplitude=5.0, period=60.0, lane_width=4.0)
+    stepped, driven = make_env(road), make_env(road)
+    stepped.reset(seed=0)
+    driven.reset(seed=0)
+    for steering in np.sin(np.arange(60) / 7.0):
+        stepped.step(np.array([steering]))
+        driven.unwrapped.drive(np.array([steering]))
+    np.testing.assert_array_equal(driven.unwrapped.vehicle.state, stepped.unwrapped.vehicle.state)
+    assert driven.unwrapped.vehicle.position[1] != pytest.approx(0.0, abs=0.5)  # it turned
+
+
 def test_leaving_the_lane_ends_the_life(tmp_path):
     """Steering straight on the 60 m circle, the centre is 2 m off the centre line after
     sqrt(62² − 60²) = 15.6 m, i.e. at step 19 at 0.83 m per step."""
