@@ -65,13 +65,13 @@ def lower_bound(family: Family, candidates: np.ndarray, strategy: int, key: int,
     return fitness.mean(axis=1) - ACCEPTANCE_ERRORS * error
 
 
-def candidates(folder: Path) -> np.ndarray:
+def candidates(folder: Path, whole_population: bool = False) -> np.ndarray:
     """A run's controllers to choose from: every generation's best chromosome (the run's best
-    alone for a run that kept none) and the elites at the head of its final population, each
-    once."""
+    alone for a run that kept none) and the elites at the head of its final population (or,
+    with ``whole_population``, all of it), each once."""
     outputs = RunOutputs.load(folder)
-    elites = outputs.population[: max(outputs.elite_count, 1)]
-    return distinct(np.concatenate([outputs.champions, elites]))
+    kept = len(outputs.population) if whole_population else max(outputs.elite_count, 1)
+    return distinct(np.concatenate([outputs.champions, outputs.population[:kept]]))
 
 
 def validation(family: Family, candidates: np.ndarray, strategies: list[int],

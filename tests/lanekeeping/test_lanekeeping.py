@@ -157,7 +157,7 @@ def test_a_drawn_road_run_is_chosen_on_validation_roads(tmp_path, monkeypatch):
     from enn_traffic.controller import Controller
     from enn_traffic.experiments import lanekeeping
     from enn_traffic.experiments.choosing import candidates
-    from enn_traffic.runner import evolve
+    from enn_traffic.runner import RunOutputs, evolve
 
     path = tmp_path / "lk.toml"
     path.write_text(SCENARIO.format(road="sine").replace("generations = 5", "generations = 3")
@@ -167,8 +167,11 @@ def test_a_drawn_road_run_is_chosen_on_validation_roads(tmp_path, monkeypatch):
     evolve(sc, tmp_path / "run", progress=False)
     monkeypatch.setattr(lanekeeping, "VALIDATION_ROADS", 3)
     chosen = lanekeeping.chosen(sc, tmp_path / "run")
-    pool = candidates(tmp_path / "run")
+    pool = candidates(tmp_path / "run", whole_population=True)
     assert any(np.array_equal(chosen, row) for row in pool)
+    final = RunOutputs.load(tmp_path / "run").population
+    assert all(any(np.array_equal(member, row) for row in pool) for member in final)
+    assert len(candidates(tmp_path / "run")) < len(pool)  # more than the elites
     world = make_world(sc.with_overrides(lane_keeping={"episodes": 3}))
     best = Controller.load(tmp_path / "run" / "best.npz").chromosome
     fitness = world.evaluate(np.vstack([chosen, best, pool]), keys.VALIDATION.start).fitness
