@@ -78,6 +78,9 @@ def build_parser() -> argparse.ArgumentParser:
     evaluate.add_argument("--mode", choices=["replay", "closed-loop"],
                           help="SUMO traffic: replayed, or reacting to the controller "
                                "(default: the scenario's traffic.mode)")
+    evaluate.add_argument("--traffic-seed", type=_non_negative, metavar="N",
+                          help="traffic seed (default: each scenario's traffic.seed); another "
+                          "seed gives traffic situations that no training or choice drew")
     evaluate.add_argument("--executor", choices=["local", "process", "ray"], default="local",
                           help="where the pairs run (default: local, one after another)")
     evaluate.add_argument("--address", help="Ray cluster address (with --executor ray)")
@@ -176,6 +179,8 @@ def _cmd_evaluate(args) -> int:
                              scenario_paths[0], "traffic.strategy")
         scenarios = [s.with_overrides(traffic={"mode": args.mode}) if s.traffic.is_sumo else s
                      for s in scenarios]
+    if args.traffic_seed is not None:
+        scenarios = [s.with_overrides(traffic={"seed": args.traffic_seed}) for s in scenarios]
     table = evaluate_batch(controllers, scenarios, args.episodes, args.executor, args.address,
                            progress=not args.quiet)
     single = len(controllers) == 1 and len(scenarios) == 1

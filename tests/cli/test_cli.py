@@ -87,6 +87,25 @@ def test_evaluate_reproduces_the_recorded_best_fitness(small_run, root, tmp_path
     assert list(pd.read_csv(lifetimes)["fitness"]) == [best, best]
 
 
+def test_evaluate_on_another_traffic_seed(small_run, root, tmp_path):
+    """``--traffic-seed`` draws the situations from another traffic seed: the CLI's lifetimes
+    are those of the scenario with that seed, which are not the default seed's."""
+    from enn_traffic.controller import Controller
+    from enn_traffic.deploy import evaluate_controller
+    from enn_traffic.scenario import load_scenario
+
+    scenario_file = root / "scenarios" / "arena_strategy1.toml"
+    lifetimes = tmp_path / "lifetimes.csv"
+    result = cli("evaluate", small_run / "best.npz", scenario_file, "--episodes", 3,
+                 "--traffic-seed", 7, "--out", lifetimes, "--quiet")
+    assert result.returncode == 0, result.stderr
+    controller, scenario = Controller.load(small_run / "best.npz"), load_scenario(scenario_file)
+    seeded = evaluate_controller(controller, scenario.with_overrides(traffic={"seed": 7}), 3)
+    default = evaluate_controller(controller, scenario, 3)
+    assert list(pd.read_csv(lifetimes)["steps"]) == list(seeded["steps"])
+    assert list(seeded["steps"]) != list(default["steps"])
+
+
 @pytest.mark.parametrize(
     "args, needle",
     [
