@@ -48,19 +48,39 @@ def episode_results(family: Family, candidates: np.ndarray, strategy: int, key: 
     return strategy_world(family, strategy, episodes).evaluate(np.atleast_2d(candidates), key)
 
 
+# Each chromosome's lifetime fitness per situation, by (family, strategy, key, episodes): a
+# chromosome's lives depend on it and the situations alone, and the same questions come
+# again (Table 2 asks each generation about the elites it asked about the one before).
+_LIVES: dict[tuple, dict[bytes, np.ndarray]] = {}
+
+
+def lifetimes(family: Family, candidates: np.ndarray, strategy: int, key: int,
+              episodes: int | None = None) -> np.ndarray:
+    """Each candidate's fitness in each of the episodes drawn from ``key`` (P, E), every
+    chromosome driven once per process."""
+    candidates = np.atleast_2d(candidates)
+    episodes = episodes or family.test_episodes
+    known = _LIVES.setdefault((family, strategy, key, episodes), {})
+    new = [row for row in distinct(candidates) if row.tobytes() not in known]
+    if new:
+        results = episode_results(family, np.array(new), strategy, key, episodes)
+        fitness = EpisodeResults.lifetime_fitness(results.steps, results.outcome)
+        known.update((row.tobytes(), lives) for row, lives in zip(new, fitness, strict=True))
+    return np.stack([known[row.tobytes()] for row in candidates])
+
+
 def mean_fitness(family: Family, candidates: np.ndarray, strategy: int, key: int,
                  episodes: int | None = None) -> np.ndarray:
     """Mean fitness of each candidate over the episodes (``test_episodes`` unless given)
     drawn from ``key``."""
-    return episode_results(family, candidates, strategy, key, episodes).fitness
+    return lifetimes(family, candidates, strategy, key, episodes).mean(axis=1)
 
 
 def lower_bound(family: Family, candidates: np.ndarray, strategy: int, key: int,
                 episodes: int) -> np.ndarray:
     """Each candidate's mean fitness over ``episodes`` situations drawn from ``key``, less
     ``ACCEPTANCE_ERRORS`` standard errors of that mean."""
-    results = episode_results(family, candidates, strategy, key, episodes)
-    fitness = EpisodeResults.lifetime_fitness(results.steps, results.outcome)
+    fitness = lifetimes(family, candidates, strategy, key, episodes)
     error = fitness.std(axis=1, ddof=1) / np.sqrt(episodes)
     return fitness.mean(axis=1) - ACCEPTANCE_ERRORS * error
 

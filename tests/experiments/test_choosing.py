@@ -60,3 +60,22 @@ def test_table2_accepts_by_the_mean_less_standard_errors_on_other_situations():
     assert choosing.accepts(family, candidate, [1], bound[0])
     assert not choosing.accepts(family, candidate, [1], 0.5 * (bound[0] + min(mean, screen)))
     assert not choosing.accepts(family, candidate, [1], screen + 1e-6)  # the screen refuses
+
+
+def test_a_chromosome_is_driven_once_and_answers_as_a_fresh_world(monkeypatch):
+    """The choice's lifetimes are the world's, whatever the order and repeats of the
+    candidates; a chromosome asked about again is not driven again."""
+    family = replace(protocol.ARENA, test_episodes=3, recheck_episodes=4)
+    world = protocol.strategy_world(family, 2)
+    pool = np.random.default_rng(5).uniform(-1, 1, size=(4, world.spec.chromosome_length))
+    fresh = world.evaluate(pool, choosing.VALIDATION_KEY)
+    asked = pool[[2, 0, 2, 1]]
+    np.testing.assert_array_equal(choosing.mean_fitness(family, asked, 2, choosing.VALIDATION_KEY),
+                                  fresh.fitness[[2, 0, 2, 1]])
+    driven = []
+    evaluate = world.evaluate
+    monkeypatch.setattr(world, "evaluate", lambda p, key: driven.append(len(p)) or evaluate(p, key))
+    again = choosing.mean_fitness(family, pool[[3, 1, 0]], 2, choosing.VALIDATION_KEY)
+    np.testing.assert_array_equal(again, fresh.fitness[[3, 1, 0]])
+    assert driven == [1]  # only pool[3] was new
+    assert len(set(np.round(fresh.fitness, 6))) > 1  # the candidates drive differently
