@@ -10,6 +10,7 @@ from conftest import ROOT
 from enn_traffic.cli import main
 from enn_traffic.controller import Controller
 from enn_traffic.deploy import evaluate_batch, fitness_matrix
+from enn_traffic.network import NetworkSpec
 from enn_traffic.scenario import load_scenario
 
 
@@ -84,7 +85,7 @@ def test_a_controller_is_measured_by_the_spin_rule_it_was_evolved_under(root, tm
     was kept leaves the scenario's rule."""
     arena = load_scenario(root / "scenarios" / "arena_strategy1.toml")
     track = load_scenario(root / "scenarios" / "unseen_zigzag14.toml")
-    genes = np.zeros(68)
+    genes = np.zeros(NetworkSpec(arena.layer_sizes).chromosome_length)
     saved = tmp_path / "arena.npz"
     Controller.from_scenario(arena, genes, 1.0, 0).save(saved)
     fitted = Controller.load(saved).fit(track).episode

@@ -17,6 +17,7 @@ from enn_traffic.evolution.backends import ProcessEvaluator
 from enn_traffic.experiments.choosing import candidates
 from enn_traffic.experiments.common import run_or_reuse, save_controller
 from enn_traffic.io import write_csv
+from enn_traffic.lanekeeping.world import LaneKeepingWorld
 from enn_traffic.report.plots import draw_paths, learning_curves, save_figure
 from enn_traffic.scenario import Scenario
 from enn_traffic.shipped import shipped_scenario
@@ -100,13 +101,11 @@ def lane_keeping(out: Path, quick: bool = False, progress: bool = True) -> list[
                      for (name, s), t in runs.items()}, out / "lane_keeping.png",
                     title="Lane keeping (highway-env): best steps in lane per generation "
                     "(mixed: fresh roads every generation)", hline=cap)
-    one_road = shipped_scenario(TRAININGS[0]).lane_keeping.model_dump(include=set(ROAD_KEYS))
     rows, paths = [], {}
     for name in TRAININGS:
-        for road, changes in ROADS.items():
+        for road in ROADS:
             for noise in NOISES:
-                world = make_world(shipped_scenario(name).with_overrides(
-                    lane_keeping={**one_road, **changes, "noise_m": noise, "episodes": 1}))
+                world = road_world(name, road, noise)
                 for seed in seeds:
                     steps, outcome, offset = world.offsets(best[name, seed], TEST_KEY)[0]
                     rows.append({"trained_on": name, "road": road, "fresh": road in FRESH,
@@ -130,6 +129,15 @@ def lane_keeping(out: Path, quick: bool = False, progress: bool = True) -> list[
             "for the whole capped episode: "
             + ", ".join(f"{road}: {kept[road]}/{len(seeds)}" for road in ROADS))
     return lines
+
+
+def road_world(training: str, road: str, noise: float) -> LaneKeepingWorld:
+    """The world a ``training``'s controller is measured in: one episode on the fixed road
+    ``road`` of ``ROADS`` (highway-env's road with the changes it names), its camera's noise
+    ``noise`` m."""
+    one_road = shipped_scenario(TRAININGS[0]).lane_keeping.model_dump(include=set(ROAD_KEYS))
+    return make_world(shipped_scenario(training).with_overrides(
+        lane_keeping={**one_road, **ROADS[road], "noise_m": noise, "episodes": 1}))
 
 
 def chosen(scenario: Scenario, run_dir: Path) -> np.ndarray:

@@ -58,8 +58,9 @@ class CameraLaneKeepingEnv(LaneKeepingEnv):
     def drive(self, action: np.ndarray) -> None:
         """One policy step as ``step()`` drives it (the action, then the simulation), without
         what the camera makes unneeded: ``lane-keeping-v0``'s own observation (noisy state,
-        derivative and reference state), reward and trajectory log, two thirds of a step's
-        time. The vehicle moves exactly as under ``step()`` (tests/lanekeeping)."""
+        derivative and reference state), reward and trajectory log (1.6-2x the steps per
+        second, measured in one process). The vehicle moves exactly as under ``step()``
+        (tests/lanekeeping)."""
         self.action_type.act(action)
         self._simulate()
 

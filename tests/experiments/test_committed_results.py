@@ -7,9 +7,7 @@ import pytest
 
 from enn_traffic.controller import Controller
 from enn_traffic.experiments import EXPERIMENTS
-from enn_traffic.experiments.lanekeeping import ROAD_KEYS, ROADS, TEST_KEY
-from enn_traffic.shipped import shipped_scenario
-from enn_traffic.worlds import make_world
+from enn_traffic.experiments.lanekeeping import TEST_KEY, road_world
 
 
 def test_todays_code_writes_the_committed_fig7_table(tmp_path, root):
@@ -28,9 +26,6 @@ def test_a_committed_lane_keeping_controller_drives_its_table_row(road, root):
                 & (table["road"] == road) & (table["noise_m"] == 0.1)].iloc[0]
     controller = Controller.load(paper / "controllers" / "lane_keeping"
                                  / "lane_keeping_mixed_seed2.npz")
-    base = shipped_scenario("lane_keeping_mixed")
-    one_road = shipped_scenario("lane_keeping").lane_keeping.model_dump(include=set(ROAD_KEYS))
-    world = make_world(base.with_overrides(lane_keeping={**one_road, **ROADS[road],
-                                                         "noise_m": 0.1, "episodes": 1}))
+    world = road_world("lane_keeping_mixed", road, 0.1)
     steps, _, offset = world.offsets(controller.chromosome, TEST_KEY)[0]
     assert (steps, round(offset, 3)) == (row["steps_in_lane"], row["mean_abs_offset_m"])
