@@ -29,3 +29,34 @@ def test_a_committed_lane_keeping_controller_drives_its_table_row(road, root):
     world = road_world("lane_keeping_mixed", road, 0.1)
     steps, _, offset = world.offsets(controller.chromosome, TEST_KEY)[0]
     assert (steps, round(offset, 3)) == (row["steps_in_lane"], row["mean_abs_offset_m"])
+
+
+def test_committed_table1_controllers_keep_the_pattern_on_unseen_traffic(root):
+    """Each committed Table 1 specialist lives longest among the traffic it trained on, on
+    200 situations of traffic seed 5000, which no training and no choice of controller drew
+    (the scenarios' own seed is 1000): the paper's diagonal above the rest of every row."""
+    from enn_traffic.deploy import evaluate_batch, fitness_matrix
+    from enn_traffic.scenario import load_scenario
+
+    folder = root / "results" / "paper" / "controllers" / "table1"
+    controllers = {f"strategy{s}": Controller.load(folder / f"strategy{s}.npz")
+                   for s in range(1, 5)}
+    scenarios = [load_scenario(root / "scenarios" / f"arena_strategy{s}.toml")
+                 .with_overrides(traffic={"seed": 5000}) for s in range(1, 5)]
+    matrix = fitness_matrix(evaluate_batch(controllers, scenarios, 200, "local", None,
+                                           progress=False)).to_numpy()
+    for row in range(4):
+        assert matrix[row, row] > max(matrix[row, col] for col in range(4) if col != row), matrix
+
+
+@pytest.mark.parametrize("trained, deployed", [(2, 2), (4, 1)])
+def test_a_committed_table1_controller_drives_its_table_entry(trained, deployed, root):
+    """A committed specialist on a strategy's 200 test situations: the committed entry."""
+    from enn_traffic.experiments.choosing import fitness_on_test_traffic
+    from enn_traffic.experiments.protocol import ARENA
+
+    paper = root / "results" / "paper"
+    entry = pd.read_csv(paper / "table1.csv").set_index("training_strategy")
+    controller = Controller.load(paper / "controllers" / "table1" / f"strategy{trained}.npz")
+    fitness = fitness_on_test_traffic(ARENA.settings(False), controller.chromosome, deployed)
+    assert round(fitness, 1) == entry.loc[trained, f"deploy_{deployed}"]
