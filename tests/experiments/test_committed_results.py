@@ -2,12 +2,15 @@
 rerun from scratch at its full settings writes the committed table byte for byte, and the
 committed controllers drive as the committed tables say."""
 
+import numpy as np
 import pandas as pd
 import pytest
 
 from enn_traffic.controller import Controller
 from enn_traffic.experiments import EXPERIMENTS
 from enn_traffic.experiments.lanekeeping import TEST_KEY, road_world
+from enn_traffic.experiments.protocol import ARENA, STRATEGIES
+from enn_traffic.shipped import shipped_scenario
 
 
 def test_todays_code_writes_the_committed_fig7_table(tmp_path, root):
@@ -36,24 +39,22 @@ def test_committed_table1_controllers_keep_the_pattern_on_unseen_traffic(root):
     200 situations of traffic seed 5000, which no training and no choice of controller drew
     (the scenarios' own seed is 1000): the paper's diagonal above the rest of every row."""
     from enn_traffic.deploy import evaluate_batch, fitness_matrix
-    from enn_traffic.scenario import load_scenario
 
     folder = root / "results" / "paper" / "controllers" / "table1"
     controllers = {f"strategy{s}": Controller.load(folder / f"strategy{s}.npz")
-                   for s in range(1, 5)}
-    scenarios = [load_scenario(root / "scenarios" / f"arena_strategy{s}.toml")
-                 .with_overrides(traffic={"seed": 5000}) for s in range(1, 5)]
+                   for s in STRATEGIES}
+    scenarios = [shipped_scenario(f"arena_strategy{s}").with_overrides(traffic={"seed": 5000})
+                 for s in STRATEGIES]
     matrix = fitness_matrix(evaluate_batch(controllers, scenarios, 200, "local", None,
                                            progress=False)).to_numpy()
-    for row in range(4):
-        assert matrix[row, row] > max(matrix[row, col] for col in range(4) if col != row), matrix
+    for row, own in enumerate(np.diag(matrix)):
+        assert own > np.delete(matrix[row], row).max(), matrix
 
 
 @pytest.mark.parametrize("trained, deployed", [(2, 2), (4, 1)])
 def test_a_committed_table1_controller_drives_its_table_entry(trained, deployed, root):
     """A committed specialist on a strategy's 200 test situations: the committed entry."""
     from enn_traffic.experiments.choosing import fitness_on_test_traffic
-    from enn_traffic.experiments.protocol import ARENA
 
     paper = root / "results" / "paper"
     entry = pd.read_csv(paper / "table1.csv").set_index("training_strategy")
