@@ -61,3 +61,36 @@ def test_a_committed_table1_controller_drives_its_table_entry(trained, deployed,
     controller = Controller.load(paper / "controllers" / "table1" / f"strategy{trained}.npz")
     fitness = fitness_on_test_traffic(ARENA.settings(False), controller.chromosome, deployed)
     assert round(fitness, 1) == entry.loc[trained, f"deploy_{deployed}"]
+
+
+@pytest.mark.parametrize("strategy", [2, 4])
+def test_the_committed_table2_controller_drives_its_last_row(strategy, root):
+    """Table 2's last controller, trained on all four strategies with the incremental
+    network, on a strategy's 200 test situations: the committed last row's entry."""
+    from enn_traffic.experiments.choosing import fitness_on_test_traffic
+
+    paper = root / "results" / "paper"
+    last_row = pd.read_csv(paper / "table2.csv").iloc[-1]
+    controller = Controller.load(paper / "controllers" / "table2" / "last_iteration.npz")
+    family = ARENA.settings(False).incremental()
+    fitness = fitness_on_test_traffic(family, controller.chromosome, strategy)
+    # the table holds one decimal, as pandas rounds it
+    assert fitness == pytest.approx(last_row[f"strategy_{strategy}"], abs=0.05 + 1e-9)
+
+
+@pytest.mark.parametrize("strategy", [1, 3])
+def test_a_committed_table3_winner_drives_its_measured_situation(strategy, root):
+    """Table 3's committed winner of a strategy, driving all 8 vehicles in the first measured
+    situation: the committed collision rate of that situation, below its initial drivers'."""
+    from enn_traffic.experiments.simultaneous import _broadcast
+    from enn_traffic.sim.arena import ArenaWorld
+
+    paper = root / "results" / "paper"
+    situations = pd.read_csv(paper / "simultaneous_situations.csv")
+    row = situations[(situations["strategy"] == strategy) & (situations["situation"] == 0)]
+    world = ArenaWorld(shipped_scenario(f"arena_strategy{strategy}"))
+    winner = Controller.load(paper / "controllers" / "table3" / f"strategy{strategy}.npz")
+    genes = world.spec.in_source_layout(winner.chromosome)[0]
+    rate = _broadcast(world, genes, situation=0)[0].collision_rate
+    assert rate == pytest.approx(row["winner"].iloc[0], abs=5e-6)
+    assert rate < row["initial"].iloc[0]
