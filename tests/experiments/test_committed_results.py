@@ -63,6 +63,19 @@ def test_a_committed_table1_controller_drives_its_table_entry(trained, deployed,
     assert round(fitness, 1) == entry.loc[trained, f"deploy_{deployed}"]
 
 
+def test_the_committed_sumo_table1_controller_drives_its_table_entry(root):
+    """The crossing-flows specialist among SUMO traffic, replayed on its strategy's 10 test
+    situations: the committed diagonal entry of ``sumo/table1.csv``."""
+    from enn_traffic.experiments.choosing import fitness_on_test_traffic
+    from enn_traffic.experiments.protocol import SUMO
+
+    paper = root / "results" / "paper"
+    entry = pd.read_csv(paper / "sumo" / "table1.csv").set_index("training_strategy")
+    controller = Controller.load(paper / "controllers" / "sumo" / "table1" / "strategy2.npz")
+    fitness = fitness_on_test_traffic(SUMO.settings(False), controller.chromosome, 2)
+    assert round(fitness, 1) == entry.loc[2, "deploy_2"]
+
+
 @pytest.mark.parametrize("strategy", [2, 4])
 def test_the_committed_table2_controller_drives_its_last_row(strategy, root):
     """Table 2's last controller, trained on all four strategies with the incremental
