@@ -63,17 +63,20 @@ def test_a_committed_table1_controller_drives_its_table_entry(trained, deployed,
     assert round(fitness, 1) == entry.loc[trained, f"deploy_{deployed}"]
 
 
-def test_the_committed_sumo_table1_controller_drives_its_table_entry(root):
-    """The crossing-flows specialist among SUMO traffic, replayed on its strategy's 10 test
-    situations: the committed diagonal entry of ``sumo/table1.csv``."""
+@pytest.mark.parametrize("family_name, strategy", [("sumo", 2), ("city", 3)])
+def test_a_committed_sumo_table1_controller_drives_its_table_entry(family_name, strategy, root):
+    """A specialist among SUMO traffic (crossing flows; Cologne's stop-and-go), replayed on
+    its strategy's 10 test situations: the committed diagonal entry of its ``table1.csv``."""
     from enn_traffic.experiments.choosing import fitness_on_test_traffic
-    from enn_traffic.experiments.protocol import SUMO
+    from enn_traffic.experiments.protocol import CITY, SUMO
 
-    paper = root / "results" / "paper"
-    entry = pd.read_csv(paper / "sumo" / "table1.csv").set_index("training_strategy")
-    controller = Controller.load(paper / "controllers" / "sumo" / "table1" / "strategy2.npz")
-    fitness = fitness_on_test_traffic(SUMO.settings(False), controller.chromosome, 2)
-    assert round(fitness, 1) == entry.loc[2, "deploy_2"]
+    family = {"sumo": SUMO, "city": CITY}[family_name]
+    folder = root / "results" / "paper" / family_name
+    entry = pd.read_csv(folder / "table1.csv").set_index("training_strategy")
+    controller = Controller.load(root / "results" / "paper" / "controllers" / family_name
+                                 / "table1" / f"strategy{strategy}.npz")
+    fitness = fitness_on_test_traffic(family.settings(False), controller.chromosome, strategy)
+    assert round(fitness, 1) == entry.loc[strategy, f"deploy_{strategy}"]
 
 
 @pytest.mark.parametrize("strategy", [2, 4])
