@@ -9,7 +9,7 @@ import pytest
 from enn_traffic.controller import Controller
 from enn_traffic.experiments import EXPERIMENTS
 from enn_traffic.experiments.lanekeeping import TEST_KEY, road_world
-from enn_traffic.experiments.protocol import ARENA, STRATEGIES
+from enn_traffic.experiments.protocol import ARENA, CITY, STRATEGIES, SUMO
 from enn_traffic.shipped import shipped_scenario
 
 
@@ -63,18 +63,16 @@ def test_a_committed_table1_controller_drives_its_table_entry(trained, deployed,
     assert round(fitness, 1) == entry.loc[trained, f"deploy_{deployed}"]
 
 
-@pytest.mark.parametrize("family_name, strategy", [("sumo", 2), ("city", 3)])
-def test_a_committed_sumo_table1_controller_drives_its_table_entry(family_name, strategy, root):
+@pytest.mark.parametrize("family, strategy", [(SUMO, 2), (CITY, 3)], ids=["sumo", "city"])
+def test_a_committed_sumo_table1_controller_drives_its_table_entry(family, strategy, root):
     """A specialist among SUMO traffic (crossing flows; Cologne's stop-and-go), replayed on
     its strategy's 10 test situations: the committed diagonal entry of its ``table1.csv``."""
     from enn_traffic.experiments.choosing import fitness_on_test_traffic
-    from enn_traffic.experiments.protocol import CITY, SUMO
 
-    family = {"sumo": SUMO, "city": CITY}[family_name]
-    folder = root / "results" / "paper" / family_name
-    entry = pd.read_csv(folder / "table1.csv").set_index("training_strategy")
-    controller = Controller.load(root / "results" / "paper" / "controllers" / family_name
-                                 / "table1" / f"strategy{strategy}.npz")
+    paper = root / "results" / "paper"
+    entry = pd.read_csv(paper / family.folder / "table1.csv").set_index("training_strategy")
+    controller = Controller.load(paper / "controllers" / family.folder / "table1"
+                                 / f"strategy{strategy}.npz")
     fitness = fitness_on_test_traffic(family.settings(False), controller.chromosome, strategy)
     assert round(fitness, 1) == entry.loc[strategy, f"deploy_{strategy}"]
 
