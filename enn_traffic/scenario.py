@@ -65,6 +65,11 @@ class TrackConfig(_Section):
     start_offset: float = Field(
         10.0, ge=0, allow_inf_nan=False, description="distance of a lane or edge start from the "
         "lane's beginning (m)")
+    surface: Literal["passenger", "all"] = Field(
+        "passenger", description="the road surface, whose edges are walls: `passenger` (the lanes "
+        "that allow passenger cars, and the junctions they meet less their walking areas: "
+        "sidewalks, bike lanes, tram tracks and railways are not road) or `all` (every lane and "
+        "junction of the network)")
     fringe: Literal["wall", "exit"] | None = Field(
         None, description="`exit`: nodes with a single neighbouring node (where traffic enters or "
         "leaves the map) are exits, and reaching one ends a life as `left network`, its steps "
@@ -302,6 +307,12 @@ class TrafficConfig(_Section):
     drivers: DriversConfig = Field(
         DriversConfig(), description="`strategy = \"sumo\"`: SUMO's driver models and demand "
         "([sumo.md](sumo.md#driver-models)); the keys are listed under `[traffic.drivers]`")
+    sumo_outputs: Literal["off", "keep"] = Field(
+        "off", description="what SUMO writes by the scenario's `.sumocfg` and additional files "
+        "(tripinfo, detectors, meandata, SSM, logs): `off` (written into a temporary folder of "
+        "each SUMO start and deleted) or `keep` (kept in the run folder's `sumo/outputs/`, a "
+        "folder per SUMO start). Never into the scenario's own folder "
+        "([sumo.md](sumo.md#what-is-written-where))")
     warmup_states: int = Field(
         0, ge=0, le=1000, description="`N` > 0: `N` warm-ups, simulated once and saved as SUMO "
         "states, shared by every traffic situation (each then drives on with its own seed); `0`: "
@@ -421,6 +432,10 @@ class Scenario(_Section):
     episode: EpisodeConfig = EpisodeConfig()
     traffic: TrafficConfig = TrafficConfig()
     source: Path | None = Field(None, exclude=True)
+    # Set by the command that runs the scenario, not by its file: where SUMO's console log and
+    # kept outputs go (none: nowhere), and whether SUMO's console is shown instead.
+    sumo_folder: Path | None = Field(None, exclude=True)
+    sumo_console: bool = Field(False, exclude=True)
 
     @model_validator(mode="after")
     def _one_task(self) -> Scenario:
@@ -484,7 +499,7 @@ class Scenario(_Section):
         data = self.model_dump()
         data["track"] = {**track.model_dump(), "traffic": {}}
         data["traffic"] = {**data["traffic"], **track.traffic}
-        return _validate(data, self.source)
+        return self._with_runtime(_validate(data, self.source))
 
     @property
     def fringe_exits(self) -> bool:
@@ -525,7 +540,17 @@ class Scenario(_Section):
                 data[section] = {**data.get(section, {}), **values}
             else:
                 data[section] = values
-        return _validate(data, self.source)
+        return self._with_runtime(_validate(data, self.source))
+
+    def _with_runtime(self, other: Scenario) -> Scenario:
+        """``other`` with this scenario's settings of the command that runs it."""
+        return other.model_copy(update={"sumo_folder": self.sumo_folder,
+                                        "sumo_console": self.sumo_console})
+
+    def with_sumo_output(self, folder: Path | None, console: bool = False) -> Scenario:
+        """A copy whose SUMO runs write their console log (and kept outputs) under
+        ``folder``, or show SUMO's console instead (``console``)."""
+        return self.model_copy(update={"sumo_folder": folder, "sumo_console": console})
 
     def to_toml(self) -> str:
         data = self.model_dump(mode="json", exclude_none=True)

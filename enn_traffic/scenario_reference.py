@@ -55,8 +55,9 @@ def _value(value) -> str:
 def _rows(model: type[BaseModel], section: str | None) -> list[str]:
     rows = []
     for name, field in model.model_fields.items():
-        if field.description is None or isinstance(field.default, BaseModel):
-            continue  # a section (listed by its own keys), or ``source``
+        if (field.description is None or isinstance(field.default, BaseModel)
+                or field.exclude):
+            continue  # a section (listed by its own keys), or set by a command, not a file
         key = f"[{section}] {name}" if section else name
         rows.append(f"| `{key}` | `{_value(field.default)}` | {field.description} |")
     return rows
@@ -76,7 +77,8 @@ def tables() -> dict[str, str]:
 def undocumented() -> list[str]:
     """Fields of the schema without a description (each must have one)."""
     missing = [f"{name}" for name, f in Scenario.model_fields.items()
-               if f.description is None and name not in (*SECTIONS, "lane_keeping", "source")]
+               if f.description is None and not f.exclude
+               and name not in (*SECTIONS, "lane_keeping")]
     for section, model in {**SECTIONS, "lane_keeping": LaneKeepingConfig,
                            "lane_keeping.draw": RoadDraw}.items():
         missing += [f"{section}.{name}" for name, f in model.model_fields.items()

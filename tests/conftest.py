@@ -8,6 +8,17 @@ from enn_traffic.sim.arena import ArenaWorld
 ROOT = Path(__file__).resolve().parents[1]
 
 
+@pytest.fixture(scope="session", autouse=True)
+def network_cache(tmp_path_factory) -> Path:
+    """A cache folder of the test session's own (subprocesses inherit it), so that the tests
+    neither read nor fill the user's cache."""
+    import os
+
+    folder = tmp_path_factory.mktemp("cache")
+    os.environ["ENN_TRAFFIC_CACHE"] = str(folder)
+    return folder
+
+
 @pytest.fixture
 def root() -> Path:
     return ROOT

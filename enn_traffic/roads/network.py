@@ -6,6 +6,11 @@ boundary, exterior and holes alike, is one wall segment. Holes narrower than ``S
 (the millimetre gaps between abutting lanes of imported networks) are road, not walls. With
 ``exits``, the network's fringe (a node with a single neighbour: where traffic enters or
 leaves the map) is cut open across the road, and the cut lines become exits, not walls.
+
+The surface is the learner's (``surface = "passenger"``, docs/sumo.md "Road surface"): the
+lanes that allow passenger cars, and the junctions they meet less their walking areas, so that
+sidewalks, bike lanes, tram tracks and railways are not road; ``"all"`` takes every lane and
+junction. A network's walls are built once and kept on disk (:mod:`enn_traffic.cache`).
 """
 
 from __future__ import annotations
@@ -14,6 +19,7 @@ import math
 import xml.etree.ElementTree as ElementTree
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Literal
 
 import numpy as np
 import shapely
@@ -21,8 +27,10 @@ import sumolib
 from shapely.geometry import LineString, MultiPolygon, Point, Polygon
 from shapely.ops import unary_union
 
+from enn_traffic import cache
 from enn_traffic.errors import InputError
 from enn_traffic.geometry import body_corners
+from enn_traffic.progress import slow_step
 
 SLIVER_M = 0.2  # holes narrower than this are gaps between lanes, not walls
 SNAP_M = 0.05  # gaps between lane and junction shapes up to twice this are closed
@@ -32,6 +40,11 @@ EXIT_MARGIN_M = 0.5  # a fringe cut reaches this far past the road's outer lane 
 ANYWHERE_SPACING_M = 5.0
 ANYWHERE_CLEARANCE_M = 1.0
 ANYWHERE_AHEAD_M = 10.0
+REMNANT_M = 0.25  # junction remnants thinner than twice this, once walking areas are cut out
+LEARNER_CLASS = "passenger"  # the SUMO vehicle class the learner drives as
+Surface = Literal["passenger", "all"]
+# Raised when the walls a network gives change (so that cached walls are built again).
+WALLS_VERSION = 1
 
 
 @dataclass(frozen=True)
@@ -158,23 +171,39 @@ def _read_net(path: Path) -> sumolib.net.Net:
         raise InputError(message, path) from None
 
 
-def drivable_area(net: sumolib.net.Net) -> Polygon | MultiPolygon:
-    """Union of every lane and junction shape of ``net``."""
-    pieces = []
+def drives_on(lane, surface: Surface) -> bool:
+    """Is ``lane`` road surface: every lane for ``"all"``, else one that allows passenger
+    cars?"""
+    return surface == "all" or lane.allows(LEARNER_CLASS)
+
+
+def drivable_area(net: sumolib.net.Net, surface: Surface = "passenger"
+                  ) -> Polygon | MultiPolygon:
+    """Union of the lane and junction shapes of ``net`` that are road for ``surface``: with
+    ``"passenger"``, the lanes that allow passenger cars, and the junctions that such a lane
+    meets, less their walking areas (sidewalk corners); with ``"all"``, every one."""
+    pieces, walking = [], []
     for edge in net.getEdges(withInternal=True):
+        if surface != "all" and edge.getFunction() == "walkingarea":
+            walking += [_polygon(lane.getShape()) for lane in edge.getLanes()
+                        if len(lane.getShape()) >= 3]
+            continue
         for lane in edge.getLanes():
             shape = lane.getShape()
-            if len(shape) >= 2:
+            if len(shape) >= 2 and drives_on(lane, surface):
                 pieces.append(
                     LineString(shape).buffer(
                         lane.getWidth() / 2, cap_style="flat", join_style="mitre"
                     )
                 )
+    junctions = []
     for node in net.getNodes():
         shape = node.getShape()
-        if len(shape) >= 3:
-            polygon = Polygon(shape)
-            pieces.append(polygon if polygon.is_valid else polygon.buffer(0))
+        if len(shape) >= 3 and _meets_road(node, surface):
+            junctions.append(_polygon(shape))
+    if walking:  # the junctions' own corners of sidewalk are not road
+        junctions = [_junction_road(junctions, walking, pieces)]
+    pieces += junctions
     # Close the gaps between abutting shapes (netconvert rounds coordinates to 0.01 m, so a
     # lane can miss its junction by a few millimetres at a sharp bend), then drop collinear
     # vertices.
@@ -182,6 +211,29 @@ def drivable_area(net: sumolib.net.Net) -> Polygon | MultiPolygon:
         -SNAP_M, join_style="mitre"
     ).simplify(1e-3)
     return _without_slivers(area)
+
+
+def _junction_road(junctions: list, walking: list, lanes: list) -> Polygon | MultiPolygon:
+    """The junctions less their walking areas, without what that leaves thinner than
+    ``2 * REMNANT_M`` (slivers along a walking area's edge) and without the pieces that
+    touch no lane of the road."""
+    rest = unary_union(junctions).difference(unary_union(walking))
+    rest = rest.buffer(-REMNANT_M, join_style="mitre").buffer(REMNANT_M, join_style="mitre")
+    road = unary_union(lanes)
+    parts = list(rest.geoms) if hasattr(rest, "geoms") else [rest]
+    return unary_union([part for part in parts if part.intersects(road)])
+
+
+def _polygon(shape) -> Polygon:
+    polygon = Polygon(shape)
+    return polygon if polygon.is_valid else polygon.buffer(0)
+
+
+def _meets_road(node, surface: Surface) -> bool:
+    """Does a road lane (:func:`drives_on`) start or end at ``node``?"""
+    return surface == "all" or any(
+        drives_on(lane, surface) for edge in (*node.getIncoming(), *node.getOutgoing())
+        for lane in edge.getLanes())
 
 
 def _without_slivers(area: Polygon | MultiPolygon) -> Polygon | MultiPolygon:
@@ -195,14 +247,21 @@ def _without_slivers(area: Polygon | MultiPolygon) -> Polygon | MultiPolygon:
     return kept[0] if len(kept) == 1 else MultiPolygon(kept)
 
 
-def fringe_mouths(net: sumolib.net.Net) -> list[tuple[np.ndarray, np.ndarray, float, float]]:
-    """The road ends at the network's fringe, one per node with a single neighbouring node:
-    (a point on the mouth line, the unit direction into the network, the mouth's extent across
-    the road from that point: lowest and highest, lane edges included)."""
+def fringe_mouths(net: sumolib.net.Net, surface: Surface = "passenger"
+                  ) -> list[tuple[np.ndarray, np.ndarray, float, float]]:
+    """The road ends at the network's fringe, one per node with a single neighbouring node
+    by road (:func:`drives_on`): (a point on the mouth line, the unit direction into the
+    network, the mouth's extent across the road from that point: lowest and highest, lane
+    edges included)."""
     mouths = []
+
+    def road(edges):
+        return [e for e in edges if e.getFunction() != "internal"
+                and any(drives_on(lane, surface) for lane in e.getLanes())]
+
     for node in net.getNodes():
-        edges = [(e, True) for e in node.getOutgoing() if e.getFunction() != "internal"]
-        edges += [(e, False) for e in node.getIncoming() if e.getFunction() != "internal"]
+        edges = [(e, True) for e in road(node.getOutgoing())]
+        edges += [(e, False) for e in road(node.getIncoming())]
         neighbours = {(e.getToNode() if out else e.getFromNode()).getID() for e, out in edges}
         neighbours.discard(node.getID())
         if len(neighbours) != 1:
@@ -210,6 +269,8 @@ def fringe_mouths(net: sumolib.net.Net) -> list[tuple[np.ndarray, np.ndarray, fl
         ends, inward, widths = [], [], []
         for edge, out in edges:
             for lane in edge.getLanes():
+                if not drives_on(lane, surface):
+                    continue
                 shape = np.asarray(lane.getShape(), dtype=np.float64)
                 end, nxt = (shape[0], shape[1]) if out else (shape[-1], shape[-2])
                 ends.append(end)
@@ -230,10 +291,11 @@ def fringe_mouths(net: sumolib.net.Net) -> list[tuple[np.ndarray, np.ndarray, fl
     return mouths
 
 
-def _open_fringe(area, net) -> tuple[Polygon | MultiPolygon, np.ndarray, list]:
+def _open_fringe(area, net, surface: Surface = "passenger"
+                 ) -> tuple[Polygon | MultiPolygon, np.ndarray, list]:
     """``area`` cut open at every fringe mouth (whatever lies beyond a mouth, such as a
     turnaround, is removed), the mouths' lines (M, 4), and the mouths."""
-    mouths = fringe_mouths(net)
+    mouths = fringe_mouths(net, surface)
     cuts, lines = [], []
     for point, u, low, high in mouths:
         n = np.array([-u[1], u[0]])
@@ -273,17 +335,41 @@ def boundary_segments(area: Polygon | MultiPolygon) -> np.ndarray:
     return np.vstack(rows) if rows else np.empty((0, 4))
 
 
-def load_track(net_file: str | Path, exits: bool = False) -> Track:
+def load_track(net_file: str | Path, exits: bool = False, surface: Surface = "passenger"
+               ) -> Track:
     """Read a SUMO network and return its walls (and, with ``exits``, its fringe cut open
-    into exits); a clear :class:`InputError` if it has no drivable area."""
+    into exits) for the road ``surface``; a clear :class:`InputError` if it has no drivable
+    area. Built once per network file (by its bytes) and kept on disk."""
     path = Path(net_file)
+    if not path.is_file():
+        raise InputError("network file not found", path)
+    key = cache.key_of(cache.file_digest(path), exits, surface, WALLS_VERSION, SNAP_M,
+                       SLIVER_M, EXIT_MARGIN_M, shapely.__version__, sumolib.__version__)
+
+    def build() -> dict[str, np.ndarray]:
+        with slow_step(f"building the walls of {path.name}"):
+            track = _build_track(path, exits, surface)
+        return {"walls": track.walls, "exits": track.exits,
+                "area": np.frombuffer(shapely.to_wkb(track.area), dtype=np.uint8)}
+
+    arrays = cache.cached_arrays("walls", key, build)
+    return Track(name=_track_name(path), walls=arrays["walls"],
+                 area=shapely.from_wkb(arrays["area"].tobytes()), exits=arrays["exits"])
+
+
+def _track_name(path: Path) -> str:
+    return path.name.removesuffix(".gz").removesuffix(".xml").removesuffix(".net")
+
+
+def _build_track(path: Path, exits: bool, surface: Surface) -> Track:
     net = _read_net(path)
-    area = drivable_area(net)
+    area = drivable_area(net, surface)
     if area.is_empty or area.area <= 0:
-        raise InputError("the network has no drivable area (no lanes or junctions)", path)
-    name = path.name.removesuffix(".net.xml")
+        what = "no lanes or junctions" if surface == "all" else "no lane allows passenger cars"
+        raise InputError(f"the network has no drivable area ({what})", path)
+    name = _track_name(path)
     if not exits:
         return Track(name=name, walls=boundary_segments(area), area=area)
-    area, mouth_lines, _ = _open_fringe(area, net)
+    area, mouth_lines, _ = _open_fringe(area, net, surface)
     exit_segments, walls = split_exits(boundary_segments(area), mouth_lines)
     return Track(name=name, walls=walls, area=area, exits=exit_segments)

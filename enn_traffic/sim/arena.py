@@ -142,14 +142,16 @@ class ArenaWorld:
 
     def __init__(self, scenario: Scenario, track: Track | None = None):
         self.scenario = scenario
-        self.track = track or load_track(scenario.track.net, exits=scenario.fringe_exits)
+        listed = listed_starts(scenario)  # a wrong start lane is refused before any geometry
+        self.track = track or load_track(scenario.track.net, exits=scenario.fringe_exits,
+                                         surface=scenario.track.surface)
         self.exits = self.track.exits if scenario.fringe_exits else np.empty((0, 4))
         self.spec = NetworkSpec(scenario.layer_sizes, scenario.network.layout)
         self.traffic_spec = NetworkSpec(scenario.traffic_layer_sizes, scenario.network.layout)
         vehicle, sensor, traffic = scenario.vehicle, scenario.sensor, scenario.traffic
         reach = max(sensor.range, math.hypot(vehicle.length, vehicle.width / 2)) + 1.0
-        self.grid = WallGrid.build(self.track.walls, reach)
-        self.starts = start_poses(scenario, self.track)
+        self.grid = WallGrid.cached(self.track.walls, reach)
+        self.starts = start_poses(scenario, self.track, listed)
         self.start = self.starts[0]
         self.traffic_starts = [tuple(xy) for xy in traffic.starts_xy]
         for index, (x, y) in enumerate(self.traffic_starts):
@@ -242,10 +244,39 @@ class ArenaWorld:
         return trace[: steps + 1], int(outcome)
 
 
-def start_poses(scenario: Scenario, track: Track) -> list[tuple[float, float, float]]:
+def _start_key(scenario: Scenario, index: int) -> str:
+    """The scenario key of the ``index``-th start: ``track.start_lane[1]``, ``track.start_xy``
+    ..."""
+    config = scenario.track
+    names = config.start_names
+    key = "track.start_xy" if not names else f"track.start_{names[0][0]}"
+    listed = names and not isinstance(getattr(config, key.removeprefix("track.")), str)
+    return f"{key}[{index}]" if listed else key
+
+
+def listed_starts(scenario: Scenario) -> list[tuple[float, float, float]] | None:
+    """The start poses that the scenario names (start lanes, edges or ``start_xy``), each
+    checked to exist and allow passenger cars; None for ``start_anywhere``, whose starts need
+    the drivable area. Reads the network only, so a wrong start is refused at once."""
+    config = scenario.track
+    if config.start_anywhere:
+        return None
+    names = config.start_names
+    if not names:
+        return [(*config.start_xy, math.radians(config.start_heading_deg))]
+    try:
+        return start_lane_poses(config.net, names, config.start_offset)
+    except ValueError as exc:
+        index, message = exc.args
+        raise InputError(message, scenario.source, _start_key(scenario, index)) from None
+
+
+def start_poses(scenario: Scenario, track: Track,
+                listed: list[tuple[float, float, float]] | None = None
+                ) -> list[tuple[float, float, float]]:
     """The learner's start poses (one, one per listed start lane or edge, or every start of
     ``start_anywhere``), each checked to exist, allow passenger cars and lie on the drivable
-    area."""
+    area; ``listed``: the poses :func:`listed_starts` gave, when already read."""
     config = scenario.track
     if config.start_anywhere:
         vehicle = scenario.vehicle
@@ -254,23 +285,10 @@ def start_poses(scenario: Scenario, track: Track) -> list[tuple[float, float, fl
             raise InputError(f"no lane of {track.name} has room for the vehicle",
                              scenario.source, "track.start_anywhere")
         return poses
-    names = config.start_names
-    key = "track.start_xy" if not names else f"track.start_{names[0][0]}"
-
-    def where(index: int) -> str:
-        listed = not isinstance(getattr(config, key.removeprefix("track.")), str)
-        return f"{key}[{index}]" if names and listed else key
-
-    if names:
-        try:
-            poses = start_lane_poses(config.net, names, config.start_offset)
-        except ValueError as exc:
-            index, message = exc.args
-            raise InputError(message, scenario.source, where(index)) from None
-    else:
-        poses = [(*config.start_xy, math.radians(config.start_heading_deg))]
+    poses = listed if listed is not None else listed_starts(scenario)
     for index, pose in enumerate(poses):
         if not track.contains(pose[0], pose[1]):
             raise InputError(f"start pose ({pose[0]:.1f}, {pose[1]:.1f}) is off the drivable "
-                             f"area of {track.name}", scenario.source, where(index))
+                             f"area of {track.name}", scenario.source,
+                             _start_key(scenario, index))
     return poses

@@ -16,6 +16,11 @@ from typing import NamedTuple
 import numpy as np
 from numba import njit
 
+from enn_traffic import cache
+from enn_traffic.progress import slow_step
+
+GRID_VERSION = 1  # raised when the cells a grid lists change
+
 
 class WallGrid(NamedTuple):
     """Walls and, per grid cell, the indices of the walls within ``reach`` of the cell. The
@@ -35,23 +40,37 @@ class WallGrid(NamedTuple):
 
     @classmethod
     def build(cls, walls: np.ndarray, reach: float, cell_size: float = 5.0) -> WallGrid:
-        walls = np.ascontiguousarray(walls, dtype=np.float64)
+        """The grid over ``walls`` whose cells list every wall within ``reach`` of any point
+        of the cell (a wall within ``reach`` plus half the cell's diagonal of its centre).
+
+        Each wall is binned into the cells its bounding box, widened by that distance, covers,
+        and kept in those whose centre is near enough: the work grows with the walls and the
+        cells near each, not with cells × walls (a city of 5,500 walls over 4 × 3 km: 0.5 s
+        instead of 350 s, docs/bench.md). A cell lists its walls in ascending order."""
+        walls = np.ascontiguousarray(walls, dtype=np.float64).reshape(-1, 4)
         low = np.minimum(walls[:, :2], walls[:, 2:]).min(axis=0) - reach
         high = np.maximum(walls[:, :2], walls[:, 2:]).max(axis=0) + reach
         nx, ny = np.ceil((high - low) / cell_size).astype(int)
-        cx = low[0] + (np.arange(nx) + 0.5) * cell_size
-        cy = low[1] + (np.arange(ny) + 0.5) * cell_size
-        centres = np.stack(np.meshgrid(cx, cy, indexing="ij"), axis=-1).reshape(-1, 2)
         limit = reach + cell_size * math.sqrt(0.5)
-        starts, members = [0], []
-        # chunk over cells to keep the (cells, walls) distance matrix small
-        for chunk in np.array_split(centres, max(1, len(centres) // 2048)):
-            near = point_segment_distance(chunk, walls) <= limit
-            for row in near:
-                idx = np.flatnonzero(row)
-                members.append(idx)
-                starts.append(starts[-1] + len(idx))
-        cell_walls = np.concatenate(members) if members else np.empty(0, dtype=np.int64)
+        cells, members = [], []
+        for chunk in _chunks_of_pairs(walls, low, cell_size, limit, nx, ny):
+            first, last, cell_lo, span_x, span_y = chunk
+            per_wall = span_x * span_y
+            wall = np.repeat(np.arange(first, last), per_wall)
+            offset = np.arange(per_wall.sum()) - np.repeat(np.cumsum(per_wall) - per_wall,
+                                                           per_wall)
+            span_y_each = np.repeat(span_y, per_wall)
+            i = np.repeat(cell_lo[:, 0], per_wall) + offset // span_y_each
+            j = np.repeat(cell_lo[:, 1], per_wall) + offset % span_y_each
+            centres = np.column_stack([low[0] + (i + 0.5) * cell_size,
+                                       low[1] + (j + 0.5) * cell_size])
+            near = pair_distance(centres, walls[wall]) <= limit
+            cells.append(i[near] * ny + j[near])
+            members.append(wall[near])
+        cell = np.concatenate(cells) if cells else np.empty(0, dtype=np.int64)
+        member = np.concatenate(members) if members else np.empty(0, dtype=np.int64)
+        order = np.argsort(cell, kind="stable")  # walls were binned in ascending order
+        counts = np.bincount(cell, minlength=nx * ny)
         return cls(
             walls=walls,
             cell_x0=float(low[0]),
@@ -59,16 +78,70 @@ class WallGrid(NamedTuple):
             cell_size=float(cell_size),
             cells_x=int(nx),
             cells_y=int(ny),
-            cell_start=np.asarray(starts, dtype=np.int64),
-            cell_walls=cell_walls.astype(np.int64),
+            cell_start=np.concatenate([[0], np.cumsum(counts)]).astype(np.int64),
+            cell_walls=member[order].astype(np.int64),
             all_walls=np.arange(len(walls), dtype=np.int64),
         )
 
+    @classmethod
+    def cached(cls, walls: np.ndarray, reach: float, cell_size: float = 5.0) -> WallGrid:
+        """:meth:`build`, kept on disk by the walls' bytes, ``reach`` and ``cell_size``
+        (:mod:`enn_traffic.cache`)."""
+        walls = np.ascontiguousarray(walls, dtype=np.float64).reshape(-1, 4)
+        key = cache.key_of(walls.tobytes(), repr(reach), repr(cell_size), GRID_VERSION)
+
+        def build() -> dict[str, np.ndarray]:
+            with slow_step(f"indexing {len(walls):,} walls for the rangefinder"):
+                grid = cls.build(walls, reach, cell_size)
+            numbers = [grid.cell_x0, grid.cell_y0, grid.cell_size, grid.cells_x, grid.cells_y]
+            return {"numbers": np.array(numbers, dtype=np.float64),
+                    "cell_start": grid.cell_start, "cell_walls": grid.cell_walls}
+
+        arrays = cache.cached_arrays("grids", key, build)
+        x0, y0, size, cells_x, cells_y = arrays["numbers"]
+        return cls(walls=walls, cell_x0=float(x0), cell_y0=float(y0), cell_size=float(size),
+                   cells_x=int(cells_x), cells_y=int(cells_y), cell_start=arrays["cell_start"],
+                   cell_walls=arrays["cell_walls"],
+                   all_walls=np.arange(len(walls), dtype=np.int64))
+
+
+PAIRS_PER_CHUNK = 250_000  # (cell, wall) candidates tested at once: bounds the memory
+
+
+def _chunks_of_pairs(walls, low, cell_size, limit, nx, ny):
+    """Runs of consecutive walls, each with the first cell (i, j) and the number of cells
+    along x and y of every wall's bounding box widened by ``limit``, so that a run holds
+    about ``PAIRS_PER_CHUNK`` candidate (cell, wall) pairs."""
+    lo_xy = np.minimum(walls[:, :2], walls[:, 2:]) - limit - low
+    hi_xy = np.maximum(walls[:, :2], walls[:, 2:]) + limit - low
+    # the cells whose centre low + (i + 0.5) * cell_size lies in [lo, hi], and one more on
+    # each side, so that no rounding drops a cell that the exact test below would keep
+    cell_lo = np.clip(np.ceil(lo_xy / cell_size - 0.5) - 1, 0, None).astype(np.int64)
+    cell_hi = np.minimum(np.floor(hi_xy / cell_size - 0.5).astype(np.int64) + 1,
+                         [nx - 1, ny - 1])
+    span = np.maximum(cell_hi - cell_lo + 1, 0)
+    pairs = np.cumsum(span[:, 0] * span[:, 1])  # candidates up to and including each wall
+    first = 0
+    while first < len(walls):
+        before = pairs[first - 1] if first else 0
+        last = max(int(np.searchsorted(pairs, before + PAIRS_PER_CHUNK, "right")), first + 1)
+        yield first, last, cell_lo[first:last], span[first:last, 0], span[first:last, 1]
+        first = last
+
+
+def pair_distance(points: np.ndarray, walls: np.ndarray) -> np.ndarray:
+    """Distance from each point (n, 2) to the wall segment (n, 4) of the same row."""
+    return point_segment_distance(points[:, None, :], walls[:, None, :])[:, 0]
+
 
 def point_segment_distance(points: np.ndarray, walls: np.ndarray) -> np.ndarray:
-    """Distances (n_points, n_walls) from each point to each wall segment."""
-    a, b = walls[None, :, :2], walls[None, :, 2:]
-    p = points[:, None, :]
+    """Distances (n_points, n_walls) from each point (n_points, 2) to each wall segment
+    (n_walls, 4); or, given arrays already shaped to broadcast ((n, 1, 2) and (n, 1, 4)),
+    row by row."""
+    if points.ndim == 2:
+        points, walls = points[:, None, :], walls[None, :, :]
+    a, b = walls[..., :2], walls[..., 2:]
+    p = points
     ab = b - a
     t = np.clip(((p - a) * ab).sum(-1) / np.maximum((ab * ab).sum(-1), 1e-300), 0.0, 1.0)
     closest = a + t[..., None] * ab

@@ -95,3 +95,35 @@ def test_mixed_tracks_have_their_widths(root):
         length = LineString(points).length
         area = load_track(root / "sumo_nets" / f"{name}.net.xml").area.area
         assert area == pytest.approx(corridor["width"] * length, rel=0.04), name
+
+
+def test_walls_and_grid_are_kept_and_built_again_when_the_network_changes(root, tmp_path,
+                                                                          monkeypatch):
+    """A network's walls and wall grid are built once and then read from the cache folder,
+    identical; a changed network file is built again; a cache folder that cannot be written
+    costs time, not an error."""
+    from enn_traffic.sim.sensors import WallGrid
+
+    monkeypatch.setenv("ENN_TRAFFIC_CACHE", str(tmp_path / "cache"))
+    net = tmp_path / "narrow.net.xml"
+    net.write_bytes((root / "sumo_nets" / "track_narrow.net.xml").read_bytes())
+    first = load_track(net, exits=False)
+    grid = WallGrid.cached(first.walls, 26.0)
+    entries = sorted((tmp_path / "cache").rglob("*.npz"))
+    assert [e.parent.name for e in entries] == ["grids", "walls"]
+    again = load_track(net, exits=False)
+    np.testing.assert_array_equal(again.walls, first.walls)
+    assert again.area.equals_exact(first.area, 0)
+    kept = WallGrid.cached(again.walls, 26.0)
+    for name in ("cell_start", "cell_walls"):
+        np.testing.assert_array_equal(getattr(kept, name), getattr(grid, name))
+    assert (kept.cells_x, kept.cell_x0) == (grid.cells_x, grid.cell_x0)
+    assert sorted((tmp_path / "cache").rglob("*.npz")) == entries  # nothing built again
+    net.write_text(net.read_text().replace('width="12.00"', 'width="11.00"', 1))
+    load_track(net, exits=False)
+    assert len(list((tmp_path / "cache" / "walls").glob("*.npz"))) == 2
+    blocked = tmp_path / "blocked"
+    blocked.write_text("a file where the cache folder should be")
+    monkeypatch.setenv("ENN_TRAFFIC_CACHE", str(blocked))
+    np.testing.assert_array_equal(load_track(net, exits=False).walls,
+                                  load_track(net, exits=False).walls)

@@ -146,17 +146,32 @@ def test_reaching_the_fringe_is_leaving_the_network(tmp_path, road_net, mode):
 
 
 def test_exits_lie_across_the_road_ends(road_net):
-    """The exits are the two road ends, x = 0 and x = 200, across both lanes (y from -4 to 4);
-    no wall is left there, and no exit elsewhere."""
-    track = load_track(road_net, exits=True)
+    """Every lane as road (``surface = "all"``): the exits are the two road ends, x = 0 and
+    x = 200, across both lanes (y from -4 to 4); no wall is left there, and no exit
+    elsewhere."""
+    track = load_track(road_net, exits=True, surface="all")
     exits = sorted(tuple(np.round(row, 6)) for row in track.exits)
     assert len(exits) == 2
     for exit_row, x in zip(exits, (0.0, 200.0), strict=True):
         assert exit_row[0] == exit_row[2] == x
         assert sorted((exit_row[1], exit_row[3])) == [-4.0, 4.0]
-    walls = load_track(road_net).walls
+    walls = load_track(road_net, surface="all").walls
     assert len(track.walls) == len(walls) - 2
     assert not ((track.walls[:, 0] == 200.0) & (track.walls[:, 2] == 200.0)).any()
+
+
+def test_a_bus_lane_is_no_road_for_cars(road_net):
+    """The learner's surface (``surface = "passenger"``, the default): the bus-only lane from
+    x = 100 to 200 (y from 0 to 4) is not road, so a wall runs along y = 0 there, and the exit
+    at x = 200 spans the eastbound lane alone (y from -4 to 0)."""
+    track = load_track(road_net, exits=True)
+    assert track.contains(150.0, -2.0) and not track.contains(150.0, 2.0)
+    assert track.contains(50.0, 2.0)  # the westbound lane before x = 100 is for everyone
+    along_middle = [w for w in np.round(track.walls, 6)
+                    if w[1] == w[3] == 0.0 and min(w[0], w[2]) >= 100.0 - 1e-6]
+    assert sum(abs(w[2] - w[0]) for w in along_middle) == pytest.approx(100.0, abs=0.5)
+    east = [tuple(e) for e in np.round(track.exits, 6) if e[0] == e[2] == 200.0]
+    assert len(east) == 1 and sorted((east[0][1], east[0][3])) == [-4.0, 0.0]
 
 
 def test_fringe_exit_needs_sumo_traffic(tmp_path, road_net):

@@ -1,0 +1,68 @@
+"""Arrays computed once and kept on disk: a network's walls and wall grid (docs/sumo.md,
+"Large networks").
+
+An entry is named by a digest of everything it depends on (the input file's bytes, the
+parameters, a version of the code that builds it), so a changed input or a new version is built
+again and nothing is ever invalidated by hand. The folder is ``$ENN_TRAFFIC_CACHE``, else
+``$XDG_CACHE_HOME/enn-traffic``, else ``~/.cache/enn-traffic``; deleting it costs only the time
+to build its entries again. A folder that cannot be written is not an error: entries are then
+built every time.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import os
+import tempfile
+from collections.abc import Callable
+from pathlib import Path
+
+import numpy as np
+
+
+def cache_folder() -> Path:
+    """Where entries are kept (read from the environment at every call)."""
+    if os.environ.get("ENN_TRAFFIC_CACHE"):
+        return Path(os.environ["ENN_TRAFFIC_CACHE"])
+    base = os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache"
+    return Path(base) / "enn-traffic"
+
+
+def file_digest(path: Path) -> str:
+    """SHA-256 of a file's bytes."""
+    digest = hashlib.sha256()
+    with open(path, "rb") as handle:
+        for block in iter(lambda: handle.read(1 << 20), b""):
+            digest.update(block)
+    return digest.hexdigest()
+
+
+def key_of(*parts: object) -> str:
+    """An entry's name from what it depends on: bytes as they are, anything else as text."""
+    digest = hashlib.sha256()
+    for part in parts:
+        data = part if isinstance(part, bytes) else str(part).encode()
+        digest.update(len(data).to_bytes(8, "little") + data)
+    return digest.hexdigest()[:32]
+
+
+def cached_arrays(kind: str, key: str, build: Callable[[], dict[str, np.ndarray]]
+                  ) -> dict[str, np.ndarray]:
+    """The arrays of entry ``key`` of ``kind``: loaded when kept, else built by ``build`` and
+    kept (written whole or not at all, so concurrent processes never read half an entry)."""
+    path = cache_folder() / kind / f"{key}.npz"
+    try:
+        with np.load(path) as stored:
+            return {name: stored[name] for name in stored.files}
+    except (OSError, ValueError, EOFError):  # absent, or unreadable: build it again
+        pass
+    arrays = build()
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        handle, partial = tempfile.mkstemp(dir=path.parent, suffix=".partial.npz")
+        with os.fdopen(handle, "wb") as file:
+            np.savez(file, **arrays)
+        os.replace(partial, path)
+    except OSError:  # a read-only or full disk: the entry is simply not kept
+        pass
+    return arrays

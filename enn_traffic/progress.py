@@ -1,0 +1,49 @@
+"""Messages about slow steps, so that no command waits in silence.
+
+A step wrapped in :func:`slow_step` says what it is doing once it has taken a second, and how
+long it took when it ends; quick steps say nothing. Messages go to the ``enn_traffic`` logger,
+which the command line prints to standard error (``--quiet`` silences it).
+"""
+
+from __future__ import annotations
+
+import contextlib
+import logging
+import threading
+import time
+from collections.abc import Iterator
+
+log = logging.getLogger("enn_traffic")
+SLOW_S = 1.0
+
+
+@contextlib.contextmanager
+def slow_step(what: str, after_s: float = SLOW_S) -> Iterator[None]:
+    """Say ``what`` is being done once it has taken ``after_s`` seconds, and how long it took
+    when done."""
+    started = time.perf_counter()
+    said = threading.Event()
+
+    def say() -> None:
+        said.set()
+        log.info("%s ...", what)
+
+    timer = threading.Timer(after_s, say)
+    timer.daemon = True
+    timer.start()
+    try:
+        yield
+    finally:
+        timer.cancel()
+        if said.is_set():
+            log.info("%s: done in %.1f s", what, time.perf_counter() - started)
+
+
+def show_messages(quiet: bool) -> None:
+    """Print the ``enn_traffic`` messages to standard error (none with ``quiet``)."""
+    if not log.handlers:
+        handler = logging.StreamHandler()
+        handler.setFormatter(logging.Formatter("enn-traffic: %(message)s"))
+        log.addHandler(handler)
+    log.setLevel(logging.WARNING if quiet else logging.INFO)
+    log.propagate = False
