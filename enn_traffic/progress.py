@@ -9,9 +9,12 @@ from __future__ import annotations
 
 import contextlib
 import logging
+import sys
 import threading
 import time
 from collections.abc import Iterator
+
+from tqdm import tqdm
 
 log = logging.getLogger("enn_traffic")
 SLOW_S = 1.0
@@ -39,10 +42,17 @@ def slow_step(what: str, after_s: float = SLOW_S) -> Iterator[None]:
             log.info("%s: done in %.1f s", what, time.perf_counter() - started)
 
 
+class _AboveBars(logging.Handler):
+    """Writes a message above any progress bar on standard error (tqdm redraws the bar)."""
+
+    def emit(self, record: logging.LogRecord) -> None:
+        tqdm.write(self.format(record), file=sys.stderr)
+
+
 def show_messages(quiet: bool) -> None:
     """Print the ``enn_traffic`` messages to standard error (none with ``quiet``)."""
     if not log.handlers:
-        handler = logging.StreamHandler()
+        handler = _AboveBars()
         handler.setFormatter(logging.Formatter("enn-traffic: %(message)s"))
         log.addHandler(handler)
     log.setLevel(logging.WARNING if quiet else logging.INFO)

@@ -28,14 +28,16 @@ from enn_traffic.network import NetworkSpec
 from enn_traffic.provenance import code_version
 from enn_traffic.report.plots import learning_curve
 from enn_traffic.scenario import Scenario
+from enn_traffic.sim.sumo_world import warmups_used
 from enn_traffic.sim.world import CAPPED, COLLIDED, LEFT_LANE, LEFT_NETWORK, SPUN
 
 CHECKPOINT = "checkpoint.npz"
 OUTPUTS = "outputs.npz"  # what a run leaves for others to read: RunOutputs
 COLUMNS = [
     "generation", "best_fitness", "mean_fitness", "median_fitness", "min_fitness",
-    "vehicle_steps", "collisions", "spins", "capped", "left_network", "left_lane", "suffered",
-    "traffic_at_start", "traffic_near_mean", "traffic_near_max", "elapsed_s",
+    "vehicle_steps", "collisions", "vehicle_collisions", "spins", "capped", "left_network",
+    "left_lane", "suffered",
+    "traffic_at_start", "traffic_near_mean", "traffic_near_max", "warmups", "elapsed_s",
 ]  # fmt: skip
 
 
@@ -153,6 +155,15 @@ def _open_state(scenario: Scenario, out: Path, resume: bool, force: bool,
     return state
 
 
+def check_folder(scenario: Scenario, out: str | Path, resume: bool = False,
+                 force: bool = False) -> None:
+    """Would :func:`evolve` accept the run folder ``out`` (a clear InputError if not)? Asked
+    before any world is built, so that a folder holding another run is said at once."""
+    out = Path(out)
+    if (out / CHECKPOINT).exists() and not force:
+        _open_state(scenario, out, resume, force, None, fingerprint(scenario))
+
+
 def _finished_rows(table_path: Path, generation: int) -> pd.DataFrame:
     """The rows of the generations a checkpoint says are done, as written; a damaged table is
     an error, never silently shortened."""
@@ -239,12 +250,14 @@ def evolve(
                 "min_fitness": fitness.min(),
                 "vehicle_steps": results.vehicle_steps,
                 "collisions": int((results.outcome == COLLIDED).sum()),
+                "vehicle_collisions": results.vehicle_collisions,
                 "spins": int((results.outcome == SPUN).sum()),
                 "capped": int((results.outcome == CAPPED).sum()),
                 "left_network": int((results.outcome == LEFT_NETWORK).sum()),
                 "left_lane": int((results.outcome == LEFT_LANE).sum()),
                 "suffered": int(results.suffered.sum()),
                 **results.traffic_summary(),
+                "warmups": warmups_used(scenario, state.generation),
                 "elapsed_s": state.extra["elapsed_s"],
             })  # fmt: skip
             state.generation += 1

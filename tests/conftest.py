@@ -24,6 +24,14 @@ def root() -> Path:
     return ROOT
 
 
+@pytest.fixture(scope="module")
+def road_net(tmp_path_factory):
+    """The straight two-way road of :mod:`sumo_road`, built once per test module."""
+    from sumo_road import build_road_net
+
+    return build_road_net(tmp_path_factory.mktemp("road"))
+
+
 @pytest.fixture
 def small(root):
     """The narrow track with a small, quick GA."""

@@ -12,6 +12,7 @@ from __future__ import annotations
 import multiprocessing
 import os
 from concurrent.futures import ProcessPoolExecutor
+from dataclasses import replace
 from typing import Protocol
 
 import numpy as np
@@ -164,11 +165,8 @@ class MeanOverWorlds:
 
     def evaluate(self, population: np.ndarray, key: int = 0) -> EpisodeResults:
         parts = [world.evaluate(population, key) for world in self.worlds]
-        steps, outcome, suffered, traffic = (
-            np.concatenate([getattr(p, f) for p in parts], axis=1)
-            for f in ("steps", "outcome", "suffered", "traffic"))
         vehicles = round(float(np.mean([p.vehicles for p in parts])))
-        return EpisodeResults.of_lives(steps, outcome, suffered, vehicles, traffic)
+        return replace(EpisodeResults.concatenate(parts, axis=1), vehicles=vehicles)
 
     def close(self) -> None:
         pass

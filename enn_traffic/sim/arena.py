@@ -57,8 +57,9 @@ def run_episode(genes, layer_sizes, start, kinds, traffic_genes, physics, geomet
     uncontrolled vehicles (``kinds``; ``traffic_genes`` drive the network ones).
 
     Returns (steps moved, outcome, collisions suffered, vehicle-steps within the learner's
-    sensor range, most vehicles within it at once). ``trace`` (n, V, 3) receives the poses of
-    steps 0..n-1 when n > 0.
+    sensor range, most vehicles within it at once, what the learner hit: ``NO_HIT``,
+    ``HIT_WALL`` or the vehicle's index). ``trace`` (n, V, 3) receives the poses of steps
+    0..n-1 when n > 0.
     """
     count = start.shape[0]
     pose = np.empty((count, 3))
@@ -85,9 +86,10 @@ def run_episode(genes, layer_sizes, start, kinds, traffic_genes, physics, geomet
         if steps < trace.shape[0]:
             trace[steps] = pose
         # 1. collisions by the blame rule
-        if responsible(0, pose, corners, centres, previous, previous_centres, fresh, 0, physics,
-                       walls, cell_start, cell_walls, all_walls) != NO_HIT:
-            return steps, COLLIDED, suffered, near_steps, near_max
+        hit = responsible(0, pose, corners, centres, previous, previous_centres, fresh, 0,
+                          physics, walls, cell_start, cell_walls, all_walls)
+        if hit != NO_HIT:
+            return steps, COLLIDED, suffered, near_steps, near_max, hit
         for v in range(1, count):
             hit = responsible(v, pose, corners, centres, previous, previous_centres, fresh, v,
                               physics, walls, cell_start, cell_walls, all_walls)
@@ -98,9 +100,9 @@ def run_episode(genes, layer_sizes, start, kinds, traffic_genes, physics, geomet
                         corners, centres, previous, previous_centres, fresh, memory, rng)
         # 2. spin test and step cap for the learner
         if spun(recent, steps, pose[0, 0], pose[0, 1], physics.spin_variance):
-            return steps, SPUN, suffered, near_steps, near_max
+            return steps, SPUN, suffered, near_steps, near_max, NO_HIT
         if steps >= max_steps:
-            return steps, CAPPED, suffered, near_steps, near_max
+            return steps, CAPPED, suffered, near_steps, near_max, NO_HIT
         within = within_range(pose[0, 0], pose[0, 1], centres, 1, reach)
         near_steps += within
         near_max = max(near_max, within)
@@ -115,15 +117,16 @@ def run_episode(genes, layer_sizes, start, kinds, traffic_genes, physics, geomet
 def run_population(population, layer_sizes, start, kinds, traffic_genes, physics, geometry, seed,
                    max_steps):
     """Run every chromosome of ``population`` (P, G) in its own world; per world
-    (steps, outcome, collisions suffered, vehicle-steps within sensor range, most at once)."""
+    (steps, outcome, collisions suffered, vehicle-steps within sensor range, most at once,
+    what the learner hit)."""
     size = population.shape[0]
-    steps, outcome, suffered, near_steps, near_max = life_columns(size)
+    steps, outcome, suffered, near_steps, near_max, hit = life_columns(size)
     no_trace = np.empty((0, start.shape[0], 3))
     for p in prange(size):
-        steps[p], outcome[p], suffered[p], near_steps[p], near_max[p] = run_episode(
+        steps[p], outcome[p], suffered[p], near_steps[p], near_max[p], hit[p] = run_episode(
             population[p], layer_sizes, start, kinds, traffic_genes, physics, geometry, seed,
             max_steps, no_trace)
-    return steps, outcome, suffered, near_steps, near_max
+    return steps, outcome, suffered, near_steps, near_max, hit
 
 
 @dataclass(frozen=True)

@@ -29,6 +29,7 @@ from enn_traffic.geometry import boxes_overlap
 from enn_traffic.network import network_buffers
 from enn_traffic.network import steering as network_steering
 from enn_traffic.sim.rules import (
+    HIT_WALL,
     NO_HIT,
     close,
     left_network,
@@ -118,6 +119,7 @@ class LearnerState(NamedTuple):
     gone: np.ndarray  # (S,) the id a slot held when it left the learner's world, or -1
     visible: np.ndarray  # (S, 2) the centres the learner sees (far off: not seen)
     absent: np.ndarray  # (S,) not in the learner's world before the step
+    hit: np.ndarray  # (1,) what the learner ran into: NO_HIT, HIT_WALL or the vehicle's id
 
 
 @njit(cache=True)
@@ -132,7 +134,7 @@ def learner_state(start, physics, beams, layer_sizes, slots) -> LearnerState:
                         np.zeros(1), np.empty((physics.spin_window, 2)), np.zeros(1, np.int64),
                         np.zeros(2, np.int64), np.empty(beams), activation, scratch,
                         np.full(slots, -1, np.int64), np.empty((slots, 2)),
-                        np.empty(slots, np.bool_))
+                        np.empty(slots, np.bool_), np.full(1, NO_HIT, np.int64))
 
 
 def with_slots(state: LearnerState, slots: int) -> LearnerState:
@@ -151,7 +153,7 @@ def learner_step(t, genes, layer_sizes, physics, geometry, ids, corners, centres
     spin test and step cap, then sense, decide and move. Returns an outcome code, or
     ``RUNNING``; updates ``state`` (a :class:`LearnerState`) in place."""
     (pose, body, centre, body_before, centre_before, fresh, steering, recent, suffered, met,
-     readings, activation, scratch, gone, visible, absent) = state
+     readings, activation, scratch, gone, visible, absent, hit) = state
     beam_cos, beam_sin, walls, cell_start, cell_walls, all_walls, exits = geometry
     ids_before, corners_before, centres_before = ids[before], corners[before], centres[before]
     ids_now, corners_now, centres_now = ids[now], corners[now], centres[now]
@@ -160,8 +162,10 @@ def learner_step(t, genes, layer_sizes, physics, geometry, ids, corners, centres
         return LEFT_NETWORK
     # 1. collisions by the blame rule
     mark_absent(t, ids_before, gone, absent)
-    if responsible(0, pose, body, centre, corners_before, centres_before, absent, -1, physics,
-                   walls, cell_start, cell_walls, all_walls) != NO_HIT:
+    found = responsible(0, pose, body, centre, corners_before, centres_before, absent, -1,
+                        physics, walls, cell_start, cell_walls, all_walls)
+    if found != NO_HIT:
+        hit[0] = found if found == HIT_WALL else ids_before[found]
         return COLLIDED
     if t > 0:
         suffered[0] += struck_by_traffic(0, body_before, centre_before, ids_now, corners_now,
@@ -198,8 +202,8 @@ def run_replay_episode(genes, layer_sizes, physics, geometry, start, ids, corner
                        max_steps, trace):
     """Drive one chromosome through a recorded traffic run (``ids`` etc. hold at least
     ``max_steps + 1`` steps). Returns (steps moved, outcome, collisions suffered, vehicle-steps
-    within sensor range, most at once); ``trace`` (n, 3) receives the learner's poses of steps
-    0..n-1 when n > 0."""
+    within sensor range, most at once, what it hit: ``NO_HIT``, ``HIT_WALL`` or the vehicle's
+    id); ``trace`` (n, 3) receives the learner's poses of steps 0..n-1 when n > 0."""
     state = learner_state(start, physics, geometry.beam_cos.shape[0], layer_sizes, ids.shape[1])
     pose, centre, suffered, met, gone = (state.pose, state.centre, state.suffered, state.met,
                                          state.gone)
@@ -211,7 +215,7 @@ def run_replay_episode(genes, layer_sizes, physics, geometry, start, ids, corner
         outcome = learner_step(t, genes, layer_sizes, physics, geometry, ids, corners, centres,
                                max(t - 1, 0), t, max_steps, state)
         if outcome != RUNNING:
-            return t, outcome, suffered[0], met[0], met[1]
+            return t, outcome, suffered[0], met[0], met[1], state.hit[0]
         t += 1
 
 
@@ -220,12 +224,12 @@ def run_replay_population(population, layer_sizes, physics, geometry, start, ids
                           centres, max_steps):
     """:func:`run_replay_episode` for every chromosome of ``population`` (P, G), spread over
     the cores; per world (steps, outcome, collisions suffered, vehicle-steps within sensor
-    range, most at once)."""
+    range, most at once, what the learner hit)."""
     size = population.shape[0]
-    steps, outcome, suffered, near_steps, near_max = life_columns(size)
+    steps, outcome, suffered, near_steps, near_max, hit = life_columns(size)
     no_trace = np.empty((0, 3))
     for p in prange(size):
-        steps[p], outcome[p], suffered[p], near_steps[p], near_max[p] = run_replay_episode(
-            population[p], layer_sizes, physics, geometry, start, ids, corners, centres,
-            max_steps, no_trace)
-    return steps, outcome, suffered, near_steps, near_max
+        (steps[p], outcome[p], suffered[p], near_steps[p], near_max[p],
+         hit[p]) = run_replay_episode(population[p], layer_sizes, physics, geometry, start, ids,
+                                      corners, centres, max_steps, no_trace)
+    return steps, outcome, suffered, near_steps, near_max, hit

@@ -31,6 +31,7 @@ from enn_traffic.geometry import body_corners, box_hits_segment, box_hits_walls,
 from enn_traffic.network import steering as network_steering
 from enn_traffic.sim.bicycle import bicycle_step
 from enn_traffic.sim.sensors import WallGrid, nearby_walls, ray_segment_distance, sense_walls
+from enn_traffic.sim.world import HIT_WALL, NO_HIT
 from enn_traffic.traffic.strategies import (
     NETWORK,
     NONE,
@@ -40,8 +41,8 @@ from enn_traffic.traffic.strategies import (
     senses_vehicles,
 )
 
-# What the blame rule found (:func:`responsible`), besides the index of a vehicle.
-NO_HIT, HIT_WALL = -1, -2
+# What the blame rule finds (:func:`responsible`), besides the index of a vehicle: HIT_WALL,
+# NO_HIT (enn_traffic.sim.world).
 
 
 class Physics(NamedTuple):
@@ -336,7 +337,8 @@ def within_range(x, y, centres, first, reach) -> int:
 @njit(cache=True)
 def life_columns(size):
     """Per world of a batch: steps, outcome, collisions suffered, vehicle-steps within sensor
-    range, most within range at once (zeros, to be filled)."""
+    range, most within range at once (zeros, to be filled), and what the learner hit
+    (``NO_HIT``, to be filled: ``HIT_WALL`` or the vehicle)."""
     return (np.zeros(size, dtype=np.int64), np.zeros(size, dtype=np.int64),
             np.zeros(size, dtype=np.int64), np.zeros(size, dtype=np.int64),
-            np.zeros(size, dtype=np.int64))
+            np.zeros(size, dtype=np.int64), np.full(size, NO_HIT, dtype=np.int64))

@@ -22,10 +22,7 @@ moves them in SUMO and steps SUMO.
 
 from __future__ import annotations
 
-import os
-import tempfile
 from dataclasses import dataclass
-from pathlib import Path
 
 import numpy as np
 from numba import njit
@@ -160,12 +157,8 @@ class SumoCrowd:
         vehicle = scenario.vehicle
         state = world.warm_state(self.seed) or sumo.warm_state(scenario, self.seed,
                                                                keep_rng=True)
-        handle, ssm_file = tempfile.mkstemp(suffix=".xml", prefix="enn-ssm-")
-        os.close(handle)
-        self._ssm_file = Path(ssm_file)
         self._simulation = simulation = sumo.Simulation(
-            scenario, self.seed, state, extra=sumo.ssm_options(self._ssm_file, self.ids),
-            learners=self.ids)
+            scenario, self.seed, state, extra=sumo.ssm_options(self.ids), learners=self.ids)
         self.physics = world._learner_physics(simulation.largest_radius())
         self.slots = sumo.slot_arrays(2, 64)
         self.before, self.now = 0, 1  # rows of the slot arrays; they swap every step
@@ -190,10 +183,9 @@ class SumoCrowd:
         """End SUMO and count each run's SSM conflicts."""
         if self._simulation is None:
             return
-        self._simulation.close()
+        output = self._simulation.close(read=(sumo.SSM_FILE,))[sumo.SSM_FILE]
         self._simulation = None
-        times = sumo.ttc_conflict_times(self._ssm_file)
-        self._ssm_file.unlink(missing_ok=True)
+        times = sumo.ttc_conflict_times(output)
         for run in self._runs:
             end = run.begin + run.seconds
             run.ttc_conflicts = int(((times >= run.begin) & (times < end)).sum())

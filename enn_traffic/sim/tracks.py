@@ -10,6 +10,8 @@ as it is over traffic strategies (§5.4.1).
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 
 from enn_traffic.scenario import Scenario
@@ -31,13 +33,7 @@ class TracksWorld:
     def evaluate(self, population: np.ndarray, key: int = 0) -> EpisodeResults:
         """Fitness of every chromosome: the mean over every track's situations of ``key``."""
         parts = [world.evaluate(population, key) for world in self.worlds]
-        safety = (None if any(part.safety is None for part in parts)
-                  else np.concatenate([part.safety for part in parts], axis=1))
-        return EpisodeResults.of_lives(
-            *(np.concatenate([getattr(part, name) for part in parts], axis=1)
-              for name in ("steps", "outcome", "suffered")),
-            vehicles=self.vehicles,
-            traffic=np.concatenate([part.traffic for part in parts], axis=1), safety=safety)
+        return replace(EpisodeResults.concatenate(parts, axis=1), vehicles=self.vehicles)
 
     def episode_labels(self) -> list[str]:
         """``track: strategy`` of each column of :meth:`evaluate`'s per-situation arrays."""

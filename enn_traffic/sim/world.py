@@ -22,6 +22,8 @@ from enn_traffic.scenario import Scenario
 # life that left the network or was capped counts its steps as fitness, as does a lane
 # departure (paper §5.6: the steps kept in the lane).
 CAPPED, COLLIDED, SPUN, LEFT_NETWORK, LEFT_LANE = 0, 1, 2, 3, 4
+# What a collision was with (``EpisodeResults.hit``), besides a vehicle (0, 1, ...).
+NO_HIT, HIT_WALL = -1, -2
 OUTCOMES = {CAPPED: "capped", COLLIDED: "collision", SPUN: "spin", LEFT_NETWORK: "left network",
             LEFT_LANE: "left lane"}
 # Columns of :attr:`EpisodeResults.traffic`: vehicles in the world when the learner starts,
@@ -60,8 +62,10 @@ class World(Protocol):
 @dataclass(frozen=True)
 class EpisodeResults:
     """Per world and episode (P, E): learner steps, outcome (``OUTCOMES``), collisions the
-    learner suffered, and the traffic it met (P, E, 3; columns ``MET_*``); fitness (P,) is
-    the mean over episodes of steps, 0 for a spin."""
+    learner suffered, the traffic it met (P, E, 3; columns ``MET_*``) and what it ran into
+    (``hit``: ``NO_HIT``, ``HIT_WALL``, or the vehicle: an arena vehicle's index, a SUMO
+    vehicle's number in its situation; ``hit_vehicle``: that SUMO vehicle's id and type, where
+    known); fitness (P,) is the mean over episodes of steps, 0 for a spin."""
 
     fitness: np.ndarray
     steps: np.ndarray
@@ -70,32 +74,40 @@ class EpisodeResults:
     vehicles: int = 1
     traffic: np.ndarray | None = None
     safety: np.ndarray | None = None  # (P, E, 4), ``SAFETY_*``: measured in closed loop only
+    hit: np.ndarray | None = None
+    hit_vehicle: np.ndarray | None = None  # (P, E) objects: (id, type), or None
 
     def __post_init__(self):
         if self.traffic is None:  # no traffic: nothing met
             object.__setattr__(self, "traffic", np.zeros((*self.steps.shape, 3)))
+        if self.hit is None:  # nothing known: walls for the collisions
+            object.__setattr__(self, "hit", np.where(self.outcome == COLLIDED, HIT_WALL, NO_HIT))
 
     @classmethod
     def of_lives(cls, steps: np.ndarray, outcome: np.ndarray, suffered: np.ndarray | None = None,
                  vehicles: int = 1, traffic: np.ndarray | None = None,
-                 safety: np.ndarray | None = None) -> EpisodeResults:
+                 safety: np.ndarray | None = None, hit: np.ndarray | None = None,
+                 hit_vehicle: np.ndarray | None = None) -> EpisodeResults:
         """From every life (P, E): fitness is the mean over the situations of
         :meth:`lifetime_fitness`."""
         fitness = cls.lifetime_fitness(steps, outcome).mean(axis=1)
         suffered = np.zeros_like(steps) if suffered is None else suffered
-        return cls(fitness, steps, outcome, suffered, vehicles, traffic, safety)
+        return cls(fitness, steps, outcome, suffered, vehicles, traffic, safety, hit,
+                   hit_vehicle)
 
     @classmethod
     def of_situations(cls, runs: list[tuple], vehicles: int, at_start: list,
-                      safety: np.ndarray | None = None) -> EpisodeResults:
+                      safety: np.ndarray | None = None,
+                      hit_vehicle: np.ndarray | None = None) -> EpisodeResults:
         """From a compiled batch's (steps, outcome, suffered, vehicle-steps within range, most
-        within range), each (P,), per situation; ``at_start``: the vehicles in the world at the
-        learner's start, per situation (a number, or one per world)."""
-        steps, outcome, suffered, near_steps, near_max = (
-            np.stack([r[i] for r in runs], axis=1) for i in range(5))
+        within range, what was hit), each (P,), per situation; ``at_start``: the vehicles in
+        the world at the learner's start, per situation (a number, or one per world)."""
+        steps, outcome, suffered, near_steps, near_max, hit = (
+            np.stack([r[i] for r in runs], axis=1) for i in range(6))
         start = np.column_stack([np.broadcast_to(a, len(steps)) for a in at_start])
         return cls.of_lives(steps, outcome, suffered, vehicles,
-                            cls.traffic_met(start, near_steps, near_max), safety)
+                            cls.traffic_met(start, near_steps, near_max), safety, hit,
+                            hit_vehicle)
 
     @staticmethod
     def traffic_met(start: np.ndarray, near_steps: np.ndarray, near_max: np.ndarray
@@ -122,17 +134,27 @@ class EpisodeResults:
         return np.where(outcome == SPUN, 0, steps).astype(np.float64)
 
     @property
+    def vehicle_collisions(self) -> int:
+        """Lives that ended by running into a vehicle (the rest of the collisions: walls)."""
+        return int(((self.outcome == COLLIDED) & (self.hit >= 0)).sum())
+
+    @property
     def vehicle_steps(self) -> int:
         """Steps moved by every simulated vehicle."""
         return int(self.steps.sum()) * self.vehicles
 
     @staticmethod
-    def concatenate(parts: list[EpisodeResults]) -> EpisodeResults:
-        return EpisodeResults(*(np.concatenate([getattr(p, f) for p in parts])
-                                for f in ("fitness", "steps", "outcome", "suffered")),
-                              vehicles=parts[0].vehicles,
-                              traffic=np.concatenate([p.traffic for p in parts]),
-                              safety=None if any(p.safety is None for p in parts)
-                              else np.concatenate([p.safety for p in parts]))
+    def concatenate(parts: list[EpisodeResults], axis: int = 0) -> EpisodeResults:
+        """Results of several batches of worlds (``axis = 0``), or of several sets of
+        situations of the same worlds (``axis = 1``)."""
+        def joined(name: str) -> np.ndarray | None:
+            arrays = [getattr(p, name) for p in parts]
+            return None if any(a is None for a in arrays) else np.concatenate(arrays, axis)
+
+        steps, outcome = joined("steps"), joined("outcome")
+        return EpisodeResults.of_lives(
+            steps, outcome, joined("suffered"), vehicles=parts[0].vehicles,
+            traffic=joined("traffic"), safety=joined("safety"), hit=joined("hit"),
+            hit_vehicle=joined("hit_vehicle"))
 
 

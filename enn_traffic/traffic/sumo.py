@@ -13,8 +13,14 @@ Pose convention: SUMO reports a vehicle's front-bumper middle and its navigation
 counter-clockwise: ``heading = radians(90 - angle)``.
 
 - :func:`record` runs SUMO once without the learner and keeps every step (replay mode).
-- :func:`closed_loop_episode` puts the learner into SUMO each step (``moveToXY`` with
-  keepRoute=2, speed and lane-change modes 0) so that SUMO traffic reacts to it.
+- :func:`add_learner` and :func:`move_learner` put a learner into SUMO each step (``moveToXY``
+  with keepRoute=2, speed and lane-change modes 0) so that SUMO traffic reacts to it (closed
+  loop).
+
+SUMO reads the user's scenario and never writes into it (docs/sumo.md, "What is written
+where"): each start writes into a folder of its own (:func:`output_prefix`), its console goes
+to a log there, and on closing the log and, when kept, the outputs move to the scenario's
+``sumo_folder``.
 
 libsumo holds one simulation per process; every function here starts and closes its own.
 """
@@ -22,13 +28,17 @@ libsumo holds one simulation per process; every function here starts and closes 
 from __future__ import annotations
 
 import contextlib
+import ctypes
 import functools
 import gzip
 import hashlib
 import math
 import os
 import re
+import shutil
+import sys
 import tempfile
+import xml.etree.ElementTree as ElementTree
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -38,6 +48,7 @@ from numba import njit
 
 from enn_traffic.errors import InputError
 from enn_traffic.geometry import body_corners
+from enn_traffic.progress import slow_step
 from enn_traffic.scenario import Scenario
 from enn_traffic.traffic.sumocfg import SumoConfig, departure_span, read_sumocfg
 
@@ -50,6 +61,13 @@ MAX_SLOTS = 4096  # vehicles on the network at once
 # Columns of the rows :meth:`Simulation.read` gives.
 ROW_SLOT, ROW_NUMBER, ROW_LENGTH, ROW_WIDTH, ROW_X, ROW_Y, ROW_ANGLE = range(7)
 MATCH_M = 10.0  # first radius in which SUMO maps the learner's position to a lane
+# The files of a SUMO start's own folder that are enn-traffic's, not the scenario's outputs.
+CONSOLE_LOG = "console.log"  # what SUMO printed
+ERROR_LOG = "errors.log"  # SUMO's errors, for messages
+SSM_FILE = "enn_learner_ssm.xml"  # the learners' SSM devices (closed loop)
+STATE_FILE = "enn_state.xml.gz"  # a warm-up being saved
+OWN_FILES = (CONSOLE_LOG, ERROR_LOG, SSM_FILE, STATE_FILE)
+RUN_LOG = "sumo.log"  # in the scenario's sumo_folder: every start's console, one after another
 
 
 @njit(cache=True)
@@ -129,12 +147,15 @@ def route_files(scenario: Scenario) -> list[Path]:
     return [*(config.route_files if config is not None else ()), *scenario.traffic.routes]
 
 
-def sumo_command(scenario: Scenario, seed: int, error_log: Path, state: Path | None = None,
+def sumo_command(scenario: Scenario, seed: int, folder: Path, state: Path | None = None,
                  save_rng: bool = False) -> list[str]:
     """The SUMO command line of a scenario's traffic with ``seed``: started at the begin time,
-    or from a saved ``state`` (whose time it takes). ``save_rng``: states saved by this run
-    keep SUMO's random generators, so that a run loading one goes on exactly as this one."""
+    or from a saved ``state`` (whose time it takes), writing every file into ``folder``
+    (:func:`output_prefix`; the ``.sumocfg``'s outputs cut to their file names, its GUI-only
+    options emptied). ``save_rng``: states saved by this run keep SUMO's random generators,
+    so that a run loading one goes on exactly as this one."""
     traffic = scenario.traffic
+    config = sumo_config(scenario)
     source = ["-c", str(traffic.sumocfg)] if traffic.sumocfg is not None else []
     if traffic.routes:  # added to the .sumocfg's own route files, which -r would replace
         source += ["-r", ",".join(str(r) for r in route_files(scenario))]
@@ -149,13 +170,61 @@ def sumo_command(scenario: Scenario, seed: int, error_log: Path, state: Path | N
         source += ["--default.carfollowmodel", drivers.car_following]
     if drivers.demand_scale is not None:
         source += ["--scale", f"{drivers.demand_scale:g}"]
+    if config is not None:
+        for name, value in config.outputs.items():
+            if name != "error-log":
+                source += [f"--{name}", _file_names(value)]
+        for name in config.gui_only:
+            source += [f"--{name}", ""]
     return [
         "sumo", *source, "-n", str(scenario.track.net),
         "--seed", str(seed), "--step-length", f"{scenario.vehicle.dt:g}",
-        "--no-step-log", "true", "--no-warnings", "true",
+        "--no-step-log", "true",
         "--collision.action", "none",  # collisions with the learner are ours (docs/sumo.md)
-        "--error-log", str(error_log),
+        "--output-prefix", output_prefix(folder), "--error-log", ERROR_LOG,
     ]  # fmt: skip
+
+
+CLIMB = 64  # more folders deep than any place SUMO resolves an output from
+
+
+def output_prefix(folder: Path) -> str:
+    """SUMO's ``--output-prefix`` that puts every file it writes into ``folder``.
+
+    SUMO resolves an output's name against the folder of the file that names it (the
+    ``.sumocfg``, an additional file, or the working folder for a command-line option) and
+    then prefixes the name's last component. A prefix that climbs to the root (``..`` from
+    ``/`` stays at ``/``) and descends to ``folder`` lands there from any such place."""
+    return "../" * CLIMB + str(folder.resolve()).lstrip("/") + "/"
+
+
+def _file_names(value: str) -> str:
+    """An output option's value with each file cut to its name (resolved against the
+    working folder, which exists, rather than a sub-folder of the scenario that may not)."""
+    return ",".join(Path(name).name for name in re.split(r"[,\s]+", value) if name)
+
+
+_C = ctypes.CDLL(None)
+
+
+@contextlib.contextmanager
+def _console_into(path: Path):
+    """The process's standard output and error (SUMO's console) into ``path`` while inside."""
+    for stream in (sys.stdout, sys.stderr):
+        if stream is not None:
+            stream.flush()
+    saved = os.dup(1), os.dup(2)
+    target = os.open(path, os.O_WRONLY | os.O_CREAT | os.O_APPEND, 0o644)
+    try:
+        os.dup2(target, 1)
+        os.dup2(target, 2)
+        yield
+    finally:
+        _C.fflush(None)
+        os.dup2(saved[0], 1)
+        os.dup2(saved[1], 2)
+        for handle in (*saved, target):
+            os.close(handle)
 
 
 def _key(scenario: Scenario) -> str:
@@ -170,15 +239,20 @@ class Simulation:
                  save_rng: bool = False, extra: tuple[str, ...] = (),
                  learners: tuple[str, ...] = (LEARNER,)):
         self.scenario = scenario
-        self._log = tempfile.NamedTemporaryFile("r", suffix=".log", prefix="enn-sumo-")  # noqa: SIM115 (open for the run)
-        command = sumo_command(scenario, seed, Path(self._log.name), state, save_rng)
+        self.seed = seed
+        self.folder = Path(tempfile.mkdtemp(prefix="enn-sumo-"))  # all this start writes
+        self._open = True
+        command = sumo_command(scenario, seed, self.folder, state, save_rng)
         try:
-            libsumo.start([*command, *extra])
+            with self.console():
+                libsumo.start([*command, *extra])
         except Exception as exc:  # libsumo raises its own exception types
             self._fail("SUMO failed to start", exc)
         # vehicle -> (slot, number, length, width): the first row columns of :meth:`read`
         self.vehicles: dict[str, tuple[int, int, float, float]] = {}
         self.numbered = 0  # vehicles given a number so far
+        self.names: list[str] = []  # each numbered vehicle's SUMO id and vehicle type
+        self.types: list[str] = []
         self.following = False
         self.learners = learners  # SUMO ids that :meth:`read` leaves out
         self.slots_used = 0  # one more than the highest slot given so far
@@ -212,28 +286,42 @@ class Simulation:
             for name, value in self._lane_change.items():
                 libsumo.vehicle.setParameter(vehicle, name, value)
 
+    def console(self):
+        """SUMO's console into this start's log while inside (shown, with
+        ``scenario.sumo_console``)."""
+        if self.scenario.sumo_console:
+            return contextlib.nullcontext()
+        return _console_into(self.folder / CONSOLE_LOG)
+
     def _fail(self, what: str, exc: Exception | None = None) -> None:
-        detail = self._log.read().strip().replace("\n", "; ") or str(exc or "")
+        errors = self.folder / ERROR_LOG
+        detail = errors.read_text(errors="replace").strip() if errors.is_file() else ""
         self.close()
+        detail = detail.replace("\n", "; ") or str(exc or "")
         raise InputError(f"{what}: {detail}", self.scenario.source, _key(self.scenario))
 
     def step(self, count: int = 1) -> None:
         try:
-            for _ in range(count):
-                libsumo.simulationStep()
-                self._stepped = True
-                if self.following:  # unseen vehicles keep their slots until they arrive
-                    for vehicle in libsumo.simulation.getArrivedIDList():
-                        if vehicle in self.vehicles:
-                            self._free.append(self.vehicles.pop(vehicle)[ROW_SLOT])
-                else:
-                    for vehicle in libsumo.simulation.getDepartedIDList():
-                        libsumo.vehicle.subscribe(vehicle, _VARIABLES)
-                if self._lane_change:
-                    for vehicle in libsumo.simulation.getDepartedIDList():
-                        self._set_lane_change(vehicle)
+            with self.console():
+                self._step(count)
         except Exception as exc:
             self._fail("SUMO stopped", exc)
+
+    def _step(self, count: int) -> None:
+        """``count`` SUMO steps, keeping the slots and subscriptions up to date."""
+        for _ in range(count):
+            libsumo.simulationStep()
+            self._stepped = True
+            if self.following:  # unseen vehicles keep their slots until they arrive
+                for vehicle in libsumo.simulation.getArrivedIDList():
+                    if vehicle in self.vehicles:
+                        self._free.append(self.vehicles.pop(vehicle)[ROW_SLOT])
+            else:
+                for vehicle in libsumo.simulation.getDepartedIDList():
+                    libsumo.vehicle.subscribe(vehicle, _VARIABLES)
+            if self._lane_change:
+                for vehicle in libsumo.simulation.getDepartedIDList():
+                    self._set_lane_change(vehicle)
 
     def read(self) -> np.ndarray:
         """The vehicles on the network now, the learner excepted, a row each (columns
@@ -271,6 +359,8 @@ class Simulation:
                 self.slots_used = max(self.slots_used, slot + 1)
                 self.vehicles[vehicle] = (slot, self.numbered, libsumo.vehicle.getLength(vehicle),
                                           libsumo.vehicle.getWidth(vehicle))
+                self.names.append(vehicle)
+                self.types.append(libsumo.vehicle.getTypeID(vehicle))
                 self.numbered += 1
 
     def follow_learner(self, reach: float) -> None:
@@ -310,23 +400,65 @@ class Simulation:
         """Vehicles on the network now."""
         return libsumo.vehicle.getIDCount()
 
-    def close(self) -> None:
-        with contextlib.suppress(Exception):  # not started, or already closed
+    def save_state(self, path: Path) -> None:
+        """Save the running SUMO's state to ``path`` (gzipped if it ends in ``.gz``) so that
+        it loads again (:func:`complete_routes`)."""
+        with self.console():
+            libsumo.simulation.saveState(STATE_FILE)  # into the folder, by the output prefix
+        written = self.folder / STATE_FILE
+        complete_routes(written)
+        shutil.move(written, path)
+
+    def close(self, read: tuple[str, ...] = ()) -> dict[str, bytes]:
+        """End SUMO. Returns what it wrote into the files ``read`` of its folder (b"" for
+        one it did not write); its console log then goes to the scenario's ``sumo_folder``
+        and, with ``traffic.sumo_outputs = "keep"``, its outputs too; its folder is deleted."""
+        if not self._open:
+            return dict.fromkeys(read, b"")
+        self._open = False
+        with contextlib.suppress(Exception), self.console():  # not started, or closed
             libsumo.close()
-        self._log.close()
+        contents = {name: (self.folder / name).read_bytes() if (self.folder / name).is_file()
+                    else b"" for name in read}
+        try:
+            self._hand_over()
+        finally:
+            shutil.rmtree(self.folder, ignore_errors=True)
+        return contents
+
+    def _hand_over(self) -> None:
+        """This start's console log (appended to ``RUN_LOG``) and kept outputs (a folder of
+        their own in ``outputs/``) into the scenario's ``sumo_folder``."""
+        target = self.scenario.sumo_folder
+        if target is None:
+            return
+        console = self.folder / CONSOLE_LOG
+        if console.is_file() and console.stat().st_size:
+            target.mkdir(parents=True, exist_ok=True)
+            with open(target / RUN_LOG, "ab") as log:
+                log.write(f"== SUMO, seed {self.seed}\n".encode() + console.read_bytes())
+        outputs = [file for file in self.folder.iterdir() if file.name not in OWN_FILES]
+        if outputs and self.scenario.traffic.sumo_outputs == "keep":
+            (target / "outputs").mkdir(parents=True, exist_ok=True)
+            kept = Path(tempfile.mkdtemp(dir=target / "outputs", prefix=f"seed{self.seed}-"))
+            for file in outputs:
+                shutil.move(file, kept / file.name)
 
 
 @dataclass(frozen=True)
 class Recording:
     """A SUMO run without the learner, step by step from the end of the warm-up: slot arrays
     ``ids`` (T, S), ``corners`` (T, S, 4, 2), ``centres`` (T, S, 2); the largest body's
-    bounding radius; the mean number of vehicles on the network."""
+    bounding radius; the mean number of vehicles on the network; and each vehicle's SUMO id
+    and type, by the number ``ids`` holds."""
 
     ids: np.ndarray
     corners: np.ndarray
     centres: np.ndarray
     radius: float
     mean_vehicles: float
+    names: tuple[str, ...] = ()
+    types: tuple[str, ...] = ()
 
 
 def warmup_steps(scenario: Scenario) -> int:
@@ -365,27 +497,27 @@ def warm_state(scenario: Scenario, seed: int, keep_rng: bool) -> Path:
     if path.is_file():
         return path
     STATE_FOLDER.mkdir(parents=True, exist_ok=True)
-    simulation = Simulation(scenario, seed, save_rng=keep_rng)
     partial = path.with_name(f"{key}.{os.getpid()}.partial.xml.gz")
-    try:
-        simulation.step(warmup_steps(scenario))
-        save_state(partial)
-    finally:
-        simulation.close()
+    with slow_step(f"simulating a SUMO warm-up ({scenario.traffic.warmup_s:g} s of SUMO "
+                   f"time, seed {seed})"):
+        simulation = Simulation(scenario, seed, save_rng=keep_rng)
+        try:
+            simulation.step(warmup_steps(scenario))
+            simulation.save_state(partial)
+        finally:
+            simulation.close()
     os.replace(partial, path)  # whole or not at all, whichever process wrote it first
     return path
 
 
-def save_state(path: Path) -> None:
-    """Save the running SUMO's state to ``path`` (gzipped if it ends in ``.gz``) so that it
-    loads again.
+def complete_routes(path: Path) -> None:
+    """Make the state SUMO just saved to ``path`` load again.
 
     With a demand scaled above 1 (``--scale``), SUMO's copies of a vehicle share its embedded
     route (``!id``), and SUMO 1.28 may leave such a route out of the state, which then fails to
     load ("The route '!id' for vehicle 'id.1' is not known"). The routes a saved vehicle names
     but the state lacks are written into it, with the edges of a vehicle that drives it (SUMO
     is still running: the vehicles are asked only when a route is missing)."""
-    libsumo.simulation.saveState(str(path))
     opener = gzip.open if path.name.endswith(".gz") else open
     with opener(path, "rt", encoding="utf-8") as file:
         text = file.read()
@@ -482,7 +614,8 @@ def record(scenario: Scenario, seed: int, steps: int, state: Path | None = None)
     radius = max((fill_frame(rows, ids[t], corners[t], centres[t])
                   for t, rows in enumerate(frames)), default=0.0)
     mean_vehicles = float((ids >= 0).sum(axis=1).mean())
-    return Recording(ids, corners, centres, radius, mean_vehicles)
+    return Recording(ids, corners, centres, radius, mean_vehicles, tuple(simulation.names),
+                     tuple(simulation.types))
 
 
 # SUMO's SSM device on the learner (closed loop): conflicts with the vehicles around it,
@@ -492,14 +625,14 @@ SSM_THRESHOLDS = {"TTC": 1.5, "DRAC": 3.0, "PET": 2.0}
 SSM_RANGE_M = 50.0
 
 
-def ssm_options(output: Path, learners: tuple[str, ...] = (LEARNER,)) -> tuple[str, ...]:
+def ssm_options(learners: tuple[str, ...] = (LEARNER,)) -> tuple[str, ...]:
     """SUMO options that equip the learners (their SUMO ids) with SSM devices writing to
-    ``output``."""
+    ``SSM_FILE`` in the start's folder (read it with ``Simulation.close(read=...)``)."""
     return ("--device.ssm.explicit", ",".join(learners),
             "--device.ssm.measures", " ".join(SSM_THRESHOLDS),
             "--device.ssm.thresholds", " ".join(f"{v:g}" for v in SSM_THRESHOLDS.values()),
             "--device.ssm.range", f"{SSM_RANGE_M:g}", "--device.ssm.trajectories", "false",
-            "--device.ssm.file", str(output))
+            "--device.ssm.file", SSM_FILE)
 
 
 @dataclass(frozen=True)
@@ -514,13 +647,11 @@ class Conflicts:
     pet: int = 0
 
 
-def _conflicts(path: Path) -> list:
-    """The conflict elements of an SSM output file (none for an empty or missing one)."""
-    import xml.etree.ElementTree as ElementTree
-
+def _conflicts(output: bytes) -> list:
+    """The conflict elements of an SSM output (none for an empty one)."""
     try:
-        return ElementTree.parse(path).getroot().findall("conflict")
-    except (ElementTree.ParseError, OSError):
+        return ElementTree.fromstring(output).findall("conflict")
+    except ElementTree.ParseError:
         return []
 
 
@@ -534,9 +665,9 @@ def _measure(conflict, tag: str, attribute: str = "value") -> float | None:
         return None
 
 
-def read_conflicts(path: Path) -> Conflicts:
-    """Read an SSM output file (an empty or missing one: no conflict)."""
-    conflicts = _conflicts(path)
+def read_conflicts(output: bytes) -> Conflicts:
+    """Read an SSM output (an empty one: no conflict)."""
+    conflicts = _conflicts(output)
     ttc = [v for c in conflicts if (v := _measure(c, "minTTC")) is not None]
     drac = [v for c in conflicts if (v := _measure(c, "maxDRAC")) is not None]
     pet = [v for c in conflicts if (v := _measure(c, "PET")) is not None]
@@ -546,10 +677,10 @@ def read_conflicts(path: Path) -> Conflicts:
                      sum(v < SSM_THRESHOLDS["PET"] for v in pet))
 
 
-def ttc_conflict_times(path: Path) -> np.ndarray:
-    """The SUMO times of the conflicts in an SSM output file whose lowest time-to-collision
-    fell below its threshold."""
-    return np.array([_measure(c, "minTTC", "time") for c in _conflicts(path)
+def ttc_conflict_times(output: bytes) -> np.ndarray:
+    """The SUMO times of the conflicts in an SSM output whose lowest time-to-collision fell
+    below its threshold."""
+    return np.array([_measure(c, "minTTC", "time") for c in _conflicts(output)
                      if (ttc := _measure(c, "minTTC")) is not None
                      and ttc < SSM_THRESHOLDS["TTC"]], dtype=np.float64)
 

@@ -1,28 +1,78 @@
 """A SUMO configuration file (``.sumocfg``) as SUMO reads it: the network, route and
-additional files it names (relative to the file), and its begin and end times.
+additional files it names (relative to the file), its begin and end times, and the options
+that write files or serve SUMO's GUI only.
 
 SUMO itself runs the configuration (``sumo -c``); this module reads only what the learner
-needs to know beforehand (where the track is, when traffic starts and ends) and checks that
-every file it names exists, so that a broken configuration is a clear error naming the file
-and the option, not a SUMO failure later (docs/sumo.md, "Your own SUMO scenario").
+needs to know beforehand (where the track is, when traffic starts and ends, what SUMO would
+write where) and checks that every file it names exists, so that a broken configuration is a
+clear error naming the files and the options, not a SUMO failure later (docs/sumo.md, "Your own
+SUMO scenario"). Which options write files, and which are the GUI's, SUMO's own option
+template says (:func:`sumo_options`), for the SUMO version installed.
 """
 
 from __future__ import annotations
 
 import contextlib
+import functools
 import re
+import subprocess
+import tempfile
 import xml.etree.ElementTree as ElementTree
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
+
+import sumolib
 
 from enn_traffic.errors import InputError
 
 FILE_OPTIONS = ("net-file", "route-files", "additional-files")
+# SUMO's messages: enn-traffic sets these itself (traffic/sumo.py).
+OWN_OUTPUTS = ("log", "error-log", "message-log")
+
+
+@dataclass(frozen=True)
+class SumoOption:
+    """One of SUMO's options, as its template describes it."""
+
+    name: str  # the canonical name
+    section: str  # input, output, report, gui_only ...
+    kind: str  # FILE, STR, BOOL, TIME ...
+
+    @property
+    def writes_file(self) -> bool:
+        """Does setting it make SUMO write a file (an output, a log, a saved state)?"""
+        if self.section in ("gui_only", "input") or self.name.endswith("input-file"):
+            return False
+        if self.kind == "FILE":
+            return (self.section in ("output", "report") or "output" in self.name
+                    or self.name.startswith("save-"))
+        return self.name.startswith("device.") and self.name.endswith(".file")
+
+
+@functools.cache
+def sumo_options() -> dict[str, SumoOption]:
+    """Every option of the installed SUMO, by its name and by each of its synonyms (from
+    ``sumo --save-template``)."""
+    with tempfile.TemporaryDirectory(prefix="enn-sumo-template-") as folder:
+        template = Path(folder) / "template.xml"
+        subprocess.run([sumolib.checkBinary("sumo"), "--save-template", str(template)],
+                       capture_output=True, check=True)
+        root = ElementTree.parse(template).getroot()
+    options = {}
+    for section in root:
+        for element in section:
+            option = SumoOption(element.tag, section.tag, element.get("type", ""))
+            for name in [element.tag, *(element.get("synonymes") or "").split()]:
+                options[name] = option
+    return options
 
 
 @dataclass(frozen=True)
 class SumoConfig:
-    """What a ``.sumocfg`` names: absolute paths, and times in seconds (None: not set)."""
+    """What a ``.sumocfg`` names: absolute paths, and times in seconds (None: not set);
+    ``outputs``: the options it sets that write files (canonical name: value as written);
+    ``gui_only``: the options of its ``<gui_only>`` section, which the command-line SUMO
+    does not need (a missing GUI settings file would stop it)."""
 
     path: Path
     net_file: Path | None
@@ -30,6 +80,8 @@ class SumoConfig:
     additional_files: tuple[Path, ...]
     begin: float | None
     end: float | None
+    outputs: dict[str, str] = field(default_factory=dict)
+    gui_only: tuple[str, ...] = ()
 
 
 def parse_time(text: str) -> float:
@@ -43,35 +95,51 @@ def parse_time(text: str) -> float:
     return seconds
 
 
-def _option(root: ElementTree.Element, name: str) -> str | None:
-    """The value of option ``name`` anywhere in the configuration (sections are optional in
-    SUMO's format: ``<input><net-file value=.../></input>`` or ``<net-file value=.../>``)."""
-    for element in root.iter(name):
-        value = element.get("value", element.get("v"))
-        if value is not None:
-            return value
-    return None
+def _settings(root: ElementTree.Element) -> tuple[dict[str, str], list[str]]:
+    """Every option the configuration sets (name as written: value) outside its
+    ``<gui_only>`` section, and the names set inside it. Sections are optional in SUMO's
+    format: ``<input><net-file value=.../></input>`` or ``<net-file value=.../>``."""
+    settings, gui_only = {}, []
+    for child in root:
+        inner = [child] if child.get("value", child.get("v")) is not None else list(child)
+        for element in inner:
+            value = element.get("value", element.get("v"))
+            if value is None:
+                continue
+            if child.tag == "gui_only":
+                gui_only.append(element.tag)
+            else:
+                settings[element.tag] = value
+    return settings, gui_only
 
 
 def read_sumocfg(path: Path) -> SumoConfig:
-    """Read ``path``; every file it names must exist (InputError naming the option)."""
+    """Read ``path``; every file it names must exist (one InputError naming every missing
+    file and its option)."""
     try:
         root = ElementTree.parse(path).getroot()
     except (ElementTree.ParseError, OSError) as exc:
         raise InputError(f"not a readable SUMO configuration: {exc}", path) from None
+    settings, gui_only = _settings(root)
+    known = sumo_options()
+    canonical = {known[name].name if name in known else name: value
+                 for name, value in settings.items()}
     files: dict[str, tuple[Path, ...]] = {}
+    missing = []
     for option in FILE_OPTIONS:
-        value = _option(root, option)
-        names = [n for n in re.split(r"[,\s]+", value or "") if n]
+        names = [n for n in re.split(r"[,\s]+", canonical.get(option) or "") if n]
         resolved = tuple((path.parent / name).resolve() for name in names)
-        for name, file in zip(names, resolved, strict=True):
-            if not file.is_file():
-                raise InputError(f"names a file that does not exist: {name} ({file})", path,
-                                 option)
+        missing += [(option, name, file) for name, file in zip(names, resolved, strict=True)
+                    if not file.is_file()]
         files[option] = resolved
+    if missing:
+        listed = "; ".join(f"{option}: {name} ({file})" for option, name, file in missing)
+        plural = "a file" if len(missing) == 1 else f"{len(missing)} files"
+        options = ", ".join(dict.fromkeys(option for option, _, _ in missing))
+        raise InputError(f"names {plural} that do not exist: {listed}", path, options)
     times = {}
     for option in ("begin", "end"):
-        value = _option(root, option)
+        value = canonical.get(option)
         try:
             times[option] = None if value is None else parse_time(value)
         except ValueError:
@@ -80,7 +148,11 @@ def read_sumocfg(path: Path) -> SumoConfig:
     if begin is not None and end is not None and end >= 0 and end <= begin:
         raise InputError(f"end ({end:g} s) is not after begin ({begin:g} s)", path, "end")
     net = files["net-file"][0] if files["net-file"] else None
-    return SumoConfig(path, net, files["route-files"], files["additional-files"], begin, end)
+    outputs = {name: value for name, value in canonical.items()
+               if name in known and known[name].writes_file and value.strip()}
+    return SumoConfig(path, net, files["route-files"], files["additional-files"], begin, end,
+                      outputs, tuple(known[name].name if name in known else name
+                                     for name in gui_only))
 
 
 def departure_span(route_files: list[Path] | tuple[Path, ...]) -> tuple[float, float] | None:

@@ -118,16 +118,16 @@ def test_bad_driver_values_name_file_and_key(tmp_path, root, strategy, drivers, 
 
 def test_a_scaled_city_state_loads(tmp_path):
     """Cologne's demand scaled by 1.5: SUMO's copies of a vehicle share its embedded route,
-    which SUMO may leave out of a saved state; :func:`sumo.save_state` writes those routes into
-    it, so the state loads and the copies drive on. (Saved here, not through the warm-ups kept
-    on disk, so that the saving is tested whatever those hold.)"""
+    which SUMO may leave out of a saved state; :meth:`sumo.Simulation.save_state` writes those
+    routes into it, so the state loads and the copies drive on. (Saved here, not through the
+    warm-ups kept on disk, so that the saving is tested whatever those hold.)"""
     scenario = shipped_scenario("city_cologne3").with_overrides(
         traffic={"drivers": {"demand_scale": 1.5}})
     state = tmp_path / "state.xml.gz"
     simulation = sumo.Simulation(scenario, seed=3)
     try:
         simulation.step(6000)  # 600 s: seed 3 then leaves a copy's route out (checked)
-        sumo.save_state(state)
+        simulation.save_state(state)
     finally:
         simulation.close()
     simulation = sumo.Simulation(scenario, seed=3, state=state)

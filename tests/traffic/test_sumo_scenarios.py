@@ -3,11 +3,10 @@ begin time, its network), traffic that never comes refused, the network's fringe
 starts drawn from lanes and edges, warm-ups simulated once, and the city scenario that ships
 with the project."""
 
-import subprocess
-
 import numpy as np
 import pandas as pd
 import pytest
+from sumo_road import CONFIG, road_scenario, straight
 
 from enn_traffic.cli import main
 from enn_traffic.errors import InputError
@@ -16,80 +15,6 @@ from enn_traffic.scenario import load_scenario
 from enn_traffic.sim.world import COLLIDED, LEFT_NETWORK, MET_START
 from enn_traffic.traffic import sumo
 from enn_traffic.worlds import make_world
-
-# A straight two-way road from x = 0 to x = 200 (4 m lanes, centre lines at y = -2 eastbound
-# and y = +2 westbound), joined at x = 100; its ends are the network's fringe. The westbound
-# half from x = 200 to 100 is for buses only.
-NODES = """<nodes>
-    <node id="w" x="0" y="0" type="priority"/>
-    <node id="m" x="100" y="0" type="priority"/>
-    <node id="e" x="200" y="0" type="priority"/>
-</nodes>"""
-EDGES = """<edges>
-    <edge id="we" from="w" to="m" numLanes="1" speed="13.9" width="4"/>
-    <edge id="ew" from="m" to="w" numLanes="1" speed="13.9" width="4"/>
-    <edge id="me" from="m" to="e" numLanes="1" speed="13.9" width="4"/>
-    <edge id="em" from="e" to="m" numLanes="1" speed="13.9" width="4" allow="bus"/>
-</edges>"""
-# One westbound bus per 10 s from ``begin`` on: traffic beside the learner's lane, never in it.
-BUSES = """<routes>
-    <vType id="bus" vClass="bus" length="12" width="2.5" sigma="0"/>
-    <flow id="bus" type="bus" begin="{begin}" end="{end}" period="10" departSpeed="max">
-        <route edges="em ew"/>
-    </flow>
-</routes>"""
-CONFIG = """<configuration>
-    <input>
-        <net-file value="road.net.xml"/>
-        <route-files value="buses.rou.xml"/>
-    </input>
-    <time><begin value="{begin}"/>{end}</time>
-</configuration>"""
-SCENARIO = """name = "road"
-[track]
-{start}
-start_offset = 20.0
-{fringe}
-[episode]
-max_steps = 400
-[traffic]
-strategy = "sumo"
-sumocfg = "road.sumocfg"
-warmup_s = {warmup}
-episodes = 2
-{extra}
-"""
-
-
-@pytest.fixture(scope="module")
-def road_net(tmp_path_factory):
-    folder = tmp_path_factory.mktemp("road")
-    (folder / "road.nod.xml").write_text(NODES)
-    (folder / "road.edg.xml").write_text(EDGES)
-    import sumo as sumo_wheel  # netconvert of the eclipse-sumo wheel
-
-    netconvert = f"{sumo_wheel.SUMO_HOME}/bin/netconvert"
-    subprocess.run([netconvert, "-n", "road.nod.xml", "-e", "road.edg.xml", "-o", "road.net.xml",
-                    "--no-turnarounds", "true"], cwd=folder, check=True, capture_output=True)
-    return folder / "road.net.xml"
-
-
-def road_scenario(tmp_path, road_net, begin=1000.0, departs=1000.0, end="", warmup=10.0,
-                  start='start_lane = "we_0"', fringe="", extra=""):
-    """A scenario on the straight road whose ``.sumocfg`` (beside it) begins at ``begin`` and
-    whose buses depart from ``departs`` on."""
-    (tmp_path / "road.net.xml").write_bytes(road_net.read_bytes())
-    (tmp_path / "buses.rou.xml").write_text(BUSES.format(begin=departs, end=departs + 600))
-    end_tag = f'<end value="{end}"/>' if end != "" else ""
-    (tmp_path / "road.sumocfg").write_text(CONFIG.format(begin=begin, end=end_tag))
-    path = tmp_path / "scenario.toml"
-    path.write_text(SCENARIO.format(start=start, fringe=fringe, warmup=warmup, extra=extra))
-    return path
-
-
-def straight(world) -> np.ndarray:
-    """A chromosome that steers straight ahead: all genes 0, so both outputs are equal."""
-    return np.zeros((1, world.spec.chromosome_length))
 
 
 def test_sumocfg_begin_time_and_network_are_used(tmp_path, road_net):
@@ -352,3 +277,22 @@ def test_a_route_file_named_only_by_the_sumocfg_is_part_of_the_fingerprint(tmp_p
     routes = tmp_path / "buses.rou.xml"
     routes.write_text(routes.read_text().replace("</routes>", "<!-- one more -->\n</routes>"))
     assert fingerprint(scenario) != before
+
+
+def test_training_generations_take_the_shared_warmups_in_turn(tmp_path, road_net):
+    """``warmup_states = 3`` and two situations a generation: generations 0, 1, 2 load warm-ups
+    0 1, 2 0, 1 2 (each twice in three generations), as generations.csv says; a held-out
+    situation draws its warm-up by its own seed."""
+    from enn_traffic.sim.sumo_world import shared_warmup, situation_seed
+
+    path = road_scenario(tmp_path, road_net, warmup=30.0, extra="warmup_states = 3")
+    run = tmp_path / "run"
+    assert main(["run", str(path), "--out", str(run), "--generations", "3", "--population",
+                 "10", "--quiet"]) == 0
+    table = pd.read_csv(run / "generations.csv", dtype={"warmups": str})
+    assert list(table["warmups"]) == ["0 1", "2 0", "1 2"]
+    scenario = load_scenario(path)
+    counts = np.bincount([shared_warmup(scenario, g, e) for g in range(30) for e in range(2)])
+    assert list(counts) == [20, 20, 20]
+    held_out = 6_000_000_123
+    assert shared_warmup(scenario, held_out, 1) == situation_seed(scenario, held_out, 1) % 3
