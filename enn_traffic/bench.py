@@ -9,12 +9,18 @@ the time SUMO takes to record each generation's traffic, and SUMO closed loop is
 process for an evolved controller, without SUMO's start and warm-up. The city workload (the
 shipped Cologne scenario) counts everything, warm-ups included, and reports their share of
 the wall time: with warm-ups shared and simulated once, and with each situation its own.
+The network workload prepares large random road networks (SUMO's netgenerate): walls and wall
+grid the first time and from the cache, and the grid as it was built until issue 39 (every
+cell against every wall) in the same run, with the peak memory of each.
 """
 
 from __future__ import annotations
 
+import os
+import subprocess
 import tempfile
 import time
+import tracemalloc
 from pathlib import Path
 
 import numba
@@ -295,9 +301,84 @@ def lane_keeping_bench(generations: int = 3) -> pd.DataFrame:
     return _rate_table(rows)
 
 
+def _random_city(folder: Path, iterations: int) -> Path:
+    """A random road network of ``iterations`` growth steps (SUMO's netgenerate, two lanes
+    each way, roads of 80-200 m), built into ``folder``."""
+    import sumo as sumo_wheel  # netgenerate of the eclipse-sumo wheel
+
+    net = folder / f"random{iterations}.net.xml"
+    subprocess.run([f"{sumo_wheel.SUMO_HOME}/bin/netgenerate", "--rand",
+                    "--rand.iterations", str(iterations), "--rand.max-distance", "200",
+                    "--rand.min-distance", "80", "-L", "2", "--seed", "7", "-o", str(net)],
+                   check=True, capture_output=True)
+    return net
+
+
+def _measured(work) -> tuple[float, float, object]:
+    """Seconds and peak memory (MB of Python and numpy allocations) of ``work()``, and its
+    value."""
+    tracemalloc.start()
+    started = time.perf_counter()
+    value = work()
+    seconds = time.perf_counter() - started
+    peak = tracemalloc.get_traced_memory()[1] / 2**20
+    tracemalloc.stop()
+    return seconds, peak, value
+
+
+def network_bench(quick: bool = False) -> pd.DataFrame:
+    """Preparing a large network: its walls and the wall grid, built the first time and
+    loaded from the cache after; the grid also as it was built until issue 39 (cells ×
+    walls), in the same run, on a network where that takes seconds."""
+    from enn_traffic.roads import load_track
+    from enn_traffic.sim.reference import reference_wall_grid
+    from enn_traffic.sim.sensors import WallGrid
+
+    reach = 29.5  # the default sensor's: 25 m range, a 4.3 m body, 1 m spare
+    rows = []
+
+    def row(workload: str, implementation: str, seconds: float, memory: float,
+            reference: float | None = None) -> None:
+        rows.append({"workload": workload, "implementation": implementation, "threads": 1,
+                     "seconds": seconds, "peak_memory_mb": memory,
+                     "speedup_vs_reference": np.nan if reference is None
+                     else reference / seconds})
+
+    with tempfile.TemporaryDirectory(prefix="enn-bench-network-") as folder:
+        environment = os.environ.get("ENN_TRAFFIC_CACHE")
+        os.environ["ENN_TRAFFIC_CACHE"] = str(Path(folder) / "cache")  # cold, then warm
+        try:
+            for iterations, with_reference in ((60 if quick else 100, True),
+                                               (300 if quick else 1500, False)):
+                net = _random_city(Path(folder), iterations)
+                walls_s, walls_mb, track = _measured(lambda n=net: load_track(n, exits=True))
+                grid_s, grid_mb, grid = _measured(lambda t=track: WallGrid.cached(t.walls,
+                                                                                reach))
+                workload = (f"network: random city, {len(track.walls):,} walls, "
+                            f"{grid.cells_x * grid.cells_y:,} cells")
+                reference = None
+                if with_reference:
+                    reference, memory, _ = _measured(
+                        lambda t=track: reference_wall_grid(t.walls, reach))
+                    row(workload, "grid: cells × walls (before issue 39)", reference, memory)
+                row(workload, "grid: walls binned into cells", grid_s, grid_mb, reference)
+                row(workload, "walls and grid, first time", walls_s + grid_s,
+                    max(walls_mb, grid_mb))
+                again, memory, _ = _measured(lambda n=net: WallGrid.cached(
+                    load_track(n, exits=True).walls, reach))
+                row(workload, "walls and grid, from the cache", again, memory)
+        finally:
+            if environment is None:
+                del os.environ["ENN_TRAFFIC_CACHE"]
+            else:
+                os.environ["ENN_TRAFFIC_CACHE"] = environment
+    return pd.DataFrame(rows)
+
+
 def run_bench(quick: bool = False) -> pd.DataFrame:
     """Every workload's throughput table."""
     return pd.concat([
+        network_bench(quick),
         navigation_bench(generations=10 if quick else 30,
                          reference_seconds=3.0 if quick else 10.0),
         arena_bench(generations=3 if quick else 10),

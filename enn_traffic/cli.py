@@ -61,7 +61,9 @@ def build_parser() -> argparse.ArgumentParser:
                      help="continue the run in the folder from its checkpoint")
     run.add_argument("--force", action="store_true",
                      help="start over even if the folder holds another run")
-    run.add_argument("--quiet", action="store_true", help="no progress bar")
+    run.add_argument("--quiet", action="store_true", help="no progress bar or messages")
+    run.add_argument("--verbose", action="store_true",
+                     help="show SUMO's console instead of logging it to OUT/sumo/sumo.log")
 
     evaluate = commands.add_parser(
         "evaluate", help="run saved controllers on scenarios", epilog=EPILOG,
@@ -84,7 +86,10 @@ def build_parser() -> argparse.ArgumentParser:
     evaluate.add_argument("--executor", choices=["local", "process", "ray"], default="local",
                           help="where the pairs run (default: local, one after another)")
     evaluate.add_argument("--address", help="Ray cluster address (with --executor ray)")
-    evaluate.add_argument("--quiet", action="store_true", help="no progress bar")
+    evaluate.add_argument("--quiet", action="store_true", help="no progress bar or messages")
+    evaluate.add_argument("--verbose", action="store_true",
+                          help="show SUMO's console instead of logging it (to FILE_sumo/ "
+                               "beside --out)")
 
     render = commands.add_parser("render", help="draw a controller's path (PNG) or animate it "
                                  "(GIF)", epilog=EPILOG)
@@ -93,6 +98,10 @@ def build_parser() -> argparse.ArgumentParser:
     render.add_argument("--out", type=Path, required=True, metavar="FILE.png|FILE.gif")
     render.add_argument("--max-steps", type=_positive, default=5000,
                         help="draw at most this many steps (default 5000)")
+    render.add_argument("--quiet", action="store_true", help="no messages")
+    render.add_argument("--verbose", action="store_true",
+                        help="show SUMO's console instead of logging it (to FILE_sumo/ beside "
+                             "--out)")
 
     reproduce = commands.add_parser("reproduce", help="run the paper's experiments",
                                     epilog=EPILOG)
@@ -105,7 +114,21 @@ def build_parser() -> argparse.ArgumentParser:
                                 "(default) or side by side as Ray tasks")
     reproduce.add_argument("--address", help="Ray cluster address (with --executor ray; "
                                              "default: start a local Ray)")
-    reproduce.add_argument("--quiet", action="store_true", help="no progress bars")
+    reproduce.add_argument("--quiet", action="store_true", help="no progress bars or messages")
+
+    lanes = commands.add_parser(
+        "lanes", help="the lanes a learner may start on, ranked by the traffic demand",
+        epilog=EPILOG, description="List the lanes of a scenario's network that allow passenger "
+        "cars (where a learner may start: [track] start_lane), ranked by the vehicles its route "
+        "files send over them, with their lengths and allowed vehicle classes; and count the "
+        "lanes cars may not use.")
+    lanes.add_argument("source", type=Path, metavar="SCENARIO.toml|FILE.sumocfg",
+                       help="a scenario, or a SUMO configuration (its network and routes)")
+    lanes.add_argument("--top", type=_positive, default=20, help="lanes listed (default 20)")
+    lanes.add_argument("--out", type=Path, metavar="FILE.csv", help="write every lane")
+    lanes.add_argument("--plot", type=Path, metavar="FILE.png",
+                       help="draw the road surface for cars against every lane as road, with "
+                            "the top start lanes numbered")
 
     bench = commands.add_parser("bench", help="throughput table (vehicle-steps per second)")
     bench.add_argument("--quick", action="store_true", help="shorter timing runs")
@@ -113,9 +136,16 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+def _sumo_folder(out: Path | None) -> Path | None:
+    """Where SUMO's log (and kept outputs) of ``evaluate`` or ``render`` go: ``FILE_sumo/``
+    beside their output file."""
+    return None if out is None else out.with_name(out.stem + "_sumo")
+
+
 def _cmd_run(args) -> int:
     from enn_traffic.evolution.backends import make_evaluator
-    from enn_traffic.runner import evolve
+    from enn_traffic.progress import slow_step
+    from enn_traffic.runner import check_folder, evolve
     from enn_traffic.scenario import load_scenario
     from enn_traffic.shipped import scenario_path
 
@@ -130,7 +160,10 @@ def _cmd_run(args) -> int:
         **({"seed": args.seed} if args.seed is not None else {}),
     )
     out = args.out or Path("results") / scenario.name
-    evaluator = make_evaluator(scenario, args.executor, args.address)
+    check_folder(scenario, out, resume=args.resume, force=args.force)  # before any world
+    scenario = scenario.with_sumo_output(out / "sumo", console=args.verbose)
+    with slow_step(f"preparing the worlds of {scenario.name}"):
+        evaluator = make_evaluator(scenario, args.executor, args.address)
     try:
         table = evolve(scenario, out, evaluator, resume=args.resume, force=args.force,
                        progress=not args.quiet)
@@ -181,6 +214,7 @@ def _cmd_evaluate(args) -> int:
                      for s in scenarios]
     if args.traffic_seed is not None:
         scenarios = [s.with_overrides(traffic={"seed": args.traffic_seed}) for s in scenarios]
+    scenarios = [s.with_sumo_output(_sumo_folder(args.out), args.verbose) for s in scenarios]
     table = evaluate_batch(controllers, scenarios, args.episodes, args.executor, args.address,
                            progress=not args.quiet)
     single = len(controllers) == 1 and len(scenarios) == 1
@@ -205,10 +239,84 @@ def _cmd_render(args) -> int:
     if args.out.suffix.lower() not in (".png", ".gif", ".svg", ".pdf"):
         raise InputError("the output must end in .png, .gif, .svg or .pdf", args.out, "--out")
     controller = Controller.load(args.controller)
-    scenario = load_scenario(scenario_path(args.scenario))
+    scenario = load_scenario(scenario_path(args.scenario)).with_sumo_output(
+        _sumo_folder(args.out), args.verbose)
     info = render(controller, scenario, args.out, args.max_steps)
     print(f"{info['steps']} steps ({info['outcome']}); written {info['file']}")
     return 0
+
+
+def _cmd_lanes(args) -> int:
+    from enn_traffic.io import write_csv
+    from enn_traffic.scenario import load_scenario
+    from enn_traffic.shipped import scenario_path
+    from enn_traffic.traffic.lanes import lane_table
+    from enn_traffic.traffic.sumocfg import read_sumocfg
+
+    source = args.source
+    if source.suffix == ".sumocfg":
+        if not source.is_file():
+            raise InputError("SUMO configuration not found", source)
+        config = read_sumocfg(source)
+        if config.net_file is None:
+            raise InputError("names no net-file", source, "net-file")
+        net, routes, additional = config.net_file, list(config.route_files), \
+            list(config.additional_files)
+    else:
+        from enn_traffic.traffic.sumo import route_files, sumo_config
+
+        scenario = load_scenario(scenario_path(source))
+        if isinstance(scenario.track, list):
+            raise InputError("give a scenario of one track (or its .sumocfg)", source, "track")
+        if scenario.track is None:
+            raise InputError("a lane-keeping scenario has no SUMO network", source,
+                             "lane_keeping")
+        net = scenario.track.net
+        routes = route_files(scenario) if scenario.traffic.is_sumo else []
+        config = sumo_config(scenario)
+        additional = list(config.additional_files) if config is not None else []
+    table = lane_table(net, routes, additional)
+    learner = table[table["learner_may_start"]]
+    others = table[~table["learner_may_start"]]
+    print(f"{net.name}: {len(table):,} lanes; {len(learner):,} allow passenger cars (a learner "
+          f"may start there), {len(others):,} do not")
+    if len(others):
+        kinds = others["allowed"].replace("", "no vehicle").value_counts()
+        print("  not for cars: " + ", ".join(f"{count:,} {kind}" for kind, count
+                                               in kinds.head(6).items()))
+    demand = "routes: " + ", ".join(p.name for p in routes) if routes else "no route files"
+    print(f"the learner's lanes by the vehicles the demand sends over them ({demand}):")
+    shown = learner.head(args.top).drop(columns="learner_may_start")
+    print(shown.to_string(index=False))
+    if len(learner):
+        print(f'\nstart there: [track] start_lane = "{learner.iloc[0]["lane"]}" '
+              '(or start_lane = "auto")')
+    if args.out:
+        write_csv(args.out, table)
+        print(f"written {args.out}")
+    if args.plot:
+        _plot_lanes(net, learner.head(min(args.top, 9)), args.plot)
+        print(f"written {args.plot}")
+    return 0
+
+
+def _plot_lanes(net: Path, top, out: Path) -> None:
+    """The surfaces ``passenger`` and ``all`` of ``net``, the ``top`` lanes on the first."""
+    import numpy as np
+
+    from enn_traffic.report.plots import road_surfaces
+    from enn_traffic.roads import load_track
+    from enn_traffic.roads.network import read_net
+
+    tracks = {surface: load_track(net, exits=True, surface=surface)
+              for surface in ("all", "passenger")}
+    network = read_net(net)
+    shapes = [(lane, np.asarray(network.getLane(lane).getShape())) for lane in top["lane"]]
+    road_surfaces({'surface = "all": every lane is road': (tracks["all"].area,
+                                                           tracks["all"].walls),
+                   'surface = "passenger" (default): the road for cars':
+                       (tracks["passenger"].area, tracks["passenger"].walls)},
+                  shapes, out, net.name)
 
 
 def _cmd_reproduce(args) -> int:
@@ -234,6 +342,10 @@ def _cmd_bench(args) -> int:
     shown["speedup_vs_reference"] = shown["speedup_vs_reference"].map(
         lambda ratio: "" if np.isnan(ratio) else f"{ratio:.1f}x")
     shown["seconds"] = shown["seconds"].map("{:.2f}".format)
+    shown["peak_memory_mb"] = shown["peak_memory_mb"].map(
+        lambda mb: "" if np.isnan(mb) else f"{mb:,.0f}")
+    shown["vehicle_steps"] = shown["vehicle_steps"].map(
+        lambda v: "" if np.isnan(v) else f"{v:,.0f}")
     shown["warmup_share"] = shown["warmup_share"].map(
         lambda share: "" if np.isnan(share) else f"{share:.1%}")
     print(shown.to_string(index=False))
@@ -243,11 +355,14 @@ def _cmd_bench(args) -> int:
 
 
 COMMANDS = {"run": _cmd_run, "evaluate": _cmd_evaluate, "render": _cmd_render,
-            "reproduce": _cmd_reproduce, "bench": _cmd_bench}
+            "reproduce": _cmd_reproduce, "lanes": _cmd_lanes, "bench": _cmd_bench}
 
 
 def main(argv: list[str] | None = None) -> int:
+    from enn_traffic.progress import show_messages
+
     args = build_parser().parse_args(argv)
+    show_messages(quiet=getattr(args, "quiet", False))
     started = time.perf_counter()
     try:
         return COMMANDS[args.command](args)

@@ -22,6 +22,7 @@ from enn_traffic.io import write_csv
 from enn_traffic.scenario import Scenario
 from enn_traffic.sim.world import (
     CAPPED,
+    HIT_WALL,
     MET_NEAR_MAX,
     MET_NEAR_STEPS,
     MET_START,
@@ -40,7 +41,9 @@ MAX_LABELLED = 9  # vehicles drawn with a legend entry each
 def evaluate_controller(controller: Controller, scenario: Scenario, episodes: int = 1
                         ) -> pd.DataFrame:
     """One row per traffic strategy and episode: lifetime in steps and seconds, distance, how
-    it ended, and the collisions the controller suffered without causing them.
+    it ended and, for a collision, what it ran into (a wall, or a vehicle: its SUMO id and
+    type, or an arena vehicle's index and strategy), and the collisions the controller
+    suffered without causing them.
 
     Episodes draw their traffic from the test keys (:data:`EVALUATION_KEY`), never from
     training's; scenarios without traffic are deterministic, so their episodes repeat one
@@ -67,6 +70,7 @@ def evaluate_controller(controller: Controller, scenario: Scenario, episodes: in
             "distance_m": steps[column] * vehicle.speed * vehicle.dt,
             "fitness": fitness[column],
             "outcome": OUTCOMES[int(outcome[column])],
+            **_hit(results, column, strategy),
             "capped": bool(outcome[column] == CAPPED),
             "suffered": int(results.suffered[0, column]),
             "traffic_at_start": int(traffic[column, MET_START]),
@@ -75,6 +79,20 @@ def evaluate_controller(controller: Controller, scenario: Scenario, episodes: in
             **_safety(results.safety, column, steps[column] * vehicle.dt),
         })  # fmt: skip
     return pd.DataFrame(rows)
+
+
+def _hit(results: EpisodeResults, column: int, strategy: str) -> dict[str, str]:
+    """What the first world's life in ``column`` ran into: ``hit`` (wall, vehicle or nothing),
+    and the vehicle's id and type (a SUMO vehicle's own; an arena vehicle's index and
+    strategy)."""
+    hit = int(results.hit[0, column])
+    if hit == HIT_WALL:
+        return {"hit": "wall", "hit_vehicle": "", "hit_type": ""}
+    if hit < 0:
+        return {"hit": "", "hit_vehicle": "", "hit_type": ""}
+    named = None if results.hit_vehicle is None else results.hit_vehicle[0, column]
+    vehicle, kind = named if named is not None else (str(hit), strategy)
+    return {"hit": "vehicle", "hit_vehicle": vehicle, "hit_type": kind}
 
 
 def _safety(safety, column: int, lifetime_s: float) -> dict[str, float]:
@@ -190,8 +208,11 @@ def render(
     from enn_traffic.report.animate import animate_run
     from enn_traffic.report.plots import trajectories
 
-    world, poses, outcome = controller_trace(controller, scenario, max_steps)
     out = Path(out)
+    if scenario.traffic.is_sumo and not isinstance(scenario.track, list) \
+            and out.suffix.lower() != ".gif":
+        return _render_among_traffic(controller, scenario, out, max_steps)
+    world, poses, outcome = controller_trace(controller, scenario, max_steps)
     steps = len(poses) - 1
     title = f"{scenario.name}: {steps} steps, {OUTCOMES[outcome]}"
     if out.suffix.lower() == ".gif":
@@ -205,4 +226,22 @@ def render(
         trajectories(world.track.walls, paths, out, title=title, start=tuple(poses[0, 0]),
                      labels=labels if len(paths) > 1 else None, colors=colors)
     return {"steps": steps, "outcome": OUTCOMES[outcome], "file": str(out)}
+
+
+def _render_among_traffic(controller: Controller, scenario: Scenario, out: Path,
+                          max_steps: int | None) -> dict:
+    """A life among SUMO's traffic, cropped to the learner's path, with what it ran into."""
+    from enn_traffic.report.plots import learner_among_traffic
+
+    world = make_world(evaluation_scenario(controller, scenario, 1))
+    life = world.trace_life(controller.chromosome, EVALUATION_KEY, 0, max_steps)
+    steps, outcome = len(life.poses) - 1, OUTCOMES[life.outcome]
+    end = f"end: {outcome} at step {steps}"
+    if life.hit == HIT_WALL:
+        end = f"end: collision with a wall at step {steps}"
+    elif life.hit_vehicle is not None:
+        end = f"end: collision with {life.hit_vehicle[0]} ({life.hit_vehicle[1]}) at step {steps}"
+    learner_among_traffic(world.track.walls, world.exits, life.poses, out,
+                          f"{scenario.name}: {steps} steps, {outcome}", end, life.hit_body)
+    return {"steps": steps, "outcome": outcome, "file": str(out)}
 

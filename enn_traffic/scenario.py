@@ -53,7 +53,8 @@ class TrackConfig(_Section):
     start_lane: str | list[str] | None = Field(
         None, description="start on this lane's centre line, `start_offset` m from its beginning, "
         "facing along it; the lane must allow passenger cars. A list: each traffic situation "
-        "draws one")
+        "draws one. `\"auto\"`: the lane the traffic demand uses most (`enn-traffic lanes` "
+        "ranks them), at least `start_offset` + 10 m + the vehicle's length long")
     start_edge: str | list[str] | None = Field(
         None, description="start on this edge's rightmost lane that allows passenger cars. A list: "
         "each traffic situation draws one")
@@ -704,7 +705,29 @@ def _with_files(scenario: Scenario, path: Path) -> Scenario:
         scenario = _with_sumocfg(scenario, path)
     if scenario.track is not None and not scenario.track.net.is_file():
         raise InputError(f"network file not found: {scenario.track.net}", path, "track.net")
+    if scenario.track is not None and scenario.track.start_lane == AUTO:
+        scenario = _with_auto_lane(scenario, path)
     return scenario
+
+
+AUTO = "auto"  # [track] start_lane = "auto"
+
+
+def _with_auto_lane(scenario: Scenario, path: Path) -> Scenario:
+    """``start_lane = "auto"`` made the lane it stands for (enn_traffic.traffic.lanes)."""
+    from enn_traffic.roads.network import ANYWHERE_AHEAD_M
+    from enn_traffic.traffic.lanes import auto_lane
+    from enn_traffic.traffic.sumo import route_files, sumo_config
+
+    track = scenario.track
+    length = track.start_offset + ANYWHERE_AHEAD_M + scenario.vehicle.length
+    config = sumo_config(scenario)
+    additional = config.additional_files if config is not None else ()
+    try:
+        lane = auto_lane(track.net, route_files(scenario), length, additional)
+    except InputError as exc:
+        raise InputError(f"auto: {exc.message}", path, "track.start_lane") from None
+    return scenario.model_copy(update={"track": track.model_copy(update={"start_lane": lane})})
 
 
 def _with_sumocfg(scenario: Scenario, path: Path) -> Scenario:

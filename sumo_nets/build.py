@@ -3,6 +3,7 @@
 Usage (from the repository root; netconvert comes with the ``eclipse-sumo`` wheel):
 
     python sumo_nets/build.py            # rewrite *.nod.xml/*.edg.xml and rebuild every *.net.xml
+    python sumo_nets/build.py street     # build scenarios/street/street.net.xml.gz only
 
 Each track is a chain of nodes on the corridor centreline joined by one-lane edges whose lane
 width is the corridor width (``spreadType="center"`` keeps the lane centred on the node line).
@@ -225,13 +226,8 @@ def netconvert_command(name: str) -> list[str]:
     """The netconvert call that builds ``name.net.xml`` from its plain XML. Networks that SUMO
     traffic drives on keep their internal (junction) lanes, so that vehicles drive through
     junctions instead of jumping across them."""
-    exe = shutil.which("netconvert")
-    if exe is None:
-        import sumo  # the eclipse-sumo wheel
-
-        exe = str(Path(sumo.SUMO_HOME) / "bin" / "netconvert")
     return [
-        exe,
+        _netconvert(),
         "--node-files", f"{name}.nod.xml",
         "--edge-files", f"{name}.edg.xml",
         "--output-file", f"{name}.net.xml",
@@ -250,7 +246,34 @@ TRAFFIC_NETS = {
 }
 
 
+def _netconvert() -> str:
+    exe = shutil.which("netconvert")
+    if exe is None:
+        import sumo  # the eclipse-sumo wheel
+
+        exe = str(Path(sumo.SUMO_HOME) / "bin" / "netconvert")
+    return exe
+
+
+def build_street() -> int:
+    """The test street of scenarios/street/ (street.nod.xml, street.edg.xml: written by hand),
+    gzipped as publishers ship networks, with walking areas and crossings at its junction."""
+    result = subprocess.run([
+        _netconvert(), "--node-files", "street.nod.xml", "--edge-files", "street.edg.xml",
+        "--output-file", str(HERE.parent / "scenarios" / "street" / "street.net.xml.gz"),
+        "--offset.disable-normalization", "--no-turnarounds", "--walkingareas", "true",
+        "--crossings.guess", "true",
+    ], cwd=HERE, capture_output=True, text=True)  # fmt: skip
+    if result.returncode != 0:
+        print(result.stdout, result.stderr, file=sys.stderr)
+    else:
+        print("built scenarios/street/street.net.xml.gz")
+    return result.returncode
+
+
 def main() -> int:
+    if sys.argv[1:] == ["street"]:
+        return build_street()
     sources = {name: corridor_xml(**spec) for name, spec in TRACKS.items()}
     sources.update({name: corridor_xml(square_corners=False, **spec)
                     for name, spec in MIXED_TRACKS.items()})
@@ -268,7 +291,7 @@ def main() -> int:
             print(result.stdout, result.stderr, file=sys.stderr)
             return result.returncode
         print(f"built {name}.net.xml")
-    return 0
+    return build_street()
 
 
 if __name__ == "__main__":

@@ -129,3 +129,101 @@ def trajectories(
         axes.legend(fontsize=8, loc="best")
     figure.tight_layout()
     save_figure(figure, path)
+
+
+def learner_among_traffic(walls: np.ndarray, exits: np.ndarray, poses: np.ndarray,
+                          path: str | Path, title: str, end_label: str,
+                          hit_body: np.ndarray | None = None, margin: float = 50.0) -> None:
+    """One life among SUMO's traffic, drawn so that the learner stands out on a busy map: the
+    view cropped to the learner's path and ``margin`` metres around it; the walls and exits
+    there; every vehicle's path in light grey under the learner's, and where it was last seen;
+    the learner's path on top, its start and its end (``end_label``), and the body of the
+    vehicle it ran into (corners ``hit_body``)."""
+    from matplotlib.collections import LineCollection
+    from matplotlib.patches import Polygon as Patch
+
+    learner = poses[:, 0, :2]
+    low = np.nanmin(learner, axis=0) - margin
+    high = np.nanmax(learner, axis=0) + margin
+    centre, half = (low + high) / 2, max(*(high - low), 2 * margin) / 2
+    low, high = centre - half, centre + half  # a square view, so the picture has no bands
+
+    def within(segments: np.ndarray) -> np.ndarray:
+        xs, ys = segments[:, [0, 2]], segments[:, [1, 3]]
+        keep = ((xs.max(1) >= low[0]) & (xs.min(1) <= high[0])
+                & (ys.max(1) >= low[1]) & (ys.min(1) <= high[1]))
+        return segments[keep].reshape(-1, 2, 2)
+
+    figure, axes = plt.subplots(figsize=(7.2, 7.2))
+    axes.add_collection(LineCollection(within(walls), colors="black", linewidths=0.8,
+                                       label="walls (edge of the road surface)", zorder=2))
+    exits_here = within(exits.reshape(-1, 4))
+    if len(exits_here):
+        axes.add_collection(LineCollection(exits_here, colors="C2", linewidths=2.0,
+                                           label="exits (the network's fringe)", zorder=2))
+    shown = False
+    for column in range(1, poses.shape[1]):
+        xy = poses[:, column, :2]
+        seen = ~np.isnan(xy[:, 0])
+        inside = seen & (xy >= low).all(1) & (xy <= high).all(1)
+        if not inside.any():
+            continue
+        axes.plot(*break_at_jumps(xy[seen]).T, color="0.65", lw=0.7, zorder=1,
+                  label=None if shown else "SUMO vehicles' paths")
+        last = xy[seen][-1]
+        axes.plot(*last, ".", color="0.45", ms=4, zorder=1,
+                  label=None if shown else "where each was last seen")
+        shown = True
+    if hit_body is not None:
+        axes.add_patch(Patch(hit_body, closed=True, facecolor="C1", edgecolor="black",
+                             zorder=4, label="the vehicle it ran into"))
+    axes.plot(*break_at_jumps(learner).T, color="C3", lw=2.2, zorder=5, label="learner's path")
+    axes.plot(*learner[0], "o", color="C2", ms=8, zorder=6, label="learner's start")
+    axes.plot(*learner[-1], "X", color="C3", mec="black", ms=11, zorder=6, label=end_label)
+    axes.set_xlim(low[0], high[0])
+    axes.set_ylim(low[1], high[1])
+    axes.set_aspect("equal")
+    axes.set_title(title)
+    axes.set_xlabel("x [m]")
+    axes.set_ylabel("y [m]")
+    axes.legend(fontsize=8, loc="best", framealpha=0.9)
+    figure.tight_layout()
+    save_figure(figure, path)
+
+
+def road_surfaces(surfaces: dict[str, tuple[object, np.ndarray]],
+                  lanes: list[tuple[str, np.ndarray]], path: str | Path, title: str) -> None:
+    """The network's road surface one way and another, side by side: for each ``surfaces``
+    entry (label: (area, walls)) the area in grey and its walls in black; on the last, the
+    ``lanes`` (id, centre line (n, 2)) numbered in their order, the start lanes to choose."""
+    from matplotlib.collections import LineCollection
+
+    figure, axes_row = plt.subplots(1, len(surfaces), figsize=(6.0 * len(surfaces), 6.0),
+                                    sharex=True, sharey=True, squeeze=False)
+    for axes, (label, (area, walls)) in zip(axes_row[0], surfaces.items(), strict=True):
+        for polygon in getattr(area, "geoms", [area]):
+            axes.fill(*polygon.exterior.xy, color="0.85", lw=0)
+            for hole in polygon.interiors:
+                axes.fill(*hole.xy, color="white", lw=0)
+        axes.add_collection(LineCollection(walls.reshape(-1, 2, 2), colors="black",
+                                           linewidths=0.7))
+        axes.set_title(f"{label}: {len(walls):,} walls", fontsize=10)
+        axes.set_aspect("equal")
+        axes.set_xlabel("x [m]")
+    axes_row[0, 0].set_ylabel("y [m]")
+    last = axes_row[0, -1]
+    for rank, (_, shape) in enumerate(lanes, start=1):
+        last.plot(*shape.T, color="C3", lw=1.6, zorder=3)
+        last.annotate("", xy=shape[-1], xytext=shape[-2], zorder=3,
+                      arrowprops={"arrowstyle": "->", "color": "C3", "lw": 1.6})
+        steps = np.hypot(*np.diff(shape, axis=0).T)
+        halfway = int(np.searchsorted(np.cumsum(steps), steps.sum() / 2))
+        middle = shape[halfway] + (shape[halfway + 1] - shape[halfway]) * 0.5
+        last.text(*middle, f"{rank}", color="C3", fontsize=8, zorder=4, va="bottom")
+    if lanes:
+        last.plot([], [], color="C3", label="start lanes, by the demand over them: "
+                  + ", ".join(f"{rank} {lane}" for rank, (lane, _) in enumerate(lanes, 1)))
+        last.legend(fontsize=7, loc="upper left")
+    figure.suptitle(title, fontsize=11)
+    figure.tight_layout()
+    save_figure(figure, path)

@@ -15,6 +15,7 @@ junction. A network's walls are built once and kept on disk (:mod:`enn_traffic.c
 
 from __future__ import annotations
 
+import functools
 import math
 import xml.etree.ElementTree as ElementTree
 from dataclasses import dataclass, field
@@ -90,7 +91,7 @@ def start_poses(net_file: Path, names: list[tuple[str, str]], offset: float
     ``("lane", id)``, or an edge ``("edge", id)``, whose rightmost lane that allows passenger
     cars is taken. A ValueError ``(index, message)`` for a start that does not exist or does
     not allow passenger cars."""
-    net = _read_net(net_file)
+    net = read_net(net_file)
     poses = []
     for index, (kind, name) in enumerate(names):
         if kind == "edge":
@@ -120,7 +121,7 @@ def anywhere_poses(net_file: Path, area: Polygon | MultiPolygon, length: float, 
     inner = area.buffer(-ANYWHERE_CLEARANCE_M)
     corners = np.empty((4, 2))
     poses = []
-    for edge in _read_net(net_file).getEdges():
+    for edge in read_net(net_file).getEdges():
         for lane in edge.getLanes():
             if not lane.allows("passenger"):
                 continue
@@ -159,9 +160,17 @@ def _along(lane, offset: float) -> tuple[float, float, float]:
     return point.x, point.y, heading
 
 
-def _read_net(path: Path) -> sumolib.net.Net:
+def read_net(path: Path) -> sumolib.net.Net:
+    """The SUMO network ``path`` (its internal lanes too), read once per process while the
+    file is unchanged; a clear InputError if it is missing or unreadable."""
     if not path.is_file():
         raise InputError("network file not found", path)
+    stat = path.stat()
+    return _read_net(path.resolve(), stat.st_size, stat.st_mtime_ns)
+
+
+@functools.lru_cache(maxsize=2)
+def _read_net(path: Path, size: int, modified: int) -> sumolib.net.Net:
     try:
         return sumolib.net.readNet(str(path), withInternal=True)
     except ElementTree.ParseError as exc:
@@ -362,7 +371,7 @@ def _track_name(path: Path) -> str:
 
 
 def _build_track(path: Path, exits: bool, surface: Surface) -> Track:
-    net = _read_net(path)
+    net = read_net(path)
     area = drivable_area(net, surface)
     if area.is_empty or area.area <= 0:
         what = "no lanes or junctions" if surface == "all" else "no lane allows passenger cars"

@@ -103,3 +103,25 @@ def reference_episode(world: ArenaWorld, chromosome: np.ndarray) -> tuple[int, i
         x, y = 0.5 * (front_x + rear_x), 0.5 * (front_y + rear_y)
         heading = math.atan2(front_y - rear_y, front_x - rear_x)
         steps += 1
+
+
+def reference_wall_grid(walls: np.ndarray, reach: float, cell_size: float = 5.0
+                        ) -> tuple[np.ndarray, np.ndarray]:
+    """The wall grid's cell lists (``cell_start``, ``cell_walls`` of
+    :class:`~enn_traffic.sim.sensors.WallGrid`) the obvious way, as they were built until issue
+    39: the distance from every cell's centre to every wall, cells × walls."""
+    from enn_traffic.sim.sensors import point_segment_distance
+
+    low = np.minimum(walls[:, :2], walls[:, 2:]).min(axis=0) - reach
+    high = np.maximum(walls[:, :2], walls[:, 2:]).max(axis=0) + reach
+    nx, ny = np.ceil((high - low) / cell_size).astype(int)
+    cx = low[0] + (np.arange(nx) + 0.5) * cell_size
+    cy = low[1] + (np.arange(ny) + 0.5) * cell_size
+    centres = np.stack(np.meshgrid(cx, cy, indexing="ij"), axis=-1).reshape(-1, 2)
+    limit = reach + cell_size * math.sqrt(0.5)
+    starts, members = [0], []
+    for chunk in np.array_split(centres, max(1, len(centres) // 2048)):
+        for row in point_segment_distance(chunk, walls) <= limit:
+            members.append(np.flatnonzero(row))
+            starts.append(starts[-1] + len(members[-1]))
+    return np.asarray(starts, dtype=np.int64), np.concatenate(members).astype(np.int64)

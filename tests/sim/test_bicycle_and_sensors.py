@@ -90,23 +90,17 @@ def test_grid_culling_gives_the_same_readings_as_all_walls(root):
 
 def test_grid_lists_exactly_the_walls_near_each_cell(root, monkeypatch):
     """Each cell lists, in ascending order, exactly the walls within reach plus half the
-    cell's diagonal of its centre: the brute-force answer over every (cell, wall) pair. Tiny
-    chunks make walls' candidate cells straddle chunk boundaries."""
+    cell's diagonal of its centre: the answer of the distance from every cell to every wall
+    (:func:`reference_wall_grid`). Tiny chunks make walls' candidate cells straddle chunk
+    boundaries."""
     from enn_traffic.roads import load_track
     from enn_traffic.sim import sensors
-    from enn_traffic.sim.sensors import point_segment_distance
+    from enn_traffic.sim.reference import reference_wall_grid
 
     walls = load_track(root / "sumo_nets" / "track_grid.net.xml").walls
     monkeypatch.setattr(sensors, "PAIRS_PER_CHUNK", 97)
-    reach, size = 26.0, 5.0
-    grid = WallGrid.build(walls, reach, size)
-    i, j = np.meshgrid(np.arange(grid.cells_x), np.arange(grid.cells_y), indexing="ij")
-    centres = np.column_stack([grid.cell_x0 + (i.ravel() + 0.5) * size,
-                               grid.cell_y0 + (j.ravel() + 0.5) * size])
-    near = point_segment_distance(centres, walls) <= reach + size * math.sqrt(0.5)
-    expected = [np.flatnonzero(row) for row in near]
-    got = [grid.cell_walls[grid.cell_start[c]:grid.cell_start[c + 1]]
-           for c in range(len(centres))]
-    assert sum(len(e) for e in expected) > 10 * len(walls)  # cells list many walls
-    for want, have in zip(expected, got, strict=True):
-        np.testing.assert_array_equal(have, want)
+    grid = WallGrid.build(walls, 26.0, 5.0)
+    cell_start, cell_walls = reference_wall_grid(walls, 26.0, 5.0)
+    assert len(cell_walls) > 10 * len(walls)  # cells list many walls
+    np.testing.assert_array_equal(grid.cell_start, cell_start)
+    np.testing.assert_array_equal(grid.cell_walls, cell_walls)

@@ -1,0 +1,180 @@
+"""The lanes a learner may start on, ranked by the traffic the demand sends over them
+(``enn-traffic lanes``; ``[track] start_lane = "auto"``; docs/sumo.md, "Choosing a start
+lane").
+
+The demand is read from the route files as published, without routing: a vehicle or flow with
+a route counts on each edge of it; a trip or a flow between edges (``from``, ``via``, ``to``)
+counts on those edges only. A flow counts its vehicles: ``number``, or its span over ``period``,
+``vehsPerHour`` or ``probability`` (a flow without an ``end`` counts one hour). A lane carries
+the demand of its edge by the vehicle classes it allows (a vehicle's class is its type's
+``vClass``, from the route and additional files; passenger when not given, as SUMO's).
+"""
+
+from __future__ import annotations
+
+import gzip
+import xml.etree.ElementTree as ElementTree
+from collections import Counter
+from pathlib import Path
+
+import pandas as pd
+
+from enn_traffic.errors import InputError
+from enn_traffic.roads.network import LEARNER_CLASS, read_net
+from enn_traffic.traffic.sumocfg import parse_time
+
+# The vehicle classes the ``allowed`` column names (of SUMO's 41), in this order.
+SHOWN_CLASSES = ("passenger", "taxi", "bus", "delivery", "truck", "motorcycle", "bicycle",
+                 "pedestrian", "tram", "rail_urban", "rail")
+UNBOUNDED_FLOW_S = 3600.0  # a flow without an end counts this long
+
+
+def _open(path: Path):
+    return gzip.open(path, "rb") if path.name.endswith(".gz") else open(path, "rb")
+
+
+def _flow_vehicles(element: ElementTree.Element) -> float:
+    """How many vehicles a ``<flow>`` sends."""
+    if element.get("number") is not None:
+        return float(element.get("number"))
+    begin = parse_time(element.get("begin", "0"))
+    end = element.get("end")
+    span = parse_time(end) - begin if end is not None else UNBOUNDED_FLOW_S
+    if element.get("period") is not None:
+        period = element.get("period")
+        if period.startswith("exp("):  # a Poisson flow of this rate per second
+            return span * float(period[4:-1])
+        return span / max(parse_time(period), 1e-9)
+    for rate, per in (("vehsPerHour", 3600.0), ("perHour", 3600.0), ("probability", 1.0)):
+        if element.get(rate) is not None:
+            return span * float(element.get(rate)) / per
+    return 1.0
+
+
+def vehicle_classes(files: list[Path] | tuple[Path, ...]) -> dict[str, str]:
+    """The vehicle class of each vehicle type (and type distribution: its first type's) that
+    the files define."""
+    classes: dict[str, str] = {}
+    for path in files:
+        try:
+            with _open(path) as handle:
+                for _, element in ElementTree.iterparse(handle):
+                    if element.tag == "vType":  # kept whole: a distribution may hold it
+                        if element.get("id"):
+                            classes[element.get("id")] = element.get("vClass", "passenger")
+                        continue
+                    if element.tag == "vTypeDistribution" and element.get("id"):
+                        first = element.find("vType")
+                        named = (element.get("vTypes") or "").split()
+                        classes[element.get("id")] = (
+                            first.get("vClass", "passenger") if first is not None
+                            else classes.get(named[0], "passenger") if named else "passenger")
+                    if element.tag != "param":
+                        element.clear()
+        except (ElementTree.ParseError, OSError) as exc:
+            raise InputError(f"not a readable SUMO file: {exc}", path) from None
+    return classes
+
+
+def demand_per_edge(route_files: list[Path] | tuple[Path, ...],
+                    classes: dict[str, str] | None = None) -> Counter[tuple[str, str]]:
+    """Vehicles the route files send over each edge, by vehicle class: (edge, class) ->
+    vehicles (see the module's docstring); ``classes``: each vehicle type's class, besides
+    those the route files define."""
+    classes = {**(classes or {}), **vehicle_classes(route_files)}
+    routes: dict[str, list[tuple[list[str], float]]] = {}  # a route or distribution's routes
+    demand: Counter[tuple[str, str]] = Counter()
+
+    def count(element: ElementTree.Element, vehicles: float) -> None:
+        kind = classes.get(element.get("type", "DEFAULT_VEHTYPE"), "passenger")
+        inner = element.find("route")
+        if inner is not None:
+            paths = [(inner.get("edges", "").split(), 1.0)]
+        elif element.get("route") in routes:
+            paths = routes[element.get("route")]
+        else:  # a trip, or a flow between edges
+            paths = [([element.get(k) for k in ("from", "to") if element.get(k)]
+                      + element.get("via", "").split(), 1.0)]
+        total = sum(weight for _, weight in paths) or 1.0
+        for edges, weight in paths:
+            for edge in dict.fromkeys(edges):  # once per vehicle, however often it passes
+                demand[edge, kind] += vehicles * weight / total
+
+    for path in route_files:
+        try:
+            with _open(path) as handle:
+                depth = 0
+                for event, element in ElementTree.iterparse(handle, ("start", "end")):
+                    if event == "start":
+                        depth += 1
+                        continue
+                    depth -= 1
+                    if depth != 1:
+                        continue  # a top-level element is handled whole, at its end
+                    tag = element.tag
+                    if tag == "route" and element.get("id"):
+                        routes[element.get("id")] = [(element.get("edges", "").split(), 1.0)]
+                    elif tag == "routeDistribution" and element.get("id"):
+                        routes[element.get("id")] = [
+                            (r.get("edges", "").split(), float(r.get("probability", "1")))
+                            for r in element.findall("route") if r.get("edges")]
+                    elif tag in ("vehicle", "trip"):
+                        count(element, 1.0)
+                    elif tag == "flow":
+                        count(element, _flow_vehicles(element))
+                    element.clear()
+        except (ElementTree.ParseError, OSError, ValueError) as exc:
+            raise InputError(f"not a readable SUMO route file: {exc}", path) from None
+    return demand
+
+
+def _allowed(lane) -> str:
+    """The lane's vehicle classes of :data:`SHOWN_CLASSES`: ``all``, ``all but ...`` (up to
+    three missing) or those it allows."""
+    permissions = lane.getPermissions()
+    missing = [c for c in SHOWN_CLASSES if c not in permissions]
+    if not missing:
+        return "all"
+    if len(missing) <= 3:
+        return "all but " + " ".join(missing)
+    return " ".join(c for c in SHOWN_CLASSES if c in permissions)
+
+
+def lane_table(net_file: Path, route_files: list[Path] | tuple[Path, ...],
+               additional_files: list[Path] | tuple[Path, ...] = ()) -> pd.DataFrame:
+    """Every lane of the network (internal ones excepted): its edge, length, speed limit,
+    allowed classes (of :data:`SHOWN_CLASSES`), whether the learner may start on it (it allows
+    passenger cars) and the demand's vehicles over it that it allows; the learner's lanes
+    first, ranked by that demand, then by length. ``additional_files``: where vehicle types
+    may be defined too."""
+    net = read_net(net_file)
+    demand: dict[str, list[tuple[str, float]]] = {}
+    for (edge, kind), vehicles in demand_per_edge(route_files,
+                                                  vehicle_classes(additional_files)).items():
+        demand.setdefault(edge, []).append((kind, vehicles))
+
+    def carried(edge, lane) -> float:
+        allowed = lane.getPermissions()
+        return round(sum(v for kind, v in demand.get(edge.getID(), []) if kind in allowed), 1)
+
+    rows = [{"lane": lane.getID(), "edge": edge.getID(), "vehicles": carried(edge, lane),
+             "length_m": round(lane.getLength(), 1), "speed_limit_ms": round(lane.getSpeed(), 2),
+             "allowed": _allowed(lane), "learner_may_start": lane.allows(LEARNER_CLASS)}
+            for edge in net.getEdges(withInternal=False) for lane in edge.getLanes()]
+    table = pd.DataFrame(rows, columns=["lane", "edge", "vehicles", "length_m",
+                                        "speed_limit_ms", "allowed", "learner_may_start"])
+    table = table.sort_values(["learner_may_start", "vehicles", "length_m", "lane"],
+                              ascending=[False, False, False, True], kind="stable")
+    return table.reset_index(drop=True)
+
+
+def auto_lane(net_file: Path, route_files: list[Path] | tuple[Path, ...],
+              min_length: float, additional_files: list[Path] | tuple[Path, ...] = ()) -> str:
+    """``start_lane = "auto"``: the learner's lane that the demand uses most, among those at
+    least ``min_length`` long (an InputError if there is none)."""
+    table = lane_table(net_file, route_files, additional_files)
+    fit = table[table["learner_may_start"] & (table["length_m"] >= min_length)]
+    if fit.empty:
+        raise InputError(f"no lane that allows passenger cars is {min_length:g} m long or "
+                         "longer", net_file)
+    return str(fit.iloc[0]["lane"])

@@ -1,0 +1,78 @@
+"""Choosing a start lane (``enn-traffic lanes``, ``start_lane = "auto"``): the lanes a learner
+may start on, ranked by the vehicles the demand sends over them."""
+
+import gzip
+
+import pytest
+from sumo_road import road_scenario
+
+from enn_traffic.cli import main
+from enn_traffic.errors import InputError
+from enn_traffic.scenario import load_scenario
+from enn_traffic.traffic.lanes import demand_per_edge, lane_table
+
+# Every way a route file sends vehicles, with the vehicles each edge gets, by hand:
+#   route r1 (a b) twice by vehicles: a 2, b 2
+#   a flow on r1 with number 5: a 5, b 5
+#   a flow from b to c, period 60 over 600 s: 10 on b and c
+#   a flow on a nested route (c d), 720 per hour for 300 s: 60 on c and d
+#   a trip from a to d via c: 1 on a, c, d
+#   a vehicle on distribution rd (r1 with 3/4, route (d) with 1/4), eight times: a, b 6; d 2
+#   a flow with probability 0.1 per s over 100 s on r1: a, b 10
+#   a tram (its type's class) on r1, twice: a, b 2 trams
+ROUTES = """<routes>
+    <vType id="tram" vClass="tram"/>
+    <route id="r1" edges="a b"/>
+    <routeDistribution id="rd">
+        <route id="x1" edges="a b" probability="3"/>
+        <route id="x2" edges="d" probability="1"/>
+    </routeDistribution>
+    <vehicle id="v1" depart="0" route="r1"/>
+    <vehicle id="v2" depart="1" route="r1"/>
+    <flow id="f1" begin="0" end="100" number="5" route="r1"/>
+    <flow id="f2" begin="0" end="600" period="60" from="b" to="c"/>
+    <flow id="f3" begin="0" end="300" vehsPerHour="720"><route edges="c d"/></flow>
+    <trip id="t1" depart="5" from="a" to="d" via="c"/>
+    {distribution}
+    <flow id="f4" begin="0" end="100" probability="0.1" route="r1"/>
+    <person id="p" depart="0"><walk edges="a b"/></person>
+    <flow id="trams" type="tram" begin="0" end="10" number="2" route="r1"/>
+</routes>"""
+
+
+def test_demand_counts_every_kind_of_route_by_hand(tmp_path):
+    path = tmp_path / "demand.rou.xml.gz"
+    distribution = "\n".join(f'<vehicle id="d{i}" depart="{i}" route="rd"/>' for i in range(8))
+    with gzip.open(path, "wt") as handle:
+        handle.write(ROUTES.format(distribution=distribution))
+    demand = demand_per_edge([path])
+    assert demand == pytest.approx({
+        ("a", "passenger"): 2 + 5 + 1 + 6 + 10, ("b", "passenger"): 2 + 5 + 10 + 6 + 10,
+        ("c", "passenger"): 10 + 60 + 1, ("d", "passenger"): 60 + 1 + 2,
+        ("a", "tram"): 2, ("b", "tram"): 2})
+
+
+def test_the_buses_lane_ranks_first_and_auto_picks_it(tmp_path, road_net, capsys):
+    """The road's westbound buses (60 in 600 s) drive em, then ew: of the lanes cars may use
+    (we_0, ew_0, me_0; em_0 is for buses), ew_0 carries them; the other two carry none and
+    are ranked by length, then name. ``start_lane = "auto"`` starts there."""
+    path = road_scenario(tmp_path, road_net, start='start_lane = "auto"')
+    scenario = load_scenario(path)
+    assert scenario.track.start_lane == "ew_0"
+    table = lane_table(scenario.track.net, [tmp_path / "buses.rou.xml"])
+    assert list(table["lane"]) == ["ew_0", "me_0", "we_0", "em_0"]
+    assert list(table["vehicles"]) == [60.0, 0.0, 0.0, 60.0]
+    assert list(table["learner_may_start"]) == [True, True, True, False]
+    assert main(["lanes", str(path), "--top", "2", "--out", str(tmp_path / "lanes.csv")]) == 0
+    printed = capsys.readouterr().out
+    assert "4 lanes; 3 allow passenger cars" in printed and "1 bus" in printed
+    assert 'start_lane = "ew_0"' in printed
+    assert (tmp_path / "lanes.csv").read_text().count("\n") == 5
+
+
+def test_auto_needs_a_lane_long_enough(tmp_path, road_net):
+    path = road_scenario(tmp_path, road_net, start='start_lane = "auto"')
+    path.write_text(path.read_text().replace("start_offset = 20.0", "start_offset = 95.0"))
+    with pytest.raises(InputError, match="no lane that allows passenger cars is") as error:
+        load_scenario(path)
+    assert error.value.key == "track.start_lane"
