@@ -314,15 +314,18 @@ def _random_city(folder: Path, iterations: int) -> Path:
     return net
 
 
-def _measured(work) -> tuple[float, float, object]:
-    """Seconds and peak memory (MB of Python and numpy allocations) of ``work()``, and its
-    value."""
-    tracemalloc.start()
+def _measured(work, memory: bool = True) -> tuple[float, float, object]:
+    """Seconds and peak memory (MB of Python and numpy allocations, by tracemalloc; NaN when
+    not ``memory``: tracing doubles the time of many small allocations, and does not see
+    GEOS's) of ``work()``, and its value."""
+    if memory:
+        tracemalloc.start()
     started = time.perf_counter()
     value = work()
     seconds = time.perf_counter() - started
-    peak = tracemalloc.get_traced_memory()[1] / 2**20
-    tracemalloc.stop()
+    peak = tracemalloc.get_traced_memory()[1] / 2**20 if memory else np.nan
+    if memory:
+        tracemalloc.stop()
     return seconds, peak, value
 
 
@@ -351,7 +354,7 @@ def network_bench(quick: bool = False) -> pd.DataFrame:
             for iterations, with_reference in ((60 if quick else 100, True),
                                                (300 if quick else 1500, False)):
                 net = _random_city(Path(folder), iterations)
-                walls_s, walls_mb, track = _measured(lambda n=net: load_track(n, exits=True))
+                walls_s, _, track = _measured(lambda n=net: load_track(n, exits=True), False)
                 grid_s, grid_mb, grid = _measured(lambda t=track: WallGrid.cached(t.walls,
                                                                                 reach))
                 workload = (f"network: random city, {len(track.walls):,} walls, "
@@ -362,8 +365,7 @@ def network_bench(quick: bool = False) -> pd.DataFrame:
                         lambda t=track: reference_wall_grid(t.walls, reach))
                     row(workload, "grid: cells × walls (before issue 39)", reference, memory)
                 row(workload, "grid: walls binned into cells", grid_s, grid_mb, reference)
-                row(workload, "walls and grid, first time", walls_s + grid_s,
-                    max(walls_mb, grid_mb))
+                row(workload, "walls and grid, first time", walls_s + grid_s, np.nan)
                 again, memory, _ = _measured(lambda n=net: WallGrid.cached(
                     load_track(n, exits=True).walls, reach))
                 row(workload, "walls and grid, from the cache", again, memory)

@@ -176,7 +176,7 @@ def learner_among_traffic(walls: np.ndarray, exits: np.ndarray, poses: np.ndarra
         shown = True
     if hit_body is not None:
         axes.add_patch(Patch(hit_body, closed=True, facecolor="C1", edgecolor="black",
-                             zorder=4, label="the vehicle it ran into"))
+                             alpha=0.85, zorder=7, label="the vehicle it ran into"))
     axes.plot(*break_at_jumps(learner).T, color="C3", lw=2.2, zorder=5, label="learner's path")
     axes.plot(*learner[0], "o", color="C2", ms=8, zorder=6, label="learner's start")
     axes.plot(*learner[-1], "X", color="C3", mec="black", ms=11, zorder=6, label=end_label)
