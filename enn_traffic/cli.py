@@ -248,33 +248,10 @@ def _cmd_render(args) -> int:
 
 def _cmd_lanes(args) -> int:
     from enn_traffic.io import write_csv
-    from enn_traffic.scenario import load_scenario
     from enn_traffic.shipped import scenario_path
-    from enn_traffic.traffic.lanes import lane_table
-    from enn_traffic.traffic.sumocfg import read_sumocfg
+    from enn_traffic.traffic.lanes import lane_table, sources
 
-    source = args.source
-    if source.suffix == ".sumocfg":
-        if not source.is_file():
-            raise InputError("SUMO configuration not found", source)
-        config = read_sumocfg(source)
-        if config.net_file is None:
-            raise InputError("names no net-file", source, "net-file")
-        net, routes, additional = config.net_file, list(config.route_files), \
-            list(config.additional_files)
-    else:
-        from enn_traffic.traffic.sumo import route_files, sumo_config
-
-        scenario = load_scenario(scenario_path(source))
-        if isinstance(scenario.track, list):
-            raise InputError("give a scenario of one track (or its .sumocfg)", source, "track")
-        if scenario.track is None:
-            raise InputError("a lane-keeping scenario has no SUMO network", source,
-                             "lane_keeping")
-        net = scenario.track.net
-        routes = route_files(scenario) if scenario.traffic.is_sumo else []
-        config = sumo_config(scenario)
-        additional = list(config.additional_files) if config is not None else []
+    net, routes, additional = sources(scenario_path(args.source))
     table = lane_table(net, routes, additional)
     learner = table[table["learner_may_start"]]
     others = table[~table["learner_may_start"]]

@@ -307,25 +307,21 @@ class Simulation:
 
     def step(self, count: int = 1) -> None:
         try:
-            self._step(count)
+            for _ in range(count):
+                libsumo.simulationStep()
+                self._stepped = True
+                if self.following:  # unseen vehicles keep their slots until they arrive
+                    for vehicle in libsumo.simulation.getArrivedIDList():
+                        if vehicle in self.vehicles:
+                            self._free.append(self.vehicles.pop(vehicle)[ROW_SLOT])
+                else:
+                    for vehicle in libsumo.simulation.getDepartedIDList():
+                        libsumo.vehicle.subscribe(vehicle, _VARIABLES)
+                if self._lane_change:
+                    for vehicle in libsumo.simulation.getDepartedIDList():
+                        self._set_lane_change(vehicle)
         except Exception as exc:
             self._fail("SUMO stopped", exc)
-
-    def _step(self, count: int) -> None:
-        """``count`` SUMO steps, keeping the slots and subscriptions up to date."""
-        for _ in range(count):
-            libsumo.simulationStep()
-            self._stepped = True
-            if self.following:  # unseen vehicles keep their slots until they arrive
-                for vehicle in libsumo.simulation.getArrivedIDList():
-                    if vehicle in self.vehicles:
-                        self._free.append(self.vehicles.pop(vehicle)[ROW_SLOT])
-            else:
-                for vehicle in libsumo.simulation.getDepartedIDList():
-                    libsumo.vehicle.subscribe(vehicle, _VARIABLES)
-            if self._lane_change:
-                for vehicle in libsumo.simulation.getDepartedIDList():
-                    self._set_lane_change(vehicle)
 
     def read(self) -> np.ndarray:
         """The vehicles on the network now, the learner excepted, a row each (columns
