@@ -130,6 +130,20 @@ def build_parser() -> argparse.ArgumentParser:
                        help="draw the road surface for cars against every lane as road, with "
                             "the top start lanes numbered")
 
+    baseline = commands.add_parser(
+        "baseline", help="the GA against PPO (Stable-Baselines3) at equal simulated steps",
+        epilog=EPILOG, description="Train the scenario's GA and PPO for the same number of "
+        "learner-steps, several seeds each, and score their controllers along the way on the "
+        "test situations that evaluate reads. Writes OUT/baseline.csv, baseline_summary.csv "
+        "and baseline.png. PPO needs the rl extra (pip install -e .[rl]).")
+    baseline.add_argument("scenario", type=Path, metavar="SCENARIO.toml",
+                          help="an arena or navigation scenario, or a shipped one's name")
+    baseline.add_argument("--budget", type=_positive, default=1_000_000,
+                          help="learner-steps per run (default 1,000,000)")
+    baseline.add_argument("--seeds", type=_positive, default=3, help="runs per method")
+    baseline.add_argument("--methods", default="GA,PPO", help="GA, PPO or both (default)")
+    baseline.add_argument("--out", type=Path, help="folder (default: results/baseline/NAME)")
+
     bench = commands.add_parser("bench", help="throughput table (vehicle-steps per second)")
     bench.add_argument("--quick", action="store_true", help="shorter timing runs")
     bench.add_argument("--out", type=Path, metavar="FILE.csv", help="also write the table")
@@ -305,6 +319,22 @@ def _cmd_reproduce(args) -> int:
     return 0
 
 
+def _cmd_baseline(args) -> int:
+    from enn_traffic import baseline
+    from enn_traffic.scenario import load_scenario
+    from enn_traffic.shipped import scenario_path
+
+    scenario = load_scenario(scenario_path(args.scenario))
+    methods = tuple(m.strip().upper() for m in args.methods.split(",") if m.strip())
+    if not methods or set(methods) - {"GA", "PPO"}:
+        raise InputError(f"--methods {args.methods!r}: expected GA, PPO or GA,PPO")
+    out = args.out or Path("results/baseline") / scenario.name
+    table = baseline.compare(scenario, args.budget, list(range(1, args.seeds + 1)), out,
+                             methods)
+    print(baseline.summary(table).to_string(index=False))
+    return 0
+
+
 def _cmd_bench(args) -> int:
     import numpy as np
 
@@ -332,7 +362,8 @@ def _cmd_bench(args) -> int:
 
 
 COMMANDS = {"run": _cmd_run, "evaluate": _cmd_evaluate, "render": _cmd_render,
-            "reproduce": _cmd_reproduce, "lanes": _cmd_lanes, "bench": _cmd_bench}
+            "reproduce": _cmd_reproduce, "lanes": _cmd_lanes, "baseline": _cmd_baseline,
+            "bench": _cmd_bench}
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -43,11 +43,63 @@ from enn_traffic.sim.rules import (
     within_range,
 )
 from enn_traffic.sim.sensors import WallGrid
-from enn_traffic.sim.world import CAPPED, COLLIDED, SPUN, EpisodeResults
+from enn_traffic.sim.world import CAPPED, COLLIDED, RUNNING, SPUN, EpisodeResults
 from enn_traffic.traffic import strategies
 from enn_traffic.traffic.strategies import reset_memory, strategy_settings
 
 START_STREAM = 5  # the last key of the seed that draws a situation's start from a list
+
+
+# Columns of a world's tally (:func:`settle`): collisions the learner suffered, vehicle-steps
+# within its sensor range, most vehicles within it at once, what it hit.
+SUFFERED, NEAR_STEPS, NEAR_MAX, HIT = range(4)
+
+
+@njit(cache=True, inline="always")
+def settle(steps, kinds, pose, corners, centres, previous, previous_centres, fresh, memory, rng,
+           recent, physics, walls, cell_start, cell_walls, all_walls, max_steps, tally) -> int:
+    """Steps 1–2 of the arena's step, after ``steps`` moves: the blame rule (the learner,
+    vehicle 0, ends its life; a responsible uncontrolled vehicle respawns), then the learner's
+    spin test and step cap, and the traffic it meets. Returns the learner's outcome, or
+    ``RUNNING``; ``tally`` (``SUFFERED``, ``NEAR_STEPS``, ``NEAR_MAX``, ``HIT``) is updated."""
+    hit = responsible(0, pose, corners, centres, previous, previous_centres, fresh, 0, physics,
+                      walls, cell_start, cell_walls, all_walls)
+    if hit != NO_HIT:
+        tally[HIT] = hit
+        return COLLIDED
+    for v in range(1, pose.shape[0]):
+        hit = responsible(v, pose, corners, centres, previous, previous_centres, fresh, v,
+                          physics, walls, cell_start, cell_walls, all_walls)
+        if hit == 0:
+            tally[SUFFERED] += 1
+        if hit != NO_HIT:
+            respawn(v, kinds[v], physics, walls, cell_start, cell_walls, all_walls, pose,
+                    corners, centres, previous, previous_centres, fresh, memory, rng)
+    if spun(recent, steps, pose[0, 0], pose[0, 1], physics.spin_variance):
+        return SPUN
+    if steps >= max_steps:
+        return CAPPED
+    within = within_range(pose[0, 0], pose[0, 1], centres, 1,
+                          physics.max_range + physics.radius)
+    tally[NEAR_STEPS] += within
+    tally[NEAR_MAX] = max(tally[NEAR_MAX], within)
+    return RUNNING
+
+
+@njit(cache=True, inline="always")
+def start_world(start, kinds, pose, corners, centres, previous, previous_centres, fresh, memory,
+                rng, seed, physics, tally) -> None:
+    """Every vehicle at its ``start`` pose with a fresh life, the world's generator at
+    ``seed`` and the tally at zero (nothing hit)."""
+    rng[0] = seed
+    fresh[:] = False
+    for v in range(start.shape[0]):
+        reset_memory(kinds[v], physics, rng, memory[v])
+        place(v, start[v, 0], start[v, 1], start[v, 2], physics, pose, corners, centres)
+    previous[:] = corners
+    previous_centres[:] = centres
+    tally[:] = 0
+    tally[HIT] = NO_HIT
 
 
 @njit(cache=True)
@@ -65,47 +117,29 @@ def run_episode(genes, layer_sizes, start, kinds, traffic_genes, physics, geomet
     pose = np.empty((count, 3))
     corners = np.empty((count, 4, 2))
     centres = np.empty((count, 2))
+    previous, previous_centres = np.empty((count, 4, 2)), np.empty((count, 2))
     fresh = np.zeros(count, dtype=np.bool_)  # respawned: no earlier body to blame against
     memory = np.zeros((count, 2))
     steering = np.zeros(count)
     drivers = traffic_genes.copy()
     drivers[0] = genes
-    rng = np.full(1, seed, dtype=np.uint64)
+    rng = np.empty(1, dtype=np.uint64)
+    tally = np.empty(4, dtype=np.int64)
     beam_cos, beam_sin, walls, cell_start, cell_walls, all_walls, _ = geometry
     readings = np.empty(beam_cos.shape[0])
     activation, scratch = network_buffers(layer_sizes)
     recent = np.empty((physics.spin_window, 2))
-    for v in range(count):
-        reset_memory(kinds[v], physics, rng, memory[v])
-        place(v, start[v, 0], start[v, 1], start[v, 2], physics, pose, corners, centres)
-    previous, previous_centres = corners.copy(), centres.copy()
-    reach = physics.max_range + physics.radius
-    suffered, near_steps, near_max = 0, 0, 0
+    start_world(start, kinds, pose, corners, centres, previous, previous_centres, fresh, memory,
+                rng, seed, physics, tally)
     steps = 0
     while True:
         if steps < trace.shape[0]:
             trace[steps] = pose
-        # 1. collisions by the blame rule
-        hit = responsible(0, pose, corners, centres, previous, previous_centres, fresh, 0,
-                          physics, walls, cell_start, cell_walls, all_walls)
-        if hit != NO_HIT:
-            return steps, COLLIDED, suffered, near_steps, near_max, hit
-        for v in range(1, count):
-            hit = responsible(v, pose, corners, centres, previous, previous_centres, fresh, v,
-                              physics, walls, cell_start, cell_walls, all_walls)
-            if hit == 0:
-                suffered += 1
-            if hit != NO_HIT:
-                respawn(v, kinds[v], physics, walls, cell_start, cell_walls, all_walls, pose,
-                        corners, centres, previous, previous_centres, fresh, memory, rng)
-        # 2. spin test and step cap for the learner
-        if spun(recent, steps, pose[0, 0], pose[0, 1], physics.spin_variance):
-            return steps, SPUN, suffered, near_steps, near_max, NO_HIT
-        if steps >= max_steps:
-            return steps, CAPPED, suffered, near_steps, near_max, NO_HIT
-        within = within_range(pose[0, 0], pose[0, 1], centres, 1, reach)
-        near_steps += within
-        near_max = max(near_max, within)
+        outcome = settle(steps, kinds, pose, corners, centres, previous, previous_centres, fresh,
+                         memory, rng, recent, physics, walls, cell_start, cell_walls, all_walls,
+                         max_steps, tally)
+        if outcome != RUNNING:
+            return steps, outcome, tally[SUFFERED], tally[NEAR_STEPS], tally[NEAR_MAX], tally[HIT]
         # 3. sense and decide, 4. move
         drive_all(kinds, drivers, layer_sizes, physics, beam_cos, beam_sin, walls, cell_start,
                   cell_walls, all_walls, pose, corners, centres, previous, previous_centres,

@@ -41,10 +41,8 @@ from enn_traffic.sim.rules import (
     spun,
     within_range,
 )
-from enn_traffic.sim.world import CAPPED, COLLIDED, LEFT_NETWORK, SPUN
+from enn_traffic.sim.world import CAPPED, COLLIDED, LEFT_NETWORK, RUNNING, SPUN
 from enn_traffic.traffic.sumo import FAR
-
-RUNNING = -1
 
 
 @njit(cache=True)

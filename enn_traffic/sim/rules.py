@@ -33,6 +33,7 @@ from enn_traffic.sim.bicycle import bicycle_step
 from enn_traffic.sim.sensors import WallGrid, nearby_walls, ray_segment_distance, sense_walls
 from enn_traffic.sim.world import HIT_WALL, NO_HIT
 from enn_traffic.traffic.strategies import (
+    ACTION,
     NETWORK,
     NONE,
     next_uniform,
@@ -252,11 +253,14 @@ def decide(v, kind, genes, layer_sizes, readings, physics, beam_cos, beam_sin, m
 def drive_all(kinds, genes, layer_sizes, physics, beam_cos, beam_sin, walls, cell_start,
               cell_walls, all_walls, pose, corners, centres, previous, previous_centres, fresh,
               memory, rng, readings, activation, scratch, steering):
-    """Every vehicle senses and decides (``genes[v]`` for a network driver), then all move at
-    once: the bodies before the move become ``previous``, and no body is ``fresh`` any more."""
+    """Every vehicle senses and decides (``genes[v]`` for a network driver; an ``ACTION``
+    vehicle keeps the ``steering[v]`` it was given), then all move at once: the bodies before
+    the move become ``previous``, and no body is ``fresh`` any more."""
     count = pose.shape[0]
     for v in range(count):
         kind = kinds[v]
+        if kind == ACTION:
+            continue
         if kind != NONE:
             sense(v, pose, physics, beam_cos, beam_sin, walls, cell_start, cell_walls, all_walls,
                   count > 1 and senses_vehicles(kind, physics), corners, centres, v, readings)

@@ -22,6 +22,7 @@ from enn_traffic.scenario import Scenario
 # life that left the network or was capped counts its steps as fitness, as does a lane
 # departure (paper §5.6: the steps kept in the lane).
 CAPPED, COLLIDED, SPUN, LEFT_NETWORK, LEFT_LANE = 0, 1, 2, 3, 4
+RUNNING = -1  # a step's outcome while the life goes on
 # What a collision was with (``EpisodeResults.hit``), besides a vehicle (0, 1, ...).
 NO_HIT, HIT_WALL = -1, -2
 OUTCOMES = {CAPPED: "capped", COLLIDED: "collision", SPUN: "spin", LEFT_NETWORK: "left network",

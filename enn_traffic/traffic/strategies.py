@@ -32,8 +32,9 @@ import numpy as np
 from numba import njit
 
 # Who steers a vehicle: nobody (it stands), a network (the learner's, an evolved driver's, or
-# the random-network strategy's fixed random genes), or a scripted strategy.
-NONE, NETWORK, STRAIGHT, CIRCLING, WANDER = 0, 1, 2, 3, 4
+# the random-network strategy's fixed random genes), a scripted strategy, or an action given
+# from outside the step (a gymnasium or PettingZoo environment's, :mod:`enn_traffic.envs`).
+NONE, NETWORK, STRAIGHT, CIRCLING, WANDER, ACTION = 0, 1, 2, 3, 4, 5
 STRATEGIES = {
     "random_network": NETWORK,
     "straight": STRAIGHT,

@@ -1,0 +1,83 @@
+"""The project's worlds as gymnasium and PettingZoo environments (docs/envs.md).
+
+``import enn_traffic.envs`` registers, under the ``enn_traffic/`` namespace, one id per
+shipped training scenario (``enn_traffic/NavigationNarrow-v0``, ``enn_traffic/ArenaStrategy1-v0``,
+...) and ``enn_traffic/Scenario-v0``, which takes ``scenario=PATH``. Arena and navigation ids
+also vectorise in one compiled call::
+
+    gymnasium.make_vec("enn_traffic/NavigationNarrow-v0", num_envs=4096,
+                       vectorization_mode="vector_entry_point")
+
+The held-out tracks (``test_*``, ``unseen_*``) and lane keeping are not registered: the first
+are for ``enn-traffic evaluate``, the second is highway-env's own environment.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import gymnasium as gym
+from gymnasium.envs.registration import register, registry
+
+from enn_traffic.scenario import Scenario, load_scenario
+from enn_traffic.shipped import SCENARIOS
+
+NAMESPACE = "enn_traffic"
+# The shipped scenarios an id is registered for: the training ones of one track (an
+# environment drives one track; navigation_mixed has five), not lane keeping.
+REGISTERED = ("navigation_narrow", "navigation_wide", "arena_strategy1",
+              "arena_strategy2", "arena_strategy3", "arena_strategy4", "sumo_strategy1",
+              "sumo_strategy2", "sumo_strategy3", "sumo_strategy4", "city_cologne3",
+              "street_mixed")
+
+
+def env_id(name: str) -> str:
+    """The registered id of a shipped scenario: ``navigation_narrow`` →
+    ``enn_traffic/NavigationNarrow-v0``."""
+    return f"{NAMESPACE}/{''.join(part.title() for part in name.split('_'))}-v0"
+
+
+def _scenario(scenario: str | Path | Scenario) -> Scenario:
+    return scenario if isinstance(scenario, Scenario) else load_scenario(scenario)
+
+
+def make_env(scenario: str | Path | Scenario, render_mode: str | None = None) -> gym.Env:
+    """The environment of a scenario: arena and navigation worlds
+    (:class:`~enn_traffic.envs.rangefinder.RangefinderEnv`) or SUMO traffic, replay or closed
+    loop (:class:`~enn_traffic.envs.sumo.SumoEnv`)."""
+    scenario = _scenario(scenario)
+    if not isinstance(scenario.track, list) and scenario.traffic.is_sumo:
+        from enn_traffic.envs.sumo import SumoEnv
+
+        return SumoEnv(scenario, render_mode=render_mode)
+    from enn_traffic.envs.rangefinder import RangefinderEnv
+
+    return RangefinderEnv(scenario, render_mode=render_mode)
+
+
+def make_vector_env(scenario: str | Path | Scenario, num_envs: int = 1, situations: int = 64,
+                    render_mode: str | None = None) -> gym.vector.VectorEnv:
+    """``num_envs`` arena or navigation worlds stepped in one compiled call
+    (:class:`~enn_traffic.envs.rangefinder.RangefinderVectorEnv`)."""
+    from enn_traffic.envs.rangefinder import RangefinderVectorEnv
+
+    return RangefinderVectorEnv(_scenario(scenario), num_envs, situations, render_mode)
+
+
+def _vectorises(name: str) -> bool:
+    return not name.startswith(("sumo_", "city_", "street_"))
+
+
+def register_envs() -> None:
+    """Register the ids (once)."""
+    if f"{NAMESPACE}/Scenario-v0" in registry:
+        return
+    register(f"{NAMESPACE}/Scenario-v0", entry_point=make_env,
+             vector_entry_point=make_vector_env)
+    for name in REGISTERED:
+        register(env_id(name), entry_point=make_env,
+                 vector_entry_point=make_vector_env if _vectorises(name) else None,
+                 kwargs={"scenario": str(SCENARIOS / f"{name}.toml")})
+
+
+register_envs()

@@ -1,0 +1,225 @@
+"""Many arena or navigation worlds stepped by one compiled call, the learner of each driven
+by an action from outside (:mod:`enn_traffic.envs.rangefinder`).
+
+A world here is the GA's world (:func:`enn_traffic.sim.arena.run_episode`) with its learner's
+steering given instead of computed: the same situations (:meth:`ArenaWorld.episodes`), the
+same :func:`~enn_traffic.sim.arena.start_world`, :func:`~enn_traffic.sim.arena.settle` and
+:func:`~enn_traffic.sim.rules.drive_all`, in the same order, so that a network's outputs fed
+as actions drive the GA's trajectory step for step. An action is the paper's two network
+outputs (§3): steering = gain · (``action[1]`` − ``action[0]``).
+
+The worlds' arrays lead with the world: ``pose[i]`` is world ``i``'s (V, 3) poses. The
+situations a world may drive are a pool (:class:`Situations`); when a life ends the world
+starts the next situation of the pool in turn (world ``i`` of N drives situations ``i``,
+``i + N``, ``i + 2N``, ... modulo the pool's size).
+"""
+
+from __future__ import annotations
+
+from typing import NamedTuple
+
+import numba
+import numpy as np
+from numba import njit, prange
+
+from enn_traffic.sim.arena import ArenaWorld, settle, start_world
+from enn_traffic.sim.rules import drive_all, sense
+from enn_traffic.sim.world import RUNNING, SPUN
+from enn_traffic.traffic.strategies import ACTION
+
+
+class Situations(NamedTuple):
+    """A pool of M traffic situations: start poses (M, V, 3), drivers (M, V) and their genes
+    (M, V, G, source layout), and each world generator's seed (M,)."""
+
+    start: np.ndarray
+    kinds: np.ndarray
+    genes: np.ndarray
+    seed: np.ndarray
+
+    @classmethod
+    def of_keys(cls, world: ArenaWorld, keys) -> Situations:
+        """Every situation of the traffic ``keys``, in order (each key's strategies and
+        episodes, as :meth:`ArenaWorld.episodes` gives them), the learner an ``ACTION``."""
+        episodes = [episode for key in keys for episode in world.episodes(int(key))]
+        kinds = np.stack([e.kinds for e in episodes]).astype(np.int64)
+        kinds[:, 0] = ACTION
+        return cls(np.stack([e.start for e in episodes]), kinds,
+                   np.ascontiguousarray(np.stack([e.traffic_genes for e in episodes])),
+                   np.array([e.seed for e in episodes], dtype=np.uint64))
+
+
+class Worlds(NamedTuple):
+    """The state of N worlds of V vehicles with B beams: the GA's per-world arrays
+    (:func:`~enn_traffic.sim.arena.run_episode`) with a leading world axis, each world's
+    situation, the learner's observation and what the last step gave."""
+
+    kinds: np.ndarray  # (N, V)
+    drivers: np.ndarray  # (N, V, G)
+    pose: np.ndarray  # (N, V, 3)
+    corners: np.ndarray  # (N, V, 4, 2)
+    centres: np.ndarray  # (N, V, 2)
+    previous: np.ndarray
+    previous_centres: np.ndarray
+    fresh: np.ndarray  # (N, V)
+    memory: np.ndarray  # (N, V, 2)
+    rng: np.ndarray  # (N, 1)
+    recent: np.ndarray  # (N, spin_window, 2)
+    steps: np.ndarray  # (N,) steps moved in the life going on
+    tally: np.ndarray  # (N, 4): suffered, near steps, near max, hit (arena.SUFFERED, ...)
+    steering: np.ndarray  # (N, V)
+    readings: np.ndarray  # (N, B) work array: every vehicle's readings
+    activation: np.ndarray  # (N, width) the traffic networks' work arrays
+    scratch: np.ndarray
+    situation: np.ndarray  # (N,) index into the pool
+    observation: np.ndarray  # (N, B) the learner's readings
+    reward: np.ndarray  # (N,)
+    outcome: np.ndarray  # (N,) RUNNING, or how the life ended
+    life: np.ndarray  # (N,) steps of the life that ended (fitness, with outcome)
+    final_observation: np.ndarray  # (N, B) the learner's readings when its life ended
+    final_tally: np.ndarray  # (N, 4)
+
+    @classmethod
+    def empty(cls, count: int, world: ArenaWorld, genes: int) -> Worlds:
+        """Room for ``count`` worlds of ``world`` whose drivers have ``genes`` genes."""
+        vehicles, beams = world.vehicles, len(world.geometry.beam_cos)
+        width = max(int(world.layer_sizes.max()), 2)
+        shape = (count, vehicles)
+        return cls(
+            np.zeros(shape, np.int64), np.zeros((*shape, genes)), np.zeros((*shape, 3)),
+            np.zeros((*shape, 4, 2)), np.zeros((*shape, 2)), np.zeros((*shape, 4, 2)),
+            np.zeros((*shape, 2)), np.zeros(shape, np.bool_), np.zeros((*shape, 2)),
+            np.zeros((count, 1), np.uint64), np.zeros((count, world.physics.spin_window, 2)),
+            np.zeros(count, np.int64), np.zeros((count, 4), np.int64), np.zeros(shape),
+            np.zeros((count, beams)), np.zeros((count, width)), np.zeros((count, width)),
+            np.zeros(count, np.int64), np.zeros((count, beams)), np.zeros(count),
+            np.full(count, RUNNING, np.int64), np.zeros(count, np.int64),
+            np.zeros((count, beams)), np.zeros((count, 4), np.int64))
+
+
+@njit(cache=True, inline="always")
+def observe(i, pose, corners, centres, physics, beam_cos, beam_sin, walls, cell_start,
+            cell_walls, all_walls, out):
+    """The learner of world ``i`` senses walls and the other bodies into ``out``."""
+    sense(0, pose[i], physics, beam_cos, beam_sin, walls, cell_start, cell_walls, all_walls,
+          pose.shape[1] > 1, corners[i], centres[i], 0, out)
+
+
+@njit(cache=True, inline="always")
+def begin(i, m, pool_start, pool_kinds, pool_genes, pool_seed, kinds, drivers, pose, corners,
+          centres, previous, previous_centres, fresh, memory, rng, recent, steps, tally,
+          situation, observation, physics, geometry, max_steps):
+    """World ``i`` starts situation ``m`` of the pool: step 0's rules, then the learner's
+    first observation."""
+    beam_cos, beam_sin, walls, cell_start, cell_walls, all_walls, _ = geometry
+    kinds[i] = pool_kinds[m]
+    drivers[i] = pool_genes[m]
+    situation[i] = m
+    steps[i] = 0
+    start_world(pool_start[m], kinds[i], pose[i], corners[i], centres[i], previous[i],
+                previous_centres[i], fresh[i], memory[i], rng[i], pool_seed[m], physics,
+                tally[i])
+    settle(0, kinds[i], pose[i], corners[i], centres[i], previous[i], previous_centres[i],
+           fresh[i], memory[i], rng[i], recent[i], physics, walls, cell_start, cell_walls,
+           all_walls, max_steps, tally[i])
+    observe(i, pose, corners, centres, physics, beam_cos, beam_sin, walls, cell_start,
+            cell_walls, all_walls, observation[i])
+
+
+@njit(cache=True, parallel=True)
+def begin_worlds(first, pool_start, pool_kinds, pool_genes, pool_seed, kinds, drivers, pose,
+                 corners, centres, previous, previous_centres, fresh, memory, rng, recent, steps,
+                 tally, situation, observation, physics, geometry, max_steps):
+    """Every world ``i`` starts situation ``(first + i) % M`` of the pool."""
+    count, size = pose.shape[0], pool_seed.shape[0]
+    for i in prange(count):
+        begin(i, (first + i) % size, pool_start, pool_kinds, pool_genes, pool_seed, kinds,
+              drivers, pose, corners, centres, previous, previous_centres, fresh, memory, rng,
+              recent, steps, tally, situation, observation, physics, geometry, max_steps)
+
+
+@njit(cache=True, parallel=True)
+def step_worlds(actions, autoreset, pool_start, pool_kinds, pool_genes, pool_seed, kinds,
+                drivers, pose, corners, centres, previous, previous_centres, fresh, memory, rng,
+                recent, steps, tally, steering, readings, activation, scratch, situation,
+                observation, reward, outcome, life, final_observation, final_tally,
+                layer_sizes, physics, geometry, max_steps):
+    """One step of every world (N, spread over the cores): each learner steers by its action
+    (N, 2), every vehicle senses, decides and moves, then the rules of
+    :func:`~enn_traffic.sim.arena.settle`. ``reward`` is 1 per step lived, and a spin takes
+    back the life's steps, so that a life's return is the paper's fitness (§5, §5.3). A world
+    whose life ended keeps its learner's last readings in ``final_observation`` and, with
+    ``autoreset``, starts its next situation."""
+    beam_cos, beam_sin, walls, cell_start, cell_walls, all_walls, _ = geometry
+    count, size = pose.shape[0], pool_seed.shape[0]
+    for i in prange(count):
+        steering[i, 0] = physics.gain * (actions[i, 1] - actions[i, 0])
+        drive_all(kinds[i], drivers[i], layer_sizes, physics, beam_cos, beam_sin, walls,
+                  cell_start, cell_walls, all_walls, pose[i], corners[i], centres[i],
+                  previous[i], previous_centres[i], fresh[i], memory[i], rng[i], readings[i],
+                  activation[i], scratch[i], steering[i])
+        steps[i] += 1
+        outcome[i] = settle(steps[i], kinds[i], pose[i], corners[i], centres[i], previous[i],
+                            previous_centres[i], fresh[i], memory[i], rng[i], recent[i],
+                            physics, walls, cell_start, cell_walls, all_walls, max_steps,
+                            tally[i])
+        observe(i, pose, corners, centres, physics, beam_cos, beam_sin, walls, cell_start,
+                cell_walls, all_walls, observation[i])
+        reward[i] = 1.0
+        if outcome[i] == RUNNING:
+            continue
+        if outcome[i] == SPUN:
+            reward[i] = 1.0 - steps[i]
+        life[i] = steps[i]
+        final_observation[i] = observation[i]
+        final_tally[i] = tally[i]
+        if autoreset:
+            begin(i, (situation[i] + count) % size, pool_start, pool_kinds, pool_genes,
+                  pool_seed, kinds, drivers, pose, corners, centres, previous, previous_centres,
+                  fresh, memory, rng, recent, steps, tally, situation, observation, physics,
+                  geometry, max_steps)
+
+
+def compiled(function, *args):
+    """``function`` compiled for the types of ``args``, called directly: through numba's
+    dispatcher a call that takes :class:`~enn_traffic.sim.rules.Physics` (a NamedTuple of
+    more than 10 fields) is typed on its slow path every time (numba issue 6144)."""
+    return function.compile(tuple(numba.typeof(value) for value in args))
+
+
+class Batch:
+    """N worlds of a scenario's :class:`ArenaWorld`, started and stepped in one compiled
+    call each."""
+
+    def __init__(self, world: ArenaWorld, count: int):
+        self.world = world
+        self.count = count
+        self.max_steps = world.max_steps
+        self.genes = world.traffic_spec.chromosome_length
+        self.worlds = Worlds.empty(count, world, world.spec.chromosome_length)
+        self.pool: Situations | None = None
+        self._begin = self._step = None
+
+    def begin(self, pool: Situations, first: int = 0) -> None:
+        """Every world starts a situation of ``pool``: world ``i`` the ``(first + i)``-th."""
+        if pool.genes.shape[2] != self.worlds.drivers.shape[2]:
+            raise ValueError("the pool's drivers have another number of genes")
+        self.pool = pool
+        w = self.worlds
+        args = (first, *pool, w.kinds, w.drivers, w.pose, w.corners, w.centres, w.previous,
+                w.previous_centres, w.fresh, w.memory, w.rng, w.recent, w.steps, w.tally,
+                w.situation, w.observation, self.world.physics, self.world.geometry,
+                self.max_steps)
+        if self._begin is None:
+            self._begin = compiled(begin_worlds, *args)
+        self._begin(*args)
+        w.outcome[:] = RUNNING
+
+    def step(self, actions: np.ndarray, autoreset: bool) -> None:
+        """Every world steps with its learner's action (N, 2)."""
+        w = self.worlds
+        args = (np.ascontiguousarray(actions, dtype=np.float64), autoreset, *self.pool, *w,
+                self.world.layer_sizes, self.world.physics, self.world.geometry, self.max_steps)
+        if self._step is None:
+            self._step = compiled(step_worlds, *args)
+        self._step(*args)

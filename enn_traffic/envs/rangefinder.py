@@ -1,0 +1,177 @@
+"""The arena and the navigation tracks as gymnasium environments (docs/envs.md).
+
+Observation: the learner's beam readings, right to left (m, ``float64``: the numbers its
+network would read); action: the paper's two network outputs in [0, 1], steering =
+gain · (``action[1]`` − ``action[0]``) (§3); reward: 1 per step lived, and a spin in place
+takes the life's steps back, so that an episode's return is the paper's fitness (§5, §5.3).
+``terminated``: a collision or a spin; ``truncated``: the step cap. ``info`` holds the life's
+``steps``, its ``outcome`` (:data:`~enn_traffic.sim.world.OUTCOMES`), ``fitness``, the
+collisions it ``suffered`` and what it ``hit``.
+
+A situation is the GA's (:meth:`ArenaWorld.episodes`): ``reset(options={"key": k,
+"situation": e})`` starts situation ``e`` of traffic key ``k``; without them, a training key
+and situation are drawn from the reset's seed. :class:`RangefinderVectorEnv` steps N worlds
+in one compiled call (:mod:`enn_traffic.envs.batch`), autoresetting in the same step.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import gymnasium as gym
+import numpy as np
+from gymnasium import spaces
+from gymnasium.vector import AutoresetMode, VectorEnv
+from gymnasium.vector.utils import batch_space
+
+from enn_traffic.envs.batch import Batch, Situations
+from enn_traffic.scenario import Scenario, load_scenario
+from enn_traffic.sim.arena import HIT, SUFFERED, ArenaWorld
+from enn_traffic.sim.world import CAPPED, OUTCOMES, RUNNING, SPUN
+
+TRAINING_KEYS = 1_000_000  # reset draws its traffic key among the first training keys
+
+
+def rangefinder_world(scenario: str | Path | Scenario) -> ArenaWorld:
+    """The arena or navigation world of a scenario (file or loaded); a clear error for the
+    others."""
+    if not isinstance(scenario, Scenario):
+        scenario = load_scenario(scenario)
+    if isinstance(scenario.track, list):
+        if len(scenario.track) > 1:
+            raise ValueError(f"{scenario.name}: an environment drives one track; this scenario "
+                             f"has {len(scenario.track)} (take one with Scenario.on_track)")
+        scenario = scenario.on_track(0)
+    if scenario.lane_keeping is not None or scenario.traffic.is_sumo:
+        raise ValueError(f"{scenario.name}: not an arena or navigation scenario")
+    return ArenaWorld(scenario)
+
+
+def spaces_of(world: ArenaWorld) -> tuple[spaces.Box, spaces.Box]:
+    """The observation (beam readings) and action (two outputs) spaces of a world."""
+    beams = len(world.geometry.beam_cos)
+    observation = spaces.Box(0.0, world.physics.max_range, (beams,), np.float64)
+    return observation, spaces.Box(0.0, 1.0, (2,), np.float64)
+
+
+def outcome_info(outcome: int, steps: int, tally: np.ndarray) -> dict:
+    """What a life's end tells: its steps, outcome, fitness, collisions suffered and hit."""
+    return {"steps": int(steps), "outcome": OUTCOMES[int(outcome)],
+            "fitness": 0.0 if outcome == SPUN else float(steps),
+            "suffered": int(tally[SUFFERED]), "hit": int(tally[HIT])}
+
+
+class RangefinderEnv(gym.Env):
+    """One learner in an arena or navigation world (a scenario file or a loaded scenario)."""
+
+    metadata = {"render_modes": ["rgb_array"], "render_fps": 10}
+
+    def __init__(self, scenario: str | Path | Scenario, render_mode: str | None = None):
+        self.world = rangefinder_world(scenario)
+        self.observation_space, self.action_space = spaces_of(self.world)
+        self.render_mode = render_mode
+        self.batch = Batch(self.world, 1)
+
+    def reset(self, *, seed: int | None = None, options: dict | None = None):
+        super().reset(seed=seed)
+        options = options or {}
+        key = options.get("key")
+        key = int(self.np_random.integers(TRAINING_KEYS) if key is None else key)
+        pool = Situations.of_keys(self.world, [key])
+        situation = options.get("situation")
+        situation = int(self.np_random.integers(len(pool.seed)) if situation is None
+                        else situation)
+        if not 0 <= situation < len(pool.seed):
+            raise ValueError(f"situation {situation}: key {key} has {len(pool.seed)}")
+        self.batch.begin(pool, situation)
+        return self.batch.worlds.observation[0].copy(), {"key": key, "situation": situation}
+
+    def step(self, action):
+        self.batch.step(np.asarray(action, dtype=np.float64).reshape(1, 2), autoreset=False)
+        w = self.batch.worlds
+        outcome = int(w.outcome[0])
+        info = {} if outcome == RUNNING else outcome_info(outcome, w.life[0], w.tally[0])
+        return (w.observation[0].copy(), float(w.reward[0]),
+                outcome not in (RUNNING, CAPPED), outcome == CAPPED, info)
+
+    def render(self):
+        if self.render_mode == "rgb_array":
+            w = self.batch.worlds
+            return picture(self.world, w.corners[0], w.pose[0], w.observation[0])
+        return None
+
+
+class RangefinderVectorEnv(VectorEnv):
+    """``num_envs`` learners, each in its own arena or navigation world, stepped by one
+    compiled call; a world whose life ended starts the next situation of its pool in the same
+    step (``info["final_obs"]``, ``info["final_info"]``). ``situations``: how many training
+    keys the pool draws at reset; ``reset(options={"keys": [...]})`` names them instead (world
+    ``i`` then starts the ``i``-th situation: test keys for a score)."""
+
+    metadata = {"render_modes": ["rgb_array"], "autoreset_mode": AutoresetMode.SAME_STEP}
+
+    def __init__(self, scenario: str | Path | Scenario, num_envs: int = 1,
+                 situations: int = 64, render_mode: str | None = None):
+        self.world = rangefinder_world(scenario)
+        self.num_envs = num_envs
+        self.situations = situations
+        self.render_mode = render_mode
+        self.single_observation_space, self.single_action_space = spaces_of(self.world)
+        self.observation_space = batch_space(self.single_observation_space, num_envs)
+        self.action_space = batch_space(self.single_action_space, num_envs)
+        self.batch = Batch(self.world, num_envs)
+
+    def reset(self, *, seed: int | None = None, options: dict | None = None):
+        super().reset(seed=seed)
+        chosen = (options or {}).get("keys")
+        if chosen is None:
+            chosen = self.np_random.integers(TRAINING_KEYS, size=self.situations)
+        self.batch.begin(Situations.of_keys(self.world, chosen))
+        return self.batch.worlds.observation.copy(), {}
+
+    def step(self, actions):
+        self.batch.step(actions, autoreset=True)
+        w = self.batch.worlds
+        ended = w.outcome != RUNNING
+        terminated = ended & (w.outcome != CAPPED)
+        infos = {}
+        if ended.any():
+            infos = {"final_obs": w.final_observation.copy(), "_final_obs": ended,
+                     "final_info": {"steps": w.life.copy(), "outcome": w.outcome.copy(),
+                                    "fitness": np.where(w.outcome == SPUN, 0, w.life),
+                                    "_steps": ended, "_outcome": ended, "_fitness": ended},
+                     "_final_info": ended}
+        return (w.observation.copy(), w.reward.copy(), terminated, ended & ~terminated, infos)
+
+    def render(self):
+        if self.render_mode == "rgb_array":
+            w = self.batch.worlds
+            return picture(self.world, w.corners[0], w.pose[0], w.observation[0])
+        return None
+
+
+def picture(world: ArenaWorld, corners: np.ndarray, pose: np.ndarray,
+            readings: np.ndarray) -> np.ndarray:
+    """An RGB image (H, W, 3) of the world: walls, bodies (the learner's blue) and the
+    learner's beams to where they read."""
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.collections import LineCollection
+    from matplotlib.figure import Figure
+
+    figure = Figure(figsize=(4, 4), dpi=80)
+    canvas = FigureCanvasAgg(figure)
+    axes = figure.add_axes((0, 0, 1, 1))
+    walls = world.geometry.walls
+    axes.add_collection(LineCollection(walls.reshape(-1, 2, 2), colors="black", linewidths=1))
+    angles = pose[0, 2] + np.arctan2(world.geometry.beam_sin, world.geometry.beam_cos)
+    ends = pose[0, :2] + readings[:, None] * np.column_stack([np.cos(angles), np.sin(angles)])
+    axes.add_collection(LineCollection([(pose[0, :2], end) for end in ends], colors="orange",
+                                       linewidths=0.5))
+    for v, body in enumerate(corners):
+        axes.fill(body[:, 0], body[:, 1], color="tab:blue" if v == 0 else "tab:red")
+    axes.set_xlim(walls[:, [0, 2]].min(), walls[:, [0, 2]].max())
+    axes.set_ylim(walls[:, [1, 3]].min(), walls[:, [1, 3]].max())
+    axes.set_aspect("equal")
+    axes.axis("off")
+    canvas.draw()
+    return np.asarray(canvas.buffer_rgba())[..., :3].copy()

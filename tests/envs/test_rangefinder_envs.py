@@ -1,0 +1,120 @@
+"""The arena and navigation worlds as gymnasium environments: API compliance, seeding, and
+the same trajectories as the GA's worlds for the same actions."""
+
+import gymnasium as gym
+import numpy as np
+import pytest
+from gymnasium.utils.env_checker import check_env
+
+from enn_traffic import keys
+from enn_traffic.controller import Controller
+from enn_traffic.envs import REGISTERED, env_id, make_env
+from enn_traffic.envs.rangefinder import RangefinderEnv, RangefinderVectorEnv
+from enn_traffic.shipped import shipped_scenario
+
+RANGEFINDER = [name for name in REGISTERED if name.startswith(("navigation", "arena"))]
+
+
+def drive(env, forward, options):
+    """One life in ``env`` with the network ``forward`` choosing each action: its steps,
+    outcome and return."""
+    observation, _ = env.reset(options=options)
+    total = 0.0
+    while True:
+        observation, reward, terminated, truncated, info = env.step(forward(observation))
+        total += reward
+        if terminated or truncated:
+            return info["steps"], info["outcome"], total
+
+
+@pytest.mark.parametrize("name", RANGEFINDER)
+def test_every_rangefinder_id_passes_the_checker(name):
+    env = gym.make(env_id(name), render_mode="rgb_array")
+    check_env(env.unwrapped)
+    first, _ = env.reset(seed=5)
+    again, _ = env.reset(seed=5)
+    np.testing.assert_array_equal(first, again)
+    frame = env.render()
+    assert frame.ndim == 3 and frame.shape[2] == 3 and frame.dtype == np.uint8
+
+
+def test_a_saved_controller_lives_as_long_in_the_env_as_in_the_gas_world(root):
+    controller = Controller.load(root / "results/paper/controllers/generalization/"
+                                        "navigation_narrow_seed1.npz")
+    env = RangefinderEnv(controller.fit(shipped_scenario("navigation_narrow")))
+    world = env.world
+    expected = world.evaluate(controller.chromosome[None], keys.TEST.start)
+    steps, outcome, total = drive(env, lambda o: world.spec.forward(controller.chromosome, o)[0],
+                                  {"key": keys.TEST.start, "situation": 0})
+    assert expected.steps[0, 0] > 1000  # a long life: it reaches the track's far end
+    assert steps == expected.steps[0, 0]
+    assert total == expected.fitness[0]
+
+
+def test_random_controllers_among_traffic_live_as_long_in_the_env():
+    env = RangefinderEnv(shipped_scenario("arena_strategy1"))
+    world = env.world
+    population = np.random.default_rng(3).uniform(-1, 1, (3, world.spec.chromosome_length))
+    key = keys.VALIDATION.start
+    expected = world.evaluate(population, key)
+    for p, chromosome in enumerate(population):
+        for situation in range(expected.steps.shape[1]):
+            steps, _, total = drive(env, lambda o, c=chromosome: world.spec.forward(c, o)[0],
+                                    {"key": key, "situation": situation})
+            assert steps == expected.steps[p, situation]
+            assert total == (0 if expected.outcome[p, situation] == 2 else steps)
+
+
+def test_the_vector_env_steps_each_world_as_the_single_env_does():
+    scenario = shipped_scenario("arena_strategy1")
+    vector = gym.make_vec(env_id("arena_strategy1"), num_envs=4,
+                          vectorization_mode="vector_entry_point")
+    assert isinstance(vector, RangefinderVectorEnv)
+    key = keys.VALIDATION.start
+    observations, _ = vector.reset(options={"keys": [key]})
+    single = RangefinderEnv(scenario)
+    actions = np.random.default_rng(0).random((40, 4, 2))
+    ended_at = {}
+    for situation in range(4):
+        observation, _ = single.reset(options={"key": key, "situation": situation})
+        np.testing.assert_array_equal(observation, observations[situation])
+    trajectories = [[] for _ in range(4)]
+    for t, action in enumerate(actions):
+        observations, rewards, terminated, truncated, info = vector.step(action)
+        for i in range(4):
+            if i in ended_at:
+                continue
+            done = terminated[i] or truncated[i]
+            trajectories[i].append(info["final_obs"][i] if done else observations[i])
+            if done:
+                ended_at[i] = t
+                assert info["_final_info"][i]
+    assert ended_at, "random actions end some lives within 40 steps"
+    for situation in range(4):
+        single.reset(options={"key": key, "situation": situation})
+        for t, expected in enumerate(trajectories[situation]):
+            observation, *_ = single.step(actions[t, situation])
+            np.testing.assert_array_equal(observation, expected)
+
+
+def test_the_same_seed_gives_the_same_vector_run():
+    def run(seed):
+        vector = RangefinderVectorEnv(shipped_scenario("arena_strategy3"), 8, situations=4)
+        observations, _ = vector.reset(seed=seed)
+        rewards = []
+        for action in np.random.default_rng(1).random((30, 8, 2)):
+            observations, reward, *_ = vector.step(action)
+            rewards.append(reward)
+        return observations, np.array(rewards)
+
+    first, again, other = run(7), run(7), run(8)
+    np.testing.assert_array_equal(first[0], again[0])
+    np.testing.assert_array_equal(first[1], again[1])
+    assert not np.array_equal(first[0], other[0])
+
+
+def test_scenarios_an_env_cannot_drive_are_refused(root):
+    with pytest.raises(ValueError, match="has 5"):
+        make_env(root / "scenarios/navigation_mixed.toml")
+    with pytest.raises(ValueError, match="not an arena or navigation"):
+        RangefinderVectorEnv(root / "scenarios/sumo_strategy1.toml")
