@@ -73,6 +73,29 @@ def box_hits_walls(corners, walls, candidates, count) -> bool:
     return False
 
 
+@njit(cache=True, inline="always")
+def body_hits_walls(corners, cx, cy, radius, walls, candidates) -> bool:
+    """:func:`box_hits_walls` for a body whose corners lie within ``radius`` of (cx, cy):
+    a wall farther than that from the centre cannot touch it and is not tested."""
+    reach = (radius + 1e-9) ** 2
+    for w in candidates:
+        x1, y1, x2, y2 = walls[w, 0], walls[w, 1], walls[w, 2], walls[w, 3]
+        if (point_segment_distance_squared(cx, cy, x1, y1, x2, y2) <= reach
+                and box_hits_segment(corners, x1, y1, x2, y2)):
+            return True
+    return False
+
+
+@njit(cache=True, inline="always")
+def point_segment_distance_squared(px, py, x1, y1, x2, y2) -> float:
+    """Squared distance from P to the segment (x1, y1)-(x2, y2)."""
+    ex, ey = x2 - x1, y2 - y1
+    length = ex * ex + ey * ey
+    t = 0.0 if length == 0.0 else min(max(((px - x1) * ex + (py - y1) * ey) / length, 0.0), 1.0)
+    dx, dy = x1 + t * ex - px, y1 + t * ey - py
+    return dx * dx + dy * dy
+
+
 @njit(cache=True)
 def boxes_overlap(a, b) -> bool:
     """Do two bodies (4, 2 corners each) overlap? Edge crossings or one inside the other."""

@@ -27,7 +27,13 @@ from typing import NamedTuple
 import numpy as np
 from numba import njit
 
-from enn_traffic.geometry import body_corners, box_hits_segment, box_hits_walls, boxes_overlap
+from enn_traffic.geometry import (
+    body_corners,
+    body_hits_walls,
+    box_hits_segment,
+    box_hits_walls,
+    boxes_overlap,
+)
 from enn_traffic.network import steering as network_steering
 from enn_traffic.sim.bicycle import bicycle_step
 from enn_traffic.sim.sensors import WallGrid, nearby_walls, ray_segment_distance, sense_walls
@@ -60,6 +66,8 @@ class Physics(NamedTuple):
     distance: float  # metres moved per step
     radius: float  # half diagonal of the largest body: farther apart, bodies cannot touch
     max_range: float
+    beam_first: float  # the first beam's angle and the spacing of the beams, rad (§3)
+    beam_step: float
     gain: float  # steering angle per unit of (left − right) network output, rad
     cell_x0: float  # the wall grid: lower-left corner, cell size, cells along x and y
     cell_y0: float
@@ -105,9 +113,12 @@ def build_constants(grid: WallGrid, bounds, beam_angles, exits: np.ndarray, stra
     area's bounds, the beam angles, the exits, the strategies' settings
     (:func:`~enn_traffic.traffic.strategies.strategy_settings`) and the other numbers."""
     x_min, y_min, x_max, y_max = map(float, bounds)
-    physics = Physics(cell_x0=grid.cell_x0, cell_y0=grid.cell_y0, cell_size=grid.cell_size,
-                      cells_x=grid.cells_x, cells_y=grid.cells_y, x_min=x_min, y_min=y_min,
-                      x_max=x_max, y_max=y_max, **strategy, **numbers)
+    angles = np.asarray(beam_angles, dtype=np.float64)
+    step = float(angles[-1] - angles[0]) / (len(angles) - 1) if len(angles) > 1 else 0.0
+    physics = Physics(beam_first=float(angles[0]), beam_step=step, cell_x0=grid.cell_x0,
+                      cell_y0=grid.cell_y0, cell_size=grid.cell_size, cells_x=grid.cells_x,
+                      cells_y=grid.cells_y, x_min=x_min, y_min=y_min, x_max=x_max, y_max=y_max,
+                      **strategy, **numbers)
     geometry = Geometry(np.cos(beam_angles), np.sin(beam_angles), grid.walls, grid.cell_start,
                         grid.cell_walls, grid.all_walls,
                         np.ascontiguousarray(exits, dtype=np.float64).reshape(-1, 4))
@@ -141,7 +152,8 @@ def responsible(v, pose, corners, centres, before, before_centres, absent, me, p
     from before the step; ``absent`` ones and ``me``, its own, skipped) it touches, else
     ``NO_HIT``."""
     candidates = nearby_walls(pose[v, 0], pose[v, 1], physics, cell_start, cell_walls, all_walls)
-    if box_hits_walls(corners[v], walls, candidates, candidates.shape[0]):
+    if body_hits_walls(corners[v], centres[v, 0], centres[v, 1], physics.radius, walls,
+                       candidates):
         return HIT_WALL
     return hits_earlier_body(v, corners, centres, before, before_centres, absent, me,
                              4.0 * physics.radius * physics.radius)
@@ -183,13 +195,20 @@ def spun(recent, life, x, y, spin_variance) -> bool:
 
 @njit(cache=True, inline="always")
 def _small_spread(points, limit) -> bool:
-    """Population variance of x and of y both at most ``limit``."""
+    """Population variance of x and of y both at most ``limit``. (Loops, not array
+    expressions: those allocated two temporary arrays per step; the sums are the same,
+    taken in the same order.)"""
     n = points.shape[0]
-    mx = points[:, 0].sum() / n
-    my = points[:, 1].sum() / n
-    vx = ((points[:, 0] - mx) ** 2).sum() / n
-    vy = ((points[:, 1] - my) ** 2).sum() / n
-    return vx <= limit and vy <= limit
+    sx = sy = 0.0
+    for i in range(n):
+        sx += points[i, 0]
+        sy += points[i, 1]
+    mx, my = sx / n, sy / n
+    vx = vy = 0.0
+    for i in range(n):
+        vx += (points[i, 0] - mx) ** 2
+        vy += (points[i, 1] - my) ** 2
+    return vx / n <= limit and vy / n <= limit
 
 
 @njit(cache=True, inline="always")
@@ -203,22 +222,33 @@ def sense(v, pose, physics, beam_cos, beam_sin, walls, cell_start, cell_walls, a
     sense_walls(x, y, heading, beam_cos, beam_sin, physics.max_range, walls, candidates,
                 readings)
     if bodies:
-        sense_bodies(me, x, y, heading, beam_cos, beam_sin, corners, centres, physics.radius,
-                     readings)
+        sense_bodies(me, x, y, heading, beam_cos, beam_sin, physics.beam_first,
+                     physics.beam_step, corners, centres, physics.radius, readings)
 
 
 @njit(cache=True, inline="always")
-def sense_bodies(me, x, y, heading, beam_cos, beam_sin, corners, centres, radius, readings):
+def sense_bodies(me, x, y, heading, beam_cos, beam_sin, first, step, corners, centres, radius,
+                 readings):
     """Lower ``readings`` of a vehicle at (x, y, heading) to the nearest edge of any body but
-    ``me``."""
+    ``me`` (the beams at ``first`` + b·``step`` radians from the heading). A body is skipped
+    when its bounding circle lies beyond every reading, and its edges are tested only along
+    the beams that pass through that circle: those within the circle's angular half-width of
+    its bearing (:func:`beams_towards`), each checked as before."""
     cos_h, sin_h = math.cos(heading), math.sin(heading)
+    beams = beam_cos.shape[0]
+    far = readings.max() + radius + 1e-9  # readings only fall: a looser cut, the same result
     for other in range(corners.shape[0]):
         if other == me:
             continue
         dx, dy = centres[other, 0] - x, centres[other, 1] - y
-        if math.hypot(dx, dy) - radius > readings.max():
+        squared = dx * dx + dy * dy
+        if squared > far * far:
             continue
-        for b in range(beam_cos.shape[0]):
+        lo, hi = 0, beams - 1
+        if squared > 4.0 * radius * radius and beams > 1:
+            lo, hi = beams_towards(dx * cos_h + dy * sin_h, dy * cos_h - dx * sin_h,
+                                   math.sqrt(squared), radius, first, step, beams)
+        for b in range(lo, hi + 1):
             ux = cos_h * beam_cos[b] - sin_h * beam_sin[b]
             uy = sin_h * beam_cos[b] + cos_h * beam_sin[b]
             along = dx * ux + dy * uy
@@ -232,6 +262,22 @@ def sense_bodies(me, x, y, heading, beam_cos, beam_sin, corners, centres, radius
                 )  # fmt: skip
                 if d < readings[b]:
                     readings[b] = d
+
+
+@njit(cache=True, inline="always")
+def beams_towards(ahead, left, distance, radius, first, step, beams):
+    """The first and last beam (``first`` + b·``step`` radians from the heading) that may
+    pass within ``radius`` of a point ``ahead``, ``left`` of the vehicle and ``distance``
+    (more than twice ``radius``) from it: those within asin(radius / distance) of its
+    bearing, the window widened by 1e-9 rad against rounding. An empty range (lo > hi) when
+    none does; the whole fan when the window wraps past ±π."""
+    bearing = math.atan2(left, ahead)
+    half = math.asin(radius / distance) + 1e-9
+    lo = math.ceil((bearing - half - first) / step)
+    hi = math.floor((bearing + half - first) / step)
+    if bearing - half < -math.pi or bearing + half > math.pi:
+        return 0, beams - 1
+    return max(lo, 0), min(hi, beams - 1)
 
 
 @njit(cache=True, inline="always")
@@ -272,9 +318,11 @@ def drive_all(kinds, genes, layer_sizes, physics, beam_cos, beam_sin, walls, cel
 @njit(cache=True, inline="always")
 def move_all(steering, physics, pose, corners, centres, previous, previous_centres, fresh):
     """Every vehicle moves one step by the bicycle model (paper §4)."""
-    previous[:] = corners
-    previous_centres[:] = centres
-    fresh[:] = False
+    for v in range(pose.shape[0]):  # loops: an array assignment here called numba's reshape
+        previous_centres[v, 0], previous_centres[v, 1] = centres[v, 0], centres[v, 1]
+        for c in range(4):
+            previous[v, c, 0], previous[v, c, 1] = corners[v, c, 0], corners[v, c, 1]
+        fresh[v] = False
     for v in range(pose.shape[0]):
         x, y, heading = bicycle_step(pose[v, 0], pose[v, 1], pose[v, 2], steering[v],
                                      physics.distance, physics.wheelbase)

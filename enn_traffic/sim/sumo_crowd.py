@@ -102,8 +102,9 @@ def drive(genes, layer_sizes, physics, geometry, ids, corners, centres, now, pos
         visible_centres(ids_now, centres_now, gone[k], visible)
         sense(k, pose, physics, beam_cos, beam_sin, walls, cell_start, cell_walls, all_walls,
               True, corners_now, visible, -1, readings)
-        sense_bodies(k, pose[k, 0], pose[k, 1], pose[k, 2], beam_cos, beam_sin, body, centre,
-                     physics.radius, readings)
+        sense_bodies(k, pose[k, 0], pose[k, 1], pose[k, 2], beam_cos, beam_sin,
+                     physics.beam_first, physics.beam_step, body, centre, physics.radius,
+                     readings)
         steering[k] = network_steering(genes[k], layer_sizes, readings, activation, scratch,
                                        physics.gain)
     move_all(steering, physics, pose, body, centre, body_before, centre_before, fresh)
