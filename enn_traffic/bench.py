@@ -9,9 +9,12 @@ the time SUMO takes to record each generation's traffic, and SUMO closed loop is
 process for an evolved controller, without SUMO's start and warm-up. The city workload (the
 shipped Cologne scenario) counts everything, warm-ups included, and reports their share of
 the wall time: with warm-ups shared and simulated once, and with each situation its own.
-The network workload prepares large random road networks (SUMO's netgenerate): walls and wall
-grid the first time and from the cache, and the grid as it was built until issue 39 (every
-cell against every wall) in the same run, with the peak memory of each.
+The gymnasium workload steps the compiled vector environment (:mod:`enn_traffic.envs`) of
+256 and 4,096 narrow-track worlds with random actions, against gymnasium's ``SyncVectorEnv``
+of the single environment in the same run. The network workload prepares large random road
+networks (SUMO's netgenerate): walls and wall grid the first time and from the cache, and
+the grid as it was built until issue 39 (every cell against every wall) in the same run,
+with the peak memory of each.
 """
 
 from __future__ import annotations
@@ -116,6 +119,42 @@ def arena_bench(generations: int = 10) -> pd.DataFrame:
     table.insert(0, "workload", f"arena: P=200 worlds x {world.vehicles} vehicles, strategy 1")
     table["vehicle_steps_per_s"] = table["vehicle_steps"] / table["seconds"]
     table["speedup_vs_reference"] = np.nan
+    return table
+
+
+def env_bench(steps: int = 200, sync_seconds: float = 5.0) -> pd.DataFrame:
+    """Gymnasium environments on the narrow track with random actions (issue 40): the
+    compiled vector environment of 256 and 4,096 worlds against gymnasium's
+    ``SyncVectorEnv`` of the single environment (256 of them), in the same run; a step of N
+    worlds counts N env-steps (one vehicle each)."""
+    import gymnasium as gym
+
+    from enn_traffic.envs import env_id
+
+    name = env_id("navigation_narrow")
+    rng = np.random.default_rng(0)
+    rows = []
+    for count, mode in ((256, "vector_entry_point"), (4096, "vector_entry_point"),
+                        (256, "sync")):
+        env = gym.make_vec(name, num_envs=count, vectorization_mode=mode)
+        env.reset(seed=0)
+        actions = rng.random((8, count, 2))
+        env.step(actions[0])  # compile outside the timing
+        done, seconds = 0, 0.0
+        while done < steps and (mode != "sync" or seconds < sync_seconds):
+            started = time.perf_counter()
+            env.step(actions[done % len(actions)])
+            seconds += time.perf_counter() - started
+            done += 1
+        env.close()
+        label = ("compiled vector env" if mode != "sync"
+                 else "gymnasium SyncVectorEnv of the single env")
+        threads = numba.get_num_threads() if mode != "sync" else 1
+        rows.append((f"gymnasium env: narrow track, random actions, {count} worlds", label,
+                     threads, done * count, done * count, seconds))
+    table = _rate_table(rows)
+    sync = table["vehicle_steps_per_s"].iloc[-1]
+    table["speedup_vs_reference"] = table["vehicle_steps_per_s"] / sync
     return table
 
 
@@ -384,6 +423,7 @@ def run_bench(quick: bool = False) -> pd.DataFrame:
         navigation_bench(generations=10 if quick else 30,
                          reference_seconds=3.0 if quick else 10.0),
         arena_bench(generations=3 if quick else 10),
+        env_bench(steps=50 if quick else 200, sync_seconds=2.0 if quick else 5.0),
         sumo_bench(generations=3 if quick else 10, closed_loop_steps=2_000 if quick else 10_000),
         city_bench(generations=3 if quick else 20, closed_loop_steps=1_000 if quick else 5_000),
         lane_keeping_bench(generations=2 if quick else 4),

@@ -1,9 +1,9 @@
-"""The project's worlds as gymnasium and PettingZoo environments (docs/envs.md).
+"""The arena and navigation worlds as gymnasium environments (docs/envs.md).
 
 ``import enn_traffic.envs`` registers, under the ``enn_traffic/`` namespace, one id per
-shipped training scenario (``enn_traffic/NavigationNarrow-v0``, ``enn_traffic/ArenaStrategy1-v0``,
-...) and ``enn_traffic/Scenario-v0``, which takes ``scenario=PATH``. Arena and navigation ids
-also vectorise in one compiled call::
+shipped arena and navigation training scenario (``enn_traffic/NavigationNarrow-v0``,
+``enn_traffic/ArenaStrategy1-v0``, ...) and ``enn_traffic/Scenario-v0``, which takes
+``scenario=PATH``. Each also vectorises in one compiled call::
 
     gymnasium.make_vec("enn_traffic/NavigationNarrow-v0", num_envs=4096,
                        vectorization_mode="vector_entry_point")
@@ -23,12 +23,11 @@ from enn_traffic.scenario import Scenario, load_scenario
 from enn_traffic.shipped import SCENARIOS
 
 NAMESPACE = "enn_traffic"
-# The shipped scenarios an id is registered for: the training ones of one track (an
-# environment drives one track; navigation_mixed has five), not lane keeping.
-REGISTERED = ("navigation_narrow", "navigation_wide", "arena_strategy1",
-              "arena_strategy2", "arena_strategy3", "arena_strategy4", "sumo_strategy1",
-              "sumo_strategy2", "sumo_strategy3", "sumo_strategy4", "city_cologne3",
-              "street_mixed")
+# The shipped scenarios an id is registered for: the arena and navigation training scenarios
+# of one track (an environment drives one track; navigation_mixed has five). SUMO scenarios
+# have no environment yet (docs/envs.md, "Not yet").
+REGISTERED = ("navigation_narrow", "navigation_wide", "arena_strategy1", "arena_strategy2",
+              "arena_strategy3", "arena_strategy4")
 
 
 def env_id(name: str) -> str:
@@ -42,17 +41,11 @@ def _scenario(scenario: str | Path | Scenario) -> Scenario:
 
 
 def make_env(scenario: str | Path | Scenario, render_mode: str | None = None) -> gym.Env:
-    """The environment of a scenario: arena and navigation worlds
-    (:class:`~enn_traffic.envs.rangefinder.RangefinderEnv`) or SUMO traffic, replay or closed
-    loop (:class:`~enn_traffic.envs.sumo.SumoEnv`)."""
-    scenario = _scenario(scenario)
-    if not isinstance(scenario.track, list) and scenario.traffic.is_sumo:
-        from enn_traffic.envs.sumo import SumoEnv
-
-        return SumoEnv(scenario, render_mode=render_mode)
+    """The environment of an arena or navigation scenario
+    (:class:`~enn_traffic.envs.rangefinder.RangefinderEnv`)."""
     from enn_traffic.envs.rangefinder import RangefinderEnv
 
-    return RangefinderEnv(scenario, render_mode=render_mode)
+    return RangefinderEnv(_scenario(scenario), render_mode=render_mode)
 
 
 def make_vector_env(scenario: str | Path | Scenario, num_envs: int = 1, situations: int = 64,
@@ -64,10 +57,6 @@ def make_vector_env(scenario: str | Path | Scenario, num_envs: int = 1, situatio
     return RangefinderVectorEnv(_scenario(scenario), num_envs, situations, render_mode)
 
 
-def _vectorises(name: str) -> bool:
-    return not name.startswith(("sumo_", "city_", "street_"))
-
-
 def register_envs() -> None:
     """Register the ids (once)."""
     if f"{NAMESPACE}/Scenario-v0" in registry:
@@ -76,7 +65,7 @@ def register_envs() -> None:
              vector_entry_point=make_vector_env)
     for name in REGISTERED:
         register(env_id(name), entry_point=make_env,
-                 vector_entry_point=make_vector_env if _vectorises(name) else None,
+                 vector_entry_point=make_vector_env,
                  kwargs={"scenario": str(SCENARIOS / f"{name}.toml")})
 
 

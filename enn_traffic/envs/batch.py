@@ -180,6 +180,12 @@ def step_worlds(actions, autoreset, pool_start, pool_kinds, pool_genes, pool_see
                   geometry, max_steps)
 
 
+# The same two kernels, run on one thread: a parallel call's start costs more than a single
+# world's step (the single environment, gymnasium's SyncVectorEnv of it).
+begin_one = njit(cache=True)(begin_worlds.py_func)
+step_one = njit(cache=True)(step_worlds.py_func)
+
+
 def compiled(function, *args):
     """``function`` compiled for the types of ``args``, called directly: through numba's
     dispatcher a call that takes :class:`~enn_traffic.sim.rules.Physics` (a NamedTuple of
@@ -211,7 +217,7 @@ class Batch:
                 w.situation, w.observation, self.world.physics, self.world.geometry,
                 self.max_steps)
         if self._begin is None:
-            self._begin = compiled(begin_worlds, *args)
+            self._begin = compiled(begin_one if self.count == 1 else begin_worlds, *args)
         self._begin(*args)
         w.outcome[:] = RUNNING
 
@@ -221,5 +227,5 @@ class Batch:
         args = (np.ascontiguousarray(actions, dtype=np.float64), autoreset, *self.pool, *w,
                 self.world.layer_sizes, self.world.physics, self.world.geometry, self.max_steps)
         if self._step is None:
-            self._step = compiled(step_worlds, *args)
+            self._step = compiled(step_one if self.count == 1 else step_worlds, *args)
         self._step(*args)
