@@ -195,20 +195,13 @@ def spun(recent, life, x, y, spin_variance) -> bool:
 
 @njit(cache=True, inline="always")
 def _small_spread(points, limit) -> bool:
-    """Population variance of x and of y both at most ``limit``. (Loops, not array
-    expressions: those allocated two temporary arrays per step; the sums are the same,
-    taken in the same order.)"""
+    """Population variance of x and of y both at most ``limit``."""
     n = points.shape[0]
-    sx = sy = 0.0
-    for i in range(n):
-        sx += points[i, 0]
-        sy += points[i, 1]
-    mx, my = sx / n, sy / n
-    vx = vy = 0.0
-    for i in range(n):
-        vx += (points[i, 0] - mx) ** 2
-        vy += (points[i, 1] - my) ** 2
-    return vx / n <= limit and vy / n <= limit
+    mx = points[:, 0].sum() / n
+    my = points[:, 1].sum() / n
+    vx = ((points[:, 0] - mx) ** 2).sum() / n
+    vy = ((points[:, 1] - my) ** 2).sum() / n
+    return vx <= limit and vy <= limit
 
 
 @njit(cache=True, inline="always")
@@ -318,11 +311,9 @@ def drive_all(kinds, genes, layer_sizes, physics, beam_cos, beam_sin, walls, cel
 @njit(cache=True, inline="always")
 def move_all(steering, physics, pose, corners, centres, previous, previous_centres, fresh):
     """Every vehicle moves one step by the bicycle model (paper §4)."""
-    for v in range(pose.shape[0]):  # loops: an array assignment here called numba's reshape
-        previous_centres[v, 0], previous_centres[v, 1] = centres[v, 0], centres[v, 1]
-        for c in range(4):
-            previous[v, c, 0], previous[v, c, 1] = corners[v, c, 0], corners[v, c, 1]
-        fresh[v] = False
+    previous[:] = corners
+    previous_centres[:] = centres
+    fresh[:] = False
     for v in range(pose.shape[0]):
         x, y, heading = bicycle_step(pose[v, 0], pose[v, 1], pose[v, 2], steering[v],
                                      physics.distance, physics.wheelbase)
