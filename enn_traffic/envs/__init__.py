@@ -8,6 +8,9 @@ shipped arena and navigation training scenario (``enn_traffic/NavigationNarrow-v
     gymnasium.make_vec("enn_traffic/NavigationNarrow-v0", num_envs=4096,
                        vectorization_mode="vector_entry_point")
 
+``parallel_env(scenario, learners)`` gives the PettingZoo environment of several learners
+at once.
+
 The held-out tracks (``test_*``, ``unseen_*``) and lane keeping are not registered: the first
 are for ``enn-traffic evaluate``, the second is highway-env's own environment.
 """
@@ -55,6 +58,16 @@ def make_vector_env(scenario: str | Path | Scenario, num_envs: int = 1, situatio
     from enn_traffic.envs.rangefinder import RangefinderVectorEnv
 
     return RangefinderVectorEnv(_scenario(scenario), num_envs, situations, render_mode)
+
+
+def parallel_env(scenario: str | Path | Scenario, learners: int | None = None,
+                 render_mode: str | None = None):
+    """A PettingZoo ``ParallelEnv`` of several learners at once, one agent per learning
+    vehicle: the arena crowd of paper §5.5
+    (:class:`~enn_traffic.envs.crowd.ArenaCrowdEnv`)."""
+    from enn_traffic.envs.crowd import ArenaCrowdEnv
+
+    return ArenaCrowdEnv(_scenario(scenario), learners, render_mode)
 
 
 def register_envs() -> None:

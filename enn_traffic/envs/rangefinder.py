@@ -97,7 +97,7 @@ class RangefinderEnv(gym.Env):
     def render(self):
         if self.render_mode == "rgb_array":
             w = self.batch.worlds
-            return picture(self.world, w.corners[0], w.pose[0], w.observation[0])
+            return picture(self.world, w.corners[0], w.pose[0], w.observation[:1])
         return None
 
 
@@ -146,14 +146,15 @@ class RangefinderVectorEnv(VectorEnv):
     def render(self):
         if self.render_mode == "rgb_array":
             w = self.batch.worlds
-            return picture(self.world, w.corners[0], w.pose[0], w.observation[0])
+            return picture(self.world, w.corners[0], w.pose[0], w.observation[:1])
         return None
 
 
 def picture(world: ArenaWorld, corners: np.ndarray, pose: np.ndarray,
             readings: np.ndarray) -> np.ndarray:
-    """An RGB image (H, W, 3) of the world: walls, bodies (the learner's blue) and the
-    learner's beams to where they read."""
+    """An RGB image (H, W, 3) of the world: walls, bodies and the beams of the learners to
+    where they read. The learners (blue) are the first ``len(readings)`` vehicles, ``readings``
+    (L, B) theirs."""
     from matplotlib.backends.backend_agg import FigureCanvasAgg
     from matplotlib.collections import LineCollection
     from matplotlib.figure import Figure
@@ -163,12 +164,14 @@ def picture(world: ArenaWorld, corners: np.ndarray, pose: np.ndarray,
     axes = figure.add_axes((0, 0, 1, 1))
     walls = world.geometry.walls
     axes.add_collection(LineCollection(walls.reshape(-1, 2, 2), colors="black", linewidths=1))
-    angles = pose[0, 2] + np.arctan2(world.geometry.beam_sin, world.geometry.beam_cos)
-    ends = pose[0, :2] + readings[:, None] * np.column_stack([np.cos(angles), np.sin(angles)])
-    axes.add_collection(LineCollection([(pose[0, :2], end) for end in ends], colors="orange",
-                                       linewidths=0.5))
+    beams = np.arctan2(world.geometry.beam_sin, world.geometry.beam_cos)
+    for v, reading in enumerate(readings):
+        angles = pose[v, 2] + beams
+        ends = pose[v, :2] + reading[:, None] * np.column_stack([np.cos(angles), np.sin(angles)])
+        axes.add_collection(LineCollection([(pose[v, :2], end) for end in ends],
+                                           colors="orange", linewidths=0.5))
     for v, body in enumerate(corners):
-        axes.fill(body[:, 0], body[:, 1], color="tab:blue" if v == 0 else "tab:red")
+        axes.fill(body[:, 0], body[:, 1], color="tab:blue" if v < len(readings) else "tab:red")
     axes.set_xlim(walls[:, [0, 2]].min(), walls[:, [0, 2]].max())
     axes.set_ylim(walls[:, [1, 3]].min(), walls[:, [1, 3]].max())
     axes.set_aspect("equal")

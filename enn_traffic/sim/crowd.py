@@ -75,26 +75,47 @@ def detect(pose, corners, centres, previous, previous_centres, fresh, spin_check
     return ended
 
 
+@njit(cache=True, inline="always")
+def step(kinds, genes, layer_sizes, physics, geometry, pose, corners, centres, previous,
+         previous_centres, fresh, spin_checked, life, recent, memory, rng, readings, activation,
+         scratch, steering, events) -> bool:
+    """One step of the crowd: every vehicle senses, decides (an ``ACTION`` vehicle keeps the
+    ``steering[v]`` it was given) and moves, then :func:`detect`. Did any life end?"""
+    beam_cos, beam_sin, walls, cell_start, cell_walls, all_walls, _ = geometry
+    drive_all(kinds, genes, layer_sizes, physics, beam_cos, beam_sin, walls, cell_start,
+              cell_walls, all_walls, pose, corners, centres, previous, previous_centres, fresh,
+              memory, rng, readings, activation, scratch, steering)
+    life += 1
+    return detect(pose, corners, centres, previous, previous_centres, fresh, spin_checked, life,
+                  recent, physics, walls, cell_start, cell_walls, all_walls, events)
+
+
+# The step alone, for a caller that steps from Python (the PettingZoo crowd, enn_traffic.envs).
+step_once = njit(cache=True)(step.py_func)
+
+
 @njit(cache=True)
 def advance(t, last, drive_first, kinds, genes, layer_sizes, physics, geometry, pose, corners,
             centres, previous, previous_centres, fresh, spin_checked, life, recent, memory, rng,
             readings, activation, scratch, steering, events, trace) -> int:
     """Run the steps from ``t`` (driving first when ``drive_first``: the lives that ended at
-    ``t`` have been dealt with) until a life ends or step ``last`` is reached: each step, record
-    the poses in ``trace``, :func:`detect`, and unless a life ended or it is the last step,
-    every vehicle senses, decides and moves. Returns the step it stopped at."""
-    beam_cos, beam_sin, walls, cell_start, cell_walls, all_walls, _ = geometry
+    ``t`` have been dealt with) until a life ends or step ``last`` is reached: each step,
+    :func:`step` (without ``drive_first``, only :func:`detect` at ``t``) and record the poses
+    in ``trace``. Returns the step it stopped at."""
+    _, _, walls, cell_start, cell_walls, all_walls, _ = geometry
     while True:
         if drive_first:
-            drive_all(kinds, genes, layer_sizes, physics, beam_cos, beam_sin, walls, cell_start,
-                      cell_walls, all_walls, pose, corners, centres, previous, previous_centres,
-                      fresh, memory, rng, readings, activation, scratch, steering)
-            life += 1
+            ended = step(kinds, genes, layer_sizes, physics, geometry, pose, corners, centres,
+                         previous, previous_centres, fresh, spin_checked, life, recent, memory,
+                         rng, readings, activation, scratch, steering, events)
             t += 1
+        else:
+            ended = detect(pose, corners, centres, previous, previous_centres, fresh,
+                           spin_checked, life, recent, physics, walls, cell_start, cell_walls,
+                           all_walls, events)
         drive_first = True
         trace[t] = pose
-        if detect(pose, corners, centres, previous, previous_centres, fresh, spin_checked, life,
-                  recent, physics, walls, cell_start, cell_walls, all_walls, events) or t == last:
+        if ended or t == last:
             return t
 
 
@@ -149,6 +170,23 @@ class Crowd:
         self._work = (np.empty(len(self.geometry.beam_cos)), *network_buffers(world.layer_sizes),
                       np.zeros(count))
 
+    def respawn(self, v: int) -> None:
+        """Vehicle ``v`` starts a new life at a free spot
+        (:func:`~enn_traffic.sim.rules.respawn`)."""
+        _, _, walls, cell_start, cell_walls, all_walls, _ = self.geometry
+        respawn(v, self.kinds[v], self.physics, walls, cell_start, cell_walls, all_walls,
+                self.pose, self.corners, self.centres, self.previous, self.previous_centres,
+                self.fresh, self.memory, self.rng)
+        self.life[v] = 0
+
+    def remove(self, vehicles) -> None:
+        """The ``vehicles`` leave the arena; the others keep their order."""
+        for name in ("kinds", "pose", "corners", "centres", "memory", "previous",
+                     "previous_centres", "fresh", "life", "recent", "events"):
+            setattr(self, name, np.delete(getattr(self, name), vehicles, axis=0))
+        readings, activation, scratch, steering = self._work
+        self._work = (readings, activation, scratch, np.delete(steering, vehicles))
+
     def run(self, seconds: float, genes: np.ndarray, learning: Learning | None = None,
             check_spins: bool = False) -> CrowdRun:
         """Drive for ``seconds`` of simulated time. ``genes`` (V, G, source layout) drive the
@@ -165,7 +203,6 @@ class Crowd:
         collisions, spins = np.zeros(count, dtype=np.int64), np.zeros(count, dtype=np.int64)
         trace = np.empty((steps + 1, count, 3))
         p, geometry = self.physics, self.geometry
-        _, _, walls, cell_start, cell_walls, all_walls, _ = geometry
         t, drive_first = 0, False
         while True:
             t = advance(t, steps, drive_first, self.kinds, genes, self.world.layer_sizes, p,
@@ -180,10 +217,7 @@ class Crowd:
                     genes[v] = learning.life_ended(v, int(self.life[v]),
                                                    int(self.life[v] - unseen_from[v]), spun)
                 unseen_from[v] = 0
-                respawn(v, self.kinds[v], p, walls, cell_start, cell_walls, all_walls, self.pose,
-                        self.corners, self.centres, self.previous, self.previous_centres,
-                        self.fresh, self.memory, self.rng)
-                self.life[v] = 0
+                self.respawn(v)
             if t == steps:
                 break
             drive_first = True
