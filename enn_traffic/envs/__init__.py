@@ -1,9 +1,11 @@
-"""The arena and navigation worlds as gymnasium environments (docs/envs.md).
+"""The project's worlds as gymnasium and PettingZoo environments (docs/envs.md).
 
 ``import enn_traffic.envs`` registers, under the ``enn_traffic/`` namespace, one id per
-shipped arena and navigation training scenario (``enn_traffic/NavigationNarrow-v0``,
-``enn_traffic/ArenaStrategy1-v0``, ...) and ``enn_traffic/Scenario-v0``, which takes
-``scenario=PATH``. Each also vectorises in one compiled call::
+shipped arena, navigation and SUMO training scenario (``enn_traffic/NavigationNarrow-v0``,
+``enn_traffic/ArenaStrategy1-v0``, ``enn_traffic/SumoStrategy1-v0``,
+``enn_traffic/CityCologne3-v0``, ...) and ``enn_traffic/Scenario-v0``, which takes
+``scenario=PATH`` (a user's own SUMO scenario too). The arena and navigation ids vectorise in
+one compiled call::
 
     gymnasium.make_vec("enn_traffic/NavigationNarrow-v0", num_envs=4096,
                        vectorization_mode="vector_entry_point")
@@ -26,11 +28,11 @@ from enn_traffic.scenario import Scenario, load_scenario
 from enn_traffic.shipped import SCENARIOS
 
 NAMESPACE = "enn_traffic"
-# The shipped scenarios an id is registered for: the arena and navigation training scenarios
-# of one track (an environment drives one track; navigation_mixed has five). SUMO scenarios
-# have no environment yet (docs/envs.md, "Not yet").
+# The shipped scenarios an id is registered for: the arena, navigation and SUMO training
+# scenarios of one track (an environment drives one track; navigation_mixed has five).
 REGISTERED = ("navigation_narrow", "navigation_wide", "arena_strategy1", "arena_strategy2",
-              "arena_strategy3", "arena_strategy4")
+              "arena_strategy3", "arena_strategy4", "sumo_strategy1", "sumo_strategy2",
+              "sumo_strategy3", "sumo_strategy4", "city_cologne3")
 
 
 def env_id(name: str) -> str:
@@ -45,19 +47,32 @@ def _scenario(scenario: str | Path | Scenario) -> Scenario:
 
 def make_env(scenario: str | Path | Scenario, render_mode: str | None = None) -> gym.Env:
     """The environment of an arena or navigation scenario
-    (:class:`~enn_traffic.envs.rangefinder.RangefinderEnv`)."""
+    (:class:`~enn_traffic.envs.rangefinder.RangefinderEnv`) or of a SUMO scenario
+    (:class:`~enn_traffic.envs.sumo.SumoEnv`)."""
+    scenario = _scenario(scenario)
+    if scenario.traffic.is_sumo:
+        from enn_traffic.envs.sumo import SumoEnv
+
+        return SumoEnv(scenario, render_mode=render_mode)
     from enn_traffic.envs.rangefinder import RangefinderEnv
 
-    return RangefinderEnv(_scenario(scenario), render_mode=render_mode)
+    return RangefinderEnv(scenario, render_mode=render_mode)
 
 
 def make_vector_env(scenario: str | Path | Scenario, num_envs: int = 1, situations: int = 64,
                     render_mode: str | None = None) -> gym.vector.VectorEnv:
     """``num_envs`` arena or navigation worlds stepped in one compiled call
-    (:class:`~enn_traffic.envs.rangefinder.RangefinderVectorEnv`)."""
+    (:class:`~enn_traffic.envs.rangefinder.RangefinderVectorEnv`); for a SUMO scenario,
+    gymnasium's ``SyncVectorEnv`` of replays or ``AsyncVectorEnv`` of closed loops (libsumo
+    runs one SUMO per process)."""
+    scenario = _scenario(scenario)
+    if scenario.traffic.is_sumo:
+        vector = (gym.vector.AsyncVectorEnv if scenario.traffic.mode == "closed-loop"
+                  else gym.vector.SyncVectorEnv)
+        return vector([lambda: make_env(scenario, render_mode)] * num_envs)
     from enn_traffic.envs.rangefinder import RangefinderVectorEnv
 
-    return RangefinderVectorEnv(_scenario(scenario), num_envs, situations, render_mode)
+    return RangefinderVectorEnv(scenario, num_envs, situations, render_mode)
 
 
 def parallel_env(scenario: str | Path | Scenario, learners: int | None = None,

@@ -151,10 +151,11 @@ class RangefinderVectorEnv(VectorEnv):
 
 
 def picture(world: ArenaWorld, corners: np.ndarray, pose: np.ndarray,
-            readings: np.ndarray) -> np.ndarray:
+            readings: np.ndarray, around: tuple[float, float, float] | None = None
+            ) -> np.ndarray:
     """An RGB image (H, W, 3) of the world: walls, bodies and the beams of the learners to
     where they read. The learners (blue) are the first ``len(readings)`` vehicles, ``readings``
-    (L, B) theirs."""
+    (L, B) theirs. ``around`` (x, y, half-width) frames a square; by default, every wall."""
     from matplotlib.backends.backend_agg import FigureCanvasAgg
     from matplotlib.collections import LineCollection
     from matplotlib.figure import Figure
@@ -172,8 +173,13 @@ def picture(world: ArenaWorld, corners: np.ndarray, pose: np.ndarray,
                                            colors="orange", linewidths=0.5))
     for v, body in enumerate(corners):
         axes.fill(body[:, 0], body[:, 1], color="tab:blue" if v < len(readings) else "tab:red")
-    axes.set_xlim(walls[:, [0, 2]].min(), walls[:, [0, 2]].max())
-    axes.set_ylim(walls[:, [1, 3]].min(), walls[:, [1, 3]].max())
+    if around is None:
+        axes.set_xlim(walls[:, [0, 2]].min(), walls[:, [0, 2]].max())
+        axes.set_ylim(walls[:, [1, 3]].min(), walls[:, [1, 3]].max())
+    else:
+        x, y, half = around
+        axes.set_xlim(x - half, x + half)
+        axes.set_ylim(y - half, y + half)
     axes.set_aspect("equal")
     axes.axis("off")
     canvas.draw()

@@ -144,12 +144,10 @@ def with_slots(state: LearnerState, slots: int) -> LearnerState:
 
 
 @njit(cache=True, inline="always")
-def learner_step(t, genes, layer_sizes, physics, geometry, ids, corners, centres, before, now,
-                 max_steps, state):
-    """One step of the learner among the traffic of rows ``before`` (the step before) and
-    ``now`` of the slot arrays ``ids``, ``corners`` and ``centres``: the fringe, collisions,
-    spin test and step cap, then sense, decide and move. Returns an outcome code, or
-    ``RUNNING``; updates ``state`` (a :class:`LearnerState`) in place."""
+def learner_sense(t, physics, geometry, ids, corners, centres, before, now, max_steps, state):
+    """Steps 0–3 of :func:`learner_step`, before the learner decides: the fringe, collisions,
+    spin test and step cap, then the learner senses into ``state.readings``. Returns an
+    outcome code, or ``RUNNING``."""
     (pose, body, centre, body_before, centre_before, fresh, steering, recent, suffered, met,
      readings, activation, scratch, gone, visible, absent, hit) = state
     beam_cos, beam_sin, walls, cell_start, cell_walls, all_walls, exits = geometry
@@ -173,18 +171,43 @@ def learner_step(t, genes, layer_sizes, physics, geometry, ids, corners, centres
         return SPUN
     if t >= max_steps:
         return CAPPED
-    # 3. sense walls and the visible vehicles, decide
+    # 3. sense walls and the visible vehicles
     visible_centres(ids_now, centres_now, gone, visible)
     within = within_range(pose[0, 0], pose[0, 1], visible, 0, physics.max_range + physics.radius)
     met[0] += within
     met[1] = max(met[1], within)
     sense(0, pose, physics, beam_cos, beam_sin, walls, cell_start, cell_walls, all_walls, True,
           corners_now, visible, -1, readings)
-    steering[0] = network_steering(genes, layer_sizes, readings, activation, scratch,
-                                   physics.gain)
-    # 4. move
-    move_all(steering, physics, pose, body, centre, body_before, centre_before, fresh)
     return RUNNING
+
+
+@njit(cache=True, inline="always")
+def learner_move(physics, state) -> None:
+    """Step 4 of :func:`learner_step`: the learner moves by ``state.steering``."""
+    move_all(state.steering, physics, state.pose, state.body, state.centre, state.body_before,
+             state.centre_before, state.fresh)
+
+
+@njit(cache=True, inline="always")
+def learner_step(t, genes, layer_sizes, physics, geometry, ids, corners, centres, before, now,
+                 max_steps, state):
+    """One step of the learner among the traffic of rows ``before`` (the step before) and
+    ``now`` of the slot arrays ``ids``, ``corners`` and ``centres``: the fringe, collisions,
+    spin test and step cap, then sense (:func:`learner_sense`), decide and move. Returns an
+    outcome code, or ``RUNNING``; updates ``state`` (a :class:`LearnerState`) in place."""
+    outcome = learner_sense(t, physics, geometry, ids, corners, centres, before, now, max_steps,
+                            state)
+    if outcome != RUNNING:
+        return outcome
+    state.steering[0] = network_steering(genes, layer_sizes, state.readings, state.activation,
+                                         state.scratch, physics.gain)
+    learner_move(physics, state)
+    return RUNNING
+
+
+# The two halves alone, for a caller that steers from outside (enn_traffic.envs.sumo).
+sense_once = njit(cache=True)(learner_sense.py_func)
+move_once = njit(cache=True)(learner_move.py_func)
 
 
 def compiled_step(*args):

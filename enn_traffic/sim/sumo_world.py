@@ -219,18 +219,12 @@ class SumoWorld(ArenaWorld):
                                             np.stack(safety, axis=1) if safety else None,
                                             np.stack(hit_vehicle, axis=1))
 
-    def closed_loop(self, genes: np.ndarray, seed: int, max_steps: int | None = None,
-                    frames: list | None = None, start: np.ndarray | None = None,
-                    warmup: int | None = None) -> ClosedLoopLife:
-        """One chromosome (source-layout genes) in a live SUMO with the learner in it, from
-        ``start`` (the world's first start by default), its SSM device recording conflicts;
-        ``frames`` receives (learner pose, ids, corners) of every step when given. A vehicle
-        that leaves the learner's world (``gone``) stays in SUMO, unseen by the learner, as it
-        does in a replay. The situation's warm-up is simulated once and loaded from a SUMO
-        state file by every later call."""
+    def live(self, seed: int, start: np.ndarray | None = None, warmup: int | None = None,
+             max_steps: int | None = None) -> LiveTraffic:
+        """A live SUMO of situation ``seed`` with the learner in it at ``start`` (the world's
+        first start by default), its SSM device recording conflicts. The situation's warm-up
+        is simulated once and loaded from a SUMO state file by every later call."""
         limit = self.max_steps if max_steps is None else max_steps
-        start = np.asarray(self.start if start is None else start, dtype=np.float64)
-        vehicle = self.scenario.vehicle
         if (seed, warmup) not in self._states:  # found (or simulated) once, not per chromosome
             self._states[seed, warmup] = (self.warm_state(seed, warmup)
                                           or sumo.warm_state(self.scenario, seed, keep_rng=True))
@@ -238,68 +232,43 @@ class SumoWorld(ArenaWorld):
         if not self._checked:  # refuse traffic that never reaches the network
             sumo.first_traffic(self.scenario, seed, state, limit)
             self._checked = True
-        simulation = sumo.Simulation(self.scenario, seed, state, extra=sumo.ssm_options())
-        ssm_output = b""
+        start = np.asarray(self.start if start is None else start, dtype=np.float64)
+        return LiveTraffic(self, sumo.Simulation(self.scenario, seed, state,
+                                                 extra=sumo.ssm_options()), start)
+
+    def closed_loop(self, genes: np.ndarray, seed: int, max_steps: int | None = None,
+                    frames: list | None = None, start: np.ndarray | None = None,
+                    warmup: int | None = None) -> ClosedLoopLife:
+        """One chromosome (source-layout genes) in a live SUMO (:meth:`live`); ``frames``
+        receives (learner pose, ids, corners) of every step when given. A vehicle that leaves
+        the learner's world (``gone``) stays in SUMO, unseen by the learner, as it does in a
+        replay."""
+        limit = self.max_steps if max_steps is None else max_steps
+        live = self.live(seed, start, warmup, limit)
         try:
-            physics = self._learner_physics(simulation.largest_radius())
-            ids, corners, centres = sumo.slot_arrays(2, 64)  # rows: the step before, now
-            before, now = 0, 1  # they swap roles every step, instead of copying
-            state = learner_state(start, physics, len(self.geometry.beam_cos), self.layer_sizes,
-                                  ids.shape[1])
-            ids, corners, centres, state, radius = self._read(
-                simulation, now, ids, corners, centres, state)
-            at_start = int((ids[now] >= 0).sum())
-            # a body larger than its type said
-            physics = physics._replace(radius=max(physics.radius, radius))
-            clear_start(state.centre, ids[now], centres[now], state.gone, physics.clearance)
-            sumo.add_learner(vehicle.length, vehicle.width, vehicle.speed)
-            # Vehicles farther than this from the learner's front bumper can neither be seen
-            # nor be hit within a step: the sensor's range, two bodies and two steps of both
-            # vehicles' travel.
-            travel = (simulation.largest_speed() + vehicle.speed) * vehicle.dt
-            reach = self.scenario.sensor.range + 2.0 * travel
-            simulation.follow_learner(reach + 4.0 * physics.radius)
             kind = numba.typeof(genes)  # the other arguments' types are the world's own
             if kind not in self._steps:
-                self._steps[kind] = compiled_step(0, genes, self.layer_sizes, physics,
-                                                  self.geometry, ids, corners, centres, before,
-                                                  now, limit, state)
+                self._steps[kind] = compiled_step(0, genes, self.layer_sizes, live.physics,
+                                                  self.geometry, live.ids, live.corners,
+                                                  live.centres, live.before, live.now, limit,
+                                                  live.state)
             step = self._steps[kind]
-            t = 0
             while True:
                 if frames is not None:
-                    frames.append((state.pose[0].copy(), ids[now].copy(), corners[now].copy()))
-                outcome = step(t, genes, self.layer_sizes, physics, self.geometry, ids, corners,
-                               centres, before, now, limit, state)
+                    frames.append((live.state.pose[0].copy(), live.ids[live.now].copy(),
+                                   live.corners[live.now].copy()))
+                outcome = step(live.t, genes, self.layer_sizes, live.physics, self.geometry,
+                               live.ids, live.corners, live.centres, live.before, live.now,
+                               limit, live.state)
                 if outcome != RUNNING:
                     break
-                sumo.move_learner(*state.pose[0])
-                simulation.step()
-                before, now = now, before
-                ids, corners, centres, state, radius = self._read(
-                    simulation, now, ids, corners, centres, state)
-                if radius > physics.radius:  # a body larger than its type said
-                    physics = physics._replace(radius=radius)
-                    simulation.follow_learner(reach + 4.0 * physics.radius)
-                t += 1
-        finally:  # SUMO writes the SSM file as it closes
-            ssm_output = simulation.close(read=(sumo.SSM_FILE,))[sumo.SSM_FILE]
-        conflicts = sumo.read_conflicts(ssm_output)
-        hit = int(state.hit[0])
-        return ClosedLoopLife(t, int(outcome), int(state.suffered[0]), int(state.met[0]),
-                              int(state.met[1]), hit, at_start, conflicts,
-                              (simulation.names[hit], simulation.types[hit]) if hit >= 0
-                              else None)
-
-    @staticmethod
-    def _read(simulation: sumo.Simulation, row: int, ids, corners, centres, state):
-        """Read SUMO's vehicles into row ``row`` of the slot arrays (:func:`sumo.read_frame`),
-        growing the learner state's per-slot arrays with them; also the largest body's half
-        diagonal."""
-        (ids, corners, centres), radius = sumo.read_frame(simulation, row, (ids, corners, centres))
-        if ids.shape[1] > len(state.gone):
-            state = with_slots(state, ids.shape[1])
-        return ids, corners, centres, state, radius
+                live.advance()
+        finally:
+            conflicts = live.close()
+        state, hit = live.state, int(live.state.hit[0])
+        return ClosedLoopLife(live.t, int(outcome), int(state.suffered[0]), int(state.met[0]),
+                              int(state.met[1]), hit, live.at_start, conflicts,
+                              live.vehicle(hit))
 
     def trace(self, chromosome: np.ndarray, key: int = 0, episode: int = 0,
               max_steps: int | None = None) -> tuple[np.ndarray, int]:
@@ -347,3 +316,68 @@ class SumoWorld(ArenaWorld):
             body = corners[before, int(np.flatnonzero(ids[before] == hit)[0])].copy()
         return TracedLife(np.concatenate([learner[:, None, :], traffic], axis=1), int(outcome),
                           int(hit), hit_vehicle, body)
+
+
+class LiveTraffic:
+    """A live SUMO with one learner in it (the closed loop), stepped from Python: the slot
+    arrays' rows ``before`` and ``now`` (they swap roles every step, instead of copying) hold
+    SUMO's vehicles at the step before and now; ``state`` is the learner's
+    (:class:`~enn_traffic.sim.replay.LearnerState`) and ``t`` the steps it has moved. Each
+    step: the learner senses, decides and moves (:func:`~enn_traffic.sim.replay.learner_step`,
+    or its halves), then :meth:`advance`. :meth:`close` ends SUMO."""
+
+    def __init__(self, world: SumoWorld, simulation: sumo.Simulation, start: np.ndarray):
+        vehicle = world.scenario.vehicle
+        self.simulation = simulation
+        self.reach = None  # known once the learner is in SUMO
+        self.t = 0
+        try:
+            self.physics = world._learner_physics(simulation.largest_radius())
+            self.ids, self.corners, self.centres = sumo.slot_arrays(2, 64)
+            self.before, self.now = 0, 1
+            self.state = learner_state(start, self.physics, len(world.geometry.beam_cos),
+                                       world.layer_sizes, self.ids.shape[1])
+            self._read()
+            self.at_start = int((self.ids[self.now] >= 0).sum())
+            clear_start(self.state.centre, self.ids[self.now], self.centres[self.now],
+                        self.state.gone, self.physics.clearance)
+            sumo.add_learner(vehicle.length, vehicle.width, vehicle.speed)
+            # Vehicles farther than this from the learner's front bumper can neither be seen
+            # nor be hit within a step: the sensor's range, two bodies and two steps of both
+            # vehicles' travel.
+            travel = (simulation.largest_speed() + vehicle.speed) * vehicle.dt
+            self.reach = world.scenario.sensor.range + 2.0 * travel
+            simulation.follow_learner(self.reach + 4.0 * self.physics.radius)
+        except BaseException:
+            simulation.close()
+            raise
+
+    def _read(self) -> None:
+        """SUMO's vehicles into row ``now`` of the slot arrays (:func:`sumo.read_frame`), the
+        learner state's per-slot arrays growing with them; a body larger than its type said
+        widens the radius beyond which bodies cannot touch."""
+        (self.ids, self.corners, self.centres), radius = sumo.read_frame(
+            self.simulation, self.now, (self.ids, self.corners, self.centres))
+        if self.ids.shape[1] > len(self.state.gone):
+            self.state = with_slots(self.state, self.ids.shape[1])
+        if radius > self.physics.radius:
+            self.physics = self.physics._replace(radius=radius)
+            if self.reach is not None:
+                self.simulation.follow_learner(self.reach + 4.0 * radius)
+
+    def advance(self) -> None:
+        """The learner where it moved, SUMO one step on, its vehicles read."""
+        sumo.move_learner(*self.state.pose[0])
+        self.simulation.step()
+        self.before, self.now = self.now, self.before
+        self._read()
+        self.t += 1
+
+    def vehicle(self, hit: int) -> tuple[str, str] | None:
+        """The SUMO id and type of vehicle number ``hit`` (None for a wall or nothing)."""
+        return (self.simulation.names[hit], self.simulation.types[hit]) if hit >= 0 else None
+
+    def close(self) -> sumo.Conflicts:
+        """End SUMO (it writes the SSM file as it closes) and read the conflicts."""
+        output = self.simulation.close(read=(sumo.SSM_FILE,))[sumo.SSM_FILE]
+        return sumo.read_conflicts(output)

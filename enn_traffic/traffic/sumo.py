@@ -239,13 +239,21 @@ class Simulation:
     """One libsumo run of a scenario's traffic: start, step, and the bodies of its vehicles in
     stable slots (a vehicle keeps its slot while it is on the network)."""
 
+    running: Simulation | None = None  # libsumo runs one simulation per process
+
     def __init__(self, scenario: Scenario, seed: int, state: Path | None = None,
                  save_rng: bool = False, extra: tuple[str, ...] = (),
                  learners: tuple[str, ...] = (LEARNER,)):
+        if Simulation.running is not None:
+            raise RuntimeError(
+                f"{scenario.name}: a SUMO is already running in this process (libsumo runs one "
+                "at a time): close it first; step several closed-loop environments each in "
+                "its own process (gymnasium.make_vec(..., vectorization_mode='async'))")
         self.scenario = scenario
         self.seed = seed
         self.folder = Path(tempfile.mkdtemp(prefix="enn-sumo-"))  # all this start writes
         self._open = True
+        Simulation.running = self
         command = sumo_command(scenario, seed, self.folder, state, save_rng)
         try:
             with self.console():
@@ -416,6 +424,7 @@ class Simulation:
         if not self._open:
             return dict.fromkeys(read, b"")
         self._open = False
+        Simulation.running = None
         with contextlib.suppress(Exception), self.console():  # not started, or closed
             libsumo.close()
         contents = {name: (self.folder / name).read_bytes() if (self.folder / name).is_file()

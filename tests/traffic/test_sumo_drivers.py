@@ -2,6 +2,8 @@
 traffic vehicle (docs/sumo.md, "Driver models"), never on the learners, and kept apart in the
 warm-ups saved on disk."""
 
+from contextlib import contextmanager
+
 import libsumo
 import pytest
 
@@ -20,18 +22,22 @@ def ring(**drivers):
         traffic={"drivers": drivers, "warmup_s": 2.0})
 
 
-def traffic_after(scenario, steps: int = 20, learner: bool = False) -> list[str]:
-    """Start the scenario's SUMO (with a learner when asked), step it, return its vehicles."""
+@contextmanager
+def traffic_after(scenario, steps: int = 20, learner: bool = False):
+    """Start the scenario's SUMO (with a learner when asked), step it, give its vehicles;
+    SUMO closes on leaving."""
     simulation = sumo.Simulation(scenario, seed=1)
-    if learner:
-        sumo.add_learner(4.5, 1.7, 10.0)
-    simulation.step(steps)
-    return [v for v in libsumo.vehicle.getIDList() if v != sumo.LEARNER]
+    try:
+        if learner:
+            sumo.add_learner(4.5, 1.7, 10.0)
+        simulation.step(steps)
+        yield [v for v in libsumo.vehicle.getIDList() if v != sumo.LEARNER]
+    finally:
+        simulation.close()
 
 
 def test_driver_values_reach_every_traffic_vehicle_but_not_the_learner():
-    try:
-        vehicles = traffic_after(ring(**DRIVERS), learner=True)
+    with traffic_after(ring(**DRIVERS), learner=True) as vehicles:
         assert len(vehicles) == 32
         for vehicle in vehicles:
             assert libsumo.vehicle.getImperfection(vehicle) == pytest.approx(0.9)
@@ -47,29 +53,22 @@ def test_driver_values_reach_every_traffic_vehicle_but_not_the_learner():
         assert libsumo.vehicle.getImperfection(sumo.LEARNER) == 0.0
         assert float(libsumo.vehicle.getParameter(
             sumo.LEARNER, "laneChangeModel.lcSpeedGain")) == 1.0
-    finally:
-        libsumo.close()
 
 
 def test_without_drivers_the_route_files_values_stand():
-    try:
-        for vehicle in traffic_after(ring()):
+    with traffic_after(ring()) as vehicles:
+        for vehicle in vehicles:
             assert libsumo.vehicle.getImperfection(vehicle) == pytest.approx(0.5)
             assert libsumo.vehicle.getTau(vehicle) == pytest.approx(1.0)
-    finally:
-        libsumo.close()
 
 
 def test_demand_scale_and_car_following_model():
     """``demand_scale = 2``: SUMO inserts each of the 32 cars twice. ``car_following = "IDM"``:
     the cars follow the Intelligent Driver Model, which has no Krauss imperfection (SUMO
     reports -1)."""
-    try:
-        vehicles = traffic_after(ring(demand_scale=2.0, car_following="IDM"))
+    with traffic_after(ring(demand_scale=2.0, car_following="IDM")) as vehicles:
         assert len(vehicles) == 64
         assert all(libsumo.vehicle.getImperfection(v) == -1.0 for v in vehicles)
-    finally:
-        libsumo.close()
 
 
 def test_a_warm_up_is_kept_per_driver_model_and_loads_with_it():

@@ -1,0 +1,155 @@
+"""SUMO scenarios as a gymnasium environment: the learner among SUMO's traffic, replayed or
+live, shipped or the user's own ``.sumocfg`` (docs/envs.md, "SUMO").
+
+The world is :class:`~enn_traffic.sim.sumo_world.SumoWorld`'s and the step its own
+(:func:`~enn_traffic.sim.replay.learner_step`), in its two halves: the learner senses
+(:func:`~enn_traffic.sim.replay.learner_sense`, after the blame rule, exits, spin test and
+step cap), the action steers, the learner moves (:func:`~enn_traffic.sim.replay.learner_move`).
+In replay mode the traffic is the situation's recorded SUMO run; in closed-loop mode a live
+SUMO per episode, the learner in it (:class:`~enn_traffic.sim.sumo_world.LiveTraffic`), so
+SUMO's drivers react to it. Observation, action and reward are those of
+:mod:`enn_traffic.envs.rangefinder`; reaching an exit of the network ends the episode too
+(``terminated``, outcome ``left network``: its steps count, as in the GA's fitness).
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import gymnasium as gym
+import numpy as np
+
+from enn_traffic.envs.batch import compiled
+from enn_traffic.envs.rangefinder import TRAINING_KEYS, spaces_of
+from enn_traffic.scenario import Scenario, load_scenario
+from enn_traffic.sim.replay import clear_start, learner_state, move_once, sense_once
+from enn_traffic.sim.sumo_world import LiveTraffic, SumoWorld
+from enn_traffic.sim.world import CAPPED, OUTCOMES, RUNNING, SPUN
+
+
+def sumo_world(scenario: str | Path | Scenario) -> SumoWorld:
+    """The SUMO world of a scenario (file or loaded); a clear error for the others."""
+    if not isinstance(scenario, Scenario):
+        scenario = load_scenario(scenario)
+    if not scenario.traffic.is_sumo:
+        raise ValueError(f"{scenario.name}: not a SUMO scenario")
+    if isinstance(scenario.track, list):
+        if len(scenario.track) > 1:
+            raise ValueError(f"{scenario.name}: an environment drives one track; this scenario "
+                             f"has {len(scenario.track)} (take one with Scenario.on_track)")
+        scenario = scenario.on_track(0)
+    return SumoWorld(scenario)
+
+
+class ReplayTraffic:
+    """A recorded SUMO run as the learner's traffic, in :class:`LiveTraffic`'s terms: step
+    ``t`` reads rows ``t - 1`` (``before``) and ``t`` (``now``) of the recording."""
+
+    def __init__(self, world: SumoWorld, seed: int, warmup: int | None, start: np.ndarray):
+        record = world.recording(seed, warmup)
+        self.ids, self.corners, self.centres = record.ids, record.corners, record.centres
+        self.names, self.types = record.names, record.types
+        self.physics = world._learner_physics(record.radius)
+        self.state = learner_state(start, self.physics, len(world.geometry.beam_cos),
+                                   world.layer_sizes, self.ids.shape[1])
+        clear_start(self.state.centre, self.ids[0], self.centres[0], self.state.gone,
+                    self.physics.clearance)
+        self.t = self.before = self.now = 0
+
+    def advance(self) -> None:
+        self.t += 1
+        self.before, self.now = self.t - 1, self.t
+
+    def vehicle(self, hit: int) -> tuple[str, str] | None:
+        return (self.names[hit], self.types[hit]) if hit >= 0 and self.names else None
+
+    def close(self) -> None:
+        pass
+
+
+class SumoEnv(gym.Env):
+    """One learner among a SUMO scenario's traffic. ``reset(options={"key": k,
+    "situation": e})`` starts situation ``e`` of traffic key ``k`` (its SUMO seed, warm-up
+    and start, as the GA's); without them both are drawn from the reset's seed. Call
+    :meth:`close` to end a live SUMO."""
+
+    metadata = {"render_modes": ["rgb_array"], "render_fps": 10}
+
+    def __init__(self, scenario: str | Path | Scenario, render_mode: str | None = None):
+        self.world = sumo_world(scenario)
+        self.observation_space, self.action_space = spaces_of(self.world)
+        self.render_mode = render_mode
+        self.traffic: LiveTraffic | ReplayTraffic | None = None
+        self._sense = self._move = None
+
+    def reset(self, *, seed: int | None = None, options: dict | None = None):
+        super().reset(seed=seed)
+        options, world = options or {}, self.world
+        key = options.get("key")
+        key = int(self.np_random.integers(TRAINING_KEYS) if key is None else key)
+        situations = world.scenario.traffic.episodes
+        situation = options.get("situation")
+        situation = int(self.np_random.integers(situations) if situation is None
+                        else situation)
+        if not 0 <= situation < situations:
+            raise ValueError(f"situation {situation}: key {key} has {situations}")
+        sumo_seed = world.seeds(key)[situation]
+        start = world.situation_starts(key)[situation]
+        warmup = world.warmups(key)[situation]
+        self.close()
+        if world.scenario.traffic.mode == "closed-loop":
+            self.traffic = world.live(sumo_seed, start, warmup)
+        else:
+            self.traffic = ReplayTraffic(world, sumo_seed, warmup, start)
+        self.outcome = self._sensed()
+        if self.outcome != RUNNING:  # a life that ends where it starts sensed nothing
+            self.traffic.state.readings[:] = world.physics.max_range
+        return self.traffic.state.readings.copy(), {"key": key, "situation": situation}
+
+    def _sensed(self) -> int:
+        """The learner's outcome at this step, or ``RUNNING`` and its readings."""
+        traffic = self.traffic
+        args = (traffic.t, traffic.physics, self.world.geometry, traffic.ids, traffic.corners,
+                traffic.centres, traffic.before, traffic.now, self.world.max_steps,
+                traffic.state)
+        if self._sense is None:
+            self._sense = compiled(sense_once, *args)
+        return int(self._sense(*args))
+
+    def step(self, action):
+        traffic = self.traffic
+        if self.outcome == RUNNING:  # else the life ended where it started
+            action = np.asarray(action, dtype=np.float64)
+            traffic.state.steering[0] = self.world.physics.gain * (action[1] - action[0])
+            if self._move is None:
+                self._move = compiled(move_once, traffic.physics, traffic.state)
+            self._move(traffic.physics, traffic.state)
+            traffic.advance()
+            self.outcome = self._sensed()
+        outcome, steps, state = self.outcome, traffic.t, traffic.state
+        if outcome == RUNNING:
+            return state.readings.copy(), 1.0, False, False, {}
+        hit = int(state.hit[0])
+        info = {"steps": steps, "outcome": OUTCOMES[outcome],
+                "fitness": 0.0 if outcome == SPUN else float(steps),
+                "suffered": int(state.suffered[0]), "hit": hit,
+                "hit_vehicle": traffic.vehicle(hit)}
+        reward = 1.0 - steps if outcome == SPUN else 1.0
+        return (state.readings.copy(), reward, outcome != CAPPED, outcome == CAPPED, info)
+
+    def render(self):
+        if self.render_mode != "rgb_array" or self.traffic is None:
+            return None
+        from enn_traffic.envs.rangefinder import picture
+
+        traffic, state = self.traffic, self.traffic.state
+        present = traffic.ids[traffic.now] >= 0
+        corners = np.concatenate([state.body, traffic.corners[traffic.now][present]])
+        reach = 2.0 * self.world.physics.max_range  # a network can be a city: show the learner's
+        return picture(self.world, corners, state.pose, state.readings[None],
+                       around=(*state.pose[0, :2], reach))
+
+    def close(self):
+        if self.traffic is not None:
+            self.traffic.close()
+            self.traffic = None
