@@ -112,7 +112,7 @@ class ArenaCrowdEnv(ParallelEnv):
 
     def step(self, actions: dict):
         crowd, gain = self.crowd, self.world.physics.gain
-        steering = crowd._work[3]
+        steering = crowd.steering
         for row, agent in enumerate(self.agents):
             if agent not in actions:
                 raise KeyError(f"no action for {agent}")
@@ -129,7 +129,6 @@ class ArenaCrowdEnv(ParallelEnv):
         rewards = dict.fromkeys(self.agents, 1.0)
         terminated = dict.fromkeys(self.agents, False)
         capped = self.steps >= self.max_steps
-        truncated = dict.fromkeys(self.agents, capped)
         infos = {agent: {} for agent in self.agents}
         ended = np.flatnonzero(crowd.events != ALIVE)
         if len(ended) == 0:
@@ -153,11 +152,11 @@ class ArenaCrowdEnv(ParallelEnv):
                 self.spin_checked = np.delete(self.spin_checked, leaving)
                 self.agents = [a for v, a in enumerate(self.agents) if v not in leaving]
             observations = dict(zip(self.agents, self._observe(), strict=True)) | final
-        for v, agent in enumerate(self.agents):
-            if capped:
+        truncated = {agent: capped and not done for agent, done in terminated.items()}
+        if capped:
+            for v, agent in enumerate(self.agents):
                 infos[agent] = {"steps": int(crowd.life[v]), "outcome": "capped",
                                 "fitness": float(crowd.life[v])}
-        if capped:
             self.agents = []
         return observations, rewards, terminated, truncated, infos
 

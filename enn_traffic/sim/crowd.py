@@ -170,6 +170,11 @@ class Crowd:
         self._work = (np.empty(len(self.geometry.beam_cos)), *network_buffers(world.layer_sizes),
                       np.zeros(count))
 
+    @property
+    def steering(self) -> np.ndarray:
+        """(V,) each vehicle's steering: an ``ACTION`` vehicle's is set before a step."""
+        return self._work[3]
+
     def respawn(self, v: int) -> None:
         """Vehicle ``v`` starts a new life at a free spot
         (:func:`~enn_traffic.sim.rules.respawn`)."""
