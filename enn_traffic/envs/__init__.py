@@ -79,10 +79,18 @@ def parallel_env(scenario: str | Path | Scenario, learners: int | None = None,
                  render_mode: str | None = None):
     """A PettingZoo ``ParallelEnv`` of several learners at once, one agent per learning
     vehicle: the arena crowd of paper §5.5
-    (:class:`~enn_traffic.envs.crowd.ArenaCrowdEnv`)."""
+    (:class:`~enn_traffic.envs.crowd.ArenaCrowdEnv`), or for a SUMO scenario the learners
+    among its live traffic (:class:`~enn_traffic.envs.sumo.SumoCrowdEnv`; no rendering)."""
+    scenario = _scenario(scenario)
+    if scenario.traffic.is_sumo:
+        from enn_traffic.envs.sumo import SumoCrowdEnv
+
+        if render_mode is not None:
+            raise ValueError(f"{scenario.name}: the SUMO crowd does not render")
+        return SumoCrowdEnv(scenario, learners)
     from enn_traffic.envs.crowd import ArenaCrowdEnv
 
-    return ArenaCrowdEnv(_scenario(scenario), learners, render_mode)
+    return ArenaCrowdEnv(scenario, learners, render_mode)
 
 
 def register_envs() -> None:

@@ -18,11 +18,15 @@ from pathlib import Path
 
 import gymnasium as gym
 import numpy as np
+from pettingzoo import ParallelEnv
 
 from enn_traffic.envs.batch import compiled
 from enn_traffic.envs.rangefinder import TRAINING_KEYS, spaces_of
 from enn_traffic.scenario import Scenario, load_scenario
+from enn_traffic.sim.crowd import ALIVE
 from enn_traffic.sim.replay import clear_start, learner_state, move_once, sense_once
+from enn_traffic.sim.sumo_crowd import SumoCrowd, observe
+from enn_traffic.sim.sumo_crowd import move_once as move_learners
 from enn_traffic.sim.sumo_world import LiveTraffic, SumoWorld
 from enn_traffic.sim.world import CAPPED, OUTCOMES, RUNNING, SPUN
 
@@ -153,3 +157,116 @@ class SumoEnv(gym.Env):
         if self.traffic is not None:
             self.traffic.close()
             self.traffic = None
+
+
+class SumoCrowdEnv(ParallelEnv):
+    """Several learners at once in a live SUMO (paper §5.5 among SUMO traffic), one agent per
+    learning vehicle: the :class:`~enn_traffic.sim.sumo_crowd.SumoCrowd` of the scenario's
+    ``traffic.learners`` (or ``learners``), stepped by its own rules with the learners'
+    steering given as actions. A learner whose life ends (collision, spin, an exit reached)
+    is terminated and leaves SUMO, where the crowd of the SUMO tables re-enters it; all are
+    truncated at ``episode.max_steps``. ``reset(options={"key": k, "situation": e})`` as
+    :class:`SumoEnv`; the learners enter at free spots drawn from the situation's seed. Call
+    :meth:`close` to end SUMO."""
+
+    metadata = {"name": "enn_traffic_sumo_crowd_v0", "render_modes": []}
+
+    def __init__(self, scenario: str | Path | Scenario, learners: int | None = None):
+        world = sumo_world(scenario)
+        if learners is not None:
+            if int(learners) < 1:
+                raise ValueError(f"{world.scenario.name}: learners must be at least 1, "
+                                 f"not {learners}")
+            traffic = world.scenario.traffic.model_copy(update={"learners": int(learners)})
+            world = SumoWorld(world.scenario.model_copy(update={"traffic": traffic}))
+        self.world = world
+        self.possible_agents = [f"vehicle_{k}"
+                                for k in range(world.scenario.traffic.learners)]
+        self.agents: list[str] = []
+        self._observation_space, self._action_space = spaces_of(world)
+        self.render_mode = None
+        self.crowd: SumoCrowd | None = None
+        self._rng = np.random.default_rng()
+        self._observe = self._move = None
+
+    def observation_space(self, agent: str):
+        return self._observation_space
+
+    def action_space(self, agent: str):
+        return self._action_space
+
+    def reset(self, seed: int | None = None, options: dict | None = None):
+        if seed is not None:
+            self._rng = np.random.default_rng(seed)
+        options, world = options or {}, self.world
+        key = options.get("key")
+        key = int(self._rng.integers(TRAINING_KEYS) if key is None else key)
+        situations = world.scenario.traffic.episodes
+        situation = options.get("situation")
+        situation = int(self._rng.integers(situations) if situation is None else situation)
+        if not 0 <= situation < situations:
+            raise ValueError(f"situation {situation}: key {key} has {situations}")
+        self.close()
+        self.crowd = crowd = SumoCrowd(world, world.seeds(key)[situation])
+        crowd.start()
+        if crowd.detect():  # a learner whose entry is taken enters again
+            for k in np.flatnonzero(crowd.lives.events != ALIVE):
+                crowd.lives.enter(k, crowd.physics, world.geometry, crowd.slots, crowd.now,
+                                  world.scenario)
+        self.agents = self.possible_agents[:]
+        self.steps = 0
+        readings = self._readings()
+        return ({agent: readings[k] for k, agent in enumerate(self.agents)},
+                {agent: {"key": key, "situation": situation} for agent in self.agents})
+
+    def _readings(self) -> np.ndarray:
+        """Every learner still on the network senses (K, B)."""
+        crowd, lives = self.crowd, self.crowd.lives
+        out = np.zeros((len(self.possible_agents), len(self.world.geometry.beam_cos)))
+        args = (lives.active, crowd.physics, self.world.geometry, *crowd.slots, crowd.now,
+                lives.pose, lives.body, lives.centre, lives.gone, lives.visible, out)
+        if self._observe is None:
+            self._observe = compiled(observe, *args)
+        self._observe(*args)
+        return out
+
+    def step(self, actions: dict):
+        crowd, lives, gain = self.crowd, self.crowd.lives, self.world.physics.gain
+        for agent in self.agents:
+            if agent not in actions:
+                raise KeyError(f"no action for {agent}")
+            action = np.asarray(actions[agent], dtype=np.float64)
+            lives.steering[int(agent.rpartition("_")[2])] = gain * (action[1] - action[0])
+        args = (lives.steering, crowd.physics, lives.pose, lives.body, lives.centre,
+                lives.body_before, lives.centre_before, lives.fresh, lives.life)
+        if self._move is None:
+            self._move = compiled(move_learners, *args)
+        self._move(*args)
+        crowd.advance()
+        self.steps += 1
+        crowd.detect()
+        readings = self._readings()
+        capped = self.steps >= self.world.max_steps
+        observations, rewards, terminated, truncated, infos = {}, {}, {}, {}, {}
+        for agent in self.agents:
+            k = int(agent.rpartition("_")[2])
+            outcome, life = int(lives.events[k]), int(lives.life[k])
+            observations[agent], rewards[agent] = readings[k], 1.0
+            terminated[agent], truncated[agent] = outcome != ALIVE, capped and outcome == ALIVE
+            infos[agent] = {}
+            if outcome != ALIVE:
+                if outcome == SPUN:
+                    rewards[agent] = 1.0 - life
+                infos[agent] = {"steps": life, "outcome": OUTCOMES[outcome],
+                                "fitness": 0.0 if outcome == SPUN else float(life)}
+                crowd.leave(k)
+            elif capped:
+                infos[agent] = {"steps": life, "outcome": OUTCOMES[CAPPED],
+                                "fitness": float(life)}
+        self.agents = [] if capped else [a for a in self.agents if not terminated[a]]
+        return observations, rewards, terminated, truncated, infos
+
+    def close(self):
+        if self.crowd is not None:
+            self.crowd.close()
+            self.crowd = None

@@ -55,12 +55,12 @@ RESPAWN_TRIES = 50  # free spots drawn before a learner re-enters beside SUMO's 
 
 @njit(cache=True)
 def detect(t, pose, body, centre, body_before, centre_before, fresh, life, recent,
-           spin_checked, physics, geometry, ids, corners, centres, before, now, gone, absent,
-           suffered, events) -> bool:
-    """Fill ``events`` (K,): ``COLLIDED`` for a learner responsible for a collision,
-    ``LEFT_NETWORK`` at an exit, ``SPUN`` for a spin, else ``ALIVE``; count the collisions SUMO
-    vehicles cause (``suffered``) and take those vehicles out of the learner's world
-    (``gone[k]``). Did any life end?"""
+           spin_checked, active, physics, geometry, ids, corners, centres, before, now, gone,
+           absent, suffered, events) -> bool:
+    """Fill ``events`` (K,): ``COLLIDED`` for an ``active`` learner responsible for a
+    collision, ``LEFT_NETWORK`` at an exit, ``SPUN`` for a spin, else ``ALIVE``; count the
+    collisions SUMO vehicles cause (``suffered``) and take those vehicles out of the learner's
+    world (``gone[k]``). Did any life end?"""
     _, _, walls, cell_start, cell_walls, all_walls, exits = geometry
     ids_before, corners_before, centres_before = ids[before], corners[before], centres[before]
     ids_now, corners_now, centres_now = ids[now], corners[now], centres[now]
@@ -68,6 +68,8 @@ def detect(t, pose, body, centre, body_before, centre_before, fresh, life, recen
     ended = False
     for k in range(pose.shape[0]):
         events[k] = ALIVE
+        if not active[k]:
+            continue
         if left_network(body[k], exits):
             events[k] = LEFT_NETWORK
             ended = True
@@ -90,25 +92,54 @@ def detect(t, pose, body, centre, body_before, centre_before, fresh, life, recen
     return ended
 
 
+@njit(cache=True, inline="always")
+def sense_learner(k, physics, geometry, ids_now, corners_now, centres_now, pose, body, centre,
+                  gone, visible, readings) -> None:
+    """Learner ``k`` senses the walls, the SUMO vehicles in its world and the other
+    learners into ``readings``."""
+    beam_cos, beam_sin, walls, cell_start, cell_walls, all_walls, _ = geometry
+    visible_centres(ids_now, centres_now, gone[k], visible)
+    sense(k, pose, physics, beam_cos, beam_sin, walls, cell_start, cell_walls, all_walls,
+          True, corners_now, visible, -1, readings)
+    sense_bodies(k, pose[k, 0], pose[k, 1], pose[k, 2], beam_cos, beam_sin,
+                 physics.beam_first, physics.beam_step, body, centre, physics.radius, readings)
+
+
+@njit(cache=True, inline="always")
+def move(steering, physics, pose, body, centre, body_before, centre_before, fresh, life
+         ) -> None:
+    """All learners move at once, each by its ``steering``."""
+    move_all(steering, physics, pose, body, centre, body_before, centre_before, fresh)
+    life += 1
+
+
 @njit(cache=True)
 def drive(genes, layer_sizes, physics, geometry, ids, corners, centres, now, pose, body,
           centre, body_before, centre_before, fresh, life, gone, visible, readings, activation,
           scratch, steering) -> None:
-    """Every learner senses the walls, the SUMO vehicles in its world and the other
-    learners, its network (``genes[k]``) steers, and all move at once."""
-    beam_cos, beam_sin, walls, cell_start, cell_walls, all_walls, _ = geometry
+    """Every learner senses (:func:`sense_learner`), its network (``genes[k]``) steers, and
+    all move at once."""
     ids_now, corners_now, centres_now = ids[now], corners[now], centres[now]
     for k in range(pose.shape[0]):
-        visible_centres(ids_now, centres_now, gone[k], visible)
-        sense(k, pose, physics, beam_cos, beam_sin, walls, cell_start, cell_walls, all_walls,
-              True, corners_now, visible, -1, readings)
-        sense_bodies(k, pose[k, 0], pose[k, 1], pose[k, 2], beam_cos, beam_sin,
-                     physics.beam_first, physics.beam_step, body, centre, physics.radius,
-                     readings)
+        sense_learner(k, physics, geometry, ids_now, corners_now, centres_now, pose, body,
+                      centre, gone, visible, readings)
         steering[k] = network_steering(genes[k], layer_sizes, readings, activation, scratch,
                                        physics.gain)
-    move_all(steering, physics, pose, body, centre, body_before, centre_before, fresh)
-    life += 1
+    move(steering, physics, pose, body, centre, body_before, centre_before, fresh, life)
+
+
+@njit(cache=True)
+def observe(active, physics, geometry, ids, corners, centres, now, pose, body, centre, gone,
+            visible, out) -> None:
+    """Every ``active`` learner ``k`` senses into ``out[k]`` (for a caller that steers them
+    from outside: the PettingZoo SUMO crowd, :mod:`enn_traffic.envs.sumo`)."""
+    for k in range(pose.shape[0]):
+        if active[k]:
+            sense_learner(k, physics, geometry, ids[now], corners[now], centres[now], pose,
+                          body, centre, gone, visible, out[k])
+
+
+move_once = njit(cache=True)(move.py_func)
 
 
 @dataclass
@@ -153,7 +184,8 @@ class SumoCrowd:
     def __exit__(self, *exc) -> None:
         self.close()
 
-    def _start(self) -> None:
+    def start(self) -> None:
+        """Start SUMO and put the learners in (:meth:`run` does it when first called)."""
         world, scenario = self.world, self.world.scenario
         vehicle = scenario.vehicle
         state = world.warm_state(self.seed) or sumo.warm_state(scenario, self.seed,
@@ -177,8 +209,10 @@ class SumoCrowd:
 
     def _move_learners(self) -> None:
         """Place every learner in SUMO for its next step (libsumo moves one vehicle a call)."""
-        for vehicle, (x, y, heading) in zip(self.ids, self.lives.pose.tolist(), strict=True):
-            sumo.move_learner(x, y, heading, vehicle)
+        for vehicle, (x, y, heading), active in zip(self.ids, self.lives.pose.tolist(),
+                                                    self.lives.active, strict=True):
+            if active:
+                sumo.move_learner(x, y, heading, vehicle)
 
     def close(self) -> None:
         """End SUMO and count each run's SSM conflicts."""
@@ -201,13 +235,39 @@ class SumoCrowd:
         if radius > self.physics.radius:
             self.physics = self.physics._replace(radius=radius)
 
+    def detect(self) -> bool:
+        """The blame rule, exits and spins of the learners at this step (:func:`detect`):
+        did a life end? ``lives.events`` says whose."""
+        lives, ids, corners, centres = self.lives, *self.slots
+        return detect(self.t, lives.pose, lives.body, lives.centre, lives.body_before,
+                      lives.centre_before, lives.fresh, lives.life, lives.recent,
+                      lives.spin_checked, lives.active, self.physics, self.world.geometry, ids,
+                      corners, centres, self.before, self.now, lives.gone, lives.absent,
+                      lives.suffered, lives.events)
+
+    def advance(self) -> None:
+        """The learners where they moved, SUMO one step on, its vehicles read."""
+        self._move_learners()
+        self._simulation.step()
+        self.before, self.now = self.now, self.before
+        self._read()
+        self.t += 1
+
+    def leave(self, k: int) -> None:
+        """Learner ``k`` leaves the network for good: out of SUMO, out of every world."""
+        lives = self.lives
+        lives.active[k] = False
+        lives.pose[k], lives.centre[k], lives.centre_before[k] = FAR, FAR, FAR
+        lives.body[k] = lives.body_before[k] = FAR
+        sumo.remove_learner(self.ids[k])
+
     def run(self, seconds: float, genes: np.ndarray, learning: Learning | None = None
             ) -> SumoCrowdRun:
         """Drive on for ``seconds`` of SUMO time; ``genes`` (K, G, source layout) drive the
         learners, and a learner that ``learning`` learns drives with its current chromosome
         and tells it of every life it ends."""
         if self._simulation is None:
-            self._start()
+            self.start()
         world, count, lives = self.world, self.count, self.lives
         genes = np.array(genes, dtype=np.float64)
         learns = [learning is not None and learning.learns(k) for k in range(count)]
@@ -223,11 +283,7 @@ class SumoCrowd:
         for step in range(steps + 1):
             trace[step] = lives.pose
             ids, corners, centres = self.slots
-            if detect(self.t, lives.pose, lives.body, lives.centre, lives.body_before,
-                      lives.centre_before, lives.fresh, lives.life, lives.recent,
-                      lives.spin_checked, self.physics, world.geometry, ids, corners, centres,
-                      self.before, self.now, lives.gone, lives.absent, lives.suffered,
-                      lives.events):
+            if self.detect():
                 for k in np.flatnonzero(lives.events != ALIVE):
                     outcome = int(lives.events[k])
                     outcomes[outcome][k] += 1
@@ -244,11 +300,7 @@ class SumoCrowd:
                   centres, self.now, lives.pose, lives.body, lives.centre, lives.body_before,
                   lives.centre_before, lives.fresh, lives.life, lives.gone, lives.visible,
                   lives.readings, lives.activation, lives.scratch, lives.steering)
-            self._move_learners()
-            self._simulation.step()
-            self.before, self.now = self.now, self.before
-            self._read()
-            self.t += 1
+            self.advance()
         for k in np.flatnonzero(learns):  # a life still going counts what it has shown
             learning.still_driving(k, int(lives.life[k] - unseen_from[k]))
         run = SumoCrowdRun(outcomes[COLLIDED], outcomes[SPUN], steps * world.scenario.vehicle.dt,
@@ -272,6 +324,7 @@ class _Lives:
         self.life = np.zeros(count, dtype=np.int64)
         self.recent = np.zeros((count, physics.spin_window, 2))
         self.spin_checked = np.ones(count, dtype=np.bool_)
+        self.active = np.ones(count, dtype=np.bool_)  # False: left the network for good
         self.gone = np.full((count, slots), -1, dtype=np.int64)
         self.absent = np.empty(slots, dtype=np.bool_)
         self.visible = np.empty((slots, 2))

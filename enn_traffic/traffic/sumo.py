@@ -721,6 +721,13 @@ def add_learner(length: float, width: float, speed: float, vehicle: str = LEARNE
     libsumo.vehicle.setSpeed(vehicle, speed)  # for its first step; then SUMO derives it
 
 
+def remove_learner(vehicle: str = LEARNER) -> None:
+    """Take a learner out of the running SUMO, its subscription first (libsumo would go on
+    asking for the variables of a vehicle it no longer knows and stop)."""
+    libsumo.vehicle.unsubscribe(vehicle)
+    libsumo.vehicle.remove(vehicle)
+
+
 def move_learner(x: float, y: float, heading: float, vehicle: str = LEARNER) -> None:
     """Place the learner for SUMO's next step (keepRoute=2: anywhere, on a lane or not); SUMO
     takes its speed from the distance moved. Lanes are looked for within MATCH_M first (the

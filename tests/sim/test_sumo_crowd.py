@@ -133,8 +133,9 @@ def test_a_sumo_vehicle_that_drives_into_a_learner_leaves_that_learners_world_on
                    np.array([b[1] for b in now_bodies]), np.array([b[0] for b in before_bodies]),
                    np.array([b[1] for b in before_bodies]), np.zeros(2, dtype=np.bool_),
                    np.full(2, 5), np.zeros((2, physics.spin_window, 2)),
-                   np.zeros(2, dtype=np.bool_), physics, world.geometry, ids, corners, centres,
-                   0, 1, gone, np.empty(4, dtype=np.bool_), suffered, events)
+                   np.zeros(2, dtype=np.bool_), np.ones(2, dtype=np.bool_), physics,
+                   world.geometry, ids, corners, centres, 0, 1, gone,
+                   np.empty(4, dtype=np.bool_), suffered, events)
     assert not ended and events.tolist() == [ALIVE, ALIVE]
     assert suffered.tolist() == [1, 0]
     assert gone[:, 0].tolist() == [7, -1]

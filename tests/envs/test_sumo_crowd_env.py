@@ -1,0 +1,100 @@
+"""The SUMO crowd as a PettingZoo ParallelEnv, through the real libsumo: PettingZoo's API
+test, seeding, and the same trajectories as the SUMO crowd of the GA
+(:class:`~enn_traffic.sim.sumo_crowd.SumoCrowd`) for the same actions."""
+
+import numpy as np
+import pytest
+from pettingzoo.test import parallel_api_test
+
+from enn_traffic import keys
+from enn_traffic.envs import parallel_env
+from enn_traffic.envs.sumo import SumoCrowdEnv
+from enn_traffic.shipped import shipped_scenario
+from enn_traffic.sim.sumo_crowd import SumoCrowd
+
+
+@pytest.fixture
+def env():
+    env = SumoCrowdEnv(shipped_scenario("sumo_strategy1"), learners=3)
+    yield env
+    env.close()
+
+
+def test_the_sumo_crowd_passes_pettingzoos_parallel_api_test(env):
+    """Random steering ends lives within the test's cycles: the leavers go out of SUMO and
+    SUMO steps on without them."""
+    parallel_api_test(env, num_cycles=200)
+    first, _ = env.reset(seed=4)
+    first = {agent: observation.copy() for agent, observation in first.items()}
+    again, _ = env.reset(seed=4)
+    assert list(first) == env.possible_agents == ["vehicle_0", "vehicle_1", "vehicle_2"]
+    for agent in first:
+        np.testing.assert_array_equal(first[agent], again[agent])
+
+
+def test_every_agent_ends_and_leaves_sumo(env):
+    env.reset(seed=2)
+    rng = np.random.default_rng(0)
+    ended = {}
+    while env.agents:
+        _, _, terminated, truncated, infos = env.step(
+            {agent: rng.uniform(0, 1, 2) for agent in env.agents})
+        ended |= {agent: infos[agent] for agent in terminated
+                  if terminated[agent] or truncated[agent]}
+    assert sorted(ended) == env.possible_agents
+    assert not env.crowd.lives.active.any()
+    assert all(info["steps"] >= 1 for info in ended.values())
+
+
+class Lives:
+    """A crowd's learning that keeps one chromosome and records every life that ends."""
+
+    def __init__(self, genes):
+        self.genes, self.ended = genes, []
+
+    def learns(self, vehicle):
+        return True
+
+    def current(self, vehicle):
+        return self.genes
+
+    def life_ended(self, vehicle, steps, unseen_steps, spun):
+        self.ended.append((vehicle, steps, spun))
+        return self.genes
+
+    def still_driving(self, vehicle, unseen_steps):
+        pass
+
+
+def test_learners_driven_by_actions_move_as_the_crowds_networks_do(env):
+    """Until the first learner's life ends every learner follows the SUMO crowd's
+    trajectory, and that life ends at the same step, the same way."""
+    world, key, situation = env.world, keys.VALIDATION.start + 1, 0
+    chromosome = np.random.default_rng(3).uniform(-1, 1, world.spec.chromosome_length)
+    genes = world.spec.in_source_layout(chromosome[None])[0]
+    lives = Lives(genes)
+    with SumoCrowd(world, world.seeds(key)[situation]) as crowd:
+        run = crowd.run(10.0, np.tile(genes, (crowd.count, 1)), lives)
+    vehicle, life, spun = lives.ended[0]
+
+    observations, _ = env.reset(options={"key": key, "situation": situation})
+    for t in range(1, life + 1):
+        np.testing.assert_array_equal(env.crowd.lives.pose, run.trace[t - 1])
+        actions = {agent: world.spec.forward(chromosome, observation)[0]
+                   for agent, observation in observations.items()}
+        observations, _, terminated, _, infos = env.step(actions)
+        ended = [agent for agent, done in terminated.items() if done]
+        assert ended == ([] if t < life else [f"vehicle_{vehicle}"])
+    assert infos[ended[0]]["steps"] == life
+    assert infos[ended[0]]["outcome"] == ("spin" if spun else "collision")
+    assert ended[0] not in env.agents
+
+
+def test_parallel_env_gives_the_sumo_crowd_for_a_sumo_scenario():
+    env = parallel_env(shipped_scenario("sumo_strategy2"), learners=2)
+    try:
+        assert isinstance(env, SumoCrowdEnv) and len(env.possible_agents) == 2
+    finally:
+        env.close()
+    with pytest.raises(ValueError, match="learners must be at least 1"):
+        SumoCrowdEnv(shipped_scenario("sumo_strategy1"), learners=0)
