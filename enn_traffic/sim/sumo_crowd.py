@@ -206,6 +206,7 @@ class SumoCrowd:
             sumo.add_learner(vehicle.length, vehicle.width, vehicle.speed, self.ids[k])
         self._move_learners()
         self.t = 0  # steps since the learners entered
+        self._detected_at = -1  # the step last detected: once a step, whoever asks
 
     def _move_learners(self) -> None:
         """Place every learner in SUMO for its next step (libsumo moves one vehicle a call)."""
@@ -237,8 +238,14 @@ class SumoCrowd:
 
     def detect(self) -> bool:
         """The blame rule, exits and spins of the learners at this step (:func:`detect`):
-        did a life end? ``lives.events`` says whose."""
+        did a life end? ``lives.events`` says whose. Once a step: a run that begins where
+        the last one ended does not judge that step again (its collisions are counted, the
+        lives that ended there re-entered)."""
         lives, ids, corners, centres = self.lives, *self.slots
+        if self._detected_at == self.t:
+            lives.events[:] = ALIVE
+            return False
+        self._detected_at = self.t
         return detect(self.t, lives.pose, lives.body, lives.centre, lives.body_before,
                       lives.centre_before, lives.fresh, lives.life, lives.recent,
                       lives.spin_checked, lives.active, self.physics, self.world.geometry, ids,

@@ -5,9 +5,11 @@ x = 15 and 145, learners 1 m a step (10 m/s, 0.1 s)."""
 import numpy as np
 import pytest
 
+from enn_traffic import keys
 from enn_traffic.evolution import ga
 from enn_traffic.evolution.online import OnlineLearning, VehicleGA
 from enn_traffic.scenario import load_scenario
+from enn_traffic.shipped import shipped_scenario
 from enn_traffic.sim.sumo_crowd import SumoCrowd
 from enn_traffic.worlds import make_world
 
@@ -139,3 +141,24 @@ def test_a_sumo_vehicle_that_drives_into_a_learner_leaves_that_learners_world_on
     assert not ended and events.tolist() == [ALIVE, ALIVE]
     assert suffered.tolist() == [1, 0]
     assert gone[:, 0].tolist() == [7, -1]
+
+
+def test_runs_one_after_another_are_one_run_cut_in_pieces():
+    """A crowd driven 20 s in 40 runs of 0.5 s goes where one 20 s run goes and counts the
+    same collisions: the step where one run ends and the next begins is judged once (it was
+    judged twice, counting again what SUMO's vehicles had done there)."""
+    world = make_world(shipped_scenario("sumo_strategy3"))
+    rng = np.random.default_rng(5)
+    genes = world.spec.in_source_layout(
+        rng.uniform(-1, 1, (world.scenario.traffic.learners, world.spec.chromosome_length)))
+    seed = world.seeds(keys.VALIDATION.start)[0]
+    with SumoCrowd(world, seed) as crowd:
+        whole = crowd.run(20.0, genes)
+    with SumoCrowd(world, seed) as crowd:
+        pieces = [crowd.run(0.5, genes) for _ in range(40)]
+    trace = np.concatenate([pieces[0].trace] + [piece.trace[1:] for piece in pieces[1:]])
+    np.testing.assert_array_equal(trace, whole.trace)
+    for counted in ("collisions", "spins", "exits", "suffered"):
+        assert sum(getattr(piece, counted) for piece in pieces).tolist() == getattr(
+            whole, counted).tolist(), counted
+    assert whole.collisions.sum() > 0 and whole.suffered.sum() > 0  # there was something to count
