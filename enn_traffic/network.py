@@ -124,20 +124,25 @@ def network_buffers(layer_sizes):
 @njit(cache=True, inline="always")
 def network_outputs(genes, layer_sizes, inputs, activation, scratch) -> None:
     """Forward pass of one source-layout chromosome on ``inputs``; the outputs are left in the
-    first ``layer_sizes[-1]`` entries of ``activation`` (sigmoid at every layer)."""
+    first ``layer_sizes[-1]`` entries of ``activation`` (sigmoid at every layer).
+
+    Each target's sum is kept in a register, bias first and then the sources in order (the
+    same additions in the same order as a row-by-row pass); the gene index is unsigned, so
+    no step pays for negative-index wraparound (docs/bench.md, "Instructions")."""
     for i in range(layer_sizes[0]):
         activation[i] = inputs[i]
-    offset = 0
+    offset = np.uint64(0)
     for layer in range(layer_sizes.shape[0] - 1):
-        n_in, n_out = layer_sizes[layer], layer_sizes[layer + 1]
+        n_in, n_out = np.uint64(layer_sizes[layer]), np.uint64(layer_sizes[layer + 1])
         bias = offset + n_in * n_out
         for j in range(n_out):
-            scratch[j] = genes[bias + j]
-        for i in range(n_in):
-            a = activation[i]
-            base = offset + i * n_out
-            for j in range(n_out):
-                scratch[j] += a * genes[base + j]
+            target = np.uint64(j)
+            total = genes[bias + target]
+            gene = offset + target
+            for i in range(n_in):
+                total += activation[i] * genes[gene]
+                gene += n_out
+            scratch[j] = total
         for j in range(n_out):
             activation[j] = 1.0 / (1.0 + math.exp(-scratch[j]))
         offset = bias + n_out

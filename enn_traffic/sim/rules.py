@@ -36,7 +36,14 @@ from enn_traffic.geometry import (
 )
 from enn_traffic.network import steering as network_steering
 from enn_traffic.sim.bicycle import bicycle_step
-from enn_traffic.sim.sensors import WallGrid, nearby_walls, ray_segment_distance, sense_walls
+from enn_traffic.sim.sensors import (
+    ANGLE_MARGIN,
+    WallGrid,
+    nearby_walls,
+    ray_segment_distance,
+    rough_atan2,
+    sense_walls,
+)
 from enn_traffic.sim.world import HIT_WALL, NO_HIT
 from enn_traffic.traffic.strategies import (
     ACTION,
@@ -195,13 +202,23 @@ def spun(recent, life, x, y, spin_variance) -> bool:
 
 @njit(cache=True, inline="always")
 def _small_spread(points, limit) -> bool:
-    """Population variance of x and of y both at most ``limit``."""
+    """Population variance of x and of y both at most ``limit`` (y only when x's is)."""
+    return _variance(points, 0) <= limit and _variance(points, 1) <= limit
+
+
+@njit(cache=True, inline="always")
+def _variance(points, axis) -> float:
+    """Population variance of column ``axis``: the sums in the order an array expression
+    takes them, without the temporary arrays it builds on every step."""
     n = points.shape[0]
-    mx = points[:, 0].sum() / n
-    my = points[:, 1].sum() / n
-    vx = ((points[:, 0] - mx) ** 2).sum() / n
-    vy = ((points[:, 1] - my) ** 2).sum() / n
-    return vx <= limit and vy <= limit
+    total = 0.0
+    for k in range(n):
+        total += points[k, axis]
+    mean = total / n
+    spread = 0.0
+    for k in range(n):
+        spread += (points[k, axis] - mean) ** 2
+    return spread / n
 
 
 @njit(cache=True, inline="always")
@@ -211,25 +228,27 @@ def sense(v, pose, physics, beam_cos, beam_sin, walls, cell_start, cell_walls, a
     when ``bodies``, the nearest edge of any other body (``corners``, ``centres``; ``me``, its
     own there, skipped)."""
     x, y, heading = pose[v, 0], pose[v, 1], pose[v, 2]
+    cos_h, sin_h = math.cos(heading), math.sin(heading)
     candidates = nearby_walls(x, y, physics, cell_start, cell_walls, all_walls)
-    sense_walls(x, y, heading, beam_cos, beam_sin, physics.max_range, walls, candidates,
-                readings)
+    sense_walls(x, y, cos_h, sin_h, beam_cos, beam_sin, physics.beam_first, physics.beam_step,
+                physics.max_range, walls, candidates, readings)
     if bodies:
-        sense_bodies(me, x, y, heading, beam_cos, beam_sin, physics.beam_first,
+        sense_bodies(me, x, y, cos_h, sin_h, beam_cos, beam_sin, physics.beam_first,
                      physics.beam_step, corners, centres, physics.radius, readings)
 
 
 @njit(cache=True, inline="always")
-def sense_bodies(me, x, y, heading, beam_cos, beam_sin, first, step, corners, centres, radius,
-                 readings):
-    """Lower ``readings`` of a vehicle at (x, y, heading) to the nearest edge of any body but
-    ``me`` (the beams at ``first`` + b·``step`` radians from the heading). A body is skipped
-    when its bounding circle lies beyond every reading, and its edges are tested only along
-    the beams that pass through that circle: those within the circle's angular half-width of
-    its bearing (:func:`beams_towards`), each checked as before."""
-    cos_h, sin_h = math.cos(heading), math.sin(heading)
+def sense_bodies(me, x, y, cos_h, sin_h, beam_cos, beam_sin, first, step, corners, centres,
+                 radius, readings):
+    """Lower ``readings`` of a vehicle at (x, y) (heading cosine ``cos_h``, sine ``sin_h``)
+    to the nearest edge of any body but ``me`` (the beams at ``first`` + b·``step`` radians
+    from the heading). A body is skipped when its bounding circle lies beyond every reading,
+    and its edges are tested only along the beams that pass through that circle: those
+    within the circle's angular half-width of its bearing (:func:`beams_towards`), each
+    checked as before. Of a body the vehicle is outside of, only the edges that face it are
+    tested: a ray enters a convex body through one of those (:func:`facing_edges`)."""
     beams = beam_cos.shape[0]
-    far = readings.max() + radius + 1e-9  # readings only fall: a looser cut, the same result
+    far = largest(readings) + radius + 1e-9  # readings only fall: a looser cut, same result
     for other in range(corners.shape[0]):
         if other == me:
             continue
@@ -241,6 +260,9 @@ def sense_bodies(me, x, y, heading, beam_cos, beam_sin, first, step, corners, ce
         if squared > 4.0 * radius * radius and beams > 1:
             lo, hi = beams_towards(dx * cos_h + dy * sin_h, dy * cos_h - dx * sin_h,
                                    math.sqrt(squared), radius, first, step, beams)
+        if lo > hi:
+            continue
+        facing = facing_edges(corners[other], x, y)
         for b in range(lo, hi + 1):
             ux = cos_h * beam_cos[b] - sin_h * beam_sin[b]
             uy = sin_h * beam_cos[b] + cos_h * beam_sin[b]
@@ -248,6 +270,8 @@ def sense_bodies(me, x, y, heading, beam_cos, beam_sin, first, step, corners, ce
             if along < -radius or along - radius > readings[b] or abs(dx * uy - dy * ux) > radius:
                 continue  # the beam passes clear of the body's bounding circle
             for i in range(4):
+                if not facing & (1 << i):
+                    continue
                 j = (i + 1) % 4
                 d = ray_segment_distance(
                     x, y, ux, uy, readings[b], corners[other, i, 0], corners[other, i, 1],
@@ -257,15 +281,45 @@ def sense_bodies(me, x, y, heading, beam_cos, beam_sin, first, step, corners, ce
                     readings[b] = d
 
 
+EDGE_MARGIN = 1e-9  # m²: an edge nearly in line with the sensing point counts as facing it
+
+
+@njit(cache=True, inline="always")
+def facing_edges(body, x, y) -> int:
+    """Bit i set when edge i (corner i to i + 1; corners counter-clockwise, as
+    :func:`~enn_traffic.geometry.body_corners` lists them) faces (x, y), that is (x, y) lies
+    on or beyond its outer side; every edge when (x, y) is inside the body."""
+    mask = 0
+    for i in range(4):
+        j = (i + 1) % 4
+        ex, ey = body[j, 0] - body[i, 0], body[j, 1] - body[i, 1]
+        if ex * (y - body[i, 1]) - ey * (x - body[i, 0]) < EDGE_MARGIN:
+            mask |= 1 << i
+    return mask if mask else 15
+
+
+@njit(cache=True, inline="always")
+def largest(values) -> float:
+    """The largest of ``values`` (a loop: ``values.max()`` costs a reshape each call)."""
+    top = values[0]
+    for k in range(1, values.shape[0]):
+        if values[k] > top:
+            top = values[k]
+    return top
+
+
 @njit(cache=True, inline="always")
 def beams_towards(ahead, left, distance, radius, first, step, beams):
     """The first and last beam (``first`` + b·``step`` radians from the heading) that may
     pass within ``radius`` of a point ``ahead``, ``left`` of the vehicle and ``distance``
     (more than twice ``radius``) from it: those within asin(radius / distance) of its
-    bearing, the window widened by 1e-9 rad against rounding. An empty range (lo > hi) when
-    none does; the whole fan when the window wraps past ±π."""
-    bearing = math.atan2(left, ahead)
-    half = math.asin(radius / distance) + 1e-9
+    bearing. The window is taken wider, never narrower: the bearing by
+    :func:`~enn_traffic.sim.sensors.rough_atan2` widened by ``ANGLE_MARGIN``, the half-width
+    by tan(asin z) = z / sqrt(1 − z²) ≥ asin z. An empty range (lo > hi) when no beam lies in
+    it; the whole fan when the window wraps past ±π."""
+    bearing = rough_atan2(left, ahead)
+    z = radius / distance
+    half = z / math.sqrt(1.0 - z * z) + ANGLE_MARGIN
     lo = math.ceil((bearing - half - first) / step)
     hi = math.floor((bearing + half - first) / step)
     if bearing - half < -math.pi or bearing + half > math.pi:

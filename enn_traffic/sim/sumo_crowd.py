@@ -22,6 +22,7 @@ moves them in SUMO and steps SUMO.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -101,8 +102,9 @@ def sense_learner(k, physics, geometry, ids_now, corners_now, centres_now, pose,
     visible_centres(ids_now, centres_now, gone[k], visible)
     sense(k, pose, physics, beam_cos, beam_sin, walls, cell_start, cell_walls, all_walls,
           True, corners_now, visible, -1, readings)
-    sense_bodies(k, pose[k, 0], pose[k, 1], pose[k, 2], beam_cos, beam_sin,
-                 physics.beam_first, physics.beam_step, body, centre, physics.radius, readings)
+    sense_bodies(k, pose[k, 0], pose[k, 1], math.cos(pose[k, 2]), math.sin(pose[k, 2]),
+                 beam_cos, beam_sin, physics.beam_first, physics.beam_step, body, centre,
+                 physics.radius, readings)
 
 
 @njit(cache=True, inline="always")

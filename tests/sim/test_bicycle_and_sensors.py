@@ -5,7 +5,15 @@ import pytest
 
 from enn_traffic.geometry import body_polygon, box_hits_segment, boxes_overlap
 from enn_traffic.sim.bicycle import bicycle_step
-from enn_traffic.sim.sensors import WallGrid, nearby_walls, sense_walls
+from enn_traffic.sim.rules import sense_bodies
+from enn_traffic.sim.sensors import (
+    ANGLE_MARGIN,
+    WallGrid,
+    nearby_walls,
+    ray_segment_distance,
+    rough_atan2,
+    sense_walls,
+)
 
 
 @pytest.mark.parametrize(
@@ -53,19 +61,22 @@ SQUARE = np.array([[0, 0, 100, 0], [100, 0, 100, 100], [100, 100, 0, 100], [0, 1
                   dtype=float)
 
 
-def _readings(x, y, heading, angles, max_range=25.0, walls=SQUARE):
+def _readings(x, y, heading, angles, max_range=25.0, walls=SQUARE, candidates=None):
+    """Readings of equally spaced beams at ``angles`` against ``candidates`` (every wall)."""
     out = np.empty(len(angles))
     angles = np.asarray(angles, dtype=float)
-    sense_walls(x, y, heading, np.cos(angles), np.sin(angles), max_range, walls,
-                np.arange(len(walls)), out)
+    step = (angles[-1] - angles[0]) / (len(angles) - 1) if len(angles) > 1 else 0.0
+    candidates = np.arange(len(walls)) if candidates is None else candidates
+    sense_walls(x, y, math.cos(heading), math.sin(heading), np.cos(angles), np.sin(angles),
+                angles[0], step, max_range, walls, candidates, out)
     return out
 
 
 def test_rangefinder_hand_computed_in_a_square():
     # at (90, 40) heading east: right beam sees y=0 at 40 (beyond range), ahead x=100 at 10,
-    # left sees y=100 at 60 (beyond range); 45 degrees left hits x=100 at 10*sqrt(2)
-    got = _readings(90.0, 40.0, 0.0, [-math.pi / 2, 0.0, math.pi / 4, math.pi / 2])
-    np.testing.assert_allclose(got, [25.0, 10.0, 10 * math.sqrt(2), 25.0])
+    # left sees y=100 at 60 (beyond range); 45 degrees right or left hits x=100 at 10*sqrt(2)
+    got = _readings(90.0, 40.0, 0.0, np.linspace(-math.pi / 2, math.pi / 2, 5))
+    np.testing.assert_allclose(got, [25.0, 10 * math.sqrt(2), 10.0, 10 * math.sqrt(2), 25.0])
     got = _readings(90.0, 40.0, 0.0, [-math.pi / 2, 0.0, math.pi / 2], max_range=100.0)
     np.testing.assert_allclose(got, [40.0, 10.0, 60.0])
 
@@ -81,11 +92,76 @@ def test_grid_culling_gives_the_same_readings_as_all_walls(root):
         x, y = rng.uniform(-240, 40), rng.uniform(-35, 225)
         heading = rng.uniform(-math.pi, math.pi)
         near = nearby_walls(x, y, grid, grid.cell_start, grid.cell_walls, grid.all_walls)
-        culled = np.empty(19)
-        sense_walls(x, y, heading, np.cos(angles), np.sin(angles), 25.0, track.walls, near,
-                    culled)
+        culled = _readings(x, y, heading, angles, 25.0, track.walls, near)
         np.testing.assert_array_equal(culled, _readings(x, y, heading, angles, 25.0, track.walls))
         assert len(near) < len(track.walls) or not track.contains(x, y)
+
+
+def test_rough_bearing_stays_well_inside_the_beam_windows_margin():
+    """The beam windows' bearings are rough (a polynomial, not libm's atan2); their error,
+    over every direction and scale, stays a fifth of the margin the windows are widened by."""
+    rng = np.random.default_rng(0)
+    angles = np.concatenate([np.linspace(-math.pi, math.pi, 20_001), rng.uniform(-4, 4, 20_000)])
+    scales = 10.0 ** rng.uniform(-6, 4, len(angles))
+    worst = max(abs(rough_atan2(r * math.sin(a), r * math.cos(a)) - math.atan2(math.sin(a),
+                                                                               math.cos(a)))
+                for a, r in zip(angles, scales, strict=True))
+    assert 1e-6 < worst < ANGLE_MARGIN / 5
+    assert rough_atan2(0.0, 0.0) == 0.0 and rough_atan2(1.0, 0.0) == pytest.approx(math.pi / 2)
+
+
+def _every_beam_every_segment(x, y, heading, angles, max_range, segments):
+    """The rangefinder's rule without any culling: every beam against every segment."""
+    readings = np.full(len(angles), max_range)
+    for b, angle in enumerate(angles):
+        ux, uy = math.cos(heading) * math.cos(angle) - math.sin(heading) * math.sin(angle), \
+            math.sin(heading) * math.cos(angle) + math.cos(heading) * math.sin(angle)
+        for x1, y1, x2, y2 in segments:
+            readings[b] = min(readings[b], ray_segment_distance(x, y, ux, uy, readings[b],
+                                                                x1, y1, x2, y2))
+    return readings
+
+
+@pytest.mark.parametrize("beams, span_deg", [(19, 180), (1, 180), (7, 360), (12, 300)])
+def test_beam_windows_find_what_every_beam_against_every_wall_finds(beams, span_deg):
+    """Each wall is tested only along the beams within its angular extent: short and long
+    walls all around the vehicle, behind it and through the bearing ±π, give bit for bit
+    the readings of every beam tested against every wall."""
+    rng = np.random.default_rng(beams)
+    span = math.radians(span_deg)
+    angles = np.array([-span / 2 + span * i / max(beams - 1, 1) for i in range(beams)])
+    for _ in range(400):
+        x, y, heading = rng.uniform(-5, 5), rng.uniform(-5, 5), rng.uniform(-math.pi, math.pi)
+        middle = rng.uniform(-30, 30, (6, 2))
+        half = rng.uniform(-15, 15, (6, 2)) * rng.choice([0.05, 1.0], (6, 1))
+        walls = np.hstack([middle - half, middle + half])
+        np.testing.assert_array_equal(
+            _readings(x, y, heading, angles, 25.0, walls),
+            _every_beam_every_segment(x, y, heading, angles, 25.0, walls))
+
+
+def test_bodies_seen_through_facing_edges_as_through_all_four():
+    """Another body is tested only along the edges that face the sensing vehicle, and along
+    the beams near its bearing: bodies all around, touching and overlapping the vehicle's
+    point, read bit for bit what every beam against every edge reads."""
+    rng = np.random.default_rng(3)
+    angles = np.array([-math.pi / 2 + math.pi * i / 18 for i in range(19)])
+    radius = 0.5 * math.hypot(4.3, 1.8)
+    inside = 0
+    for _ in range(300):
+        heading = rng.uniform(-math.pi, math.pi)
+        poses = np.column_stack([rng.uniform(-12, 12, (6, 2)), rng.uniform(-math.pi, math.pi, 6)])
+        corners = np.stack([body_polygon(*pose, 4.3, 1.8) for pose in poses])
+        centres = corners.mean(axis=1)
+        readings = np.full(19, 25.0)
+        sense_bodies(-1, 0.0, 0.0, math.cos(heading), math.sin(heading), np.cos(angles),
+                     np.sin(angles), angles[0], angles[1] - angles[0], corners, centres, radius,
+                     readings)
+        edges = np.concatenate([np.hstack([body, np.roll(body, -1, axis=0)]) for body in corners])
+        np.testing.assert_array_equal(
+            readings, _every_beam_every_segment(0.0, 0.0, heading, angles, 25.0, edges))
+        inside += any(box_hits_segment(body, -1e-3, 0.0, 1e-3, 0.0) for body in corners)
+    assert inside > 5  # the point inside a body, where every edge faces it, was met
 
 
 def test_grid_lists_exactly_the_walls_near_each_cell(root, monkeypatch):

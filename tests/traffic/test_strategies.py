@@ -42,7 +42,7 @@ def test_beams_see_other_vehicles_bodies():
     centres = corners.mean(axis=1)
     angles = np.array([-math.pi / 2, 0.0, math.pi / 2])
     readings = np.full(3, 25.0)
-    sense_bodies(0, 0.0, 0.0, 0.0, np.cos(angles), np.sin(angles), -math.pi / 2, math.pi / 2,
+    sense_bodies(0, 0.0, 0.0, 1.0, 0.0, np.cos(angles), np.sin(angles), -math.pi / 2, math.pi / 2,
                  corners, centres, 0.5 * math.hypot(4.3, 2.5), readings)
     np.testing.assert_allclose(readings, [25.0, 10.0, 25.0])
 
