@@ -502,6 +502,21 @@ class Scenario(_Section):
         data["traffic"] = {**data["traffic"], **track.traffic}
         return self._with_runtime(_validate(data, self.source))
 
+    def single_track(self, index: int | None = None) -> Scenario:
+        """This scenario on one track, as an environment drives it: track ``index`` of a
+        scenario of several, or its only one. A clear error when it has several and no
+        ``index`` is given, or when ``index`` names no track."""
+        count = len(self.tracks)
+        if index is None:
+            if count > 1:
+                raise ValueError(f"{self.name}: an environment drives one track and this "
+                                 f"scenario has {count}: pass track=0 … {count - 1}")
+            return self.on_track(0) if isinstance(self.track, list) else self
+        if not 0 <= index < max(count, 1):
+            raise ValueError(f"{self.name}: track={index}, but the scenario has {count} "
+                             f"track{'s' if count != 1 else ''}")
+        return self.on_track(index) if isinstance(self.track, list) else self
+
     @property
     def fringe_exits(self) -> bool:
         """Does reaching the network's fringe end a life as "left the network" (the default

@@ -4,7 +4,8 @@
 shipped arena, navigation and SUMO training scenario (``enn_traffic/NavigationNarrow-v0``,
 ``enn_traffic/ArenaStrategy1-v0``, ``enn_traffic/SumoStrategy1-v0``,
 ``enn_traffic/CityCologne3-v0``, ...) and ``enn_traffic/Scenario-v0``, which takes
-``scenario=PATH`` (a user's own SUMO scenario too). The arena and navigation ids vectorise in
+``scenario=PATH`` (a user's own SUMO scenario too) and, for a scenario of several tracks,
+``track=i``. The arena and navigation ids vectorise in
 one compiled call::
 
     gymnasium.make_vec("enn_traffic/NavigationNarrow-v0", num_envs=4096,
@@ -41,15 +42,19 @@ def env_id(name: str) -> str:
     return f"{NAMESPACE}/{''.join(part.title() for part in name.split('_'))}-v0"
 
 
-def _scenario(scenario: str | Path | Scenario) -> Scenario:
-    return scenario if isinstance(scenario, Scenario) else load_scenario(scenario)
+def _scenario(scenario: str | Path | Scenario, track: int | None) -> Scenario:
+    """The scenario (a file or loaded) on one track: ``track`` of a scenario of several."""
+    loaded = scenario if isinstance(scenario, Scenario) else load_scenario(scenario)
+    return loaded.single_track(track)
 
 
-def make_env(scenario: str | Path | Scenario, render_mode: str | None = None) -> gym.Env:
+def make_env(scenario: str | Path | Scenario, render_mode: str | None = None,
+             track: int | None = None) -> gym.Env:
     """The environment of an arena or navigation scenario
     (:class:`~enn_traffic.envs.rangefinder.RangefinderEnv`) or of a SUMO scenario
-    (:class:`~enn_traffic.envs.sumo.SumoEnv`)."""
-    scenario = _scenario(scenario)
+    (:class:`~enn_traffic.envs.sumo.SumoEnv`); ``track`` picks one of a scenario of several
+    (``navigation_mixed``)."""
+    scenario = _scenario(scenario, track)
     if scenario.traffic.is_sumo:
         from enn_traffic.envs.sumo import SumoEnv
 
@@ -60,12 +65,13 @@ def make_env(scenario: str | Path | Scenario, render_mode: str | None = None) ->
 
 
 def make_vector_env(scenario: str | Path | Scenario, num_envs: int = 1, situations: int = 64,
-                    render_mode: str | None = None) -> gym.vector.VectorEnv:
+                    render_mode: str | None = None, track: int | None = None
+                    ) -> gym.vector.VectorEnv:
     """``num_envs`` arena or navigation worlds stepped in one compiled call
     (:class:`~enn_traffic.envs.rangefinder.RangefinderVectorEnv`); for a SUMO scenario,
     gymnasium's ``SyncVectorEnv`` of replays or ``AsyncVectorEnv`` of closed loops (libsumo
-    runs one SUMO per process)."""
-    scenario = _scenario(scenario)
+    runs one SUMO per process). ``track`` as in :func:`make_env`."""
+    scenario = _scenario(scenario, track)
     if scenario.traffic.is_sumo:
         vector = (gym.vector.AsyncVectorEnv if scenario.traffic.mode == "closed-loop"
                   else gym.vector.SyncVectorEnv)
@@ -76,12 +82,13 @@ def make_vector_env(scenario: str | Path | Scenario, num_envs: int = 1, situatio
 
 
 def parallel_env(scenario: str | Path | Scenario, learners: int | None = None,
-                 render_mode: str | None = None):
+                 render_mode: str | None = None, track: int | None = None):
     """A PettingZoo ``ParallelEnv`` of several learners at once, one agent per learning
     vehicle: the arena crowd of paper §5.5
     (:class:`~enn_traffic.envs.crowd.ArenaCrowdEnv`), or for a SUMO scenario the learners
-    among its live traffic (:class:`~enn_traffic.envs.sumo.SumoCrowdEnv`; no rendering)."""
-    scenario = _scenario(scenario)
+    among its live traffic (:class:`~enn_traffic.envs.sumo.SumoCrowdEnv`; no rendering).
+    ``track`` as in :func:`make_env`."""
+    scenario = _scenario(scenario, track)
     if scenario.traffic.is_sumo:
         from enn_traffic.envs.sumo import SumoCrowdEnv
 

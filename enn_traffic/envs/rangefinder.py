@@ -37,11 +37,7 @@ def rangefinder_world(scenario: str | Path | Scenario) -> ArenaWorld:
     others."""
     if not isinstance(scenario, Scenario):
         scenario = load_scenario(scenario)
-    if isinstance(scenario.track, list):
-        if len(scenario.track) > 1:
-            raise ValueError(f"{scenario.name}: an environment drives one track; this scenario "
-                             f"has {len(scenario.track)} (take one with Scenario.on_track)")
-        scenario = scenario.on_track(0)
+    scenario = scenario.single_track()
     if scenario.lane_keeping is not None or scenario.traffic.is_sumo:
         raise ValueError(f"{scenario.name}: not an arena or navigation scenario")
     return ArenaWorld(scenario)

@@ -37,11 +37,7 @@ def sumo_world(scenario: str | Path | Scenario) -> SumoWorld:
         scenario = load_scenario(scenario)
     if not scenario.traffic.is_sumo:
         raise ValueError(f"{scenario.name}: not a SUMO scenario")
-    if isinstance(scenario.track, list):
-        if len(scenario.track) > 1:
-            raise ValueError(f"{scenario.name}: an environment drives one track; this scenario "
-                             f"has {len(scenario.track)} (take one with Scenario.on_track)")
-        scenario = scenario.on_track(0)
+    scenario = scenario.single_track()
     return SumoWorld(scenario)
 
 

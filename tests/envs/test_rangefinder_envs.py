@@ -10,7 +10,9 @@ from enn_traffic import keys
 from enn_traffic.controller import Controller
 from enn_traffic.envs import REGISTERED, env_id, make_env
 from enn_traffic.envs.rangefinder import RangefinderEnv, RangefinderVectorEnv
+from enn_traffic.scenario import load_scenario
 from enn_traffic.shipped import shipped_scenario
+from enn_traffic.sim.arena import ArenaWorld
 
 
 def drive(env, forward, options):
@@ -114,8 +116,27 @@ def test_the_same_seed_gives_the_same_vector_run():
     assert not np.array_equal(first[0], other[0])
 
 
+def test_a_scenario_of_several_tracks_drives_the_one_named(root):
+    """navigation_mixed has five tracks: ``track=i`` drives the i-th (its walls, its
+    vector env), and without it, or past the last, a clear error says what to pass."""
+    path = root / "scenarios/navigation_mixed.toml"
+    with pytest.raises(ValueError, match=r"has 5: pass track=0 … 4"):
+        make_env(path)
+    with pytest.raises(ValueError, match="track=5, but the scenario has 5 tracks"):
+        make_env(path, track=5)
+    scenario = load_scenario(path)
+    for track in (0, 3):
+        env = gym.make("enn_traffic/Scenario-v0", scenario=str(path), track=track)
+        check_env(env.unwrapped, skip_render_check=True)
+        alone = ArenaWorld(scenario.on_track(track))
+        np.testing.assert_array_equal(env.unwrapped.world.geometry.walls, alone.geometry.walls)
+        vector = gym.make_vec("enn_traffic/Scenario-v0", num_envs=3, scenario=str(path),
+                              track=track, vectorization_mode="vector_entry_point")
+        np.testing.assert_array_equal(vector.world.geometry.walls, alone.geometry.walls)
+    walls = [ArenaWorld(scenario.on_track(t)).geometry.walls for t in (0, 3)]
+    assert walls[0].shape != walls[1].shape or not np.array_equal(*walls)
+
+
 def test_scenarios_an_env_cannot_drive_are_refused(root):
-    with pytest.raises(ValueError, match="has 5"):
-        make_env(root / "scenarios/navigation_mixed.toml")
     with pytest.raises(ValueError, match="not an arena or navigation"):
         RangefinderVectorEnv(root / "scenarios/sumo_strategy1.toml")
