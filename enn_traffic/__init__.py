@@ -1,8 +1,9 @@
 """enn-traffic: evolve neural-network driving controllers in SUMO traffic (Eraqi et al., 2016)."""
 
-import hashlib
 import os
 from pathlib import Path
+
+from enn_traffic.provenance import code_version
 
 __version__ = "0.1.0"
 
@@ -10,11 +11,7 @@ __version__ = "0.1.0"
 def _numba_cache_dir() -> str:
     """numba's on-disk cache checks only each function's own file, not the modules it calls;
     a cache folder per version of the package's source keeps a stale kernel from running."""
-    package = Path(__file__).resolve().parent
-    digest = hashlib.sha1()
-    for path in sorted(package.rglob("*.py")):
-        digest.update(path.read_bytes())
-    return str(Path.home() / ".cache" / "enn-traffic" / f"numba-{digest.hexdigest()[:12]}")
+    return str(Path.home() / ".cache" / "enn-traffic" / f"numba-{code_version()}")
 
 
 os.environ.setdefault("NUMBA_CACHE_DIR", _numba_cache_dir())

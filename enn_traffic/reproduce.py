@@ -70,8 +70,9 @@ def write_summary(out: Path, records: dict) -> None:
                 f"{records[n]['seconds']} |" for n in done]
     total = sum(records[n]["seconds"] for n in done)
     summary += [f"| all | | | | | {total:.1f} |", "",
-                "A call reuses finished runs made by the same code (`code`: a digest of the "
-                "package's sources): its wall time can be far below the compute. From an empty "
-                "folder, the wall times are the compute.", ""]
+                "A call reuses finished runs made by the same rules (the sources that decide a "
+                "run; `code`: a digest of every source of the package): its wall time can be "
+                "far below the compute. From an empty folder, the wall times are the "
+                "compute.", ""]
     summary += paper_tables(out)
     write_text(out / "summary.md", "\n".join(summary) + "\n")

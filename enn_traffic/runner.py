@@ -25,7 +25,7 @@ from enn_traffic.evolution import ga
 from enn_traffic.evolution.backends import Evaluator, make_evaluator
 from enn_traffic.io import write_atomic, write_csv, write_text
 from enn_traffic.network import NetworkSpec
-from enn_traffic.provenance import code_version
+from enn_traffic.provenance import rules_version, sources_of
 from enn_traffic.report.plots import learning_curve
 from enn_traffic.scenario import Scenario
 from enn_traffic.sim.sumo_world import warmups_used
@@ -87,12 +87,15 @@ def ga_params(scenario: Scenario) -> ga.GAParams:
 
 
 def fingerprint(scenario: Scenario, others: Sequence[Scenario] = (),
-                population: np.ndarray | None = None) -> str:
+                population: np.ndarray | None = None, deciders: Sequence[object] = ()) -> str:
     """Identifies a run: its settings (everything but the number of generations) and the
     contents of the files they name, with the other scenarios its evaluator runs (their
     worlds: not their own number of generations), the population it started from, where there
-    are such, and the code that runs it (:func:`~enn_traffic.provenance.code_version`)."""
-    digest = hashlib.sha256(code_version().encode())
+    are such, and the code that decides its result: the rules
+    (:func:`~enn_traffic.provenance.rules_version`) and the files of its ``deciders`` (an
+    evaluator or stopping rule from elsewhere, :func:`~enn_traffic.provenance.sources_of`)."""
+    digest = hashlib.sha256(rules_version().encode())
+    digest.update(sources_of(*deciders).encode())
     for one in (scenario, *others):
         digest.update(one.with_overrides(ga={"generations": 1}).to_toml().encode())
         for path in input_files(one):
@@ -132,7 +135,7 @@ def _fresh_state(scenario: Scenario, key: str, population: np.ndarray | None = N
         raise ValueError(f"initial population has shape {population.shape}, the scenario "
                          f"needs ({scenario.ga.population_size}, {length})")
     return ga.GAState(generation=0, population=population, rng=rng, fingerprint=key,
-                      extra={"elapsed_s": 0.0, "code": code_version()})
+                      extra={"elapsed_s": 0.0, "rules": rules_version()})
 
 
 def _open_state(scenario: Scenario, out: Path, resume: bool, force: bool,
@@ -146,10 +149,10 @@ def _open_state(scenario: Scenario, out: Path, resume: bool, force: bool,
             "start over", out)
     state = ga.GAState.load(checkpoint)
     if state.fingerprint != key:
-        made_by = state.extra.get("code", "older")
-        if made_by != code_version():
-            raise InputError(f"the folder holds a run made by other code ({made_by}; this is "
-                             f"{code_version()}); use another --out or --force", out)
+        made_by = state.extra.get("rules", "older")
+        if made_by != rules_version():
+            raise InputError(f"the folder holds a run made by other rules ({made_by}; these "
+                             f"are {rules_version()}); use another --out or --force", out)
         raise InputError(
             "the folder holds a run of different settings; use another --out or --force", out)
     return state
@@ -204,7 +207,8 @@ def evolve(
     """
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
-    key = fingerprint(scenario, others, initial_population)
+    deciders = [d for d in (evaluator, stop) if d is not None]
+    key = fingerprint(scenario, others, initial_population, deciders)
     state = _open_state(scenario, out, resume, force, initial_population, key)
     table_path = out / "generations.csv"
     done = _finished_rows(table_path, state.generation)

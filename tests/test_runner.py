@@ -83,26 +83,65 @@ def test_a_run_is_resumed_only_from_the_same_start_and_other_worlds(small, tmp_p
             evolve(scenario, tmp_path, resume=True, progress=False, **change)
 
 
-def test_a_run_made_by_other_code_is_named_and_run_again(small, tmp_path):
-    """issue 26: a run's fingerprint holds the code that ran it; reproduce reruns a run that
-    other code made, and says so."""
+def test_a_run_made_by_other_rules_is_named_and_run_again(small, tmp_path):
+    """issue 26: a run's fingerprint holds the rules that ran it; reproduce reruns a run that
+    other rules made, and says so."""
     from enn_traffic.experiments.common import run_or_reuse
-    from enn_traffic.provenance import code_version
+    from enn_traffic.provenance import rules_version
 
     scenario = small.with_overrides(ga={"generations": 2})
     first = evolve(scenario, tmp_path, progress=False)
     state = GAState.load(tmp_path / "checkpoint.npz")
-    assert state.extra["code"] == code_version()
-    # what a checkpoint written by other code holds
-    state.fingerprint, state.extra["code"] = "0" * 16, "0123456789ab"
+    assert state.extra["rules"] == rules_version()
+    # what a checkpoint written by other rules holds
+    state.fingerprint, state.extra["rules"] = "0" * 16, "0123456789ab"
     state.generation = 1
     state.save(tmp_path / "checkpoint.npz")
-    with pytest.raises(InputError, match=r"made by other code \(0123456789ab; this is"):
+    with pytest.raises(InputError, match=r"made by other rules \(0123456789ab; these are"):
         evolve(scenario, tmp_path, resume=True, progress=False)
     again = run_or_reuse(scenario, tmp_path, progress=False)
-    assert GAState.load(tmp_path / "checkpoint.npz").extra["code"] == code_version()
+    assert GAState.load(tmp_path / "checkpoint.npz").extra["rules"] == rules_version()
     pd.testing.assert_frame_equal(again.drop(columns="elapsed_s"),
                                   first.drop(columns="elapsed_s"))
+
+
+def test_only_the_deciding_code_moves_a_runs_fingerprint(tmp_path):
+    """issue 41: on a copy of the package, a docstring in report/ or cli.py leaves the rules'
+    digest as it was (a finished run is reused); a change in sim/rules.py or the GA moves it
+    (the run is made again). Every source's digest, the record of what wrote an output,
+    moves with any of them."""
+    import shutil
+
+    from enn_traffic.provenance import PACKAGE, code_version, rules_version
+
+    copy = tmp_path / "enn_traffic"
+    shutil.copytree(PACKAGE, copy, ignore=shutil.ignore_patterns("__pycache__"))
+    rules, code = rules_version(copy), code_version(copy)
+    assert (rules, code) == (rules_version(), code_version())
+    steps = [("report/plots.py", False), ("cli.py", False), ("sim/rules.py", True),
+             ("evolution/ga.py", True)]
+    for name, decides in steps:
+        with open(copy / name, "a") as source:
+            source.write("\n# an edit\n")
+        rules_version.cache_clear()
+        code_version.cache_clear()
+        assert (rules_version(copy) != rules) == decides, name
+        assert code_version(copy) != code, name
+        rules, code = rules_version(copy), code_version(copy)
+    rules_version.cache_clear()
+    code_version.cache_clear()
+
+
+def test_a_stopping_rule_from_an_experiment_is_part_of_the_fingerprint(small):
+    """A run's deciders from outside the rules (an experiment's evaluator or stopping rule)
+    move its fingerprint; those within the rules, or none, leave it as it was."""
+    from enn_traffic.evolution.backends import LocalEvaluator
+    from enn_traffic.experiments.incremental import incremental_evolution
+    from enn_traffic.runner import fingerprint
+
+    plain = fingerprint(small)
+    assert fingerprint(small, deciders=[LocalEvaluator]) == plain
+    assert fingerprint(small, deciders=[incremental_evolution]) != plain
 
 
 def test_a_changed_network_file_changes_the_fingerprint(small, tmp_path, root):
