@@ -52,14 +52,13 @@ def ga_checkpoints(scenario: Scenario, budget: int, seed: int
     rng = np.random.default_rng([scenario.seed, seed])
     population = ga.initial_population(rng, params.population_size,
                                        world.spec.chromosome_length, params.init_range)
-    spent, began, generation = 0, time.perf_counter(), 0
+    spent, began = 0, time.perf_counter()
+    run = ga.generations(ga.GAState(generation=0, population=population, rng=rng),
+                         world.evaluate, params)
     while spent < budget:
-        results = world.evaluate(population, generation)
+        state, _, results = next(run)
         spent += int(results.steps.sum())
-        best = population[int(np.argmax(results.fitness))].copy()
-        yield spent, time.perf_counter() - began, best
-        population = ga.next_generation(rng, population, results.fitness, params)
-        generation += 1
+        yield spent, time.perf_counter() - began, state.champions[-1].copy()
 
 
 def ga_curve(scenario: Scenario, budget: int, seed: int) -> pd.DataFrame:

@@ -19,6 +19,7 @@ with the peak memory of each.
 
 from __future__ import annotations
 
+import itertools
 import os
 import subprocess
 import tempfile
@@ -107,13 +108,8 @@ def arena_bench(generations: int = 10) -> pd.DataFrame:
     over the generations of a real GA run; every vehicle's steps count."""
     world, params, rng, population = _workload("arena_strategy1")
     threads = numba.get_num_threads()
-    steps, seconds = 0, 0.0
-    for generation in range(generations):
-        started = time.perf_counter()
-        results = world.evaluate(population, generation)
-        seconds += time.perf_counter() - started
-        steps += results.vehicle_steps
-        population = ga.next_generation(rng, population, results.fitness, params)
+    steps, _, seconds, _ = _timed_generations(world, params, rng, population,
+                                              range(generations))
     table = pd.DataFrame([("compiled batch", threads, steps, seconds)],
                          columns=["implementation", "threads", "vehicle_steps", "seconds"])
     table.insert(0, "workload", f"arena: P=200 worlds x {world.vehicles} vehicles, strategy 1")
@@ -198,17 +194,23 @@ def _crowd(scenario, chromosome, generation: int, learner_steps: int) -> tuple[i
 def _timed_generations(world, params, rng, population, generations: range) -> tuple:
     """A GA run over ``generations``, its evaluations timed: vehicle steps, learner steps,
     seconds, and the best chromosome met."""
-    steps, learner_steps, seconds = 0, 0, 0.0
-    best, best_fitness = population[0], -1.0
-    for generation in generations:
+    seconds = 0.0
+
+    def timed(population, generation):
+        nonlocal seconds
         started = time.perf_counter()
         results = world.evaluate(population, generation)
         seconds += time.perf_counter() - started
+        return results
+
+    state = ga.GAState(generation=generations.start, population=population, rng=rng)
+    run = ga.generations(state, timed, params)
+    steps, learner_steps = 0, 0
+    for _ in generations:
+        state, _, results = next(run)
         steps += results.vehicle_steps
         learner_steps += int(results.steps.sum())
-        if results.fitness.max() > best_fitness:
-            best, best_fitness = population[int(np.argmax(results.fitness))], results.fitness.max()
-        population = ga.next_generation(rng, population, results.fitness, params)
+    best = state.best_chromosome if state.best_chromosome is not None else population[0]
     return steps, learner_steps, seconds, best
 
 
@@ -312,12 +314,9 @@ def _rate_table(rows: list[tuple]) -> pd.DataFrame:
 
 def _ga_generations(world, params, rng, population, generations: int) -> list[np.ndarray]:
     """The populations of the first ``generations`` generations of a GA run."""
-    populations = []
-    for _ in range(generations):
-        populations.append(population)
-        population = ga.next_generation(rng, population, world.evaluate(population).fitness,
-                                        params)
-    return populations
+    run = ga.generations(ga.GAState(generation=0, population=population, rng=rng),
+                         lambda population, _: world.evaluate(population), params)
+    return [evaluated for _, evaluated, _ in itertools.islice(run, generations)]
 
 
 def lane_keeping_bench(generations: int = 3) -> pd.DataFrame:

@@ -19,6 +19,7 @@ import numpy as np
 import pandas as pd
 from tqdm import tqdm
 
+from enn_traffic import generations
 from enn_traffic.controller import Controller
 from enn_traffic.errors import InputError
 from enn_traffic.evolution import ga
@@ -28,17 +29,9 @@ from enn_traffic.network import NetworkSpec
 from enn_traffic.provenance import rules_version, sources_of
 from enn_traffic.report.plots import learning_curve
 from enn_traffic.scenario import Scenario
-from enn_traffic.sim.sumo_world import warmups_used
-from enn_traffic.sim.world import CAPPED, COLLIDED, LEFT_LANE, LEFT_NETWORK, SPUN
 
 CHECKPOINT = "checkpoint.npz"
 OUTPUTS = "outputs.npz"  # what a run leaves for others to read: RunOutputs
-COLUMNS = [
-    "generation", "best_fitness", "mean_fitness", "median_fitness", "min_fitness",
-    "vehicle_steps", "collisions", "vehicle_collisions", "spins", "capped", "left_network",
-    "left_lane", "suffered",
-    "traffic_at_start", "traffic_near_mean", "traffic_near_max", "warmups", "elapsed_s",
-]  # fmt: skip
 
 
 @dataclass(frozen=True)
@@ -171,7 +164,7 @@ def _finished_rows(table_path: Path, generation: int) -> pd.DataFrame:
     """The rows of the generations a checkpoint says are done, as written; a damaged table is
     an error, never silently shortened."""
     if generation == 0:
-        return pd.DataFrame(columns=COLUMNS)
+        return pd.DataFrame(columns=list(generations.COLUMNS))
     try:
         done = pd.read_csv(table_path)
         rows = done[done["generation"] < generation]
@@ -229,43 +222,20 @@ def evolve(
     bar = tqdm(total=total, initial=min(state.generation, total), desc=scenario.name,
                unit="gen", disable=not progress, leave=False)
     try:
+        run = ga.generations(state, evaluator.evaluate, params)
         while state.generation < total and not state.extra.get("target_reached", False):
-            started = time.perf_counter()
-            evaluated = state.population
-            results = evaluator.evaluate(evaluated, state.generation)
+            started, generation, best_before = time.perf_counter(), state.generation, \
+                state.best_fitness
+            state, evaluated, results = next(run)
             fitness = results.fitness
-            best = int(np.argmax(fitness))
-            if fitness[best] > state.best_fitness:
-                state.best_fitness = float(fitness[best])
-                state.best_chromosome = state.population[best].copy()
+            if state.best_fitness > best_before:
                 Controller.from_scenario(
-                    scenario, state.best_chromosome, state.best_fitness, state.generation
+                    scenario, state.best_chromosome, state.best_fitness, generation
                 ).save(out / "best.npz")
-            champion = state.population[best][None, :]
-            state.champions = champion if state.champions is None else np.concatenate(
-                [state.champions, champion])
-            state.population = ga.next_generation(state.rng, state.population, fitness, params)
             state.extra["elapsed_s"] += time.perf_counter() - started
-            rows.append({
-                "generation": state.generation,
-                "best_fitness": fitness.max(),
-                "mean_fitness": fitness.mean(),
-                "median_fitness": float(np.median(fitness)),
-                "min_fitness": fitness.min(),
-                "vehicle_steps": results.vehicle_steps,
-                "collisions": int((results.outcome == COLLIDED).sum()),
-                "vehicle_collisions": results.vehicle_collisions,
-                "spins": int((results.outcome == SPUN).sum()),
-                "capped": int((results.outcome == CAPPED).sum()),
-                "left_network": int((results.outcome == LEFT_NETWORK).sum()),
-                "left_lane": int((results.outcome == LEFT_LANE).sum()),
-                "suffered": int(results.suffered.sum()),
-                **results.traffic_summary(),
-                "warmups": warmups_used(scenario, state.generation),
-                "elapsed_s": state.extra["elapsed_s"],
-            })  # fmt: skip
-            state.generation += 1
-            write_csv(table_path, pd.DataFrame(rows, columns=COLUMNS))
+            rows.append(generations.row(generations.Generation(
+                scenario, generation, fitness, results, state.extra["elapsed_s"])))
+            write_csv(table_path, pd.DataFrame(rows, columns=list(generations.COLUMNS)))
             state.save(out / CHECKPOINT)
             RunOutputs.of(state, scenario).save(out)
             bar.update(1)

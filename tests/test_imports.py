@@ -17,6 +17,8 @@ FORBIDDEN = {
             "reproduce", "cli"],
     "evolution": ["experiments", "runner", "deploy", "bench", "reproduce", "cli"],
     "lanekeeping": ["experiments", "runner", "evolution", "deploy", "bench", "reproduce", "cli"],
+    "generations": ["experiments", "runner", "evolution", "deploy", "bench", "reproduce",
+                    "cli"],
     "runner": ["experiments", "deploy", "bench", "reproduce", "cli"],
     "experiments": ["bench", "reproduce", "cli"],
 }

@@ -154,3 +154,19 @@ def test_a_changed_network_file_changes_the_fingerprint(small, tmp_path, root):
     assert fingerprint(scenario) == before
     net.write_bytes(net.read_bytes() + b"<!-- edited -->\n")
     assert fingerprint(scenario) != before
+
+
+def test_a_registered_column_is_written_to_generations_csv(small, tmp_path):
+    """A new column of generations.csv is one registered function (issue 41)."""
+    from enn_traffic import generations
+
+    @generations.column
+    def lives(evaluated):
+        return int(evaluated.results.steps.size)
+
+    try:
+        table = evolve(small.with_overrides(ga={"generations": 2}), tmp_path, progress=False)
+    finally:
+        del generations.COLUMNS["lives"]
+    assert list(table.columns)[-1] == "lives"
+    assert (table["lives"] == small.ga.population_size * small.traffic.episodes).all()

@@ -4,16 +4,19 @@ Defaults (paper §5): population 200, tournaments of 10, one-point crossover wit
 and the cut at round(Normal(0.95, 0.05) × length), per-gene mutation with probability 0.1 that
 replaces the gene by U[-1, 1], children replace their parents. Elitism is an option.
 
-The GA never knows how fitness is computed: a run calls ``evaluate(population) -> fitness``.
-Every operator takes the random generator explicitly; the state is a small dataclass that
-checkpoints to one ``.npz`` file.
+The GA never knows how fitness is computed: a run asks for the chromosomes to evaluate
+(:func:`ask`), evaluates them however it likes and tells the GA their fitness (:func:`tell`),
+which breeds the next generation; :func:`generations` is that loop, the one every run, bench
+and baseline drives. Every operator takes the random generator explicitly; the
+state is a small dataclass that checkpoints to one ``.npz`` file.
 """
 
 from __future__ import annotations
 
 import io
 import json
-from dataclasses import dataclass, field
+from collections.abc import Callable, Iterator
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 import numpy as np
@@ -161,3 +164,39 @@ class GAState:
         if not np.all(np.isfinite(state.population)):
             raise InputError("checkpoint population holds NaN or inf", path)
         return state
+
+
+def ask(state: GAState) -> np.ndarray:
+    """The chromosomes whose fitness the GA needs next: the state's population."""
+    return state.population
+
+
+def tell(state: GAState, fitness: np.ndarray, params: GAParams) -> GAState:
+    """The state after the generation of ``ask(state)`` scored ``fitness``: its best
+    chromosome recorded as the generation's champion (and as the best so far when it beats
+    it), the next generation bred from it (:func:`next_generation`, drawing from the state's
+    generator), the generation number advanced."""
+    best = int(np.argmax(fitness))
+    champion = state.population[best][None, :]
+    improved = fitness[best] > state.best_fitness
+    return replace(
+        state,
+        generation=state.generation + 1,
+        population=next_generation(state.rng, state.population, fitness, params),
+        best_chromosome=state.population[best].copy() if improved else state.best_chromosome,
+        best_fitness=float(fitness[best]) if improved else state.best_fitness,
+        champions=champion if state.champions is None
+        else np.concatenate([state.champions, champion]),
+    )
+
+
+def generations(state: GAState, evaluate: Callable[[np.ndarray, int], object],
+                params: GAParams) -> Iterator[tuple[GAState, np.ndarray, object]]:
+    """Ask, evaluate, tell, without end: after each generation, the new state, the
+    population just evaluated and what ``evaluate(population, generation)`` returned (its
+    ``fitness`` is what the GA is told). The caller stops when it has seen enough."""
+    while True:
+        population = ask(state)
+        evaluated = evaluate(population, state.generation)
+        state = tell(state, evaluated.fitness, params)
+        yield state, population, evaluated

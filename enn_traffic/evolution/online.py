@@ -45,7 +45,9 @@ class VehicleGA:
     def advance(self, params: ga.GAParams, global_elites: np.ndarray | None = None) -> None:
         """The next generation; ``global_elites`` (the best chromosomes of all vehicles,
         reference §7.4) replace its own elites when given."""
-        population = ga.next_generation(self.rng, self.population, self.fitness, params)
+        state = ga.tell(ga.GAState(self.generation, self.population, self.rng), self.fitness,
+                        params)
+        population = state.population
         if global_elites is not None and len(global_elites):
             population[: len(global_elites)] = global_elites
         self.population, self.index, self.generation = population, 0, self.generation + 1

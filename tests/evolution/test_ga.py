@@ -86,6 +86,44 @@ def test_ga_improves_fitness_on_a_small_problem():
     assert final > first / 10  # the best squared error shrank at least tenfold
 
 
+def test_ask_and_tell_drive_a_run_to_the_target_and_keep_its_best():
+    """The GA's loop (:func:`ga.generations`: ask, evaluate, tell) on the same problem: the
+    state's best is the fittest chromosome ever evaluated, each generation's champion is its
+    fittest, and the best squared error shrinks tenfold."""
+    rng = np.random.default_rng(6)
+    target = rng.uniform(-1, 1, 10)
+
+    class Scored:
+        def __init__(self, population, generation):
+            self.fitness = -((population - target) ** 2).sum(axis=1)
+            self.generation = generation
+
+    params = ga.GAParams(population_size=60, tournament_size=4, elite_count=1)
+    state = ga.GAState(generation=0, population=ga.initial_population(rng, 60, 10, 1.0), rng=rng)
+    seen, run = [], ga.generations(state, Scored, params)
+    for number in range(60):
+        state, population, scored = next(run)
+        assert scored.generation == number and state.generation == number + 1
+        seen.append((population, scored.fitness))
+        np.testing.assert_array_equal(state.champions[-1], population[np.argmax(scored.fitness)])
+    fitness = np.concatenate([f for _, f in seen])
+    assert state.best_fitness == fitness.max()
+    assert np.array_equal(state.best_chromosome, np.concatenate([p for p, _ in seen])[
+        np.argmax(fitness)])
+    assert len(state.champions) == 60 and state.best_fitness > seen[0][1].max() / 10
+
+
+def test_tell_breeds_as_next_generation_does():
+    """tell's children are next_generation's from the same generator state."""
+    population = ga.initial_population(np.random.default_rng(1), 30, 12, 1.0)
+    fitness = population.sum(axis=1)
+    params = ga.GAParams(30, 5, elite_count=2)
+    told = ga.tell(ga.GAState(4, population, np.random.default_rng(9)), fitness, params)
+    bred = ga.next_generation(np.random.default_rng(9), population, fitness, params)
+    np.testing.assert_array_equal(told.population, bred)
+    assert told.generation == 5 and told.best_fitness == fitness.max()
+
+
 def test_checkpoint_round_trip_and_corruption(tmp_path):
     from enn_traffic.errors import InputError
 
