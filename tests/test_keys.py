@@ -36,6 +36,6 @@ def test_no_experiment_reads_a_retired_test_range():
 
     used = [deploy.EVALUATION_KEY, lanekeeping.TEST_KEY, choosing.VALIDATION_KEY,
             choosing.ACCEPTANCE_KEY, simultaneous.VALIDATION_KEY, simultaneous.SITUATION_KEY]
-    for retired in (keys.RETIRED_TEST, keys.RETIRED_CROWD_TEST):
+    for retired in (keys.RETIRED_TEST, keys.RETIRED_CROWD_TEST, keys.DESIGN_TRIALS):
         assert not any(key in retired for key in used)
     assert lanekeeping.TEST_KEY in keys.TEST
