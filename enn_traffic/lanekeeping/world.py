@@ -46,7 +46,6 @@ class LaneKeepingWorld:
         self.layer_sizes = self.spec.layer_array
         self._envs: dict[tuple, object] = {}
         self._track: Road | None = None
-        self.start = (0.0, 0.0, 0.0)
 
     @property
     def track(self) -> Road:

@@ -35,6 +35,14 @@ MET_START, MET_NEAR_STEPS, MET_NEAR_MAX = range(3)
 SAFETY_MIN_TTC, SAFETY_TTC, SAFETY_DRAC, SAFETY_PET = range(4)
 
 
+class Drawn(Protocol):
+    """What a world shows of where it drives: a name and wall segments (S, 4), x1 y1 x2 y2
+    (a track's walls, a road's lane markings)."""
+
+    name: str
+    walls: np.ndarray
+
+
 @runtime_checkable
 class World(Protocol):
     """A scenario's worlds, ready to evaluate populations of controllers.
@@ -45,6 +53,7 @@ class World(Protocol):
     scenario: Scenario
     spec: NetworkSpec
     vehicles: int  # vehicles simulated per world
+    track: Drawn  # the track or road (the first, of several) that tables name and plots draw
 
     def evaluate(self, population: np.ndarray, key: int = 0) -> EpisodeResults:
         """Fitness and per-situation results of every chromosome (P, G)."""
