@@ -16,7 +16,6 @@ from enn_traffic.deploy import EVALUATION_KEY
 from enn_traffic.experiments.common import distinct
 from enn_traffic.experiments.protocol import (
     ARENA,
-    STRATEGIES,
     Family,
     family_runs,
     run_dir,
@@ -157,7 +156,7 @@ def _specialists(family: Family, out: Path) -> dict[int, np.ndarray]:
     """:func:`specialists` of finished runs, chosen once per process: Table 1, the replay
     against closed loop and Tables 3–4 deploy the same controllers."""
     pools = _evolved_candidates(family, out, progress=False)
-    return {strategy: pick(family, pools[strategy], [strategy]) for strategy in STRATEGIES}
+    return {strategy: pick(family, pools[strategy], [strategy]) for strategy in family.strategies}
 
 
 def _evolved_candidates(family: Family, out: Path, progress: bool) -> dict[int, np.ndarray]:
@@ -167,7 +166,7 @@ def _evolved_candidates(family: Family, out: Path, progress: bool) -> dict[int, 
     return {strategy: np.concatenate([
                 candidates(run_dir(family, out, strategy, seed))
                 for seed in family.seeds])
-            for strategy in STRATEGIES}  # fmt: skip
+            for strategy in family.strategies}  # fmt: skip
 
 
 def evolved_candidates(out: Path, quick: bool, progress: bool, family: Family = ARENA

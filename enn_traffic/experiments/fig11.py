@@ -8,7 +8,7 @@ import numpy as np
 import pandas as pd
 
 from enn_traffic.experiments.choosing import held_out
-from enn_traffic.experiments.protocol import ARENA, STRATEGIES, Family, family_runs, title
+from enn_traffic.experiments.protocol import ARENA, Family, family_runs, title
 from enn_traffic.io import write_csv
 from enn_traffic.report.figures import fig11_figure
 
@@ -27,7 +27,7 @@ def fig11(out: Path, quick: bool = False, progress: bool = True,
         for seed, table in runs.items():
             scores[strategy, seed] = held_out(family, out, strategy, seed)
             rows.append(run_row(strategy, seed, table, scores[strategy, seed]))
-    fig11_figure(runs_by_strategy, scores, {s: title(family, s) for s in STRATEGIES},
+    fig11_figure(runs_by_strategy, scores, {s: title(family, s) for s in family.strategies},
                  f"Fig. 11 ({family.label}): the learner among traffic, "
                  f"{len(family.seeds)} runs per strategy\nsolid: each generation's best "
                  f"fitness; dashed: the same chromosome on {family.test_episodes} test "

@@ -19,7 +19,7 @@ from enn_traffic.experiments.choosing import (
     scored_pick,
 )
 from enn_traffic.experiments.common import run_or_reuse
-from enn_traffic.experiments.protocol import STRATEGIES, Family
+from enn_traffic.experiments.protocol import Family
 from enn_traffic.runner import RunOutputs
 from enn_traffic.worlds import make_world
 
@@ -43,7 +43,7 @@ def incremental_evolution(family: Family, out: Path, seed: int, progress: bool
     threshold = family.threshold
     base = family.scenario(1)
     population, iterations = None, []
-    for iteration in range(1, len(STRATEGIES) + 1):
+    for iteration in range(1, len(family.strategies) + 1):
         ga = {"generations": family.incremental_max_generations, **family.ga()}
         # the acceptance rule is part of the run's settings: a run stopped by another is redone
         rule = (f"Incremental evolution (§5.4.1), iteration {iteration}: stops when one of the "
@@ -53,7 +53,7 @@ def incremental_evolution(family: Family, out: Path, seed: int, progress: bool
                 "others.")
         sc = base.with_overrides(name=f"incremental_{iteration}", description=rule, seed=seed,
                                  ga=ga)
-        included = STRATEGIES[:iteration]
+        included = family.strategies[:iteration]
         scenarios = [family.scenario(s) for s in included]
         worlds = [make_world(sc) for sc in scenarios]
 

@@ -1,5 +1,6 @@
-"""The protocol of the dynamic-traffic experiments (paper §5.3–5.4): families of four traffic
-strategies, the settings each experiment runs them with, and where each run lives.
+"""The protocol of the dynamic-traffic experiments (paper §5.3–5.4): families of traffic
+strategies (four, as the paper's), the settings each experiment runs them with, and where each
+run lives.
 
 Three families of strategies run the same experiments: the arena's scripted strategies
 (``scenarios/arena_strategy1..4``, into the reproduce folder), SUMO traffic on SUMO networks
@@ -20,15 +21,13 @@ from enn_traffic.shipped import shipped_scenario
 from enn_traffic.sim.world import World
 from enn_traffic.worlds import make_world
 
-STRATEGIES = [1, 2, 3, 4]
-
 
 @dataclass(frozen=True)
 class Family:
-    """A set of four traffic strategies (the shipped scenarios ``names``, strategy 1 first)
-    and the experiment settings that go with it."""
+    """A set of traffic strategies (the shipped scenarios ``names``, strategy 1 first; the
+    paper's families have four) and the experiment settings that go with it."""
 
-    names: tuple[str, str, str, str]
+    names: tuple[str, ...]
     folder: str  # subfolder of the reproduce folder ("" for the top)
     seeds: tuple[int, ...]
     test_episodes: int  # Fig. 11's test curves, and the first look at candidates
@@ -53,11 +52,16 @@ class Family:
         return self.names[strategy - 1]
 
     @property
+    def strategies(self) -> list[int]:
+        """The strategies' numbers, 1 first."""
+        return list(range(1, len(self.names) + 1))
+
+    @property
     def label(self) -> str:
-        """The four scenarios in a few words: ``sumo_strategy1-4``, or their names."""
+        """The scenarios in a few words: ``sumo_strategy1-4``, or their names."""
         prefix = self.names[0].removesuffix("1")
-        if self.names == tuple(f"{prefix}{strategy}" for strategy in STRATEGIES):
-            return f"{prefix}1-4"
+        if self.names == _numbered(prefix, len(self.names)):
+            return f"{prefix}1-{len(self.names)}"
         return ", ".join(self.names)
 
     def settings(self, quick: bool) -> Family:
@@ -97,8 +101,8 @@ class Family:
         return dict(self.quick) if self.quick_mode else {}
 
 
-def _numbered(prefix: str) -> tuple[str, str, str, str]:
-    return tuple(f"{prefix}{strategy}" for strategy in STRATEGIES)
+def _numbered(prefix: str, count: int = 4) -> tuple[str, ...]:
+    return tuple(f"{prefix}{strategy}" for strategy in range(1, count + 1))
 
 
 ARENA = Family(_numbered("arena_strategy"), "", (1, 2, 3, 4), test_episodes=40,
@@ -128,14 +132,14 @@ def family_runs(family: Family, out: Path, progress: bool) -> dict[int, dict[int
     """Every strategy's runs, one per seed (all submitted at once, so on Ray they run side by
     side): ``{strategy: {seed: generations table}}``."""
     jobs = {}
-    for strategy in STRATEGIES:
+    for strategy in family.strategies:
         base = family.scenario(strategy)
         for seed in family.seeds:
             jobs[strategy, seed] = (base.with_overrides(seed=seed, ga=family.ga()),
                                     run_dir(family, out, strategy, seed))
     tables = run_all(jobs, progress)
     return {strategy: {seed: tables[strategy, seed] for seed in family.seeds}
-            for strategy in STRATEGIES}
+            for strategy in family.strategies}
 
 
 def strategy_world(family: Family, strategy: int, episodes: int | None = None) -> World:

@@ -45,15 +45,15 @@ from enn_traffic import keys
 from enn_traffic.evolution.online import Evidence, OnlineLearning, VehicleGA
 from enn_traffic.experiments.choosing import evolved_candidates, final_population
 from enn_traffic.experiments.common import distinct, save_controller
-from enn_traffic.experiments.protocol import ARENA, STRATEGIES
+from enn_traffic.experiments.protocol import ARENA
 from enn_traffic.io import write_csv
 from enn_traffic.report.plots import draw_paths, save_figure
 from enn_traffic.runner import ga_params
 from enn_traffic.shipped import shipped_scenario
 from enn_traffic.sim.arena import ArenaWorld
 from enn_traffic.sim.crowd import Crowd, CrowdRun
+from enn_traffic.traffic.strategies import DRIVER_KINDS as DRIVERS
 from enn_traffic.traffic.strategies import NETWORK
-from enn_traffic.traffic.strategies import STRATEGIES as DRIVERS
 
 SECONDS = 100.0  # the paper's training time, and each measuring period
 SITUATIONS = 20
@@ -159,7 +159,7 @@ def _measure(out: Path, quick: bool, progress: bool) -> tuple[pd.DataFrame, pd.D
     situation's, written to ``simultaneous_situations.csv``."""
     candidates = evolved_candidates(out, quick, progress)
     rows, situations, paths = [], [], {}
-    for strategy in STRATEGIES:
+    for strategy in ARENA.strategies:
         world = ArenaWorld(shipped_scenario(ARENA.name(strategy)))
         ranked, validation = _ranked(world, candidates[strategy])
         winner = ranked[0]

@@ -34,7 +34,7 @@ import pandas as pd
 from enn_traffic import keys
 from enn_traffic.evolution.online import OnlineLearning, VehicleGA
 from enn_traffic.experiments.choosing import final_population, trained_controllers
-from enn_traffic.experiments.protocol import STRATEGIES, SUMO, Family
+from enn_traffic.experiments.protocol import SUMO, Family
 from enn_traffic.io import write_csv
 from enn_traffic.runner import ga_params
 from enn_traffic.sim.sumo_crowd import SumoCrowd
@@ -104,7 +104,7 @@ def measure(family: Family, out: Path, quick: bool, progress: bool) -> pd.DataFr
     controllers = trained_controllers(out, quick, progress, family)
     seconds, situations = (QUICK_SECONDS, QUICK_SITUATIONS) if quick else (SECONDS, SITUATIONS)
     rows = []
-    for strategy in STRATEGIES:
+    for strategy in family.strategies:
         world = crowd_world(family, strategy, quick)
         winner = controllers[strategy]
         evolved = final_population(family, out, strategy, winner, quick)

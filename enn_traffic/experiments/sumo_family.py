@@ -12,7 +12,7 @@ import pandas as pd
 from enn_traffic.deploy import EVALUATION_KEY
 from enn_traffic.experiments.choosing import trained_controllers
 from enn_traffic.experiments.fig11 import fig11
-from enn_traffic.experiments.protocol import CITY, STRATEGIES, SUMO, Family, strategy_world
+from enn_traffic.experiments.protocol import CITY, SUMO, Family, strategy_world
 from enn_traffic.experiments.sumo_crowds import sumo_tables
 from enn_traffic.experiments.table1 import table1
 from enn_traffic.experiments.table2 import table2
@@ -26,7 +26,7 @@ def replay_against_closed_loop(out: Path, quick: bool = False, progress: bool = 
     situations with the traffic replayed and in closed loop: lifetimes side by side."""
     controllers = trained_controllers(out, quick, progress, family)
     rows = []
-    for strategy in STRATEGIES:
+    for strategy in family.strategies:
         test = strategy_world(family.settings(quick), strategy).scenario
         lifetimes = {}
         for mode in ("replay", "closed-loop"):

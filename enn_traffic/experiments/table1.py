@@ -11,7 +11,7 @@ import pandas as pd
 from enn_traffic.deploy import EVALUATION_KEY
 from enn_traffic.experiments.choosing import fitness_on_test_traffic, specialists
 from enn_traffic.experiments.common import save_controller
-from enn_traffic.experiments.protocol import ARENA, STRATEGIES, Family, strategy_world
+from enn_traffic.experiments.protocol import ARENA, Family, strategy_world
 from enn_traffic.io import write_csv
 from enn_traffic.report.figures import fig12_figure, specialist_paths
 
@@ -21,13 +21,13 @@ def _draw_specialists(family: Family, controllers: dict[int, np.ndarray], path: 
     """Table 1 as paths: each strategy's chosen controller among each strategy's traffic, the
     first test episode."""
     traces, walls = {}, {}
-    for deployed in STRATEGIES:
+    for deployed in family.strategies:
         world = strategy_world(family, deployed)
         walls[deployed] = world.track.walls
-        for trained in STRATEGIES:
+        for trained in family.strategies:
             traces[trained, deployed], _ = world.trace(controllers[trained], EVALUATION_KEY,
                                                        max_steps=steps)
-    specialist_paths(traces, walls, STRATEGIES, steps, path)
+    specialist_paths(traces, walls, family.strategies, steps, path)
 
 
 def table1(out: Path, quick: bool = False, progress: bool = True,
@@ -37,14 +37,14 @@ def table1(out: Path, quick: bool = False, progress: bool = True,
     root, out = out, out / family.folder
     controllers = specialists(family, out, progress)
     matrix = np.array([[fitness_on_test_traffic(family, controllers[trained], deployed)
-                        for deployed in STRATEGIES] for trained in STRATEGIES])
-    for index, strategy in enumerate(STRATEGIES):
+                        for deployed in family.strategies] for trained in family.strategies])
+    for index, strategy in enumerate(family.strategies):
         save_controller(root, (Path(family.folder) / "table1" / f"strategy{strategy}").as_posix(),
                         family.scenario(strategy), controllers[strategy], matrix[index, index])
-    table = pd.DataFrame(matrix.round(1), columns=[f"deploy_{s}" for s in STRATEGIES])
-    table.insert(0, "training_strategy", STRATEGIES)
+    table = pd.DataFrame(matrix.round(1), columns=[f"deploy_{s}" for s in family.strategies])
+    table.insert(0, "training_strategy", family.strategies)
     write_csv(out / "table1.csv", table)
-    fig12_figure(matrix, STRATEGIES, out / "fig12.png")
+    fig12_figure(matrix, family.strategies, out / "fig12.png")
     _draw_specialists(family, controllers,
                       out / ("arena_paths.png" if family is ARENA else "paths.png"))
     return [summary_line(matrix, f"{family.folder}/table1" if family.folder else "table1")]

@@ -11,7 +11,7 @@ import pandas as pd
 from enn_traffic.experiments.choosing import fitness_on_test_traffic
 from enn_traffic.experiments.common import save_controller
 from enn_traffic.experiments.incremental import Iteration, incremental_evolution
-from enn_traffic.experiments.protocol import ARENA, STRATEGIES, Family
+from enn_traffic.experiments.protocol import ARENA, Family
 from enn_traffic.io import write_csv
 
 
@@ -22,7 +22,7 @@ def _rows(family: Family, seed: int, iterations: list[Iteration]) -> tuple[list[
     for number, iteration in enumerate(iterations, start=1):
         row = {"seed": seed, "iteration": number, "generations": iteration.generations,
                "reached_threshold": iteration.accepted}
-        for strategy in STRATEGIES:
+        for strategy in family.strategies:
             row[f"strategy_{strategy}"] = (
                 fitness_on_test_traffic(family, iteration.chosen, strategy)
                 if strategy in iteration.included else np.nan)
@@ -47,15 +47,15 @@ def table2(out: Path, quick: bool = False, progress: bool = True,
     seed = max(chains, key=lambda s: chains[s][1])  # the first of equals, as argmax
     last_row = chains[seed][0][-1]
     save_controller(root, (Path(family.folder) / "table2" / "last_iteration").as_posix(),
-                    family.scenario(STRATEGIES[0]), evolutions[seed][-1].chosen,
+                    family.scenario(family.strategies[0]), evolutions[seed][-1].chosen,
                     last_row["average"])
     every = pd.DataFrame([row for rows, _ in chains.values() for row in rows])
     write_csv(out / "table2_runs.csv", every.round(1))
     table = every[every["seed"] == seed].drop(columns="seed").reset_index(drop=True)
     write_csv(out / "table2.csv", table.round(1))
     last = table.iloc[-1]
-    kept = all(last[f"strategy_{s}"] > threshold for s in STRATEGIES)
-    ends = every.groupby("seed").last()[[f"strategy_{s}" for s in STRATEGIES]].min(axis=1)
+    kept = all(last[f"strategy_{s}"] > threshold for s in family.strategies)
+    ends = every.groupby("seed").last()[[f"strategy_{s}" for s in family.strategies]].min(axis=1)
     label = f"{family.folder}/table2" if family.folder else "table2"
     return [f"{label}: average fitness {table['average'].iloc[0]:.0f} after iteration 1, "
             f"{last['average']:.0f} after iteration {int(last['iteration'])} "

@@ -228,7 +228,7 @@ class ArenaWorld:
                 low, high = np.radians(traffic.start_heading_deg)
                 start = np.array([self.start_of(key, s, e)] + [
                     (x, y, rng.uniform(low, high)) for x, y in self.traffic_starts])
-                kind = strategies.STRATEGIES.get(name, strategies.NONE)
+                kind = strategies.DRIVER_KINDS.get(name, strategies.NONE)
                 kinds = np.array([strategies.NETWORK] + [kind] * len(self.traffic_starts))
                 genes = rng.uniform(-1, 1, size=(self.vehicles,
                                                  self.traffic_spec.chromosome_length))

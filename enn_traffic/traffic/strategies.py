@@ -35,7 +35,7 @@ from numba import njit
 # the random-network strategy's fixed random genes), a scripted strategy, or an action given
 # from outside the step (a gymnasium or PettingZoo environment's, :mod:`enn_traffic.envs`).
 NONE, NETWORK, STRAIGHT, CIRCLING, WANDER, ACTION = 0, 1, 2, 3, 4, 5
-STRATEGIES = {
+DRIVER_KINDS = {
     "random_network": NETWORK,
     "straight": STRAIGHT,
     "circling": CIRCLING,

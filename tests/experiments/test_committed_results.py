@@ -9,7 +9,7 @@ import pytest
 from enn_traffic.controller import Controller
 from enn_traffic.experiments import EXPERIMENTS
 from enn_traffic.experiments.lanekeeping import TEST_KEY, road_world
-from enn_traffic.experiments.protocol import ARENA, CITY, STRATEGIES, SUMO
+from enn_traffic.experiments.protocol import ARENA, CITY, SUMO
 from enn_traffic.shipped import shipped_scenario
 
 
@@ -42,9 +42,9 @@ def test_committed_table1_controllers_keep_the_pattern_on_unseen_traffic(root):
 
     folder = root / "results" / "paper" / "controllers" / "table1"
     controllers = {f"strategy{s}": Controller.load(folder / f"strategy{s}.npz")
-                   for s in STRATEGIES}
+                   for s in ARENA.strategies}
     scenarios = [shipped_scenario(f"arena_strategy{s}").with_overrides(traffic={"seed": 5000})
-                 for s in STRATEGIES]
+                 for s in ARENA.strategies]
     matrix = fitness_matrix(evaluate_batch(controllers, scenarios, 200, "local", None,
                                            progress=False)).to_numpy()
     for row, own in enumerate(np.diag(matrix)):

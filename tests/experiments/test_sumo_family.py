@@ -7,7 +7,7 @@ from dataclasses import replace
 import pandas as pd
 import pytest
 
-from enn_traffic.experiments.protocol import STRATEGIES, SUMO
+from enn_traffic.experiments.protocol import SUMO
 from enn_traffic.experiments.sumo_family import family_experiments
 
 TINY = replace(SUMO, folder="tiny", seeds=(1,), incremental_max_generations=2,
@@ -39,7 +39,7 @@ def test_every_table_and_figure_is_written(tiny):
 def test_tables_3_and_4_are_the_means_of_the_situations(tiny):
     folder, _ = tiny
     situations = pd.read_csv(folder / "crowd_situations.csv")
-    assert sorted(situations.strategy.unique()) == STRATEGIES
+    assert sorted(situations.strategy.unique()) == SUMO.strategies
     means = situations.groupby("strategy").mean()
     table3 = pd.read_csv(folder / "table3.csv").set_index("strategy")
     table4 = pd.read_csv(folder / "table4.csv").set_index("strategy")

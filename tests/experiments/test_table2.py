@@ -29,8 +29,8 @@ def test_table2_reports_the_evolution_whose_last_controller_does_best_on_validat
     worst = {}
     for seed in family.incremental_seeds:
         last = tmp_path / "runs" / "incremental" / f"seed{seed}" / "iteration4"
-        chosen = choosing.pick(family, choosing.candidates(last), protocol.STRATEGIES)
-        worst[seed] = choosing.validation(family, chosen, protocol.STRATEGIES,
+        chosen = choosing.pick(family, choosing.candidates(last), family.strategies)
+        worst[seed] = choosing.validation(family, chosen, family.strategies,
                                           family.recheck_episodes).min()
     assert worst[1] != worst[2]  # the two evolutions are told apart
     best = max(worst, key=worst.get)
