@@ -18,14 +18,17 @@ from enn_traffic.sim.world import CAPPED, COLLIDED, LEFT_LANE, LEFT_NETWORK, SPU
 
 @dataclass(frozen=True)
 class Generation:
-    """One evaluated generation of a run: its scenario, its number, the fitness and results
-    of its chromosomes, and the run's compute time up to its end."""
+    """One evaluated generation of a run: its scenario, its number, the results of its
+    chromosomes, and the run's compute time up to its end."""
 
     scenario: Scenario
     number: int
-    fitness: np.ndarray
     results: EpisodeResults
     elapsed_s: float
+
+    @property
+    def fitness(self) -> np.ndarray:
+        return self.results.fitness
 
 
 COLUMNS: dict[str, Callable[[Generation], object]] = {}

@@ -224,8 +224,8 @@ def evolve(
     try:
         run = ga.generations(state, evaluator.evaluate, params)
         while state.generation < total and not state.extra.get("target_reached", False):
-            started, generation, best_before = time.perf_counter(), state.generation, \
-                state.best_fitness
+            started = time.perf_counter()
+            generation, best_before = state.generation, state.best_fitness
             state, evaluated, results = next(run)
             fitness = results.fitness
             if state.best_fitness > best_before:
@@ -234,7 +234,7 @@ def evolve(
                 ).save(out / "best.npz")
             state.extra["elapsed_s"] += time.perf_counter() - started
             rows.append(generations.row(generations.Generation(
-                scenario, generation, fitness, results, state.extra["elapsed_s"])))
+                scenario, generation, results, state.extra["elapsed_s"])))
             write_csv(table_path, pd.DataFrame(rows, columns=list(generations.COLUMNS)))
             state.save(out / CHECKPOINT)
             RunOutputs.of(state, scenario).save(out)

@@ -50,7 +50,7 @@ class VehicleGA:
         population = state.population
         if global_elites is not None and len(global_elites):
             population[: len(global_elites)] = global_elites
-        self.population, self.index, self.generation = population, 0, self.generation + 1
+        self.population, self.index, self.generation = population, 0, state.generation
         self.fitness = np.zeros(len(population))
 
 

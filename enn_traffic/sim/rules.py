@@ -37,11 +37,10 @@ from enn_traffic.geometry import (
 from enn_traffic.network import steering as network_steering
 from enn_traffic.sim.bicycle import bicycle_step
 from enn_traffic.sim.sensors import (
-    ANGLE_MARGIN,
     WallGrid,
+    beams_towards,
     nearby_walls,
     ray_segment_distance,
-    rough_atan2,
     sense_walls,
 )
 from enn_traffic.sim.world import HIT_WALL, NO_HIT
@@ -244,9 +243,10 @@ def sense_bodies(me, x, y, cos_h, sin_h, beam_cos, beam_sin, first, step, corner
     to the nearest edge of any body but ``me`` (the beams at ``first`` + b·``step`` radians
     from the heading). A body is skipped when its bounding circle lies beyond every reading,
     and its edges are tested only along the beams that pass through that circle: those
-    within the circle's angular half-width of its bearing (:func:`beams_towards`), each
-    checked as before. Of a body the vehicle is outside of, only the edges that face it are
-    tested: a ray enters a convex body through one of those (:func:`facing_edges`)."""
+    within the circle's angular half-width of its bearing
+    (:func:`~enn_traffic.sim.sensors.beams_towards`), each checked as before. Of a body the
+    vehicle is outside of, only the edges that face it are tested: a ray enters a convex body
+    through one of those (:func:`facing_edges`)."""
     beams = beam_cos.shape[0]
     far = largest(readings) + radius + 1e-9  # readings only fall: a looser cut, same result
     for other in range(corners.shape[0]):
@@ -306,25 +306,6 @@ def largest(values) -> float:
         if values[k] > top:
             top = values[k]
     return top
-
-
-@njit(cache=True, inline="always")
-def beams_towards(ahead, left, distance, radius, first, step, beams):
-    """The first and last beam (``first`` + b·``step`` radians from the heading) that may
-    pass within ``radius`` of a point ``ahead``, ``left`` of the vehicle and ``distance``
-    (more than twice ``radius``) from it: those within asin(radius / distance) of its
-    bearing. The window is taken wider, never narrower: the bearing by
-    :func:`~enn_traffic.sim.sensors.rough_atan2` widened by ``ANGLE_MARGIN``, the half-width
-    by tan(asin z) = z / sqrt(1 − z²) ≥ asin z. An empty range (lo > hi) when no beam lies in
-    it; the whole fan when the window wraps past ±π."""
-    bearing = rough_atan2(left, ahead)
-    z = radius / distance
-    half = z / math.sqrt(1.0 - z * z) + ANGLE_MARGIN
-    lo = math.ceil((bearing - half - first) / step)
-    hi = math.floor((bearing + half - first) / step)
-    if bearing - half < -math.pi or bearing + half > math.pi:
-        return 0, beams - 1
-    return max(lo, 0), min(hi, beams - 1)
 
 
 @njit(cache=True, inline="always")

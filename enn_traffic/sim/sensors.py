@@ -253,3 +253,22 @@ def beams_across(ax, ay, bx, by, cos_h, sin_h, first, step, beams):
     if above <= beams - 1:
         return max(above, 0), beams - 1
     return 0, min(below, beams - 1)
+
+
+@njit(cache=True, inline="always")
+def beams_towards(ahead, left, distance, radius, first, step, beams):
+    """The first and last beam (``first`` + b·``step`` radians from the heading) that may
+    pass within ``radius`` of a point ``ahead``, ``left`` of the vehicle and ``distance``
+    (more than twice ``radius``) from it: those within asin(radius / distance) of its
+    bearing. The window is taken wider, never narrower: the bearing by
+    :func:`rough_atan2` widened by ``ANGLE_MARGIN``, the half-width
+    by tan(asin z) = z / sqrt(1 − z²) ≥ asin z. An empty range (lo > hi) when no beam lies in
+    it; the whole fan when the window wraps past ±π."""
+    bearing = rough_atan2(left, ahead)
+    z = radius / distance
+    half = z / math.sqrt(1.0 - z * z) + ANGLE_MARGIN
+    lo = math.ceil((bearing - half - first) / step)
+    hi = math.floor((bearing + half - first) / step)
+    if bearing - half < -math.pi or bearing + half > math.pi:
+        return 0, beams - 1
+    return max(lo, 0), min(hi, beams - 1)
