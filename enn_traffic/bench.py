@@ -249,11 +249,11 @@ def city_bench(generations: int = 10, closed_loop_steps: int = 5_000) -> pd.Data
     situation warming up itself; then the run's best controller in closed loop, SUMO's start
     included. ``warmup_share``: the part of the wall time spent simulating warm-ups."""
     scenario = shipped_scenario("city_cologne3")
-    saved_folder = sumo.STATE_FOLDER
+    saved_folder = os.environ.get(sumo.STATE_FOLDER_VARIABLE)
     rows = []
     try:
         with tempfile.TemporaryDirectory(prefix="enn-bench-states-") as folder:
-            sumo.STATE_FOLDER = Path(folder)
+            os.environ[sumo.STATE_FOLDER_VARIABLE] = folder
             for label, settings in (("shared warm-ups", {}),
                                     ("each situation its own warm-up", {"warmup_states": 0})):
                 world = make_world(scenario.with_overrides(traffic=settings))
@@ -263,7 +263,10 @@ def city_bench(generations: int = 10, closed_loop_steps: int = 5_000) -> pd.Data
             steps, seconds = _closed_loop(scenario, best, generations, closed_loop_steps,
                                           count_start=True)
     finally:
-        sumo.STATE_FOLDER = saved_folder
+        if saved_folder is None:
+            os.environ.pop(sumo.STATE_FOLDER_VARIABLE, None)
+        else:
+            os.environ[sumo.STATE_FOLDER_VARIABLE] = saved_folder
     table = _rate_table([row[:-2] for row in rows] + [
         ("city closed loop: the best controller", "libsumo step by step, 1 process, SUMO "
          "start included", 1, steps, steps, seconds)])

@@ -474,7 +474,7 @@ def warmup_steps(scenario: Scenario) -> int:
     return round(scenario.traffic.warmup_s / scenario.vehicle.dt)
 
 
-STATE_FOLDER = Path(tempfile.gettempdir()) / "enn-traffic-sumo-states"
+STATE_FOLDER_VARIABLE = "ENN_TRAFFIC_SUMO_STATES"
 STATE_VERSION = 3  # raised when the code that simulates and saves a warm-up changes
 
 
@@ -494,18 +494,27 @@ def _inputs_key(scenario: Scenario) -> list[str]:
             repr(scenario.vehicle.dt), libsumo.getVersion()[1]]
 
 
+def state_folder() -> Path:
+    """Where saved warm-ups are kept: ``$ENN_TRAFFIC_SUMO_STATES``, else
+    ``<temp dir>/enn-traffic-sumo-states`` (read at every call, so that worker processes,
+    which inherit the environment, use the same folder)."""
+    folder = os.environ.get(STATE_FOLDER_VARIABLE)
+    return Path(folder) if folder else Path(tempfile.gettempdir()) / "enn-traffic-sumo-states"
+
+
 def warm_state(scenario: Scenario, seed: int, keep_rng: bool) -> Path:
     """A SUMO state file of the scenario's traffic ``warmup_s`` after its begin, simulated with
-    ``seed`` once and kept on disk (in ``STATE_FOLDER``, named by everything it depends on).
+    ``seed`` once and kept on disk (in :func:`state_folder`, named by everything it depends
+    on).
     ``keep_rng``: the state holds SUMO's random generators, so a run loading it goes on as the
     warm-up would have (one traffic situation's own warm-up); without, a run loading it goes
     on by its own seed (a warm-up shared by several situations)."""
     key = hashlib.sha256("\n".join([*_inputs_key(scenario), str(seed), str(keep_rng)])
                          .encode()).hexdigest()[:24]
-    path = STATE_FOLDER / f"{key}.xml.gz"
+    path = state_folder() / f"{key}.xml.gz"
     if path.is_file():
         return path
-    STATE_FOLDER.mkdir(parents=True, exist_ok=True)
+    path.parent.mkdir(parents=True, exist_ok=True)
     partial = path.with_name(f"{key}.{os.getpid()}.partial.xml.gz")
     with slow_step(f"simulating a SUMO warm-up ({scenario.traffic.warmup_s:g} s of SUMO "
                    f"time, seed {seed})"):

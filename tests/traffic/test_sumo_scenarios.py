@@ -191,7 +191,7 @@ def test_a_life_ends_where_the_sumocfg_ends(tmp_path, road_net):
 def test_shared_warmups_are_simulated_once_and_reused(tmp_path, road_net, monkeypatch):
     """``warmup_states = 2``: over three generations of two situations, two warm-ups are
     simulated and saved; a second world reuses them and gets the same results."""
-    monkeypatch.setattr(sumo, "STATE_FOLDER", tmp_path / "states")
+    monkeypatch.setenv(sumo.STATE_FOLDER_VARIABLE, str(tmp_path / "states"))
     path = road_scenario(tmp_path, road_net, warmup=30.0, extra="warmup_states = 2")
     scenario = load_scenario(path)
     population = np.random.default_rng(3).uniform(-1, 1, (6, 19 * 3 + 3 + 3 * 2 + 2))
