@@ -174,8 +174,11 @@ class Episode:
     seed: np.uint64
 
 
-class ArenaWorld:
-    """A scenario's worlds: its track, learner and traffic, ready to evaluate populations."""
+class LearnerWorld:
+    """What every world of a rangefinder learner holds, whoever drives the traffic: the
+    scenario, its track and wall grid, the learner's network and start poses, and the step's
+    constants (:mod:`enn_traffic.sim.rules`). :class:`ArenaWorld` adds scripted traffic,
+    :class:`~enn_traffic.sim.sumo_world.SumoWorld` SUMO's."""
 
     def __init__(self, scenario: Scenario, track: Track | None = None):
         self.scenario = scenario
@@ -184,18 +187,11 @@ class ArenaWorld:
                                          surface=scenario.track.surface)
         self.exits = self.track.exits if scenario.fringe_exits else np.empty((0, 4))
         self.spec = NetworkSpec(scenario.layer_sizes, scenario.network.layout)
-        self.traffic_spec = NetworkSpec(scenario.traffic_layer_sizes, scenario.network.layout)
         vehicle, sensor, traffic = scenario.vehicle, scenario.sensor, scenario.traffic
         reach = max(sensor.range, math.hypot(vehicle.length, vehicle.width / 2)) + 1.0
         self.grid = WallGrid.cached(self.track.walls, reach)
         self.starts = start_poses(scenario, self.track, listed)
         self.start = self.starts[0]
-        self.traffic_starts = [tuple(xy) for xy in traffic.starts_xy]
-        for index, (x, y) in enumerate(self.traffic_starts):
-            if not self.track.contains(x, y):
-                raise InputError(f"start ({x:g}, {y:g}) is off the drivable area",
-                                 scenario.source, f"traffic.starts_xy[{index}]")
-        self.vehicles = 1 + len(self.traffic_starts)
         self.layer_sizes = self.spec.layer_array
         episode = scenario.episode
         self.physics, self.geometry = build_constants(
@@ -213,6 +209,35 @@ class ArenaWorld:
             clearance=traffic.respawn_clearance,
         )
         self.max_steps = episode.max_steps
+
+    def start_of(self, key: int, strategy: int, episode: int) -> tuple[float, float, float]:
+        """The learner's start in the situation (traffic key, strategy, episode): the one
+        start, or one drawn from the scenario's list of start lanes or edges."""
+        if len(self.starts) == 1:
+            return self.starts[0]
+        sequence = [self.scenario.traffic.seed, key, strategy, episode, START_STREAM]
+        return self.starts[np.random.default_rng(sequence).integers(len(self.starts))]
+
+    def traffic_key(self, key: int) -> int:
+        """The key traffic is drawn from: ``key``, or 0 for every training generation when
+        ``traffic.vary = "fixed"`` (held-out keys stay their own)."""
+        fixed = self.scenario.traffic.vary == "fixed" and keys.is_training(key)
+        return 0 if fixed else key
+
+
+class ArenaWorld(LearnerWorld):
+    """A scenario's worlds: its track, learner and scripted traffic, ready to evaluate
+    populations."""
+
+    def __init__(self, scenario: Scenario, track: Track | None = None):
+        super().__init__(scenario, track)
+        self.traffic_spec = NetworkSpec(scenario.traffic_layer_sizes, scenario.network.layout)
+        self.traffic_starts = [tuple(xy) for xy in scenario.traffic.starts_xy]
+        for index, (x, y) in enumerate(self.traffic_starts):
+            if not self.track.contains(x, y):
+                raise InputError(f"start ({x:g}, {y:g}) is off the drivable area",
+                                 scenario.source, f"traffic.starts_xy[{index}]")
+        self.vehicles = 1 + len(self.traffic_starts)
 
     def episodes(self, key: int) -> list[Episode]:
         """The traffic situations of a traffic key: one per (strategy, episode), drawn from
@@ -235,20 +260,6 @@ class ArenaWorld:
                 result.append(Episode(start, kinds, self.spec.embed(genes, self.traffic_spec),
                                       np.uint64(sequence.generate_state(1, np.uint64)[0])))
         return result
-
-    def start_of(self, key: int, strategy: int, episode: int) -> tuple[float, float, float]:
-        """The learner's start in the situation (traffic key, strategy, episode): the one
-        start, or one drawn from the scenario's list of start lanes or edges."""
-        if len(self.starts) == 1:
-            return self.starts[0]
-        sequence = [self.scenario.traffic.seed, key, strategy, episode, START_STREAM]
-        return self.starts[np.random.default_rng(sequence).integers(len(self.starts))]
-
-    def traffic_key(self, key: int) -> int:
-        """The key traffic is drawn from: ``key``, or 0 for every training generation when
-        ``traffic.vary = "fixed"`` (held-out keys stay their own)."""
-        fixed = self.scenario.traffic.vary == "fixed" and keys.is_training(key)
-        return 0 if fixed else key
 
     def episode_labels(self) -> list[str]:
         """The strategy of each column of :meth:`evaluate`'s per-episode arrays."""

@@ -27,7 +27,7 @@ from enn_traffic import keys
 from enn_traffic.progress import slow_step
 from enn_traffic.roads import Track
 from enn_traffic.scenario import Scenario
-from enn_traffic.sim.arena import ArenaWorld
+from enn_traffic.sim.arena import LearnerWorld
 from enn_traffic.sim.replay import (
     RUNNING,
     clear_start,
@@ -122,17 +122,23 @@ def warmups_used(scenario: Scenario, key: int) -> str:
     return "; ".join(used)
 
 
-class SumoWorld(ArenaWorld):
+class SumoWorld(LearnerWorld):
     """A scenario whose traffic is SUMO's: evaluate populations, trace one episode."""
 
     def __init__(self, scenario: Scenario, track: Track | None = None):
         super().__init__(scenario, track)
         self._recordings: OrderedDict[tuple, sumo.Recording] = OrderedDict()
-        self.vehicles = 1
+        self._traffic_seen: list[float] = []  # the last replay's mean SUMO vehicles
         self.max_steps = sumo.episode_steps(scenario)  # or where the .sumocfg ends
         self._checked = False  # closed loop: has some traffic been seen on the network?
         self._states: dict[tuple, Path] = {}  # closed loop: each situation's saved warm-up
         self._steps: dict = {}  # closed loop: the compiled step, by the genes' numba type
+
+    @property
+    def vehicles(self) -> int:
+        """Vehicles simulated per world: the learner and the mean of the SUMO vehicles the
+        last replayed situations held (the learner alone before any, or in closed loop)."""
+        return 1 + round(float(np.mean(self._traffic_seen))) if self._traffic_seen else 1
 
     def seeds(self, key: int) -> list[int]:
         """The SUMO seed of each traffic situation of a traffic key."""
@@ -214,7 +220,8 @@ class SumoWorld(ArenaWorld):
                     genes, self.layer_sizes, self._learner_physics(record.radius), self.geometry,
                     start, record.ids, record.corners, record.centres, self.max_steps))
             hit_vehicle.append(named(runs[-1][5], record.names, record.types))
-        self.vehicles = 1 + round(float(np.mean(vehicles))) if vehicles else self.vehicles
+        if vehicles:
+            self._traffic_seen = vehicles
         return EpisodeResults.of_situations(runs, self.vehicles, at_start,
                                             np.stack(safety, axis=1) if safety else None,
                                             np.stack(hit_vehicle, axis=1))
