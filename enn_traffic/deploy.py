@@ -12,6 +12,7 @@ from collections.abc import Sequence
 from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 
+import numpy as np
 import pandas as pd
 from tqdm import tqdm
 
@@ -28,6 +29,7 @@ from enn_traffic.sim.world import (
     MET_START,
     OUTCOMES,
     EpisodeResults,
+    World,
 )
 from enn_traffic.worlds import make_world
 
@@ -192,7 +194,7 @@ def evaluation_scenario(controller: Controller, scenario: Scenario, episodes: in
 
 def controller_trace(
     controller: Controller, scenario: Scenario, max_steps: int | None = None, episode: int = 0
-):
+) -> tuple[World, np.ndarray, int]:
     """The world, every vehicle's poses (n, V, 3) in one episode, and the learner's outcome."""
     world = make_world(evaluation_scenario(controller, scenario, episode + 1))
     poses, outcome = world.trace(

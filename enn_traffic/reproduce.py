@@ -26,7 +26,8 @@ def reproduce(out: Path, quick: bool = False, only: list[str] | None = None,
     """Run the experiments ``only`` (default: all) into ``out``; their independent runs go to
     ``executor`` (local, or ray at ``address``)."""
     from enn_traffic.experiments import EXPERIMENTS
-    from enn_traffic.experiments.common import whole_runs_on
+    from enn_traffic.experiments.common import executor as runs_on
+    from enn_traffic.experiments.study import Study
 
     names = only or list(EXPERIMENTS)
     unknown = [n for n in names if n not in EXPERIMENTS]
@@ -37,18 +38,18 @@ def reproduce(out: Path, quick: bool = False, only: list[str] | None = None,
     out.mkdir(parents=True, exist_ok=True)
     record_path = out / "summary.json"
     records = json.loads(record_path.read_text()) if record_path.exists() else {}
+    study = Study(out, quick, progress, runs_on(executor, address))
     bar = tqdm(names, desc="reproduce", unit="experiment", disable=not progress, position=0)
-    with whole_runs_on(executor, address):
-        for name in bar:
-            bar.set_postfix_str(name)
-            started = time.perf_counter()
-            lines = EXPERIMENTS[name](out, quick=quick, progress=progress)
-            records[name] = {"lines": lines, "seconds": round(time.perf_counter() - started, 1),
-                             "settings": "quick" if quick else "full", "commit": commit(),
-                             "code": code_version(),
-                             "date": datetime.now(UTC).strftime("%Y-%m-%d %H:%M UTC")}
-            write_text(record_path, json.dumps(records, indent=1))
-            tqdm.write("\n".join(lines))
+    for name in bar:
+        bar.set_postfix_str(name)
+        started = time.perf_counter()
+        lines = EXPERIMENTS[name](study)
+        records[name] = {"lines": lines, "seconds": round(time.perf_counter() - started, 1),
+                         "settings": "quick" if quick else "full", "commit": commit(),
+                         "code": code_version(),
+                         "date": datetime.now(UTC).strftime("%Y-%m-%d %H:%M UTC")}
+        write_text(record_path, json.dumps(records, indent=1))
+        tqdm.write("\n".join(lines))
     write_summary(out, records)
     for name in names:
         print(f"{name:>16}: {records[name]['seconds']:7.1f} s")

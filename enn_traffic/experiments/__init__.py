@@ -1,7 +1,9 @@
 """One module per paper experiment; each writes its tables and figures into the reproduce folder.
 
 ``EXPERIMENTS`` maps the names that ``enn-traffic reproduce --only`` takes to functions
-``(out: Path, quick: bool, progress: bool) -> list[str]`` that return summary lines. The
+``(study: Study) -> list[str]`` that return summary lines
+(:class:`~enn_traffic.experiments.study.Study`: the folder, the settings, the executor and
+what experiments compute once and share). The
 dynamic-traffic experiments share their protocol (:mod:`~enn_traffic.experiments.protocol`) and
 the statistics of choosing controllers (:mod:`~enn_traffic.experiments.choosing`).
 """

@@ -1,11 +1,12 @@
-"""Helpers the experiments share: where scenarios live, and reusable runs."""
+"""Helpers the experiments share: saved controllers, and whole runs reused, resumed or done,
+here or on Ray."""
 
 from __future__ import annotations
 
 import tempfile
-from collections.abc import Hashable, Iterator
-from contextlib import contextmanager
+from collections.abc import Hashable
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 import pandas as pd
@@ -17,6 +18,9 @@ from enn_traffic.io import write_atomic
 from enn_traffic.runner import CHECKPOINT, evolve
 from enn_traffic.scenario import Scenario
 from enn_traffic.shipped import shipped_scenario
+
+if TYPE_CHECKING:
+    from enn_traffic.experiments.study import Runs, Study
 
 
 def save_controller(out: Path, name: str, scenario: Scenario, chromosome: np.ndarray,
@@ -107,37 +111,24 @@ class RayRuns:
         return {key: tables[key] for key in jobs}
 
 
-_runs: LocalRuns | RayRuns = LocalRuns()
-
-
-@contextmanager
-def whole_runs_on(executor: str = "local", address: str | None = None) -> Iterator[None]:
-    """Within this block the experiments' independent runs go to ``executor`` (local or ray)."""
-    global _runs
-    if executor not in ("local", "ray"):
-        raise InputError(f"unknown executor {executor!r} for whole runs; use local or ray",
+def executor(name: str = "local", address: str | None = None) -> LocalRuns | RayRuns:
+    """Where a study's independent whole runs go: ``local`` (one after another) or ``ray``
+    (at ``address``, or a local Ray)."""
+    if name not in ("local", "ray"):
+        raise InputError(f"unknown executor {name!r} for whole runs; use local or ray",
                          key="--executor")
-    previous, _runs = _runs, RayRuns(address) if executor == "ray" else LocalRuns()
-    try:
-        yield
-    finally:
-        _runs = previous
+    return RayRuns(address) if name == "ray" else LocalRuns()
 
 
-def run_all(jobs: Jobs, progress: bool) -> dict[Hashable, pd.DataFrame]:
-    """Independent runs (``key -> (scenario, folder)``), each reused, resumed or done; on Ray
-    within ``whole_runs_on("ray")``."""
-    return _runs.map(jobs, progress)
-
-
-def seed_runs(name: str, out: Path, seeds, ga: dict, progress: bool
-              ) -> dict[int, pd.DataFrame]:
-    """One run of scenario ``name`` per seed under ``out/runs/NAME/seedN``; experiments that
-    share runs (Fig. 7 and Fig. 9's 19 beams) find them done."""
+def seed_runs(study: Study, name: str, runs: Runs) -> dict[int, pd.DataFrame]:
+    """One run of scenario ``name`` per seed of ``runs`` (as ``study`` runs them) under
+    ``runs/NAME/seedN``; experiments that share runs (Fig. 7 and Fig. 9's 19 beams) find them
+    done."""
+    runs = study.settings(runs)
     base = shipped_scenario(name)
-    jobs = {seed: (base.with_overrides(seed=seed, ga=ga), out / "runs" / name / f"seed{seed}")
-            for seed in seeds}
-    return run_all(jobs, progress)
+    jobs = {seed: (base.with_overrides(seed=seed, ga=dict(runs.ga)),
+                   study.out / "runs" / name / f"seed{seed}") for seed in runs.seeds}
+    return study.run_all(jobs)
 
 
 def first_generation(table: pd.DataFrame, threshold: float) -> float:

@@ -2,35 +2,33 @@
 
 from __future__ import annotations
 
-from pathlib import Path
-
 import numpy as np
 import pandas as pd
 
 from enn_traffic.experiments.choosing import held_out
 from enn_traffic.experiments.protocol import ARENA, Family, family_runs, title
+from enn_traffic.experiments.study import Study
 from enn_traffic.io import write_csv
 from enn_traffic.report.figures import fig11_figure
 
 
-def fig11(out: Path, quick: bool = False, progress: bool = True,
-          family: Family = ARENA) -> list[str]:
+def fig11(study: Study, family: Family = ARENA) -> list[str]:
     """Learning curves, one run per seed and strategy, one panel per strategy: each
     generation's best training fitness (solid) and the same chromosome on test traffic
     (dashed)."""
-    family = family.settings(quick)
-    out = out / family.folder
+    family = study.settings(family)
+    out = study.out / family.folder
     rows = []
-    runs_by_strategy = family_runs(family, out, progress)
+    runs_by_strategy = family_runs(study, family)
     scores = {}
     for strategy, runs in runs_by_strategy.items():
         for seed, table in runs.items():
-            scores[strategy, seed] = held_out(family, out, strategy, seed)
+            scores[strategy, seed] = held_out(study, family, strategy, seed)
             rows.append(run_row(strategy, seed, table, scores[strategy, seed]))
     fig11_figure(runs_by_strategy, scores, {s: title(family, s) for s in family.strategies},
                  f"Fig. 11 ({family.label}): the learner among traffic, "
                  f"{len(family.seeds)} runs per strategy\nsolid: each generation's best "
-                 f"fitness; dashed: the same chromosome on {family.test_episodes} test "
+                 f"fitness; dashed: the same chromosome on {family.test_situations} test "
                  "situations", out / "fig11.png")
     table = pd.DataFrame(rows)
     write_csv(out / "fig11.csv", table)

@@ -7,6 +7,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -23,6 +24,9 @@ from enn_traffic.experiments.protocol import Family
 from enn_traffic.runner import RunOutputs
 from enn_traffic.worlds import make_world
 
+if TYPE_CHECKING:
+    from enn_traffic.experiments.study import Study
+
 
 @dataclass(frozen=True)
 class Iteration:
@@ -37,19 +41,19 @@ class Iteration:
     worst: float
 
 
-def incremental_evolution(family: Family, out: Path, seed: int, progress: bool
+def incremental_evolution(study: Study, family: Family, out: Path, seed: int
                           ) -> list[Iteration]:
     """One incremental evolution from GA seed ``seed``, its runs in ``out/iterationK``."""
     threshold = family.threshold
     base = family.scenario(1)
     population, iterations = None, []
     for iteration in range(1, len(family.strategies) + 1):
-        ga = {"generations": family.incremental_max_generations, **family.ga()}
+        ga = {"generations": family.incremental_max_generations, **family.ga}
         # the acceptance rule is part of the run's settings: a run stopped by another is redone
         rule = (f"Incremental evolution (§5.4.1), iteration {iteration}: stops when one of the "
                 f"{TOP_CANDIDATES} fittest reaches {threshold:g} steps on every included "
-                f"strategy in {family.test_episodes} validation situations, and by its mean "
-                f"less {ACCEPTANCE_ERRORS:g} standard errors in {family.recheck_episodes} "
+                f"strategy in {family.test_situations} validation situations, and by its mean "
+                f"less {ACCEPTANCE_ERRORS:g} standard errors in {family.recheck_situations} "
                 "others.")
         sc = base.with_overrides(name=f"incremental_{iteration}", description=rule, seed=seed,
                                  ga=ga)
@@ -59,13 +63,13 @@ def incremental_evolution(family: Family, out: Path, seed: int, progress: bool
 
         def accepted(population, fitness, included=included):
             fittest = population[np.argsort(-fitness, kind="stable")[:TOP_CANDIDATES]]
-            return accepts(family, fittest, included, threshold)
+            return accepts(study, family, fittest, included, threshold)
 
         folder = out / f"iteration{iteration}"
-        table = run_or_reuse(sc, folder, progress, evaluator=MeanOverWorlds(worlds),
+        table = run_or_reuse(sc, folder, study.progress, evaluator=MeanOverWorlds(worlds),
                              initial_population=population, stop=accepted, others=scenarios)
         outputs = RunOutputs.load(folder)
         population = outputs.population
-        chosen, worst = scored_pick(family, candidates(folder), included)
+        chosen, worst = scored_pick(study, family, candidates(folder), included)
         iterations.append(Iteration(included, len(table), outputs.stopped, chosen, worst))
     return iterations

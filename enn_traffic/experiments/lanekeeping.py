@@ -15,6 +15,7 @@ from enn_traffic.deploy import EVALUATION_KEY
 from enn_traffic.evolution.backends import ProcessEvaluator
 from enn_traffic.experiments.choosing import candidates
 from enn_traffic.experiments.common import run_or_reuse, save_controller
+from enn_traffic.experiments.study import Runs, Study
 from enn_traffic.io import write_csv
 from enn_traffic.lanekeeping.world import LaneKeepingWorld
 from enn_traffic.report.plots import draw_paths, learning_curves, save_figure
@@ -23,9 +24,9 @@ from enn_traffic.shipped import shipped_scenario
 from enn_traffic.sim.world import CAPPED
 from enn_traffic.worlds import make_world
 
-SEEDS = [1, 2, 3]
+RUNS = Runs(seeds=(1, 2, 3), quick={"seeds": (1,), "ga": {"population_size": 20,
+                                                           "generations": 6, "elite_count": 2}})
 DRAWN_STEPS = 400
-QUICK = {"population_size": 20, "generations": 6, "elite_count": 2}
 # Trained on highway-env's road alone, or on roads drawn per situation (issue 25).
 TRAININGS = ["lane_keeping", "lane_keeping_mixed"]
 # Measured on fixed roads: highway-env's training road and roads neither training drove (the
@@ -74,20 +75,22 @@ NOISES = [0.0, 0.1]  # the camera's noise when measured (m)
 ROAD_KEYS = ["road", "amplitude", "period", "radius", "mirrored", "draw"]
 
 
-def lane_keeping(out: Path, quick: bool = False, progress: bool = True) -> list[str]:
+def lane_keeping(study: Study) -> list[str]:
     """Evolve on highway-env's road and on drawn roads (process pool), then drive the best
     controller of each run on every road of ``ROADS``, with and without camera noise:
     ``lane_keeping.csv``, ``lane_keeping.png``, ``lane_keeping_paths.png``."""
-    seeds = SEEDS[:1] if quick else SEEDS
+    out, settings = study.out, study.settings(RUNS)
+    seeds = settings.seeds
     runs, best = {}, {}
     for name in TRAININGS:
         base = shipped_scenario(name)
         for seed in seeds:
-            sc = base.with_overrides(seed=seed, ga=QUICK if quick else {})
+            sc = base.with_overrides(seed=seed, ga=dict(settings.ga))
             run_dir = out / "runs" / name / f"seed{seed}"
             evaluator = ProcessEvaluator(sc)
             try:
-                runs[name, seed] = run_or_reuse(sc, run_dir, progress, evaluator=evaluator)
+                runs[name, seed] = run_or_reuse(sc, run_dir, study.progress,
+                                                evaluator=evaluator)
             finally:
                 evaluator.close()
             best[name, seed] = chosen(sc, run_dir)

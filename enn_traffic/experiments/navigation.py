@@ -4,6 +4,7 @@ generalisation: controllers trained on one track or on several, on tracks they n
 
 from __future__ import annotations
 
+from dataclasses import replace
 from pathlib import Path
 
 import matplotlib.pyplot as plt
@@ -13,7 +14,8 @@ from tqdm import tqdm
 
 from enn_traffic.controller import Controller
 from enn_traffic.deploy import controller_trace
-from enn_traffic.experiments.common import first_generation, run_all, save_controller, seed_runs
+from enn_traffic.experiments.common import first_generation, save_controller, seed_runs
+from enn_traffic.experiments.study import Runs, Study
 from enn_traffic.io import write_csv
 from enn_traffic.report.plots import draw_paths, heat_map, learning_curves, save_figure
 from enn_traffic.shipped import shipped_scenario
@@ -22,8 +24,10 @@ from enn_traffic.sim.world import CAPPED, OUTCOMES
 # Best fitness at which the vehicle has reached the far dead end of the narrow track
 # (location B, ≈1.3 km of corridor; docs/design.md, "The authors' code" 1).
 REACHED_B = 1200
-SEEDS = [1, 2, 3, 4, 5]
-QUICK = {"population_size": 60, "generations": 20}
+# Five GA seeds per training; --quick: two, and a small GA.
+RUNS = Runs(seeds=(1, 2, 3, 4, 5), quick={"seeds": (1, 2), "ga": {"population_size": 60,
+                                                                   "generations": 20}})
+SENSOR_RUNS = replace(RUNS, quick={**RUNS.quick, "seeds": (1,)})  # Fig. 9: six sensors
 # Generalisation (issue 25): the scenarios controllers train on, and the tracks they are
 # measured on, narrowest first. The validation tracks (unseen_*, 12-30 m) were read once as a
 # test, then decided the design of training across tracks; the test tracks (test_*, 12-30 m)
@@ -41,14 +45,10 @@ STEP_CAP = 20_000
 PATH_STEPS = 3000
 
 
-def _seed_runs(name: str, out: Path, seeds, quick: bool, progress: bool):
-    return seed_runs(name, out, seeds, QUICK if quick else {}, progress)
-
-
-def fig7(out: Path, quick: bool = False, progress: bool = True) -> list[str]:
+def fig7(study: Study) -> list[str]:
     """Narrow track, 5 seeds: does the best vehicle reach location B within 50 generations?"""
-    seeds = SEEDS[:2] if quick else SEEDS
-    runs = _seed_runs("navigation_narrow", out, seeds, quick, progress)
+    out = study.out
+    runs = seed_runs(study, "navigation_narrow", RUNS)
     rows = []
     for seed, table in runs.items():
         rows.append({
@@ -67,16 +67,16 @@ def fig7(out: Path, quick: bool = False, progress: bool = True) -> list[str]:
     reached = int(summary["reached_B_generation"].notna().sum())
     return [
         f"fig7: best vehicle reached location B (≥{REACHED_B} steps) in {reached} of "
-        f"{len(seeds)} seeds; generations to reach it: "
+        f"{len(runs)} seeds; generations to reach it: "
         f"{summary['reached_B_generation'].tolist()}; max best fitness "
         f"{summary['max_best_fitness'].max():.0f} steps (paper: <50 generations, stalls at B)",
     ]
 
 
-def fig8(out: Path, quick: bool = False, progress: bool = True) -> list[str]:
+def fig8(study: Study) -> list[str]:
     """Wide track, 5 seeds: back and forth without collision up to the step cap."""
-    seeds = SEEDS[:2] if quick else SEEDS
-    runs = _seed_runs("navigation_wide", out, seeds, quick, progress)
+    out = study.out
+    runs = seed_runs(study, "navigation_wide", RUNS)
     cap = shipped_scenario("navigation_wide").episode.max_steps
     rows = [{
         "seed": seed,
@@ -91,7 +91,7 @@ def fig8(out: Path, quick: bool = False, progress: bool = True) -> list[str]:
                     title="Fig. 8: wide track (30 m)", hline=cap, log=True)
     capped = int(summary["capped_generation"].notna().sum())
     return [
-        f"fig8: best vehicle drove to the {cap}-step cap in {capped} of {len(seeds)} seeds, at "
+        f"fig8: best vehicle drove to the {cap}-step cap in {capped} of {len(runs)} seeds, at "
         f"generations {summary['capped_generation'].tolist()} (paper: 'very high fitness')",
     ]
 
@@ -101,9 +101,10 @@ def fig8(out: Path, quick: bool = False, progress: bool = True) -> list[str]:
 SENSORS = [(1, 180.0), (3, 180.0), (5, 180.0), (10, 180.0), (19, 180.0), (3, 90.0)]
 
 
-def fig9(out: Path, quick: bool = False, progress: bool = True) -> list[str]:
+def fig9(study: Study) -> list[str]:
     """Sensor resolution: 1, 3, 5, 10, 19 beams over 180° on the narrow track."""
-    seeds = SEEDS[:1] if quick else SEEDS
+    out, settings = study.out, study.settings(SENSOR_RUNS)
+    seeds = settings.seeds
     base = shipped_scenario("navigation_narrow")
     jobs = {}  # every sensor's runs at once: side by side on Ray
     for beams, span in SENSORS:
@@ -111,10 +112,10 @@ def fig9(out: Path, quick: bool = False, progress: bool = True) -> list[str]:
         label += "" if span == 180.0 else f"_{span:g}deg"
         for seed in seeds:
             jobs[beams, span, seed] = (
-                base.with_overrides(seed=seed, ga=QUICK if quick else {},
+                base.with_overrides(seed=seed, ga=dict(settings.ga),
                                     sensor={"beams": beams, "span_deg": span}),
                 out / "runs" / label / f"seed{seed}")
-    tables = run_all(jobs, progress)
+    tables = study.run_all(jobs)
     rows, curves = [], {}
     for beams, span in SENSORS:
         runs = {seed: tables[beams, span, seed] for seed in seeds}
@@ -151,16 +152,16 @@ def fig9(out: Path, quick: bool = False, progress: bool = True) -> list[str]:
     ]
 
 
-def generalization(out: Path, quick: bool = False, progress: bool = True) -> list[str]:
+def generalization(study: Study) -> list[str]:
     """Controllers trained on one track (narrow, wide) or on five at once (mixed), 5 seeds
     each, on tracks they never trained on: the validation tracks (``VALIDATION_TRACKS``) and
     the test tracks (``TEST_TRACKS``), 12–30 m; steps to the cap and the share of the track
     covered. A controller drives every track by its training's spin rule
     (:meth:`Controller.fit`). Pairs whose track a controller trained on are marked ``seen``."""
-    seeds = SEEDS[:2] if quick else SEEDS
+    out, seeds = study.out, study.settings(RUNS).seeds
     controllers = {}
     for name in TRAINED:
-        _seed_runs(name, out, seeds, quick, progress)
+        seed_runs(study, name, RUNS)
         for seed in seeds:
             path = out / "runs" / name / f"seed{seed}" / "best.npz"
             controllers[name, seed] = Controller.load(path)
@@ -175,7 +176,7 @@ def generalization(out: Path, quick: bool = False, progress: bool = True) -> lis
               for key in controllers for i, track in enumerate(trainings[key[0]].tracks)]
     rows, traces = [], {}
     for (name, seed), track, scenario in tqdm(pairs, desc="generalization", unit="pair",
-                                              disable=not progress, leave=False):
+                                              disable=not study.progress, leave=False):
         world, poses, outcome = controller_trace(controllers[name, seed], scenario)
         trained_on = {t.net for t in trainings[name].tracks}
         rows.append({
@@ -231,7 +232,8 @@ def _path_figure(traces: dict, path: Path, seed: int) -> None:
     for row, name in zip(axes, TRAINED, strict=True):
         for ax, track in zip(row, TEST_TRACKS, strict=True):
             world, xy = traces[name, track]
-            draw_paths(ax, world.track.walls, [xy], colors=["C0"], start=world.start, width=0.6)
+            draw_paths(ax, world.track.walls, [xy], colors=["C0"], start=tuple(xy[0]),
+                       width=0.6)
             ax.set_xticks([])
             ax.set_yticks([])
             if name == TRAINED[0]:

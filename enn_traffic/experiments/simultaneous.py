@@ -34,7 +34,6 @@ from __future__ import annotations
 
 import copy
 import time
-from functools import cache
 from pathlib import Path
 
 import matplotlib.pyplot as plt
@@ -46,6 +45,7 @@ from enn_traffic.evolution.online import Evidence, OnlineLearning, VehicleGA
 from enn_traffic.experiments.choosing import evolved_candidates, final_population
 from enn_traffic.experiments.common import distinct, save_controller
 from enn_traffic.experiments.protocol import ARENA
+from enn_traffic.experiments.study import Study
 from enn_traffic.io import write_csv
 from enn_traffic.report.plots import draw_paths, save_figure
 from enn_traffic.runner import ga_params
@@ -152,12 +152,12 @@ def _strategy_rows(world: ArenaWorld, strategy: int, winner: np.ndarray, populat
              "simulated_s": simulated, "wall_s": round(wall, 1)}, situations)
 
 
-@cache
-def _measure(out: Path, quick: bool, progress: bool) -> tuple[pd.DataFrame, pd.DataFrame]:
-    """Every strategy's rates, once per process (Tables 3 and 4 share them): the means, also
-    written to ``simultaneous.csv`` with the simulated and wall time they took, and each
-    situation's, written to ``simultaneous_situations.csv``."""
-    candidates = evolved_candidates(out, quick, progress)
+def _measure(study: Study) -> tuple[pd.DataFrame, pd.DataFrame]:
+    """Every strategy's rates (Tables 3 and 4 share them): the means, also written to
+    ``simultaneous.csv`` with the simulated and wall time they took, and each situation's,
+    written to ``simultaneous_situations.csv``."""
+    family, out = study.settings(ARENA), study.out
+    candidates = evolved_candidates(study, family)
     rows, situations, paths = [], [], {}
     for strategy in ARENA.strategies:
         world = ArenaWorld(shipped_scenario(ARENA.name(strategy)))
@@ -166,7 +166,7 @@ def _measure(out: Path, quick: bool, progress: bool) -> tuple[pd.DataFrame, pd.D
         save_controller(out, f"table3/strategy{strategy}", world.scenario, winner,
                         float("nan"))  # chosen by lives lost, not by a fitness
         population = _evolved_population(
-            ranked, final_population(ARENA, out, strategy, winner, quick),
+            ranked, final_population(study, family, strategy, winner),
             world.scenario.ga.population_size)
         means, each = _strategy_rows(world, strategy, winner, population, validation, paths)
         rows.append(means)
@@ -214,11 +214,10 @@ def _draw(paths: dict, path: Path) -> None:
     save_figure(figure, path)
 
 
-def _table(out: Path, quick: bool, progress: bool, after: str, name: str, label: str
-           ) -> list[str]:
-    measured, situations = _measure(out, quick, progress)
+def _table(study: Study, after: str, name: str, label: str) -> list[str]:
+    measured, situations = study.shared("simultaneous", lambda: _measure(study))
     table = rates_table(measured, after)
-    write_csv(out / f"{name}.csv", table)
+    write_csv(study.out / f"{name}.csv", table)
     return summary_lines(table, measured, situations, after, name, label)
 
 
@@ -258,11 +257,11 @@ def summary_lines(table: pd.DataFrame, measured: pd.DataFrame, situations: pd.Da
             f"s (table4.csv): {rates}; {measure}; {simulated}"]
 
 
-def table3(out: Path, quick: bool = False, progress: bool = True) -> list[str]:
+def table3(study: Study) -> list[str]:
     """§5.5.1: the winning chromosome drives every vehicle."""
-    return _table(out, quick, progress, "winner", "table3", "winner")
+    return _table(study, "winner", "table3", "winner")
 
 
-def table4(out: Path, quick: bool = False, progress: bool = True) -> list[str]:
+def table4(study: Study) -> list[str]:
     """§5.5.2: the evolved population, all vehicles learning at once."""
-    return _table(out, quick, progress, "population", "table4", "population")
+    return _table(study, "population", "table4", "population")

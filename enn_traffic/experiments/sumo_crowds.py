@@ -2,8 +2,8 @@
 or the city's; docs/sumo.md).
 
 ``traffic.learners`` learners (8) drive at once in one live SUMO, among its own traffic
-(:mod:`enn_traffic.sim.sumo_crowd`). For each strategy and each of ``SITUATIONS`` traffic
-situations, over spans of ``SECONDS`` of SUMO time:
+(:mod:`enn_traffic.sim.sumo_crowd`). For each strategy and each of the ``CROWD_SPANS``'
+situations (10), over spans of its seconds (100) of SUMO time:
 
 - initial drivers: every learner a random network (drawn per situation), two spans one after
   the other (``initial``, ``initial_next``);
@@ -25,27 +25,39 @@ keys (:data:`enn_traffic.keys.CROWD_TEST`), which no choice looked at.
 
 from __future__ import annotations
 
-from functools import cache
-from pathlib import Path
+from collections.abc import Mapping
+from dataclasses import dataclass, field
 
 import numpy as np
 import pandas as pd
 
 from enn_traffic import keys
 from enn_traffic.evolution.online import OnlineLearning, VehicleGA
-from enn_traffic.experiments.choosing import final_population, trained_controllers
+from enn_traffic.experiments.choosing import final_population, specialists
 from enn_traffic.experiments.protocol import SUMO, Family
+from enn_traffic.experiments.study import Study
 from enn_traffic.io import write_csv
 from enn_traffic.runner import ga_params
 from enn_traffic.sim.sumo_crowd import SumoCrowd
 from enn_traffic.sim.sumo_world import SumoWorld
 from enn_traffic.worlds import make_world
 
-SECONDS = 100.0  # the paper's learning time, and each measured span
-SITUATIONS = 10
-QUICK_SECONDS, QUICK_SITUATIONS = 20.0, 2
 SITUATION_KEY = keys.CROWD_TEST.start
 SPANS = ["initial", "initial_next", "winner", "winner_next", "learning", "population"]
+
+
+@dataclass(frozen=True)
+class Spans:
+    """How long each span is (SUMO seconds) and how many situations each strategy is measured
+    in, and what ``--quick`` changes of them."""
+
+    seconds: float
+    situations: int
+    quick: Mapping[str, object] = field(default_factory=dict)
+
+
+# 100 s: the paper's learning time, and each measured span
+CROWD_SPANS = Spans(seconds=100.0, situations=10, quick={"seconds": 20.0, "situations": 2})
 
 
 def situation_rates(world: SumoWorld, winner: np.ndarray, evolved: np.ndarray, situation: int,
@@ -89,31 +101,29 @@ def interval(values: np.ndarray, rng: np.random.Generator, draws: int = 2000,
     return float(low), float(high)
 
 
-def crowd_world(family: Family, strategy: int, quick: bool) -> SumoWorld:
+def crowd_world(family: Family, strategy: int) -> SumoWorld:
     """The strategy's test world with its SUMO in closed loop (the learners are in it), and the
-    GA settings its populations evolved with (the quick ones in quick mode)."""
-    settings = family.settings(quick)
-    return make_world(settings.scenario(strategy).with_overrides(
-        ga=settings.ga(), traffic={"mode": "closed-loop"}))
+    GA settings its populations evolved with."""
+    return make_world(family.scenario(strategy).with_overrides(
+        ga=dict(family.ga), traffic={"mode": "closed-loop"}))
 
 
-@cache
-def measure(family: Family, out: Path, quick: bool, progress: bool) -> pd.DataFrame:
-    """Every strategy's situations (once per process: Tables 3 and 4 share them), written to
-    ``<family folder>/crowd_situations.csv``."""
-    controllers = trained_controllers(out, quick, progress, family)
-    seconds, situations = (QUICK_SECONDS, QUICK_SITUATIONS) if quick else (SECONDS, SITUATIONS)
+def measure(study: Study, family: Family) -> pd.DataFrame:
+    """Every strategy's situations, written to ``<family folder>/crowd_situations.csv``."""
+    controllers = specialists(study, family)
+    spans = study.settings(CROWD_SPANS)
     rows = []
     for strategy in family.strategies:
-        world = crowd_world(family, strategy, quick)
+        world = crowd_world(family, strategy)
         winner = controllers[strategy]
-        evolved = final_population(family, out, strategy, winner, quick)
+        evolved = final_population(study, family, strategy, winner)
         source = world.spec.in_source_layout(np.vstack([winner, evolved]))
-        for situation in range(situations):
+        for situation in range(spans.situations):
             rows.append({"strategy": strategy, "situation": situation,
-                         **situation_rates(world, source[0], source[1:], situation, seconds)})
+                         **situation_rates(world, source[0], source[1:], situation,
+                                           spans.seconds)})
     table = pd.DataFrame(rows)
-    write_csv(out / family.folder / "crowd_situations.csv", table)
+    write_csv(study.out / family.folder / "crowd_situations.csv", table)
     return table
 
 
@@ -133,16 +143,16 @@ def table(situations: pd.DataFrame, columns: list[str]) -> pd.DataFrame:
     return pd.DataFrame(rows)
 
 
-def sumo_tables(out: Path, quick: bool = False, progress: bool = True, family: Family = SUMO
-                ) -> list[str]:
+def sumo_tables(study: Study, family: Family = SUMO) -> list[str]:
     """A SUMO family's Table 3 (the winner broadcast, against the initial drivers, from the
     learners' entry) and Table 4 (after learning together, against both drivers' second
-    spans), into ``out/<family folder>/table3.csv`` and ``table4.csv``."""
-    situations = measure(family, out, quick, progress)
+    spans), into ``<family folder>/table3.csv`` and ``table4.csv``."""
+    family = study.settings(family)
+    situations = measure(study, family)
     table3 = table(situations, ["initial", "winner"])
     table4 = table(situations, ["initial_next", "winner_next", "population"])
-    write_csv(out / family.folder / "table3.csv", table3)
-    write_csv(out / family.folder / "table4.csv", table4)
+    write_csv(study.out / family.folder / "table3.csv", table3)
+    write_csv(study.out / family.folder / "table4.csv", table4)
 
     def entries(frame: pd.DataFrame, before: str, after: str) -> str:
         return ", ".join(

@@ -5,14 +5,13 @@ with SUMO's drivers reacting to it (closed loop). ``sumo``: our ring and grid ne
 
 from __future__ import annotations
 
-from pathlib import Path
-
 import pandas as pd
 
 from enn_traffic.deploy import EVALUATION_KEY
-from enn_traffic.experiments.choosing import trained_controllers
+from enn_traffic.experiments.choosing import specialists
 from enn_traffic.experiments.fig11 import fig11
-from enn_traffic.experiments.protocol import CITY, SUMO, Family, strategy_world
+from enn_traffic.experiments.protocol import CITY, SUMO, Family
+from enn_traffic.experiments.study import Study
 from enn_traffic.experiments.sumo_crowds import sumo_tables
 from enn_traffic.experiments.table1 import table1
 from enn_traffic.experiments.table2 import table2
@@ -20,14 +19,14 @@ from enn_traffic.io import write_csv
 from enn_traffic.worlds import make_world
 
 
-def replay_against_closed_loop(out: Path, quick: bool = False, progress: bool = True,
-                               family: Family = SUMO) -> list[str]:
+def replay_against_closed_loop(study: Study, family: Family = SUMO) -> list[str]:
     """Each strategy's Table 1 controller (trained on replayed traffic) on the same test
     situations with the traffic replayed and in closed loop: lifetimes side by side."""
-    controllers = trained_controllers(out, quick, progress, family)
+    family = study.settings(family)
+    controllers = specialists(study, family)
     rows = []
     for strategy in family.strategies:
-        test = strategy_world(family.settings(quick), strategy).scenario
+        test = family.scenario(strategy, family.test_situations)
         lifetimes = {}
         for mode in ("replay", "closed-loop"):
             world = make_world(test.with_overrides(traffic={"mode": mode}))
@@ -37,7 +36,7 @@ def replay_against_closed_loop(out: Path, quick: bool = False, progress: bool = 
                          "replay_steps": int(lifetimes["replay"].steps[0, episode]),
                          "closed_loop_steps": int(lifetimes["closed-loop"].steps[0, episode])})
     table = pd.DataFrame(rows)
-    write_csv(out / family.folder / "closed_loop.csv", table)
+    write_csv(study.out / family.folder / "closed_loop.csv", table)
     means = table.groupby("strategy")[["replay_steps", "closed_loop_steps"]].mean()
     pairs = ", ".join(f"strategy {s}: {r.replay_steps:.0f} vs {r.closed_loop_steps:.0f}"
                       for s, r in means.iterrows())
@@ -45,20 +44,18 @@ def replay_against_closed_loop(out: Path, quick: bool = False, progress: bool = 
             f"vs closed loop: {pairs}"]
 
 
-def family_experiments(family: Family, out: Path, quick: bool, progress: bool) -> list[str]:
+def family_experiments(study: Study, family: Family) -> list[str]:
     """Fig. 11 and Tables 1–4 over a SUMO family's strategies, and the replayed against the
-    closed-loop lifetimes, into ``out/<family folder>/``."""
-    return [*fig11(out, quick, progress, family), *table1(out, quick, progress, family),
-            *table2(out, quick, progress, family),
-            *replay_against_closed_loop(out, quick, progress, family),
-            *sumo_tables(out, quick, progress, family)]
+    closed-loop lifetimes, into ``<study folder>/<family folder>/``."""
+    return [*fig11(study, family), *table1(study, family), *table2(study, family),
+            *replay_against_closed_loop(study, family), *sumo_tables(study, family)]
 
 
-def sumo(out: Path, quick: bool = False, progress: bool = True) -> list[str]:
-    """The SUMO family of our own networks (``sumo_strategy1..4``), into ``out/sumo/``."""
-    return family_experiments(SUMO, out, quick, progress)
+def sumo(study: Study) -> list[str]:
+    """The SUMO family of our own networks (``sumo_strategy1..4``), into ``sumo/``."""
+    return family_experiments(study, SUMO)
 
 
-def city(out: Path, quick: bool = False, progress: bool = True) -> list[str]:
-    """The city family (Cologne under four driver models), into ``out/city/``."""
-    return family_experiments(CITY, out, quick, progress)
+def city(study: Study) -> list[str]:
+    """The city family (Cologne under four driver models), into ``city/``."""
+    return family_experiments(study, CITY)

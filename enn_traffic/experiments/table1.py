@@ -12,17 +12,18 @@ from enn_traffic.deploy import EVALUATION_KEY
 from enn_traffic.experiments.choosing import fitness_on_test_traffic, specialists
 from enn_traffic.experiments.common import save_controller
 from enn_traffic.experiments.protocol import ARENA, Family, strategy_world
+from enn_traffic.experiments.study import Study
 from enn_traffic.io import write_csv
 from enn_traffic.report.figures import fig12_figure, specialist_paths
 
 
-def _draw_specialists(family: Family, controllers: dict[int, np.ndarray], path: Path,
+def _draw_specialists(study: Study, family: Family, controllers: dict[int, np.ndarray], path: Path,
                       steps: int = 400) -> None:
     """Table 1 as paths: each strategy's chosen controller among each strategy's traffic, the
     first test episode."""
     traces, walls = {}, {}
     for deployed in family.strategies:
-        world = strategy_world(family, deployed)
+        world = strategy_world(study, family, deployed)
         walls[deployed] = world.track.walls
         for trained in family.strategies:
             traces[trained, deployed], _ = world.trace(controllers[trained], EVALUATION_KEY,
@@ -30,13 +31,12 @@ def _draw_specialists(family: Family, controllers: dict[int, np.ndarray], path: 
     specialist_paths(traces, walls, family.strategies, steps, path)
 
 
-def table1(out: Path, quick: bool = False, progress: bool = True,
-           family: Family = ARENA) -> list[str]:
+def table1(study: Study, family: Family = ARENA) -> list[str]:
     """Train on each strategy, deploy on each (Table 1), and the colour map (Fig. 12)."""
-    family = family.settings(quick)
-    root, out = out, out / family.folder
-    controllers = specialists(family, out, progress)
-    matrix = np.array([[fitness_on_test_traffic(family, controllers[trained], deployed)
+    family = study.settings(family)
+    root, out = study.out, study.out / family.folder
+    controllers = specialists(study, family)
+    matrix = np.array([[fitness_on_test_traffic(study, family, controllers[trained], deployed)
                         for deployed in family.strategies] for trained in family.strategies])
     for index, strategy in enumerate(family.strategies):
         save_controller(root, (Path(family.folder) / "table1" / f"strategy{strategy}").as_posix(),
@@ -45,8 +45,8 @@ def table1(out: Path, quick: bool = False, progress: bool = True,
     table.insert(0, "training_strategy", family.strategies)
     write_csv(out / "table1.csv", table)
     fig12_figure(matrix, family.strategies, out / "fig12.png")
-    _draw_specialists(family, controllers,
-                      out / ("arena_paths.png" if family is ARENA else "paths.png"))
+    _draw_specialists(study, family, controllers,
+                      out / ("arena_paths.png" if family.names == ARENA.names else "paths.png"))
     return [summary_line(matrix, f"{family.folder}/table1" if family.folder else "table1")]
 
 

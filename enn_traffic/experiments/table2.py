@@ -12,10 +12,12 @@ from enn_traffic.experiments.choosing import fitness_on_test_traffic
 from enn_traffic.experiments.common import save_controller
 from enn_traffic.experiments.incremental import Iteration, incremental_evolution
 from enn_traffic.experiments.protocol import ARENA, Family
+from enn_traffic.experiments.study import Study
 from enn_traffic.io import write_csv
 
 
-def _rows(family: Family, seed: int, iterations: list[Iteration]) -> tuple[list[dict], float]:
+def _rows(study: Study, family: Family, seed: int, iterations: list[Iteration]
+          ) -> tuple[list[dict], float]:
     """A row of test fitness per iteration, and the worst strategy of the last iteration's
     controller on validation traffic."""
     rows = []
@@ -24,26 +26,26 @@ def _rows(family: Family, seed: int, iterations: list[Iteration]) -> tuple[list[
                "reached_threshold": iteration.accepted}
         for strategy in family.strategies:
             row[f"strategy_{strategy}"] = (
-                fitness_on_test_traffic(family, iteration.chosen, strategy)
+                fitness_on_test_traffic(study, family, iteration.chosen, strategy)
                 if strategy in iteration.included else np.nan)
         row["average"] = float(np.nanmean([row[f"strategy_{s}"] for s in iteration.included]))
         rows.append(row)
     return rows, iterations[-1].worst
 
 
-def table2(out: Path, quick: bool = False, progress: bool = True,
-           family: Family = ARENA) -> list[str]:
+def table2(study: Study, family: Family = ARENA) -> list[str]:
     """Incremental evolution: add a strategy each time the fitness passes 80% of the accepted
     fitness; the fitness is averaged over the strategies included so far (§5.4.1). One
     evolution per seed of ``incremental_seeds``; Table 2 is the one whose last controller's
     worst strategy does best on validation traffic, as Table 1 chooses among its seeds' runs."""
-    family = family.settings(quick).incremental()
-    root, out = out, out / family.folder
+    family = study.settings(family).incremental()
+    root, out = study.out, study.out / family.folder
     threshold = family.threshold
-    evolutions = {seed: incremental_evolution(family, out / "runs" / "incremental" / f"seed{seed}",
-                                              seed, progress)
+    evolutions = {seed: incremental_evolution(study, family,
+                                              out / "runs" / "incremental" / f"seed{seed}", seed)
                   for seed in family.incremental_seeds}
-    chains = {seed: _rows(family, seed, iterations) for seed, iterations in evolutions.items()}
+    chains = {seed: _rows(study, family, seed, iterations)
+              for seed, iterations in evolutions.items()}
     seed = max(chains, key=lambda s: chains[s][1])  # the first of equals, as argmax
     last_row = chains[seed][0][-1]
     save_controller(root, (Path(family.folder) / "table2" / "last_iteration").as_posix(),

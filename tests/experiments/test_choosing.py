@@ -3,12 +3,14 @@ functions."""
 
 import math
 from dataclasses import replace
+from pathlib import Path
 
 import numpy as np
 import pytest
 
 from enn_traffic.evolution.ga import GAState
 from enn_traffic.experiments import choosing, protocol
+from enn_traffic.experiments.study import Study
 from enn_traffic.runner import evolve
 
 
@@ -29,16 +31,17 @@ def test_candidates_are_every_generations_best_and_the_final_elites_each_once(sm
 def test_the_pick_rechecks_its_short_list_and_keeps_the_best_worst_strategy():
     """Table 1 and 2 choose by the worst included strategy, on more traffic for the short list."""
 
-    family = replace(protocol.ARENA, test_episodes=2, recheck_episodes=3)
-    length = protocol.strategy_world(family, 1).spec.chromosome_length
+    family = replace(protocol.ARENA, test_situations=2, recheck_situations=3)
+    study = Study(Path("unused"))
+    length = protocol.strategy_world(study, family, 1).spec.chromosome_length
     candidates = np.random.default_rng(0).uniform(-1, 1, size=(16, length))
     strategies = [1, 3]
-    picked = choosing.pick(family, candidates, strategies)
-    short = choosing.validation(family, candidates, strategies).min(axis=1)
+    picked = choosing.pick(study, family, candidates, strategies)
+    short = choosing.validation(study, family, candidates, strategies).min(axis=1)
     listed = candidates[np.argsort(-short, kind="stable")[: choosing.RECHECKED]]
-    rechecked = choosing.validation(family, listed, strategies, 3).min(axis=1)
+    rechecked = choosing.validation(study, family, listed, strategies, 3).min(axis=1)
     assert any(np.array_equal(picked, row) for row in listed)
-    assert choosing.validation(family, picked, strategies, 3).min() == rechecked.max()
+    assert choosing.validation(study, family, picked, strategies, 3).min() == rechecked.max()
     assert len(set(np.round(rechecked, 6))) > 1  # the recheck tells the short list apart
 
 
@@ -47,35 +50,40 @@ def test_table2_accepts_by_the_mean_less_standard_errors_on_other_situations():
     a threshold between a candidate's bound and its mean there is refused."""
     from enn_traffic.sim.world import SPUN
 
-    family = replace(protocol.ARENA, test_episodes=2, recheck_episodes=6)
-    world = protocol.strategy_world(family, 1, 6)
+    family = replace(protocol.ARENA, test_situations=2, recheck_situations=6)
+    study = Study(Path("unused"))
+    world = protocol.strategy_world(study, family, 1, 6)
     candidate = np.random.default_rng(3).uniform(-1, 1, size=(1, world.spec.chromosome_length))
     results = world.evaluate(candidate, choosing.ACCEPTANCE_KEY)
     fitness = np.where(results.outcome[0] == SPUN, 0.0, results.steps[0])
     mean, error = fitness.mean(), fitness.std(ddof=1) / math.sqrt(6)
-    bound = choosing.lower_bound(family, candidate, 1, choosing.ACCEPTANCE_KEY, 6)
+    bound = choosing.lower_bound(study, family, candidate, 1, choosing.ACCEPTANCE_KEY, 6)
     assert bound[0] == pytest.approx(mean - choosing.ACCEPTANCE_ERRORS * error) and error > 0
-    screen = choosing.validation(family, candidate, [1]).min()
+    screen = choosing.validation(study, family, candidate, [1]).min()
     assert bound[0] < min(mean, screen)  # this candidate tells the bound from the mean
-    assert choosing.accepts(family, candidate, [1], bound[0])
-    assert not choosing.accepts(family, candidate, [1], 0.5 * (bound[0] + min(mean, screen)))
-    assert not choosing.accepts(family, candidate, [1], screen + 1e-6)  # the screen refuses
+    assert choosing.accepts(study, family, candidate, [1], bound[0])
+    assert not choosing.accepts(study, family, candidate, [1], 0.5 * (bound[0] + min(mean, screen)))
+    assert not choosing.accepts(study, family, candidate, [1], screen + 1e-6)  # the screen refuses
 
 
 def test_a_chromosome_is_driven_once_and_answers_as_a_fresh_world(monkeypatch):
     """The choice's lifetimes are the world's, whatever the order and repeats of the
     candidates; a chromosome asked about again is not driven again."""
-    family = replace(protocol.ARENA, test_episodes=3, recheck_episodes=4)
-    world = protocol.strategy_world(family, 2)
+    family = replace(protocol.ARENA, test_situations=3, recheck_situations=4)
+    study = Study(Path("unused"))
+    world = protocol.strategy_world(study, family, 2)
     pool = np.random.default_rng(5).uniform(-1, 1, size=(4, world.spec.chromosome_length))
     fresh = world.evaluate(pool, choosing.VALIDATION_KEY)
     asked = pool[[2, 0, 2, 1]]
-    np.testing.assert_array_equal(choosing.mean_fitness(family, asked, 2, choosing.VALIDATION_KEY),
-                                  fresh.fitness[[2, 0, 2, 1]])
+    np.testing.assert_array_equal(
+        choosing.mean_fitness(study, family, asked, 2, choosing.VALIDATION_KEY),
+        fresh.fitness[[2, 0, 2, 1]])
     driven = []
     evaluate = world.evaluate
     monkeypatch.setattr(world, "evaluate", lambda p, key: driven.append(len(p)) or evaluate(p, key))
-    again = choosing.mean_fitness(family, pool[[3, 1, 0]], 2, choosing.VALIDATION_KEY)
+    again = choosing.mean_fitness(study, family, pool[[3, 1, 0]], 2, choosing.VALIDATION_KEY)
     np.testing.assert_array_equal(again, fresh.fitness[[3, 1, 0]])
     assert driven == [1]  # only pool[3] was new
+    # a study of its own shares nothing with this one
+    assert protocol.strategy_world(Study(Path("unused")), family, 2) is not world
     assert len(set(np.round(fresh.fitness, 6))) > 1  # the candidates drive differently

@@ -10,11 +10,12 @@ from enn_traffic.controller import Controller
 from enn_traffic.experiments import EXPERIMENTS
 from enn_traffic.experiments.lanekeeping import TEST_KEY, road_world
 from enn_traffic.experiments.protocol import ARENA, CITY, SUMO
+from enn_traffic.experiments.study import Study
 from enn_traffic.shipped import shipped_scenario
 
 
 def test_todays_code_writes_the_committed_fig7_table(tmp_path, root):
-    EXPERIMENTS["fig7"](tmp_path, quick=False, progress=False)
+    EXPERIMENTS["fig7"](Study(tmp_path, progress=False))
     committed = root / "results" / "paper" / "fig7.csv"
     assert (tmp_path / "fig7.csv").read_text() == committed.read_text()
 
@@ -59,7 +60,7 @@ def test_a_committed_table1_controller_drives_its_table_entry(trained, deployed,
     paper = root / "results" / "paper"
     entry = pd.read_csv(paper / "table1.csv").set_index("training_strategy")
     controller = Controller.load(paper / "controllers" / "table1" / f"strategy{trained}.npz")
-    fitness = fitness_on_test_traffic(ARENA.settings(False), controller.chromosome, deployed)
+    fitness = fitness_on_test_traffic(Study(paper), ARENA, controller.chromosome, deployed)
     assert round(fitness, 1) == entry.loc[trained, f"deploy_{deployed}"]
 
 
@@ -73,7 +74,7 @@ def test_a_committed_sumo_table1_controller_drives_its_table_entry(family, strat
     entry = pd.read_csv(paper / family.folder / "table1.csv").set_index("training_strategy")
     controller = Controller.load(paper / "controllers" / family.folder / "table1"
                                  / f"strategy{strategy}.npz")
-    fitness = fitness_on_test_traffic(family.settings(False), controller.chromosome, strategy)
+    fitness = fitness_on_test_traffic(Study(paper), family, controller.chromosome, strategy)
     assert round(fitness, 1) == entry.loc[strategy, f"deploy_{strategy}"]
 
 
@@ -86,8 +87,8 @@ def test_the_committed_table2_controller_drives_its_last_row(strategy, root):
     paper = root / "results" / "paper"
     last_row = pd.read_csv(paper / "table2.csv").iloc[-1]
     controller = Controller.load(paper / "controllers" / "table2" / "last_iteration.npz")
-    family = ARENA.settings(False).incremental()
-    fitness = fitness_on_test_traffic(family, controller.chromosome, strategy)
+    fitness = fitness_on_test_traffic(Study(paper), ARENA.incremental(), controller.chromosome,
+                                      strategy)
     # the table holds one decimal, as pandas rounds it
     assert fitness == pytest.approx(last_row[f"strategy_{strategy}"], abs=0.05 + 1e-9)
 

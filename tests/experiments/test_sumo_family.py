@@ -8,19 +8,21 @@ import pandas as pd
 import pytest
 
 from enn_traffic.experiments.protocol import SUMO
+from enn_traffic.experiments.study import Study
 from enn_traffic.experiments.sumo_family import family_experiments
 
 TINY = replace(SUMO, folder="tiny", seeds=(1,), incremental_max_generations=2,
-               quick=(("population_size", 10), ("generations", 2), ("elite_count", 2)),
-               quick_test_episodes=1,
-               quick_scenario=(("episode", (("max_steps", 100),)),
-                               ("traffic", (("warmup_s", 5.0), ("episodes", 1)))))
+               quick={**SUMO.quick, "ga": {"population_size": 10, "generations": 2,
+                                           "elite_count": 2},
+                      "test_situations": 1, "recheck_situations": 1, "table_situations": 1,
+                      "scenario_overrides": {"episode": {"max_steps": 100},
+                                             "traffic": {"warmup_s": 5.0, "episodes": 1}}})
 
 
 @pytest.fixture(scope="module")
 def tiny(tmp_path_factory):
     out = tmp_path_factory.mktemp("reproduce")
-    lines = family_experiments(TINY, out, quick=True, progress=False)
+    lines = family_experiments(Study(out, quick=True, progress=False), TINY)
     return out / "tiny", lines
 
 

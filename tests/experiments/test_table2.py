@@ -1,8 +1,11 @@
 """Table 2's incremental evolution (paper §5.4.1)."""
 
+from pathlib import Path
+
 import pandas as pd
 
 from enn_traffic.experiments import choosing, protocol, table2
+from enn_traffic.experiments.study import Study
 
 
 def test_table2_evolves_a_wider_network_than_table1():
@@ -13,25 +16,28 @@ def test_table2_evolves_a_wider_network_than_table1():
     (hidden,) = protocol.ARENA.incremental_hidden
     assert protocol.ARENA.scenario(2).network.hidden == [3] and hidden != 3
     # (19 beams + bias) x hidden + (hidden + bias) x 2 outputs
-    assert protocol.strategy_world(incremental, 2, 1).spec.chromosome_length == 20 * hidden + (
-        hidden + 1) * 2
-    assert protocol.strategy_world(protocol.ARENA, 2, 1).spec.chromosome_length == 20 * 3 + 4 * 2
+    study = Study(Path("unused"))
+    assert protocol.strategy_world(study, incremental, 2, 1).spec.chromosome_length == (
+        20 * hidden + (hidden + 1) * 2)
+    assert protocol.strategy_world(study, protocol.ARENA, 2, 1).spec.chromosome_length == (
+        20 * 3 + 4 * 2)
 
 
 def test_table2_reports_the_evolution_whose_last_controller_does_best_on_validation(tmp_path):
     """One incremental evolution per seed; table2.csv is the one whose last controller's worst
     strategy does best on validation traffic, table2_runs.csv holds them all."""
 
-    table2.table2(tmp_path, quick=True, progress=False)
+    study = Study(tmp_path, quick=True, progress=False)
+    table2.table2(study)
     runs = pd.read_csv(tmp_path / "table2_runs.csv")
-    family = protocol.ARENA.settings(True).incremental()
+    family = study.settings(protocol.ARENA).incremental()
     assert sorted(runs["seed"].unique()) == list(family.incremental_seeds) == [1, 2]
     worst = {}
     for seed in family.incremental_seeds:
         last = tmp_path / "runs" / "incremental" / f"seed{seed}" / "iteration4"
-        chosen = choosing.pick(family, choosing.candidates(last), family.strategies)
-        worst[seed] = choosing.validation(family, chosen, family.strategies,
-                                          family.recheck_episodes).min()
+        chosen = choosing.pick(study, family, choosing.candidates(last), family.strategies)
+        worst[seed] = choosing.validation(study, family, chosen, family.strategies,
+                                          family.recheck_situations).min()
     assert worst[1] != worst[2]  # the two evolutions are told apart
     best = max(worst, key=worst.get)
     expected = runs[runs["seed"] == best].drop(columns="seed").reset_index(drop=True)
