@@ -26,7 +26,7 @@ from pettingzoo import ParallelEnv
 from enn_traffic.envs.batch import compiled
 from enn_traffic.envs.rangefinder import TRAINING_KEYS, picture, rangefinder_world, spaces_of
 from enn_traffic.scenario import Scenario
-from enn_traffic.sim.crowd import ALIVE, Crowd, detect, step_once
+from enn_traffic.sim.crowd import ALIVE, Crowd, crowd_events, step_once
 from enn_traffic.sim.rules import sense
 from enn_traffic.sim.world import OUTCOMES, SPUN
 from enn_traffic.traffic.strategies import ACTION
@@ -90,9 +90,10 @@ class ArenaCrowdEnv(ParallelEnv):
         self.genes = np.ascontiguousarray(episode.traffic_genes, dtype=np.float64)
         self.spin_checked = kinds == ACTION
         _, _, walls, cell_start, cell_walls, all_walls, _ = crowd.geometry
-        detect(crowd.pose, crowd.corners, crowd.centres, crowd.previous, crowd.previous_centres,
-               crowd.fresh, self.spin_checked, crowd.life, crowd.recent,
-               crowd.physics, walls, cell_start, cell_walls, all_walls, crowd.events)
+        crowd_events(crowd.pose, crowd.corners, crowd.centres, crowd.previous,
+                     crowd.previous_centres, crowd.fresh, self.spin_checked, crowd.life,
+                     crowd.recent, crowd.physics, walls, cell_start, cell_walls, all_walls,
+                     crowd.events)
         for v in np.flatnonzero(crowd.events != ALIVE):
             crowd.respawn(v)
         self.agents = self.possible_agents[:]

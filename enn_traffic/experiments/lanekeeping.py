@@ -123,7 +123,7 @@ def lane_keeping(study: Study) -> list[str]:
                                    world.trace(best[name, seeds[0]], TEST_KEY)[0][:, 0])
     table = pd.DataFrame(rows)
     write_csv(out / "lane_keeping.csv", table)
-    _draw(paths, out / "lane_keeping_paths.png", TRAININGS[-1], NOISES[-1])
+    _draw_roads(paths, out / "lane_keeping_paths.png", TRAININGS[-1], NOISES[-1])
     lines = []
     for (name, noise), group in table.groupby(["trained_on", "noise_m"], sort=False):
         kept = group.groupby("road", sort=False)["kept_whole_episode"].sum()
@@ -168,7 +168,7 @@ def _first_cap(table: pd.DataFrame, cap: int) -> float:
     return float(hits.iloc[0]) if len(hits) else float("nan")
 
 
-def _draw(paths: dict, path: Path, name: str, noise: float) -> None:
+def _draw_roads(paths: dict, path: Path, name: str, noise: float) -> None:
     columns = (len(paths) + 1) // 2
     figure, axes = plt.subplots(2, columns, figsize=(3.2 * columns, 6.4))
     for ax in axes.flat[len(paths):]:

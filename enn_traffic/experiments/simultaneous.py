@@ -174,7 +174,7 @@ def _measure(study: Study) -> tuple[pd.DataFrame, pd.DataFrame]:
     table, situations = pd.DataFrame(rows), pd.DataFrame(situations)
     write_csv(out / "simultaneous.csv", table)
     write_csv(out / "simultaneous_situations.csv", situations)
-    _draw(paths, out / "simultaneous_paths.png")
+    _draw_crowds(paths, out / "simultaneous_paths.png")
     return table, situations
 
 
@@ -194,7 +194,7 @@ def reduction_interval(situations: pd.DataFrame, after: str, rng: np.random.Gene
     return float(low), float(high)
 
 
-def _draw(paths: dict, path: Path) -> None:
+def _draw_crowds(paths: dict, path: Path) -> None:
     """Each strategy: the first seconds of its initial drivers, the broadcast winner and the
     vehicles after simultaneous learning."""
     figure, axes = plt.subplots(3, 4, figsize=(16, 12))

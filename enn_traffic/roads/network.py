@@ -82,10 +82,10 @@ class Track:
 
     def lane_pose(self, net_file: Path, lane_id: str, offset: float) -> tuple[float, float, float]:
         """(x, y, heading) at ``offset`` metres along the centre line of ``lane_id``."""
-        return start_poses(net_file, [("lane", lane_id)], offset)[0]
+        return lane_start_poses(net_file, [("lane", lane_id)], offset)[0]
 
 
-def start_poses(net_file: Path, names: list[tuple[str, str]], offset: float
+def lane_start_poses(net_file: Path, names: list[tuple[str, str]], offset: float
                 ) -> list[tuple[float, float, float]]:
     """(x, y, heading) at ``offset`` metres along each start's centre line: a lane
     ``("lane", id)``, or an edge ``("edge", id)``, whose rightmost lane that allows passenger

@@ -28,8 +28,7 @@ from enn_traffic import keys
 from enn_traffic.errors import InputError
 from enn_traffic.network import NetworkSpec, network_buffers
 from enn_traffic.roads import Track, load_track
-from enn_traffic.roads.network import anywhere_poses
-from enn_traffic.roads.network import start_poses as start_lane_poses
+from enn_traffic.roads.network import anywhere_poses, lane_start_poses
 from enn_traffic.scenario import Scenario
 from enn_traffic.sim.rules import (
     NO_HIT,
@@ -313,7 +312,7 @@ def listed_starts(scenario: Scenario) -> list[tuple[float, float, float]] | None
     if not names:
         return [(*config.start_xy, math.radians(config.start_heading_deg))]
     try:
-        return start_lane_poses(config.net, names, config.start_offset)
+        return lane_start_poses(config.net, names, config.start_offset)
     except ValueError as exc:
         index, message = exc.args
         raise InputError(message, scenario.source, _start_key(scenario, index)) from None

@@ -5,7 +5,7 @@ Unlike :mod:`enn_traffic.sim.arena`, which runs one learner per world and P worl
 this is one world of V vehicles run for a stretch of simulated time, by the same rules
 (:mod:`enn_traffic.sim.rules`). Each step:
 
-1. :func:`detect` — collisions by the blame rule, and the spin test for learning vehicles (and
+1. :func:`crowd_events` — collisions by the blame rule, and the spin test for learning vehicles (and
    for every network vehicle when asked: evolved drivers are held to §5.3's rule that rotating
    in place ends a life);
 2. every vehicle whose life ended respawns at a free spot; a learning vehicle first tells its
@@ -58,8 +58,8 @@ class Learning(Protocol):
 
 
 @njit(cache=True, inline="always")
-def detect(pose, corners, centres, previous, previous_centres, fresh, spin_checked, life, recent,
-           physics, walls, cell_start, cell_walls, all_walls, events) -> bool:
+def crowd_events(pose, corners, centres, previous, previous_centres, fresh, spin_checked, life,
+                 recent, physics, walls, cell_start, cell_walls, all_walls, events) -> bool:
     """Fill ``events`` (V,): ``COLLIDED`` for a responsible collision, ``SPUN`` for a
     ``spin_checked`` vehicle spinning in place, else ``ALIVE``. Did any life end?"""
     ended = False
@@ -80,14 +80,14 @@ def step(kinds, genes, layer_sizes, physics, geometry, pose, corners, centres, p
          previous_centres, fresh, spin_checked, life, recent, memory, rng, readings, activation,
          scratch, steering, events) -> bool:
     """One step of the crowd: every vehicle senses, decides (an ``ACTION`` vehicle keeps the
-    ``steering[v]`` it was given) and moves, then :func:`detect`. Did any life end?"""
+    ``steering[v]`` it was given) and moves, then :func:`crowd_events`. Did any life end?"""
     beam_cos, beam_sin, walls, cell_start, cell_walls, all_walls, _ = geometry
     drive_all(kinds, genes, layer_sizes, physics, beam_cos, beam_sin, walls, cell_start,
               cell_walls, all_walls, pose, corners, centres, previous, previous_centres, fresh,
               memory, rng, readings, activation, scratch, steering)
     life += 1
-    return detect(pose, corners, centres, previous, previous_centres, fresh, spin_checked, life,
-                  recent, physics, walls, cell_start, cell_walls, all_walls, events)
+    return crowd_events(pose, corners, centres, previous, previous_centres, fresh, spin_checked,
+                        life, recent, physics, walls, cell_start, cell_walls, all_walls, events)
 
 
 # The step alone, for a caller that steps from Python (the PettingZoo crowd, enn_traffic.envs).
@@ -100,7 +100,7 @@ def advance(t, last, drive_first, kinds, genes, layer_sizes, physics, geometry, 
             readings, activation, scratch, steering, events, trace) -> int:
     """Run the steps from ``t`` (driving first when ``drive_first``: the lives that ended at
     ``t`` have been dealt with) until a life ends or step ``last`` is reached: each step,
-    :func:`step` (without ``drive_first``, only :func:`detect` at ``t``) and record the poses
+    :func:`step` (without ``drive_first``, only :func:`crowd_events` at ``t``) and record the poses
     in ``trace``. Returns the step it stopped at."""
     _, _, walls, cell_start, cell_walls, all_walls, _ = geometry
     while True:
@@ -110,9 +110,9 @@ def advance(t, last, drive_first, kinds, genes, layer_sizes, physics, geometry, 
                          rng, readings, activation, scratch, steering, events)
             t += 1
         else:
-            ended = detect(pose, corners, centres, previous, previous_centres, fresh,
-                           spin_checked, life, recent, physics, walls, cell_start, cell_walls,
-                           all_walls, events)
+            ended = crowd_events(pose, corners, centres, previous, previous_centres, fresh,
+                                 spin_checked, life, recent, physics, walls, cell_start,
+                                 cell_walls, all_walls, events)
         drive_first = True
         trace[t] = pose
         if ended or t == last:

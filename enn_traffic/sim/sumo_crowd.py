@@ -14,7 +14,7 @@ learners. The blame rule is the arena's and the closed loop's (:mod:`enn_traffic
 - a learner that reaches an exit of the network has left it, and re-enters as after a
   collision; learners are held to §5.3's spin test.
 
-Each SUMO step makes two compiled calls, whatever K: :func:`detect` (blame, exits, spins of
+Each SUMO step makes two compiled calls, whatever K: :func:`learner_events` (blame, exits, spins of
 all learners) and :func:`drive` (all learners sense, decide and move). Python respawns the
 learners whose lives ended, calls their learning back (:class:`~enn_traffic.sim.crowd.Learning`),
 moves them in SUMO and steps SUMO.
@@ -55,9 +55,9 @@ RESPAWN_TRIES = 50  # free spots drawn before a learner re-enters beside SUMO's 
 
 
 @njit(cache=True)
-def detect(t, pose, body, centre, body_before, centre_before, fresh, life, recent,
-           spin_checked, active, physics, geometry, ids, corners, centres, before, now, gone,
-           absent, suffered, events) -> bool:
+def learner_events(t, pose, body, centre, body_before, centre_before, fresh, life, recent,
+                   spin_checked, active, physics, geometry, ids, corners, centres, before, now,
+                   gone, absent, suffered, events) -> bool:
     """Fill ``events`` (K,): ``COLLIDED`` for an ``active`` learner responsible for a
     collision, ``LEFT_NETWORK`` at an exit, ``SPUN`` for a spin, else ``ALIVE``; count the
     collisions SUMO vehicles cause (``suffered``) and take those vehicles out of the learner's
@@ -239,7 +239,7 @@ class SumoCrowd:
             self.physics = self.physics._replace(radius=radius)
 
     def detect(self) -> bool:
-        """The blame rule, exits and spins of the learners at this step (:func:`detect`):
+        """The blame rule, exits and spins of the learners at this step (:func:`learner_events`):
         did a life end? ``lives.events`` says whose. Once a step: a run that begins where
         the last one ended does not judge that step again (its collisions are counted, the
         lives that ended there re-entered)."""
@@ -248,11 +248,11 @@ class SumoCrowd:
             lives.events[:] = ALIVE
             return False
         self._detected_at = self.t
-        return detect(self.t, lives.pose, lives.body, lives.centre, lives.body_before,
-                      lives.centre_before, lives.fresh, lives.life, lives.recent,
-                      lives.spin_checked, lives.active, self.physics, self.world.geometry, ids,
-                      corners, centres, self.before, self.now, lives.gone, lives.absent,
-                      lives.suffered, lives.events)
+        return learner_events(self.t, lives.pose, lives.body, lives.centre, lives.body_before,
+                              lives.centre_before, lives.fresh, lives.life, lives.recent,
+                              lives.spin_checked, lives.active, self.physics,
+                              self.world.geometry, ids, corners, centres, self.before, self.now,
+                              lives.gone, lives.absent, lives.suffered, lives.events)
 
     def advance(self) -> None:
         """The learners where they moved, SUMO one step on, its vehicles read."""
