@@ -28,7 +28,7 @@ from enn_traffic.sim.world import (
     MET_NEAR_STEPS,
     MET_START,
     OUTCOMES,
-    EpisodeResults,
+    SituationResults,
     World,
 )
 from enn_traffic.worlds import make_world
@@ -58,10 +58,10 @@ def evaluate_controller(controller: Controller, scenario: Scenario, episodes: in
     vehicle = scenario.vehicle
     results = world.evaluate(controller.chromosome[None, :], EVALUATION_KEY)
     steps, outcome = results.steps[0], results.outcome[0]
-    fitness = EpisodeResults.lifetime_fitness(steps, outcome)
+    fitness = SituationResults.lifetime_fitness(steps, outcome)
     traffic = results.traffic[0]
     rows = []
-    for column, strategy in enumerate(world.episode_labels()):
+    for column, strategy in enumerate(world.situation_labels()):
         rows.append({
             "scenario": scenario.name,
             "track": world.track.name,
@@ -83,7 +83,7 @@ def evaluate_controller(controller: Controller, scenario: Scenario, episodes: in
     return pd.DataFrame(rows)
 
 
-def _hit(results: EpisodeResults, column: int, strategy: str) -> dict[str, str]:
+def _hit(results: SituationResults, column: int, strategy: str) -> dict[str, str]:
     """What the first world's life in ``column`` ran into: ``hit`` (wall, vehicle or nothing),
     and the vehicle's id and type (a SUMO vehicle's own; an arena vehicle's index and
     strategy)."""

@@ -13,7 +13,7 @@ import numpy as np
 
 from enn_traffic.scenario import Scenario
 from enn_traffic.sim.sumo_world import warmups_used
-from enn_traffic.sim.world import CAPPED, COLLIDED, LEFT_LANE, LEFT_NETWORK, SPUN, EpisodeResults
+from enn_traffic.sim.world import CAPPED, COLLIDED, LEFT_LANE, LEFT_NETWORK, SPUN, SituationResults
 
 
 @dataclass(frozen=True)
@@ -23,7 +23,7 @@ class Generation:
 
     scenario: Scenario
     number: int
-    results: EpisodeResults
+    results: SituationResults
     elapsed_s: float
 
     @property

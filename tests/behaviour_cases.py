@@ -73,7 +73,7 @@ def _many_learners() -> dict[str, np.ndarray]:
     from enn_traffic.sim.crowd import Crowd as Arena
 
     def arena(world, key, kinds=None):
-        episode = world.episodes(key)[0]
+        episode = world.situations(key)[0]
         kinds = episode.kinds.copy() if kinds is None else kinds
         kinds[0] = kinds[1]  # the learner's place is driven as the others are
         return Arena(world, episode.start, kinds, int(episode.seed)), episode.traffic_genes.copy()

@@ -16,7 +16,7 @@ def test_every_scenario_gives_a_world(root, name, kind):
     world = make_world(load_scenario(root / "scenarios" / f"{name}.toml"))
     assert type(world).__name__ == kind
     assert isinstance(world, World)
-    assert world.episode_labels() and world.spec.chromosome_length > 0
+    assert world.situation_labels() and world.spec.chromosome_length > 0
     assert world.track.name and world.track.walls.ndim == 2 and world.track.walls.shape[1] == 4
 
 
@@ -24,7 +24,7 @@ def test_a_world_of_several_tracks_names_and_draws_its_first(root):
     world = make_world(load_scenario(root / "scenarios" / "navigation_mixed.toml"))
     assert isinstance(world, World) and type(world).__name__ == "TracksWorld"
     assert world.track is world.worlds[0].track
-    assert world.episode_labels()[0].startswith(f"{world.track.name}: ")
+    assert world.situation_labels()[0].startswith(f"{world.track.name}: ")
 
 
 def test_outcome_names_are_distinct():

@@ -41,7 +41,7 @@ class Situations(NamedTuple):
     def of_keys(cls, world: ArenaWorld, keys) -> Situations:
         """Every situation of the traffic ``keys``, in order (each key's strategies and
         episodes, as :meth:`ArenaWorld.episodes` gives them), the learner an ``ACTION``."""
-        episodes = [episode for key in keys for episode in world.episodes(int(key))]
+        episodes = [episode for key in keys for episode in world.situations(int(key))]
         kinds = np.stack([e.kinds for e in episodes]).astype(np.int64)
         kinds[:, 0] = ACTION
         return cls(np.stack([e.start for e in episodes]), kinds,

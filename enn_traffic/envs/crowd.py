@@ -78,7 +78,7 @@ class ArenaCrowdEnv(ParallelEnv):
         world = self.world
         key = options.get("key")
         key = int(self._rng.integers(TRAINING_KEYS) if key is None else key)
-        episodes = world.episodes(key)
+        episodes = world.situations(key)
         situation = options.get("situation")
         situation = int(self._rng.integers(len(episodes)) if situation is None else situation)
         if not 0 <= situation < len(episodes):

@@ -1,6 +1,6 @@
 """Evaluators: how a population's fitness gets computed (docs/design.md, "Scale-out").
 
-The GA calls ``evaluator.evaluate(population, key) -> EpisodeResults`` and nothing else (the
+The GA calls ``evaluator.evaluate(population, key) -> SituationResults`` and nothing else (the
 traffic key picks the traffic situations: a training generation's number, or a held-out key,
 :mod:`enn_traffic.keys`). ``local`` runs the compiled batch in this process (numba threads over
 the cores); ``process`` splits the population into chunks over a process pool, each worker
@@ -19,12 +19,12 @@ import numpy as np
 
 from enn_traffic.errors import InputError
 from enn_traffic.scenario import Scenario
-from enn_traffic.sim.world import EpisodeResults, World
+from enn_traffic.sim.world import SituationResults, World
 from enn_traffic.worlds import make_world
 
 
 class Evaluator(Protocol):
-    def evaluate(self, population: np.ndarray, key: int = 0) -> EpisodeResults: ...
+    def evaluate(self, population: np.ndarray, key: int = 0) -> SituationResults: ...
 
     def close(self) -> None: ...
 
@@ -35,7 +35,7 @@ class LocalEvaluator:
     def __init__(self, scenario: Scenario):
         self.world = make_world(scenario)
 
-    def evaluate(self, population: np.ndarray, key: int = 0) -> EpisodeResults:
+    def evaluate(self, population: np.ndarray, key: int = 0) -> SituationResults:
         return self.world.evaluate(population, key)
 
     def close(self) -> None:
@@ -58,7 +58,7 @@ def _init_worker(scenario: Scenario) -> None:
     _worker_world = _single_threaded_world(scenario)
 
 
-def _evaluate_chunk(chunk: np.ndarray, key: int) -> EpisodeResults:
+def _evaluate_chunk(chunk: np.ndarray, key: int) -> SituationResults:
     assert _worker_world is not None
     return _worker_world.evaluate(chunk, key)
 
@@ -79,10 +79,10 @@ class ProcessEvaluator:
             initargs=(scenario,),
         )
 
-    def evaluate(self, population: np.ndarray, key: int = 0) -> EpisodeResults:
+    def evaluate(self, population: np.ndarray, key: int = 0) -> SituationResults:
         chunks = np.array_split(population, min(self.workers * 4, len(population)))
         parts = list(self.pool.map(_evaluate_chunk, chunks, [key] * len(chunks)))
-        return EpisodeResults.concatenate(parts)
+        return SituationResults.concatenate(parts)
 
     def close(self) -> None:
         self.pool.shutdown()
@@ -94,7 +94,7 @@ class _WorldActor:
     def __init__(self, scenario: Scenario):
         self.world = _single_threaded_world(scenario)
 
-    def evaluate(self, chunk: np.ndarray, key: int) -> EpisodeResults:
+    def evaluate(self, chunk: np.ndarray, key: int) -> SituationResults:
         return self.world.evaluate(chunk, key)
 
 
@@ -144,11 +144,11 @@ class RayEvaluator:
         actor = ray.remote(num_cpus=1)(_WorldActor)
         self.actors = [actor.remote(scenario) for _ in range(self.workers)]
 
-    def evaluate(self, population: np.ndarray, key: int = 0) -> EpisodeResults:
+    def evaluate(self, population: np.ndarray, key: int = 0) -> SituationResults:
         chunks = np.array_split(population, min(self.workers, len(population)))
         futures = [actor.evaluate.remote(chunk, key)
                    for actor, chunk in zip(self.actors, chunks, strict=False)]
-        return EpisodeResults.concatenate(self.ray.get(futures))
+        return SituationResults.concatenate(self.ray.get(futures))
 
     def close(self) -> None:
         for actor in self.actors:
@@ -163,10 +163,10 @@ class MeanOverWorlds:
     def __init__(self, worlds: list[World]):
         self.worlds = worlds
 
-    def evaluate(self, population: np.ndarray, key: int = 0) -> EpisodeResults:
+    def evaluate(self, population: np.ndarray, key: int = 0) -> SituationResults:
         parts = [world.evaluate(population, key) for world in self.worlds]
         vehicles = round(float(np.mean([p.vehicles for p in parts])))
-        return replace(EpisodeResults.concatenate(parts, axis=1), vehicles=vehicles)
+        return replace(SituationResults.concatenate(parts, axis=1), vehicles=vehicles)
 
     def close(self) -> None:
         pass

@@ -69,7 +69,7 @@ def _arena(world: ArenaWorld, situation: int, kinds=None, key: int = SITUATION_K
            ) -> tuple[Crowd, np.ndarray]:
     """The arena of one traffic situation: 8 start poses; ``kinds`` default to the strategy's
     own drivers; and the drivers' random genes (random-network strategy)."""
-    episode = world.episodes(key + situation)[0]
+    episode = world.situations(key + situation)[0]
     strategy = DRIVERS[world.scenario.traffic.strategy_list[0]]
     kinds = np.full(world.vehicles, strategy) if kinds is None else kinds
     return Crowd(world, episode.start, kinds, int(episode.seed)), episode.traffic_genes.copy()

@@ -24,7 +24,7 @@ import pandas as pd
 
 from enn_traffic.experiments.common import Jobs, LocalRuns, RayRuns, distinct
 from enn_traffic.scenario import Scenario
-from enn_traffic.sim.world import EpisodeResults, World
+from enn_traffic.sim.world import SituationResults, World
 from enn_traffic.worlds import make_world
 
 T = TypeVar("T")
@@ -81,7 +81,7 @@ class Study:
         new = [row for row in distinct(candidates) if row.tobytes() not in known]
         if new:
             results = self.world(scenario).evaluate(np.array(new), key)
-            fitness = EpisodeResults.lifetime_fitness(results.steps, results.outcome)
+            fitness = SituationResults.lifetime_fitness(results.steps, results.outcome)
             known.update((row.tobytes(), lives) for row, lives in zip(new, fitness, strict=True))
         return np.stack([known[row.tobytes()] for row in candidates])
 

@@ -20,7 +20,7 @@ from enn_traffic.lanekeeping.env import lane_markings, lane_offset, make_env, ma
 from enn_traffic.network import NetworkSpec, network_buffers
 from enn_traffic.network import steering as network_steering
 from enn_traffic.scenario import LaneKeepingConfig, Scenario
-from enn_traffic.sim.world import CAPPED, LEFT_LANE, EpisodeResults
+from enn_traffic.sim.world import CAPPED, LEFT_LANE, SituationResults
 
 ROAD_STREAM = 1  # the drawn roads' own stream, apart from the camera noise's
 KEPT_ENVS = 16
@@ -53,7 +53,7 @@ class LaneKeepingWorld:
             self._track = Road(marking_segments(self.config), f"{self.config.road} road")
         return self._track
 
-    def episode_labels(self) -> list[str]:
+    def situation_labels(self) -> list[str]:
         road = "drawn" if self.config.draw is not None else self.config.road
         return [f"{road} road"] * self.config.episodes
 
@@ -110,7 +110,7 @@ class LaneKeepingWorld:
             env.unwrapped.drive(action)
             steps += 1
 
-    def evaluate(self, population: np.ndarray, key: int = 0) -> EpisodeResults:
+    def evaluate(self, population: np.ndarray, key: int = 0) -> SituationResults:
         """Fitness of every chromosome: steps kept in the lane, averaged over episodes."""
         genes = self.spec.in_source_layout(population)
         episodes = self.config.episodes
@@ -121,7 +121,7 @@ class LaneKeepingWorld:
             for e, road in enumerate(roads):
                 steps[p, e], outcome[p, e], _ = self.episode(
                     row, self._rng(key, e), self.scenario.episode.max_steps, road=road)
-        return EpisodeResults.of_lives(steps, outcome)
+        return SituationResults.of_lives(steps, outcome)
 
     def offsets(self, chromosome: np.ndarray, key: int = 0) -> list[tuple[int, int, float]]:
         """Per episode: (steps, outcome, mean |lateral offset|) of one chromosome."""

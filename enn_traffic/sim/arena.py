@@ -42,7 +42,7 @@ from enn_traffic.sim.rules import (
     within_range,
 )
 from enn_traffic.sim.sensors import WallGrid
-from enn_traffic.sim.world import CAPPED, COLLIDED, RUNNING, SPUN, EpisodeResults
+from enn_traffic.sim.world import CAPPED, COLLIDED, RUNNING, SPUN, SituationResults
 from enn_traffic.traffic import strategies
 from enn_traffic.traffic.strategies import reset_memory, strategy_settings
 
@@ -163,7 +163,7 @@ def run_population(population, layer_sizes, start, kinds, traffic_genes, physics
 
 
 @dataclass(frozen=True)
-class Episode:
+class Situation:
     """One traffic situation: every vehicle's start pose, strategy and (for random networks)
     genes, and the seed of the world's generator."""
 
@@ -238,7 +238,7 @@ class ArenaWorld(LearnerWorld):
                                  scenario.source, f"traffic.starts_xy[{index}]")
         self.vehicles = 1 + len(self.traffic_starts)
 
-    def episodes(self, key: int) -> list[Episode]:
+    def situations(self, key: int) -> list[Situation]:
         """The traffic situations of a traffic key: one per (strategy, episode), drawn from
         (traffic seed, key, strategy, episode) alone. The learner (vehicle 0) is a network
         driver."""
@@ -256,33 +256,33 @@ class ArenaWorld(LearnerWorld):
                 kinds = np.array([strategies.NETWORK] + [kind] * len(self.traffic_starts))
                 genes = rng.uniform(-1, 1, size=(self.vehicles,
                                                  self.traffic_spec.chromosome_length))
-                result.append(Episode(start, kinds, self.spec.embed(genes, self.traffic_spec),
+                result.append(Situation(start, kinds, self.spec.embed(genes, self.traffic_spec),
                                       np.uint64(sequence.generate_state(1, np.uint64)[0])))
         return result
 
-    def episode_labels(self) -> list[str]:
+    def situation_labels(self) -> list[str]:
         """The strategy of each column of :meth:`evaluate`'s per-episode arrays."""
         traffic = self.scenario.traffic
         return [name for name in traffic.strategy_list for _ in range(traffic.episodes)]
 
-    def evaluate(self, population: np.ndarray, key: int = 0) -> EpisodeResults:
+    def evaluate(self, population: np.ndarray, key: int = 0) -> SituationResults:
         """Fitness of every chromosome: steps survived (0 for a spin), averaged over the
         traffic situations of ``key``."""
         genes = self.spec.in_source_layout(population)
         runs = []
         with numba.parallel_chunksize(1):
-            for episode in self.episodes(key):
+            for episode in self.situations(key):
                 runs.append(run_population(
                     genes, self.layer_sizes, episode.start, episode.kinds, episode.traffic_genes,
                     self.physics, self.geometry, episode.seed, self.max_steps))  # fmt: skip
-        return EpisodeResults.of_situations(runs, self.vehicles,
+        return SituationResults.of_situations(runs, self.vehicles,
                                             [self.vehicles - 1] * len(runs))
 
     def trace(self, chromosome: np.ndarray, key: int = 0, episode: int = 0,
               max_steps: int | None = None) -> tuple[np.ndarray, int]:
         """Poses (n, V, 3) of every vehicle in one episode, and the learner's outcome code."""
         limit = self.max_steps if max_steps is None else max_steps
-        chosen = self.episodes(key)[episode]
+        chosen = self.situations(key)[episode]
         trace = np.full((limit + 1, self.vehicles, 3), np.nan)
         steps, outcome, *_ = run_episode(
             self.spec.in_source_layout(chromosome)[0], self.layer_sizes, chosen.start,

@@ -38,7 +38,7 @@ from enn_traffic.sim.replay import (
     with_slots,
 )
 from enn_traffic.sim.rules import Physics
-from enn_traffic.sim.world import EpisodeResults
+from enn_traffic.sim.world import SituationResults
 from enn_traffic.traffic import sumo
 
 
@@ -171,7 +171,7 @@ class SumoWorld(LearnerWorld):
             [self.scenario.traffic.seed, WARMUP_STREAM, index]).generate_state(1)[0] % 2**31)
         return sumo.warm_state(self.scenario, warm_seed, keep_rng=False)
 
-    def episode_labels(self) -> list[str]:
+    def situation_labels(self) -> list[str]:
         return [f"sumo ({self.scenario.traffic.mode})"] * self.scenario.traffic.episodes
 
     def recording(self, seed: int, warmup: int | None = None) -> sumo.Recording:
@@ -193,7 +193,7 @@ class SumoWorld(LearnerWorld):
         """The constants, with bodies as large as the traffic's largest (``radius``)."""
         return self.physics._replace(radius=max(radius, self.physics.radius))
 
-    def evaluate(self, population: np.ndarray, key: int = 0) -> EpisodeResults:
+    def evaluate(self, population: np.ndarray, key: int = 0) -> SituationResults:
         """Fitness of every chromosome: steps survived (0 for a spin), averaged over the
         traffic situations of ``key``."""
         genes = self.spec.in_source_layout(population)
@@ -222,7 +222,7 @@ class SumoWorld(LearnerWorld):
             hit_vehicle.append(named(runs[-1][5], record.names, record.types))
         if vehicles:
             self._traffic_seen = vehicles
-        return EpisodeResults.of_situations(runs, self.vehicles, at_start,
+        return SituationResults.of_situations(runs, self.vehicles, at_start,
                                             np.stack(safety, axis=1) if safety else None,
                                             np.stack(hit_vehicle, axis=1))
 

@@ -15,7 +15,7 @@ from dataclasses import replace
 import numpy as np
 
 from enn_traffic.scenario import Scenario
-from enn_traffic.sim.world import EpisodeResults, World
+from enn_traffic.sim.world import SituationResults, World
 
 
 class TracksWorld:
@@ -28,17 +28,17 @@ class TracksWorld:
         self.spec = worlds[0].spec
         self.vehicles = max(world.vehicles for world in worlds)
         self.track = worlds[0].track  # the first situation's, for drawing it
-        self._situations = [len(world.episode_labels()) for world in worlds]
+        self._situations = [len(world.situation_labels()) for world in worlds]
 
-    def evaluate(self, population: np.ndarray, key: int = 0) -> EpisodeResults:
+    def evaluate(self, population: np.ndarray, key: int = 0) -> SituationResults:
         """Fitness of every chromosome: the mean over every track's situations of ``key``."""
         parts = [world.evaluate(population, key) for world in self.worlds]
-        return replace(EpisodeResults.concatenate(parts, axis=1), vehicles=self.vehicles)
+        return replace(SituationResults.concatenate(parts, axis=1), vehicles=self.vehicles)
 
-    def episode_labels(self) -> list[str]:
+    def situation_labels(self) -> list[str]:
         """``track: strategy`` of each column of :meth:`evaluate`'s per-situation arrays."""
         return [f"{world.track.name}: {label}" for world in self.worlds
-                for label in world.episode_labels()]
+                for label in world.situation_labels()]
 
     def world_of(self, episode: int) -> tuple[World, int]:
         """The world that situation ``episode`` (a column of :meth:`evaluate`) is on, and its

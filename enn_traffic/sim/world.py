@@ -1,5 +1,5 @@
 """What every kind of world is to the rest of the project: the :class:`World` protocol, the
-outcomes of a life and the :class:`EpisodeResults` a world's evaluation gives (paper §5, §5.3).
+outcomes of a life and the :class:`SituationResults` a world's evaluation gives (paper §5, §5.3).
 
 Worlds: :class:`~enn_traffic.sim.arena.ArenaWorld` (the arena and the navigation tracks, with
 scripted or network traffic), :class:`~enn_traffic.sim.sumo_world.SumoWorld` (SUMO's traffic,
@@ -23,14 +23,14 @@ from enn_traffic.scenario import Scenario
 # departure (paper §5.6: the steps kept in the lane).
 CAPPED, COLLIDED, SPUN, LEFT_NETWORK, LEFT_LANE = 0, 1, 2, 3, 4
 RUNNING = -1  # a step's outcome while the life goes on
-# What a collision was with (``EpisodeResults.hit``), besides a vehicle (0, 1, ...).
+# What a collision was with (``SituationResults.hit``), besides a vehicle (0, 1, ...).
 NO_HIT, HIT_WALL = -1, -2
 OUTCOMES = {CAPPED: "capped", COLLIDED: "collision", SPUN: "spin", LEFT_NETWORK: "left network",
             LEFT_LANE: "left lane"}
-# Columns of :attr:`EpisodeResults.traffic`: vehicles in the world when the learner starts,
+# Columns of :attr:`SituationResults.traffic`: vehicles in the world when the learner starts,
 # vehicle-steps within the learner's sensor range, most vehicles within range at once.
 MET_START, MET_NEAR_STEPS, MET_NEAR_MAX = range(3)
-# Columns of :attr:`EpisodeResults.safety` (closed loop with SUMO only): the lowest
+# Columns of :attr:`SituationResults.safety` (closed loop with SUMO only): the lowest
 # time-to-collision its SSM device saw (s; inf: none), conflicts by TTC, DRAC and PET.
 SAFETY_MIN_TTC, SAFETY_TTC, SAFETY_DRAC, SAFETY_PET = range(4)
 
@@ -55,11 +55,11 @@ class World(Protocol):
     vehicles: int  # vehicles simulated per world
     track: Drawn  # the track or road (the first, of several) that tables name and plots draw
 
-    def evaluate(self, population: np.ndarray, key: int = 0) -> EpisodeResults:
+    def evaluate(self, population: np.ndarray, key: int = 0) -> SituationResults:
         """Fitness and per-situation results of every chromosome (P, G)."""
         ...
 
-    def episode_labels(self) -> list[str]:
+    def situation_labels(self) -> list[str]:
         """What each column of the per-situation arrays is (a strategy, a road)."""
         ...
 
@@ -70,7 +70,7 @@ class World(Protocol):
 
 
 @dataclass(frozen=True)
-class EpisodeResults:
+class SituationResults:
     """Per world and episode (P, E): learner steps, outcome (``OUTCOMES``), collisions the
     learner suffered, the traffic it met (P, E, 3; columns ``MET_*``) and what it ran into
     (``hit``: ``NO_HIT``, ``HIT_WALL``, or the vehicle: an arena vehicle's index, a SUMO
@@ -97,7 +97,7 @@ class EpisodeResults:
     def of_lives(cls, steps: np.ndarray, outcome: np.ndarray, suffered: np.ndarray | None = None,
                  vehicles: int = 1, traffic: np.ndarray | None = None,
                  safety: np.ndarray | None = None, hit: np.ndarray | None = None,
-                 hit_vehicle: np.ndarray | None = None) -> EpisodeResults:
+                 hit_vehicle: np.ndarray | None = None) -> SituationResults:
         """From every life (P, E): fitness is the mean over the situations of
         :meth:`lifetime_fitness`."""
         fitness = cls.lifetime_fitness(steps, outcome).mean(axis=1)
@@ -108,7 +108,7 @@ class EpisodeResults:
     @classmethod
     def of_situations(cls, runs: list[tuple], vehicles: int, at_start: list,
                       safety: np.ndarray | None = None,
-                      hit_vehicle: np.ndarray | None = None) -> EpisodeResults:
+                      hit_vehicle: np.ndarray | None = None) -> SituationResults:
         """From a compiled batch's (steps, outcome, suffered, vehicle-steps within range, most
         within range, what was hit), each (P,), per situation; ``at_start``: the vehicles in
         the world at the learner's start, per situation (a number, or one per world)."""
@@ -154,7 +154,7 @@ class EpisodeResults:
         return int(self.steps.sum()) * self.vehicles
 
     @staticmethod
-    def concatenate(parts: list[EpisodeResults], axis: int = 0) -> EpisodeResults:
+    def concatenate(parts: list[SituationResults], axis: int = 0) -> SituationResults:
         """Results of several batches of worlds (``axis = 0``), or of several sets of
         situations of the same worlds (``axis = 1``)."""
         def joined(name: str) -> np.ndarray | None:
@@ -162,7 +162,7 @@ class EpisodeResults:
             return None if any(a is None for a in arrays) else np.concatenate(arrays, axis)
 
         steps, outcome = joined("steps"), joined("outcome")
-        return EpisodeResults.of_lives(
+        return SituationResults.of_lives(
             steps, outcome, joined("suffered"), vehicles=parts[0].vehicles,
             traffic=joined("traffic"), safety=joined("safety"), hit=joined("hit"),
             hit_vehicle=joined("hit_vehicle"))

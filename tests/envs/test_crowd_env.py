@@ -54,7 +54,7 @@ def test_learners_driven_by_actions_move_as_the_crowds_networks_do(name):
     env = ArenaCrowdEnv(shipped_scenario(name), learners=learners)
     world, key, situation = env.world, keys.VALIDATION.start + 2, 1
     chromosome = np.random.default_rng(7).uniform(-1, 1, world.spec.chromosome_length)
-    episode = world.episodes(key)[situation]
+    episode = world.situations(key)[situation]
     kinds = np.asarray(episode.kinds).copy()
     kinds[:learners] = NETWORK
     genes = episode.traffic_genes.copy()

@@ -139,7 +139,7 @@ def test_roads_drawn_per_situation(tmp_path):
     assert all(40.0 <= r.radius <= 50.0 and 2.0 <= r.amplitude <= 7.0 for r in roads)
     assert len({(r.road, r.radius, r.amplitude) for r in roads}) == len(roads)
     results = world.evaluate(np.zeros((2, world.spec.chromosome_length)), key=3)
-    assert results.steps.shape == (2, 2) and world.episode_labels() == ["drawn road"] * 2
+    assert results.steps.shape == (2, 2) and world.situation_labels() == ["drawn road"] * 2
 
 
 def test_a_bad_draw_range_is_named(tmp_path):

@@ -155,9 +155,9 @@ def test_start_anywhere_takes_every_spot_with_room_along_the_lane(tmp_path, root
     assert np.allclose(np.sort(east[:, 0]), np.arange(7.5, 88, 5))
     assert np.allclose(np.sort(west[:, 0]), np.arange(12.5, 93, 5))
     # each situation draws its start from the traffic key: the same key, the same starts
-    drawn = [tuple(e.start[0]) for e in world.episodes(3)]
-    assert drawn == [tuple(e.start[0]) for e in world.episodes(3)]
-    assert len(set(drawn)) > 1 and drawn != [tuple(e.start[0]) for e in world.episodes(4)]
+    drawn = [tuple(e.start[0]) for e in world.situations(3)]
+    assert drawn == [tuple(e.start[0]) for e in world.situations(3)]
+    assert len(set(drawn)) > 1 and drawn != [tuple(e.start[0]) for e in world.situations(4)]
 
 
 def test_start_anywhere_with_a_start_pose_is_refused(tmp_path, root):
@@ -196,7 +196,7 @@ def test_random_network_traffic_is_the_same_whatever_the_learners_network(root):
     # hidden neurons: the traffic's networks drive the same, vehicle for vehicle.
     base = load_scenario(root / "scenarios" / "arena_strategy1.toml")
     worlds = [ArenaWorld(base.with_overrides(network={"hidden": hidden})) for hidden in ([3], [6])]
-    situations = [world.episodes(7) for world in worlds]
+    situations = [world.situations(7) for world in worlds]
     specs = [NetworkSpec(world.spec.layer_sizes) for world in worlds]  # genes: source layout
     for small, big in zip(*situations, strict=True):
         assert np.array_equal(small.start, big.start) and small.seed == big.seed

@@ -52,7 +52,7 @@ def test_fitness_is_the_mean_over_the_tracks(tmp_path, root):
     for index, one in enumerate(alone):
         np.testing.assert_array_equal(results.steps[:, index], one.steps[:, 0])
     np.testing.assert_allclose(results.fitness, np.mean([a.fitness for a in alone], axis=0))
-    assert world.episode_labels() == ["arena: none", "arena: none", "track_narrow: none"]
+    assert world.situation_labels() == ["arena: none", "arena: none", "track_narrow: none"]
 
 
 def test_a_trace_is_of_its_own_track(tmp_path, root):

@@ -63,11 +63,11 @@ def test_every_world_of_a_generation_meets_the_same_traffic(arena):
 
 def test_traffic_changes_with_the_generation(arena):
     varying = ArenaWorld(arena.scenario.with_overrides(traffic={"vary": "generation"}))
-    first = varying.episodes(0)[0]
-    second = varying.episodes(1)[0]
+    first = varying.situations(0)[0]
+    second = varying.situations(1)[0]
     assert not np.array_equal(first.start, second.start)
     np.testing.assert_array_equal(first.start[0], second.start[0])  # the learner starts alike
-    np.testing.assert_array_equal(first.start, varying.episodes(0)[0].start)
+    np.testing.assert_array_equal(first.start, varying.situations(0)[0].start)
 
 
 def test_fixed_traffic_holds_for_training_but_never_for_held_out_keys(arena):
@@ -77,10 +77,10 @@ def test_fixed_traffic_holds_for_training_but_never_for_held_out_keys(arena):
 
     fixed = ArenaWorld(arena.scenario.with_overrides(traffic={"vary": "fixed"}))
     varying = ArenaWorld(arena.scenario.with_overrides(traffic={"vary": "generation"}))
-    np.testing.assert_array_equal(fixed.episodes(0)[0].start, fixed.episodes(9)[0].start)
-    held_out = fixed.episodes(EVALUATION_KEY)[0].start
-    assert not np.array_equal(held_out, fixed.episodes(0)[0].start)
-    np.testing.assert_array_equal(held_out, varying.episodes(EVALUATION_KEY)[0].start)
+    np.testing.assert_array_equal(fixed.situations(0)[0].start, fixed.situations(9)[0].start)
+    held_out = fixed.situations(EVALUATION_KEY)[0].start
+    assert not np.array_equal(held_out, fixed.situations(0)[0].start)
+    np.testing.assert_array_equal(held_out, varying.situations(EVALUATION_KEY)[0].start)
 
 
 @pytest.mark.parametrize("strategy", [1, 2, 3, 4])

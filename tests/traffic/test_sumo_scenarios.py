@@ -259,7 +259,7 @@ def test_sumo_traffic_on_several_tracks(tmp_path, root):
                                            routes=root / "scenarios" / "routes"))
     scenario = load_scenario(path)
     world = make_world(scenario)
-    assert world.episode_labels() == ["sumo_ring: sumo (replay)", "sumo_grid: sumo (replay)"]
+    assert world.situation_labels() == ["sumo_ring: sumo (replay)", "sumo_grid: sumo (replay)"]
     population = np.random.default_rng(5).uniform(-1, 1, (3, world.spec.chromosome_length))
     results = world.evaluate(population, key=4)
     for index in range(2):
