@@ -73,6 +73,12 @@ class NetworkSpec:
                              f"{self.layer_sizes} needs {self.chromosome_length}")
         return np.ascontiguousarray(population[:, self.source_order()])
 
+    def from_source_layout(self, population: np.ndarray) -> np.ndarray:
+        """Chromosomes (P, G) in the source layout back in this layout: the inverse of
+        :meth:`in_source_layout`."""
+        population = np.atleast_2d(np.asarray(population, dtype=np.float64))
+        return np.ascontiguousarray(population[:, np.argsort(self.source_order())])
+
     def embed(self, population: np.ndarray, smaller: NetworkSpec) -> np.ndarray:
         """Chromosomes (P, g) of the ``smaller`` network (its layout) as chromosomes of this
         one in the source layout, computing the same outputs: each extra hidden neuron gets

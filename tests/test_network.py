@@ -43,6 +43,16 @@ def test_target_layout_is_the_authors_grouping():
     np.testing.assert_array_equal(output[0, :, 1], np.arange(64, 68))
 
 
+def test_a_chromosome_goes_back_from_the_source_layout():
+    """The target layout's gene 1 (input 2 to hidden 1) is the source layout's gene 3 (one
+    gene per hidden neuron before it), and back again."""
+    spec = NetworkSpec((19, 3, 2), layout="target")
+    chromosome = np.arange(68, dtype=float)
+    source = spec.in_source_layout(chromosome)
+    assert source[0, 3] == 1.0 and source[0, 1] == 20.0
+    np.testing.assert_array_equal(spec.from_source_layout(source)[0], chromosome)
+
+
 def test_compiled_forward_pass_matches_hand_computation():
     """The one forward pass every world drives with, against Figure 1's layout by hand."""
     spec = NetworkSpec((2, 3, 2))

@@ -1,7 +1,9 @@
 """Learning while driving (paper §5.5; docs/design.md, "The authors' code" 6): each learning
 vehicle evolves its own population, a chromosome per life, and the vehicles share what they
 learn — the best chromosomes of all of them replace each one's elites, and what every vehicle
-saw of a chromosome is pooled.
+saw of a chromosome is pooled. What each vehicle saw itself is also kept apart, so that each
+can end with a controller of its own (§5.5.2: "a customized solution for each different
+vehicle").
 
 The world that drives the vehicles (:class:`enn_traffic.sim.crowd.Crowd`) knows nothing of the
 GA: it calls back :class:`OnlineLearning` when a learning vehicle's life ends.
@@ -87,7 +89,8 @@ class OnlineLearning:
     """The learning vehicles of a crowd, as the crowd calls them back: ``learners[v]`` is
     vehicle v's own GA, or None for a vehicle that does not learn. With ``share_elites``, an
     exhausted population breeds with the ``elite_count`` best chromosomes of all vehicles
-    (reference §7.4); every life goes into ``evidence``."""
+    (reference §7.4); every life goes into the pooled ``evidence`` and into the vehicle's own
+    (``own[v]``)."""
 
     def __init__(self, learners: list[VehicleGA | None], params: ga.GAParams,
                  share_elites: bool = False, elite_count: int = 0,
@@ -97,6 +100,7 @@ class OnlineLearning:
         self.share_elites = share_elites
         self.elite_count = elite_count
         self.evidence = Evidence() if evidence is None else evidence
+        self.own = [Evidence() for _ in learners]
 
     def learns(self, vehicle: int) -> bool:
         return self.learners[vehicle] is not None
@@ -112,6 +116,7 @@ class OnlineLearning:
         life."""
         learner = self.learners[vehicle]
         self.evidence.record(learner.current, unseen_steps, losses=1)
+        self.own[vehicle].record(learner.current, unseen_steps, losses=1)
         learner.record(0.0 if spun else float(steps))
         if learner.exhausted:
             elites = (global_elites(self.learners, self.elite_count) if self.share_elites
@@ -122,6 +127,13 @@ class OnlineLearning:
     def still_driving(self, vehicle: int, unseen_steps: int) -> None:
         """The run ends with the vehicle's life going on: what it has shown counts."""
         self.evidence.record(self.learners[vehicle].current, unseen_steps, losses=0)
+        self.own[vehicle].record(self.learners[vehicle].current, unseen_steps, losses=0)
+
+    def own_controllers(self) -> np.ndarray:
+        """Each learning vehicle's controller (V, G): of the chromosomes it drove itself, the
+        one that lost fewest lives per step in its own lives (:meth:`Evidence.best`)."""
+        return np.stack([own.best() for own, learner in zip(self.own, self.learners,
+                                                             strict=True) if learner is not None])
 
 
 def global_elites(learners: list[VehicleGA | None], count: int) -> np.ndarray:

@@ -14,11 +14,14 @@ time each:
 - Table 4 (§5.5.2, broadcasting the evolved population): every vehicle starts from a copy of the
   evolved population (the candidates, fewest broadcast lives lost first, then the rest of the
   winner's run's final population) and all learn at once for ``SECONDS`` (each its own GA,
-  sharing the best chromosomes across vehicles, docs/design.md, "The authors' code" 6); then all
-  drive what they found together: the chromosome that lost fewest lives per step
-  (:class:`~enn_traffic.evolution.online.Evidence`), counting what the vehicles saw while learning
-  together with what the validation situations showed of each candidate, and the rate is
-  measured over the ``SECONDS`` that follow.
+  sharing the best chromosomes across vehicles, docs/design.md, "The authors' code" 6); then
+  each drives its own controller, "a customized solution for each different vehicle": of the
+  chromosomes it drove itself, the one that lost fewest lives per step in its own lives
+  (:meth:`~enn_traffic.evolution.online.OnlineLearning.own_controllers`), and the rate is
+  measured over the ``SECONDS`` that follow (``population``). An alternative, from the same
+  state after learning: all drive one pooled chromosome, the fewest lives lost per step over
+  what every vehicle saw while learning and what the validation situations showed of each
+  candidate (``pooled``).
 
 Table 4 thus measures a later span than Table 3 and the initial behaviour, which start from
 the start poses. So the initial drivers and the winner also drive on for a second span
@@ -107,16 +110,19 @@ def _evolved_population(ranked: np.ndarray, run_population: np.ndarray, size: in
 
 
 def _strategy_rows(world: ArenaWorld, strategy: int, winner: np.ndarray, population: np.ndarray,
-                   validation: Evidence, paths: dict) -> tuple[dict, list[dict]]:
+                   validation: Evidence, paths: dict, controllers: dict
+                   ) -> tuple[dict, list[dict]]:
     """The strategy's mean rates (with the simulated and wall time they took) and each
-    situation's."""
+    situation's; ``paths`` and ``controllers`` (each vehicle's own after learning) receive
+    the first situation's."""
     sc = world.scenario
     params = ga_params(sc)
     winner_genes = world.spec.in_source_layout(winner)[0]
     evolved = world.spec.in_source_layout(population)
     network = np.full(world.vehicles, NETWORK)
     rates = {"initial": [], "winner": [], "learning": [], "population": [],
-             "winner_spins": [], "population_spins": [], "initial_next": [], "winner_next": []}
+             "winner_spins": [], "population_spins": [], "initial_next": [], "winner_next": [],
+             "pooled": [], "pooled_spins": []}
     started = time.perf_counter()
     for situation in range(SITUATIONS):
         arena, genes = _arena(world, situation)
@@ -132,19 +138,23 @@ def _strategy_rows(world: ArenaWorld, strategy: int, winner: np.ndarray, populat
         learners = [VehicleGA(evolved.copy(), np.random.default_rng([sc.seed, situation, v]))
                     for v in range(world.vehicles)]
         genes = np.tile(winner_genes, (world.vehicles, 1))
-        evidence = copy.deepcopy(validation)
-        learning = arena.run(SECONDS, genes, OnlineLearning(
-            learners, params, share_elites=True, elite_count=sc.ga.elite_count,
-            evidence=evidence))
-        rates["learning"].append(learning.collision_rate)
-        after = arena.run(SECONDS, np.tile(evidence.best(), (world.vehicles, 1)),
-                          check_spins=True)
-        rates["population"].append(after.collision_rate)
-        rates["population_spins"].append(after.spin_rate)
+        learning = OnlineLearning(learners, params, share_elites=True,
+                                  elite_count=sc.ga.elite_count,
+                                  evidence=copy.deepcopy(validation))
+        rates["learning"].append(arena.run(SECONDS, genes, learning).collision_rate)
+        own = learning.own_controllers()
+        pooled = arena.fork().run(SECONDS, np.tile(learning.evidence.best(), (world.vehicles, 1)),
+                                  check_spins=True)
+        after = arena.run(SECONDS, own.copy(), check_spins=True)
+        for name, run in (("population", after), ("pooled", pooled)):
+            rates[name].append(run.collision_rate)
+            rates[f"{name}_spins"].append(run.spin_rate)
         if situation == 0:
             paths[strategy] = (initial.trace, broadcast.trace, after.trace, world.track.walls)
+            controllers[strategy] = world.spec.from_source_layout(own)
     wall = time.perf_counter() - started
-    simulated = SITUATIONS * SECONDS * 6  # initial and winner (two spans each), learning, after
+    # initial and winner (two spans each), learning, after learning by own and pooled controllers
+    simulated = SITUATIONS * SECONDS * 7
     situations = [{"strategy": strategy, "situation": situation,
                    **{k: v[situation] for k, v in rates.items()}}
                   for situation in range(SITUATIONS)]
@@ -158,7 +168,7 @@ def _measure(study: Study) -> tuple[pd.DataFrame, pd.DataFrame]:
     written to ``simultaneous_situations.csv``."""
     family, out = study.settings(ARENA), study.out
     candidates = evolved_candidates(study, family)
-    rows, situations, paths = [], [], {}
+    rows, situations, paths, controllers = [], [], {}, {}
     for strategy in ARENA.strategies:
         world = ArenaWorld(shipped_scenario(ARENA.name(strategy)))
         ranked, validation = _ranked(world, candidates[strategy])
@@ -168,7 +178,11 @@ def _measure(study: Study) -> tuple[pd.DataFrame, pd.DataFrame]:
         population = _evolved_population(
             ranked, final_population(study, family, strategy, winner),
             world.scenario.ga.population_size)
-        means, each = _strategy_rows(world, strategy, winner, population, validation, paths)
+        means, each = _strategy_rows(world, strategy, winner, population, validation, paths,
+                                     controllers)
+        for vehicle, chromosome in enumerate(controllers[strategy]):
+            save_controller(out, f"table4/strategy{strategy}_vehicle{vehicle}", world.scenario,
+                            chromosome, float("nan"))  # chosen by lives lost
         rows.append(means)
         situations.extend(each)
     table, situations = pd.DataFrame(rows), pd.DataFrame(situations)
@@ -248,13 +262,15 @@ def summary_lines(table: pd.DataFrame, measured: pd.DataFrame, situations: pd.Da
     # initial drivers' and the winner's own second spans are the fair comparison.
     same_span = 1 - measured["population"] / measured["initial_next"]
     driving_on = 1 - measured["winner_next"] / measured["initial_next"]
+    pooled = 1 - measured["pooled"] / measured["initial_next"]
     like = ", ".join(f"strategy {s}: {i:.3f} -> {a:.3f}" for s, i, a in zip(
         measured["strategy"], measured["initial_next"], measured["population"], strict=True))
     return [f"{name} ({label}): like for like, both over the second {SECONDS:g} s, collisions "
-            f"per second per vehicle, initial drivers -> after learning: {like}; mean "
-            f"reduction {same_span.mean():.0%}, where the winner driving on without learning "
-            f"reaches {driving_on.mean():.0%}. Against the initial drivers' first {SECONDS:g} "
-            f"s (table4.csv): {rates}; {measure}; {simulated}"]
+            f"per second per vehicle, initial drivers -> after learning, each vehicle its own "
+            f"controller: {like}; mean reduction {same_span.mean():.0%}, where the winner "
+            f"driving on without learning reaches {driving_on.mean():.0%} and all driving one "
+            f"pooled chromosome after learning {pooled.mean():.0%}. Against the initial "
+            f"drivers' first {SECONDS:g} s (table4.csv): {rates}; {measure}; {simulated}"]
 
 
 def table3(study: Study) -> list[str]:

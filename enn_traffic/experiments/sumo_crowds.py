@@ -13,9 +13,10 @@ situations (10), over spans of its seconds (100) of SUMO time:
   broadcasting it, as the arena does, would cost about 10 min of SUMO time per strategy;
 - Table 4 (§5.5.2): every learner starts from a copy of the evolved population (the final
   population of the winner's run) and all learn at once for a span, each its own GA sharing
-  the best chromosomes (``learning``); then all drive the chromosome that lost fewest lives
-  per step while they learned (``population``), over the span after it. Its like-for-like
-  comparisons are the second spans of the initial drivers and of the winner.
+  the best chromosomes (``learning``); then each drives its own controller, the chromosome
+  that lost fewest lives per step in its own lives (``population``), over the span after it.
+  Its like-for-like comparisons are the second spans of the initial drivers and of the
+  winner. (A live SUMO cannot be forked, so the arena's pooled alternative is not run here.)
 
 Rates are responsible collisions per learner-second (:attr:`SumoCrowdRun.collision_rate`) and
 SUMO's SSM conflicts, time-to-collision below 1.5 s, per learner-hour, each with a 90%
@@ -34,6 +35,7 @@ import pandas as pd
 from enn_traffic import keys
 from enn_traffic.evolution.online import OnlineLearning, VehicleGA
 from enn_traffic.experiments.choosing import final_population, specialists
+from enn_traffic.experiments.common import save_controller
 from enn_traffic.experiments.protocol import SUMO, Family
 from enn_traffic.experiments.study import Study
 from enn_traffic.io import write_csv
@@ -61,10 +63,10 @@ CROWD_SPANS = Spans(seconds=100.0, situations=10, quick={"seconds": 20.0, "situa
 
 
 def situation_rates(world: SumoWorld, winner: np.ndarray, evolved: np.ndarray, situation: int,
-                    seconds: float) -> dict[str, float]:
+                    seconds: float) -> tuple[dict[str, float], np.ndarray]:
     """One situation's spans (``SPANS``): collisions per learner-second and SSM conflicts per
-    learner-hour (``<span>_conflicts``). ``winner`` (G,) and ``evolved`` (N, G) in the source
-    layout."""
+    learner-hour (``<span>_conflicts``), and each learner's own controller after learning
+    (K, G). ``winner`` (G,), ``evolved`` (N, G) and the controllers in the source layout."""
     scenario = world.scenario
     count = scenario.traffic.learners
     seed = world.seeds(SITUATION_KEY + situation)[0]
@@ -85,10 +87,11 @@ def situation_rates(world: SumoWorld, winner: np.ndarray, evolved: np.ndarray, s
                               elite_count=scenario.ga.elite_count)
     with SumoCrowd(world, seed) as crowd:
         runs["learning"] = crowd.run(seconds, broadcast, learning)
-        runs["population"] = crowd.run(seconds, np.tile(learning.evidence.best(), (count, 1)))
+        controllers = learning.own_controllers()
+        runs["population"] = crowd.run(seconds, controllers.copy())
     rates = {span: run.collision_rate for span, run in runs.items()}
     rates |= {f"{span}_conflicts": run.conflict_rate for span, run in runs.items()}
-    return rates
+    return rates, controllers
 
 
 def interval(values: np.ndarray, rng: np.random.Generator, draws: int = 2000,
@@ -119,9 +122,13 @@ def measure(study: Study, family: Family) -> pd.DataFrame:
         evolved = final_population(study, family, strategy, winner)
         source = world.spec.in_source_layout(np.vstack([winner, evolved]))
         for situation in range(spans.situations):
-            rows.append({"strategy": strategy, "situation": situation,
-                         **situation_rates(world, source[0], source[1:], situation,
-                                           spans.seconds)})
+            rates, controllers = situation_rates(world, source[0], source[1:], situation,
+                                                 spans.seconds)
+            rows.append({"strategy": strategy, "situation": situation, **rates})
+            if situation == 0:  # each learner's own controller, committed with the tables
+                for learner, genes in enumerate(world.spec.from_source_layout(controllers)):
+                    save_controller(study.out, f"{family.folder}/table4/strategy{strategy}_"
+                                    f"learner{learner}", world.scenario, genes, float("nan"))
     table = pd.DataFrame(rows)
     write_csv(study.out / family.folder / "crowd_situations.csv", table)
     return table

@@ -23,6 +23,7 @@ divided by the number of vehicles and the simulated time.
 
 from __future__ import annotations
 
+import copy
 from dataclasses import dataclass
 from typing import Protocol
 
@@ -183,6 +184,16 @@ class Crowd:
                 self.pose, self.corners, self.centres, self.previous, self.previous_centres,
                 self.fresh, self.memory, self.rng)
         self.life[v] = 0
+
+    def fork(self) -> Crowd:
+        """A crowd in this one's state (poses, lives, memories, random generator) that goes on
+        apart from it; the world is shared."""
+        twin = copy.copy(self)
+        for name, value in vars(self).items():
+            if isinstance(value, np.ndarray):
+                setattr(twin, name, value.copy())
+        twin._work = tuple(buffer.copy() for buffer in self._work)
+        return twin
 
     def remove(self, vehicles) -> None:
         """The ``vehicles`` leave the arena; the others keep their order."""

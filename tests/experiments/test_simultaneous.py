@@ -64,16 +64,18 @@ def test_tables_3_and_4_and_their_summary_lines():
     measured = pd.DataFrame({  # two strategies' mean rates per span
         "strategy": [1, 2], "initial": [0.10, 0.05], "initial_next": [0.08, 0.04],
         "winner": [0.02, 0.01], "winner_next": [0.02, 0.01], "population": [0.02, 0.02],
-        "simulated_s": [100.0, 100.0], "wall_s": [1.0, 1.0]})
+        "pooled": [0.04, 0.01], "simulated_s": [100.0, 100.0], "wall_s": [1.0, 1.0]})
     situations = measured.drop(columns=["simulated_s", "wall_s"])
     table4 = rates_table(measured, "population")
     assert list(table4["after_collisions_per_s"]) == [0.02, 0.02]
     assert list(table4["initial_collisions_per_s"]) == [0.10, 0.05]
     (line,) = summary_lines(table4, measured, situations, "population", "table4", "population")
     # like for like: 1 - 0.02/0.08 = 75%, 1 - 0.02/0.04 = 50% -> 62%; winner driving on:
-    # 75% and 75%; from the first span: 80% and 60% -> 70%
+    # 75% and 75%; one pooled chromosome: 50% and 75% -> 62%; from the first span: 80% and
+    # 60% -> 70%
     assert line.startswith("table4 (population): like for like")
-    assert "mean reduction 62%, where the winner driving on without learning reaches 75%" in line
+    assert ("mean reduction 62%, where the winner driving on without learning reaches 75% and "
+            "all driving one pooled chromosome after learning 62%") in line
     assert line.index("62%") < line.index("mean reduction 70%")
     (line,) = summary_lines(rates_table(measured, "winner"), measured, situations, "winner",
                             "table3", "winner")

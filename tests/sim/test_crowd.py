@@ -62,6 +62,29 @@ def test_learners_record_every_step_they_drove(world):
     assert set(evidence.chromosomes) == driven
 
 
+def test_each_learner_ends_with_a_controller_of_its_own_lives(world):
+    """Table 4 (§5.5.2, "a customized solution for each different vehicle"): each vehicle's
+    controller is the chromosome with the fewest lives lost per step among those it drove
+    itself; the pooled evidence holds both vehicles' lives."""
+    length = world.spec.chromosome_length
+    rng = np.random.default_rng(5)
+    learners = [VehicleGA(rng.uniform(-1, 1, (4, length)), np.random.default_rng(v))
+                for v in range(2)]
+    starts = np.array([[80.0, 50.0, 0.0], [20.0, 50.0, np.pi]])
+    arena = Crowd(world, starts, np.array([NETWORK, NETWORK]), seed=2)
+    learning = OnlineLearning(learners, ga.GAParams(population_size=4, tournament_size=2))
+    arena.run(3.0, np.zeros((2, length)), learning)
+    controllers = learning.own_controllers()
+    assert controllers.shape == (2, length)
+    for vehicle, learner in enumerate(learners):
+        drove = {row.tobytes() for row in learner.population[: learner.index + 1]}
+        own = learning.own[vehicle]
+        assert set(own.chromosomes) == drove and sum(own.steps.values()) == 30
+        np.testing.assert_array_equal(controllers[vehicle], own.best())
+    assert not np.array_equal(controllers[0], controllers[1])
+    assert sum(learning.evidence.steps.values()) == 2 * 30
+
+
 def test_evolved_drivers_held_to_the_spin_rule_lose_their_life_circling_on_the_spot(world):
     """A network whose only gene steers it left drives a ≈ 7 m circle: both position spreads
     stay under the spin limit, so with check_spins each vehicle spins out (and respawns)."""

@@ -98,10 +98,15 @@ def test_one_situation_of_the_sumo_tables_is_the_same_run_again(world):
 
     winner = straight(world)[0]
     evolved = np.random.default_rng(0).uniform(-1, 1, (4, world.spec.chromosome_length))
-    first = situation_rates(world, winner, evolved, situation=0, seconds=3.0)
+    first, controllers = situation_rates(world, winner, evolved, situation=0, seconds=3.0)
     assert set(first) == set(SPANS) | {f"{span}_conflicts" for span in SPANS}
-    assert first == situation_rates(world, winner, evolved, situation=0, seconds=3.0)
+    again, same = situation_rates(world, winner, evolved, situation=0, seconds=3.0)
+    assert first == again
+    np.testing.assert_array_equal(controllers, same)
     assert first["winner"] > 0 and first["winner_next"] > 0
+    # each learner ends with a chromosome of the population it was given
+    assert controllers.shape == (world.scenario.traffic.learners, len(winner))
+    assert all(any(np.array_equal(row, given) for given in evolved) for row in controllers)
 
 
 def test_a_sumo_vehicle_that_drives_into_a_learner_leaves_that_learners_world_only(world):
