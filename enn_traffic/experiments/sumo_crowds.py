@@ -122,11 +122,10 @@ def measure(study: Study, family: Family) -> pd.DataFrame:
         evolved = final_population(study, family, strategy, winner)
         source = world.spec.in_source_layout(np.vstack([winner, evolved]))
         for situation in range(spans.situations):
-            rates, controllers = situation_rates(world, source[0], source[1:], situation,
-                                                 spans.seconds)
+            rates, own = situation_rates(world, source[0], source[1:], situation, spans.seconds)
             rows.append({"strategy": strategy, "situation": situation, **rates})
             if situation == 0:  # each learner's own controller, committed with the tables
-                for learner, genes in enumerate(world.spec.from_source_layout(controllers)):
+                for learner, genes in enumerate(world.spec.from_source_layout(own)):
                     save_controller(study.out, f"{family.folder}/table4/strategy{strategy}_"
                                     f"learner{learner}", world.scenario, genes, float("nan"))
     table = pd.DataFrame(rows)

@@ -3,13 +3,12 @@
 import numpy as np
 import pandas as pd
 import pytest
+import ray  # the development install carries Ray: a missing Ray fails, never skips
 from conftest import FIG7_RUNS, assert_same_run, local_and_spread
 
 from enn_traffic.evolution.backends import RayEvaluator
 from enn_traffic.runner import evolve
 from enn_traffic.scenario import load_scenario
-
-ray = pytest.importorskip("ray")
 
 
 @pytest.fixture(scope="module")

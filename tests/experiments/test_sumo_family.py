@@ -31,11 +31,30 @@ def test_every_table_and_figure_is_written(tiny):
     for name in ("fig11.csv", "fig11.png", "table1.csv", "fig12.png", "table2.csv",
                  "closed_loop.csv", "table3.csv", "table4.csv", "crowd_situations.csv"):
         assert (folder / name).is_file(), name
-    table1 = pd.read_csv(folder / "table1.csv")
-    assert table1.shape == (4, 5)
-    assert ((table1.filter(like="deploy_") >= 0) & (table1.filter(like="deploy_") <= 100)).all(
-        axis=None)  # lifetimes of at most max_steps = 100
     assert any(line.startswith("tiny/table3:") for line in lines)
+    # Table 4 (§5.5.2): every learner of the first situation ends with a controller of its own
+    learners = TINY.scenario(1).traffic.learners
+    saved = sorted((folder.parent / "controllers" / "tiny" / "table4").glob("*.npz"))
+    assert len(saved) == 4 * learners and saved[0].name == "strategy1_learner0.npz"
+
+
+@pytest.mark.parametrize("trained, deployed", [(1, 2), (2, 1), (3, 3)])
+def test_a_table1_entry_is_its_saved_controller_on_that_strategys_test_traffic(
+        tiny, trained, deployed):
+    """Row: the strategy trained on; column: the strategy deployed on. The controller saved
+    for the row, driven again on the column strategy's test situations, gives the entry."""
+    from enn_traffic.controller import Controller
+    from enn_traffic.experiments.choosing import fitness_on_test_traffic
+
+    folder, _ = tiny
+    table1 = pd.read_csv(folder / "table1.csv").set_index("training_strategy")
+    assert table1.shape == (4, 4)
+    controller = Controller.load(folder.parent / "controllers" / "tiny" / "table1"
+                                 / f"strategy{trained}.npz")
+    study = Study(folder.parent, quick=True, progress=False)
+    fitness = fitness_on_test_traffic(study, study.settings(TINY), controller.chromosome,
+                                      deployed)
+    assert round(fitness, 1) == table1.loc[trained, f"deploy_{deployed}"]
 
 
 def test_tables_3_and_4_are_the_means_of_the_situations(tiny):

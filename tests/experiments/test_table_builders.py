@@ -40,9 +40,13 @@ def test_paper_tables_set_ours_beside_the_papers(tmp_path):
     pd.DataFrame({"strategy": [1, 2, 3, 4], "initial_collisions_per_s": [0.1, 0.2, 0.3, 0.4],
                   "after_collisions_per_s": [0.01, 0.02, 0.03, 0.04]}).to_csv(
         tmp_path / "table4.csv", index=False)
-    text = "\n".join(paper_tables(tmp_path))
-    assert "### Table 1, arena" in text and "| 2 |" in text
-    row = next(line for line in text.splitlines() if line.startswith("| 2 |"))
-    assert row.count("/") == 4 and row.rstrip(" |").endswith(" 24")  # trained 2, deployed 4
-    table4 = text[text.index("### Table 4"):]
-    assert "| 3 |" in table4 and "0.3" in table4 and "0.03" in table4
+    lines = paper_tables(tmp_path)
+    table1 = lines[lines.index("| trained \\ deployed | 1 | 2 | 3 | 4 |") + 2:][:4]
+    # the paper's Table 1 (its text, row by row) beside ours: entry (i, j) = 10 i + j
+    assert table1 == ["| 1 | 2115 / 11 | 544 / 12 | 558 / 13 | 432 / 14 |",
+                      "| 2 | 595 / 21 | 2305 / 22 | 136 / 23 | 931 / 24 |",
+                      "| 3 | 159 / 31 | 351 / 32 | 3050 / 33 | 460 / 34 |",
+                      "| 4 | 559 / 41 | 334 / 42 | 1080 / 43 | 2560 / 44 |"]
+    table4 = lines[lines.index("| strategy | initial | after |") + 2:][:4]
+    assert table4 == ["| 1 | 16.33 / 0.1 | 2.11 / 0.01 |", "| 2 | 20.05 / 0.2 | 1.58 / 0.02 |",
+                      "| 3 | 16.82 / 0.3 | 1.76 / 0.03 |", "| 4 | 13.49 / 0.4 | 1.9 / 0.04 |"]
