@@ -38,7 +38,7 @@ def test_every_table_and_figure_is_written(tiny):
     assert len(saved) == 4 * learners and saved[0].name == "strategy1_learner0.npz"
 
 
-@pytest.mark.parametrize("trained, deployed", [(1, 2), (2, 1), (3, 3)])
+@pytest.mark.parametrize("trained, deployed", [(1, 4), (4, 1), (3, 3)])
 def test_a_table1_entry_is_its_saved_controller_on_that_strategys_test_traffic(
         tiny, trained, deployed):
     """Row: the strategy trained on; column: the strategy deployed on. The controller saved
@@ -49,6 +49,9 @@ def test_a_table1_entry_is_its_saved_controller_on_that_strategys_test_traffic(
     folder, _ = tiny
     table1 = pd.read_csv(folder / "table1.csv").set_index("training_strategy")
     assert table1.shape == (4, 4)
+    # most lives reach the 100-step cap; some controllers end a life among strategy 4's
+    # traffic, so the entries tell a row from a column
+    assert len(set(table1.to_numpy().ravel())) > 1
     controller = Controller.load(folder.parent / "controllers" / "tiny" / "table1"
                                  / f"strategy{trained}.npz")
     study = Study(folder.parent, quick=True, progress=False)
