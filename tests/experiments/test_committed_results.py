@@ -52,16 +52,20 @@ def test_committed_table1_controllers_keep_the_pattern_on_unseen_traffic(root):
         assert own > np.delete(matrix[row], row).max(), matrix
 
 
-@pytest.mark.parametrize("trained, deployed", [(2, 2), (4, 1)])
-def test_a_committed_table1_controller_drives_its_table_entry(trained, deployed, root):
-    """A committed specialist on a strategy's 200 test situations: the committed entry."""
+def test_the_committed_table1_controllers_drive_every_entry_of_their_table(root):
+    """Each committed specialist on each strategy's 200 test situations: the whole committed
+    Table 1, entry for entry."""
     from enn_traffic.experiments.choosing import fitness_on_test_traffic
 
     paper = root / "results" / "paper"
-    entry = pd.read_csv(paper / "table1.csv").set_index("training_strategy")
-    controller = Controller.load(paper / "controllers" / "table1" / f"strategy{trained}.npz")
-    fitness = fitness_on_test_traffic(Study(paper), ARENA, controller.chromosome, deployed)
-    assert round(fitness, 1) == entry.loc[trained, f"deploy_{deployed}"]
+    table = pd.read_csv(paper / "table1.csv").set_index("training_strategy")
+    study = Study(paper)
+    for trained in ARENA.strategies:
+        controller = Controller.load(paper / "controllers" / "table1" / f"strategy{trained}.npz")
+        for deployed in ARENA.strategies:
+            fitness = fitness_on_test_traffic(study, ARENA, controller.chromosome, deployed)
+            assert round(fitness, 1) == table.loc[trained, f"deploy_{deployed}"], (trained,
+                                                                                  deployed)
 
 
 @pytest.mark.parametrize("family, strategy", [(SUMO, 2), (CITY, 3)], ids=["sumo", "city"])
@@ -78,22 +82,25 @@ def test_a_committed_sumo_table1_controller_drives_its_table_entry(family, strat
     assert round(fitness, 1) == entry.loc[strategy, f"deploy_{strategy}"]
 
 
-@pytest.mark.parametrize("strategy", [2, 4])
-def test_the_committed_table2_controller_drives_its_last_row(strategy, root):
+def test_the_committed_table2_controller_drives_its_last_row(root):
     """Table 2's last controller, trained on all four strategies with the incremental
-    network, on a strategy's 200 test situations: the committed last row's entry."""
+    network, on each strategy's 200 test situations: the committed last row, entry for
+    entry, and its average."""
     from enn_traffic.experiments.choosing import fitness_on_test_traffic
 
     paper = root / "results" / "paper"
     last_row = pd.read_csv(paper / "table2.csv").iloc[-1]
     controller = Controller.load(paper / "controllers" / "table2" / "last_iteration.npz")
-    fitness = fitness_on_test_traffic(Study(paper), ARENA.incremental(), controller.chromosome,
-                                      strategy)
+    study = Study(paper)
+    fitness = [fitness_on_test_traffic(study, ARENA.incremental(), controller.chromosome, s)
+               for s in ARENA.strategies]
     # the table holds one decimal, as pandas rounds it
-    assert fitness == pytest.approx(last_row[f"strategy_{strategy}"], abs=0.05 + 1e-9)
+    for strategy, value in zip(ARENA.strategies, fitness, strict=True):
+        assert value == pytest.approx(last_row[f"strategy_{strategy}"], abs=0.05 + 1e-9)
+    assert np.mean(fitness) == pytest.approx(last_row["average"], abs=0.05 + 1e-9)
 
 
-@pytest.mark.parametrize("strategy", [1, 3])
+@pytest.mark.parametrize("strategy", [1, 2, 3, 4])
 def test_a_committed_table3_winner_drives_its_measured_situation(strategy, root):
     """Table 3's committed winner of a strategy, driving all 8 vehicles in the first measured
     situation: the committed collision rate of that situation, below its initial drivers'."""
