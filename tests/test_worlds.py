@@ -16,8 +16,20 @@ def test_every_scenario_gives_a_world(root, name, kind):
     world = make_world(load_scenario(root / "scenarios" / f"{name}.toml"))
     assert type(world).__name__ == kind
     assert isinstance(world, World)
-    assert world.situation_labels() and world.spec.chromosome_length > 0
     assert world.track.name and world.track.walls.ndim == 2 and world.track.walls.shape[1] == 4
+    # one label per situation a chromosome is driven in, and an evaluation reports each
+    scenario = world.scenario
+    if kind == "LaneKeepingWorld":
+        count = scenario.lane_keeping.episodes
+    elif kind == "SumoWorld":
+        count = scenario.traffic.episodes
+    else:
+        count = scenario.traffic.episodes * len(scenario.traffic.strategy_list)
+        assert world.vehicles == 1 + len(scenario.traffic.starts_xy)
+    assert len(world.situation_labels()) == count
+    hidden, outputs = scenario.network.hidden, 2
+    inputs = world.spec.layer_sizes[0]
+    assert world.spec.chromosome_length == (inputs + 1) * hidden[0] + (hidden[0] + 1) * outputs
 
 
 def test_a_world_of_several_tracks_names_and_draws_its_first(root):

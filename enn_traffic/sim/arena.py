@@ -261,7 +261,7 @@ class ArenaWorld(LearnerWorld):
         return result
 
     def situation_labels(self) -> list[str]:
-        """The strategy of each column of :meth:`evaluate`'s per-episode arrays."""
+        """The strategy of each column of :meth:`evaluate`'s per-situation arrays."""
         traffic = self.scenario.traffic
         return [name for name in traffic.strategy_list for _ in range(traffic.episodes)]
 

@@ -103,7 +103,9 @@ def test_wrong_chromosome_length_is_refused(root):
 
 
 def test_learning_on_the_narrow_track_improves_fitness(root):
-    """The real problem, small: 40 vehicles, 12 generations, best fitness must rise."""
+    """The real problem, small: 40 vehicles, 12 generations. Untrained, the best stalls
+    before the first turns (location A, ~100 steps; paper §5.1); after learning, every one of
+    the last four generations' best is past them and the population's mean has risen."""
     from enn_traffic.evolution import ga
     from enn_traffic.runner import ga_params
 
@@ -112,12 +114,14 @@ def test_learning_on_the_narrow_track_improves_fitness(root):
     world = ArenaWorld(scenario)
     rng = np.random.default_rng(scenario.seed)
     population = ga.initial_population(rng, 40, world.spec.chromosome_length, 1.0)
-    bests = []
+    bests, means = [], []
     for _ in range(12):
         fitness = world.evaluate(population).fitness
         bests.append(fitness.max())
+        means.append(fitness.mean())
         population = ga.next_generation(rng, population, fitness, ga_params(scenario))
-    assert max(bests[-4:]) > bests[0]
+    assert bests[0] < 100 < min(bests[-4:])
+    assert means[-1] > 3 * means[0]
 
 
 def test_process_pool_gives_the_local_results(root):
