@@ -116,3 +116,23 @@ def test_a_committed_table3_winner_drives_its_measured_situation(strategy, root)
     rate = _broadcast(world, genes, situation=0)[0].collision_rate
     assert rate == pytest.approx(row["winner"].iloc[0], abs=5e-6)
     assert rate < row["initial"].iloc[0]
+
+
+@pytest.mark.parametrize("trained, track", [("navigation_narrow", "test_zigzag30"),
+                                            ("navigation_wide", "test_snake20"),
+                                            ("navigation_mixed", "test_bends13")])
+def test_a_committed_generalization_controller_drives_its_table_row(trained, track, root):
+    """A committed seed-2 controller on a test track it never trained on: the committed
+    steps, outcome and share of the track covered (a spin, a collision, the step cap)."""
+    from enn_traffic.deploy import controller_trace
+    from enn_traffic.sim.world import OUTCOMES
+
+    paper = root / "results" / "paper"
+    table = pd.read_csv(paper / "generalization.csv")
+    row = table[(table["trained_on"] == trained) & (table["seed"] == 2)
+                & (table["track"] == track)].iloc[0]
+    controller = Controller.load(paper / "controllers" / "generalization"
+                                 / f"{trained}_seed2.npz")
+    world, poses, outcome = controller_trace(controller, shipped_scenario(track))
+    assert (len(poses) - 1, OUTCOMES[outcome]) == (row["steps"], row["outcome"])
+    assert round(world.track.coverage(poses[:, 0, :2]), 4) == row["coverage"]
