@@ -662,7 +662,10 @@ def _resolve(path: Path, section, key: str) -> None:
                 return str(package_file(value))
             except ValueError as exc:
                 raise InputError(str(exc), path, where) from None
-        return str((path.parent / value).resolve())
+        try:
+            return str((path.parent / value).resolve())
+        except (ValueError, OSError) as exc:  # a NUL character, a name the system refuses
+            raise InputError(f"not a usable path: {exc}", path, where) from None
 
     value = section.get(key)
     if isinstance(value, list):

@@ -9,6 +9,7 @@ import time
 
 import numpy as np
 import pandas as pd
+import pytest
 import tomli_w
 from conftest import FIG7_RUNS, assert_same_run
 from hypothesis import HealthCheck, given, settings
@@ -235,6 +236,17 @@ def test_any_edited_value_loads_or_names_file_and_key(tmp_path, root, place, val
         return
     assert scenario.name  # loaded: the edited value was a valid one
     assert not (isinstance(value, float) and not math.isfinite(value)), f"{place}: {value}"
+
+
+def test_a_path_with_a_nul_character_names_file_and_key(tmp_path, root):
+    """Found by the property test above: ``net = "\\u0000"`` reached pathlib's ValueError."""
+    data = {k: dict(v) if isinstance(v, dict) else v for k, v in VALID.items()}
+    data["track"]["net"] = "\x00"
+    path = tmp_path / "nul.toml"
+    path.write_text(tomli_w.dumps(data))
+    with pytest.raises(InputError) as error:
+        load_scenario(path)
+    assert error.value.key == "net" and "path" in error.value.message
 
 
 def test_bad_scenarios_from_the_command_line_exit_2_without_traceback(tmp_path, root):
