@@ -128,10 +128,12 @@ def specialists(study: Study, family: Family) -> dict[int, np.ndarray]:
     """Per strategy: the best of its runs' candidates, judged on validation traffic of that
     same strategy (the runs done first if need be), chosen once per study: Table 1, the
     replay against closed loop and Tables 3–4 deploy the same controllers."""
-    pools = evolved_candidates(study, family)
-    return study.shared(("specialists", repr(family)), lambda: {
-        strategy: pick(study, family, pools[strategy], [strategy])
-        for strategy in family.strategies})
+    def choose() -> dict[int, np.ndarray]:
+        pools = evolved_candidates(study, family)
+        return {strategy: pick(study, family, pools[strategy], [strategy])
+                for strategy in family.strategies}
+
+    return study.shared(("specialists", repr(family)), choose)
 
 
 def evolved_candidates(study: Study, family: Family) -> dict[int, np.ndarray]:
