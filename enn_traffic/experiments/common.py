@@ -36,6 +36,16 @@ def save_controller(out: Path, name: str, scenario: Scenario, chromosome: np.nda
     return path
 
 
+def save_population(out: Path, name: str, population: np.ndarray) -> Path:
+    """The population a table's learners started from (Figure 1 layout, one chromosome per
+    row) as ``out/controllers/NAME.npz``, key ``population``: with the controllers, a
+    committed table's learning can be driven again."""
+    path = out / "controllers" / f"{name}.npz"
+    path.parent.mkdir(parents=True, exist_ok=True)
+    write_atomic(path, lambda handle: np.savez(handle, population=population), binary=True)
+    return path
+
+
 def distinct(rows: np.ndarray) -> np.ndarray:
     """The rows of ``rows`` without repeats, in the order they first occur."""
     _, first = np.unique(rows, axis=0, return_index=True)

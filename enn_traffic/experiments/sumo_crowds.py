@@ -22,6 +22,11 @@ Rates are responsible collisions per learner-second (:attr:`SumoCrowdRun.collisi
 SUMO's SSM conflicts, time-to-collision below 1.5 s, per learner-hour, each with a 90%
 bootstrap interval over the situations. The situations' SUMO seeds come from the crowd test
 keys (:data:`enn_traffic.keys.CROWD_TEST`), which no choice looked at.
+
+Committed with the tables, under ``controllers/<family>/table4/``: each strategy's evolved
+population (``strategyS_evolved.npz``) and each learner's own controller of the first
+situation (``strategyS_learnerK.npz``); with the Table 1 controllers they drive that situation
+again.
 """
 
 from __future__ import annotations
@@ -35,7 +40,7 @@ import pandas as pd
 from enn_traffic import keys
 from enn_traffic.evolution.online import OnlineLearning, VehicleGA
 from enn_traffic.experiments.choosing import final_population, specialists
-from enn_traffic.experiments.common import save_controller
+from enn_traffic.experiments.common import save_controller, save_population
 from enn_traffic.experiments.protocol import SUMO, Family
 from enn_traffic.experiments.study import Study
 from enn_traffic.io import write_csv
@@ -121,6 +126,8 @@ def measure(study: Study, family: Family) -> pd.DataFrame:
         winner = controllers[strategy]
         evolved = final_population(study, family, strategy, winner)
         source = world.spec.in_source_layout(np.vstack([winner, evolved]))
+        save_population(study.out, f"{family.folder}/table4/strategy{strategy}_evolved",
+                        evolved)
         for situation in range(spans.situations):
             rates, own = situation_rates(world, source[0], source[1:], situation, spans.seconds)
             rows.append({"strategy": strategy, "situation": situation, **rates})

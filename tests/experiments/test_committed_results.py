@@ -14,10 +14,15 @@ from enn_traffic.experiments.study import Study
 from enn_traffic.shipped import shipped_scenario
 
 
-def test_todays_code_writes_the_committed_fig7_table(tmp_path, root):
-    EXPERIMENTS["fig7"](Study(tmp_path, progress=False))
-    committed = root / "results" / "paper" / "fig7.csv"
-    assert (tmp_path / "fig7.csv").read_text() == committed.read_text()
+def test_todays_code_writes_the_committed_navigation_tables(tmp_path, root):
+    """Figs. 7, 8 and 9 rerun from scratch at full settings in one study (Fig. 9's 19 beams
+    are Fig. 7's runs): every committed table, byte for byte."""
+    study = Study(tmp_path, progress=False)
+    for name in ("fig7", "fig8", "fig9"):
+        EXPERIMENTS[name](study)
+    for table in ("fig7.csv", "fig8.csv", "fig9.csv", "fig9_runs.csv"):
+        committed = root / "results" / "paper" / table
+        assert (tmp_path / table).read_text() == committed.read_text(), table
 
 
 @pytest.mark.parametrize("road", ["tight sine (6 m, 70 m)", "circle, radius 35 m"])
@@ -36,20 +41,25 @@ def test_a_committed_lane_keeping_controller_drives_its_table_row(road, root):
 
 
 def test_committed_table1_controllers_keep_the_pattern_on_unseen_traffic(root):
-    """Each committed Table 1 specialist lives longest among the traffic it trained on, on
-    200 situations of traffic seed 5000, which no training and no choice of controller drew
-    (the scenarios' own seed is 1000): the paper's diagonal above the rest of every row."""
+    """Each committed Table 1 specialist on 200 situations of traffic seed 5000, which no
+    training and no choice of controller drew (the scenarios' own seed is 1000): every entry
+    of the committed ``table1_seed5000_matrix.csv`` (the README's ``evaluate`` command), and
+    the paper's diagonal above the rest of every row."""
     from enn_traffic.deploy import evaluate_batch, fitness_matrix
 
-    folder = root / "results" / "paper" / "controllers" / "table1"
+    paper = root / "results" / "paper"
+    folder = paper / "controllers" / "table1"
     controllers = {f"strategy{s}": Controller.load(folder / f"strategy{s}.npz")
                    for s in ARENA.strategies}
     scenarios = [shipped_scenario(f"arena_strategy{s}").with_overrides(traffic={"seed": 5000})
                  for s in ARENA.strategies]
     matrix = fitness_matrix(evaluate_batch(controllers, scenarios, 200, "local", None,
-                                           progress=False)).to_numpy()
-    for row, own in enumerate(np.diag(matrix)):
-        assert own > np.delete(matrix[row], row).max(), matrix
+                                           progress=False))
+    committed = pd.read_csv(paper / "table1_seed5000_matrix.csv", index_col=0)
+    # the CSV keeps 6 significant digits
+    pd.testing.assert_frame_equal(matrix, committed, check_names=False, rtol=5e-6)
+    for row, own in enumerate(np.diag(matrix.to_numpy())):
+        assert own > np.delete(matrix.to_numpy()[row], row).max(), matrix
 
 
 def test_the_committed_table1_controllers_drive_every_entry_of_their_table(root):
@@ -100,6 +110,44 @@ def test_the_committed_table2_controller_drives_its_last_row(root):
     assert np.mean(fitness) == pytest.approx(last_row["average"], abs=0.05 + 1e-9)
 
 
+@pytest.mark.parametrize("family", [SUMO, CITY], ids=["sumo", "city"])
+def test_a_committed_sumo_table2_controller_drives_its_last_row(family, root):
+    """Table 2's last controller of a SUMO family, trained on all four strategies, replayed on
+    each strategy's 10 test situations: the committed last row, entry for entry, and its
+    average."""
+    from enn_traffic.experiments.choosing import fitness_on_test_traffic
+
+    paper = root / "results" / "paper"
+    last_row = pd.read_csv(paper / family.folder / "table2.csv").iloc[-1]
+    controller = Controller.load(paper / "controllers" / family.folder / "table2"
+                                 / "last_iteration.npz")
+    study = Study(paper)
+    fitness = [fitness_on_test_traffic(study, family.incremental(), controller.chromosome, s)
+               for s in family.strategies]
+    for strategy, value in zip(family.strategies, fitness, strict=True):
+        assert value == pytest.approx(last_row[f"strategy_{strategy}"], abs=0.05 + 1e-9)
+    assert np.mean(fitness) == pytest.approx(last_row["average"], abs=0.05 + 1e-9)
+
+
+@pytest.mark.parametrize("family, strategy", [(SUMO, 3), (CITY, 2)], ids=["sumo", "city"])
+def test_a_committed_controller_drives_its_closed_loop_rows(family, strategy, root):
+    """A strategy's committed Table 1 controller on its test situations, traffic replayed and
+    in closed loop: every episode's two lifetimes in the committed ``closed_loop.csv``."""
+    from enn_traffic.deploy import EVALUATION_KEY
+    from enn_traffic.worlds import make_world
+
+    paper = root / "results" / "paper"
+    table = pd.read_csv(paper / family.folder / "closed_loop.csv")
+    rows = table[table["strategy"] == strategy]
+    controller = Controller.load(paper / "controllers" / family.folder / "table1"
+                                 / f"strategy{strategy}.npz")
+    test = family.scenario(strategy, family.test_situations)
+    for mode, column in (("replay", "replay_steps"), ("closed-loop", "closed_loop_steps")):
+        world = make_world(test.with_overrides(traffic={"mode": mode}))
+        steps = world.evaluate(controller.chromosome[None, :], EVALUATION_KEY).steps[0]
+        assert steps.tolist() == rows[column].tolist(), mode
+
+
 @pytest.mark.parametrize("strategy", [1, 2, 3, 4])
 def test_a_committed_table3_winner_drives_its_measured_situation(strategy, root):
     """Table 3's committed winner of a strategy, driving all 8 vehicles in the first measured
@@ -116,6 +164,31 @@ def test_a_committed_table3_winner_drives_its_measured_situation(strategy, root)
     rate = _broadcast(world, genes, situation=0)[0].collision_rate
     assert rate == pytest.approx(row["winner"].iloc[0], abs=5e-6)
     assert rate < row["initial"].iloc[0]
+
+
+@pytest.mark.parametrize("family, strategy", [(SUMO, 3), (CITY, 1)], ids=["sumo", "city"])
+def test_committed_sumo_crowd_files_drive_their_first_situation(family, strategy, root):
+    """Tables 3-4 among SUMO traffic, a strategy's first situation driven again from the
+    committed files: the initial drivers, the winner (the Table 1 controller) and learning
+    from the committed evolved population give every rate and conflict rate of the committed
+    ``crowd_situations.csv`` row, and each learner ends with its committed own controller."""
+    from enn_traffic.experiments.sumo_crowds import CROWD_SPANS, crowd_world, situation_rates
+
+    paper = root / "results" / "paper"
+    controllers = paper / "controllers" / family.folder
+    table = pd.read_csv(paper / family.folder / "crowd_situations.csv")
+    row = table[(table["strategy"] == strategy) & (table["situation"] == 0)].iloc[0]
+    world = crowd_world(family, strategy)
+    winner = Controller.load(controllers / "table1" / f"strategy{strategy}.npz").chromosome
+    with np.load(controllers / "table4" / f"strategy{strategy}_evolved.npz") as saved:
+        evolved = saved["population"]
+    source = world.spec.in_source_layout(np.vstack([winner, evolved]))
+    rates, own = situation_rates(world, source[0], source[1:], 0, CROWD_SPANS.seconds)
+    assert rates == pytest.approx(row[list(rates)].to_dict(), rel=1e-9, abs=1e-12)
+    for learner, genes in enumerate(world.spec.from_source_layout(own)):
+        committed = Controller.load(controllers / "table4"
+                                    / f"strategy{strategy}_learner{learner}.npz")
+        np.testing.assert_array_equal(genes, committed.chromosome)
 
 
 @pytest.mark.parametrize("trained, track", [("navigation_narrow", "test_zigzag30"),

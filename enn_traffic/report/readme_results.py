@@ -1,0 +1,193 @@
+"""The README's table of results, written from the committed tables in ``results/paper`` rather
+than typed: each row's figures are read from its CSV, so the README says what was measured.
+
+``python -m enn_traffic.report.readme_results`` rewrites the table between the README's
+markers after a reproduction; a test checks that the committed README holds what the
+committed tables give.
+"""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+BEGIN = "<!-- results table: written by python -m enn_traffic.report.readme_results -->"
+END = "<!-- end of results table -->"
+# Table 2's acceptance threshold (docs/results.md), and the step cap of the navigation tracks.
+TABLE2_THRESHOLD = 600
+NAVIGATION_CAP = 20000
+
+
+def _span(values) -> str:
+    low, high = min(values), max(values)
+    return f"{low:g}" if low == high else f"{low:g}–{high:g}"
+
+
+def _percent(part: float) -> str:
+    return f"{100 * part:.0f}%"
+
+
+def fig7(paper: Path) -> str:
+    table = pd.read_csv(paper / "fig7.csv")
+    reached = table["reached_B_generation"].dropna()
+    return (f"best vehicle reaches the far dead end B (≥ 1200 steps) in {len(reached)}/"
+            f"{len(table)} seeds, at generations {_span(reached.astype(int))}, after passing "
+            f"the first turns (A) at generations {_span(table['passed_A_generation'])}; best "
+            f"lifetimes {_span(table['max_best_fitness'])} steps")
+
+
+def fig8(paper: Path) -> str:
+    table = pd.read_csv(paper / "fig8.csv")
+    capped = table["capped_generation"].dropna().astype(int)
+    at_once = int((table["reached_B_generation"] == 0).sum())
+    return (f"30 m track: best vehicle drives the {NAVIGATION_CAP:,}-step cap in {len(capped)}/"
+            f"{len(table)} seeds, at generations {', '.join(map(str, capped))}. There is "
+            f"little to learn on this track: generation 0's untrained best already passes B "
+            f"in {at_once} of {len(table)} seeds; learning shows on Fig. 7's narrow track")
+
+
+def fig9(paper: Path) -> str:
+    table = pd.read_csv(paper / "fig9.csv")
+
+    def sensor(row) -> str:
+        name = f"{row.beams} beam{'s' if row.beams > 1 else ''}"
+        if row.span_deg != 180:
+            name = f"the authors' {name} over {row.span_deg}°"
+        median = ("" if pd.isna(row.median_generations_to_accepted)
+                  else f" (median {row.median_generations_to_accepted:g} generations)")
+        return f"{name}: {row.runs_accepted}/{row.runs}{median}"
+
+    return "over 180°: " + "; ".join(sensor(row) for row in table.itertuples())
+
+
+def generalization(paper: Path) -> str:
+    table = pd.read_csv(paper / "generalization.csv")
+    test = table[table["tracks"] == "test"]
+    shares = test.groupby("trained_on")["capped"].mean()
+    single = [shares[name] for name in ("navigation_narrow", "navigation_wide")]
+    return (f"on {test['track'].nunique()} test tracks of 12–30 m, controllers trained on five "
+            f"tracks at once from starts drawn anywhere on them (a departure from the paper's "
+            f"one track) reach the {NAVIGATION_CAP:,}-step cap in "
+            f"{_percent(shares['navigation_mixed'])} of (controller, track) pairs; trained on "
+            f"one track, {100 * min(single):.0f}–{_percent(max(single))} "
+            "([docs/results.md](docs/results.md#generalisation-across-tracks-51))")
+
+
+def _diagonal(matrix: pd.DataFrame) -> tuple[float, float, int]:
+    """Mean of the diagonal, mean of the rest, and the rows whose diagonal is on top."""
+    values = matrix.to_numpy()
+    own = values.diagonal()
+    rest = values[~np.eye(len(values), dtype=bool)]
+    on_top = int((own == values.max(axis=1)).sum())
+    return float(own.mean()), float(rest.mean()), on_top
+
+
+def table1(paper: Path) -> str:
+    table = pd.read_csv(paper / "table1.csv").set_index("training_strategy")
+    own, rest, on_top = _diagonal(table)
+    unseen = pd.read_csv(paper / "table1_seed5000_matrix.csv", index_col=0)
+    unseen_own, unseen_rest, unseen_top = _diagonal(unseen)
+    rows = len(table)
+    return (f"100 generations, 200 test situations per entry: diagonal {own:.0f} against "
+            f"{rest:.0f} steps ({own / rest:.2f}×), on top in {on_top} of {rows} rows; the "
+            f"same controllers on traffic seed 5000: {unseen_own:.0f} against {unseen_rest:.0f}"
+            f", {unseen_top} of {rows}. Strategies 2–4 are invented here (the paper defines "
+            "only the first) and were adjusted until this pattern appeared on since-retired "
+            "test keys ([docs/departures.md](docs/departures.md)) "
+            "([docs/results.md](docs/results.md#dynamic-vehicles-paper-5354))")
+
+
+def table2(paper: Path) -> str:
+    table = pd.read_csv(paper / "table2.csv")
+    runs = pd.read_csv(paper / "table2_runs.csv")
+    first, last = table["average"].iloc[0], table["average"].iloc[-1]
+    strategies = [c for c in table.columns if c.startswith("strategy_")]
+    kept = (table[strategies].iloc[-1] > TABLE2_THRESHOLD).all()
+    final = runs[runs["iteration"] == runs["iteration"].max()]
+    others = final[~(final[strategies].to_numpy() == table[strategies].iloc[-1].to_numpy())
+                   .all(axis=1)]
+    below = sorted(v for v in others[strategies].to_numpy().ravel() if v < TABLE2_THRESHOLD)
+    below_seeds = int((others[strategies] < TABLE2_THRESHOLD).any(axis=1).sum())
+    return (f"6 hidden neurons, {runs['seed'].nunique()} seeds, the evolution chosen on "
+            f"validation traffic: average {first:.0f} → {last:.0f} steps "
+            f"({_percent(last / first)}), "
+            f"{'every strategy above' if kept else 'not every strategy above'} the "
+            f"{TABLE2_THRESHOLD}-step threshold at the end; {below_seeds} of the other "
+            f"{len(others)} seeds' last controllers end below it among wanderers "
+            f"({', '.join(f'{v:.0f}' for v in below)})")
+
+
+def tables34(paper: Path) -> str:
+    table = pd.read_csv(paper / "simultaneous.csv")
+
+    def cut(after: str, before: str = "initial") -> str:
+        return _percent((1 - table[after] / table[before]).mean())
+
+    below = int((table["population"] < table["winner"]).sum())
+    return (f"per vehicle-second: {cut('winner')} by the winner; learning together, then each "
+            f"vehicle driving its own controller: {cut('population')} against the initial "
+            f"drivers' first 100 s, but {cut('population', 'initial_next')} like for like "
+            f"(both over the second 100 s), where the winner simply driving on reaches "
+            f"{cut('winner_next', 'initial_next')} and one pooled chromosome "
+            f"{cut('pooled', 'initial_next')}; below Table 3 in {below} of {len(table)} "
+            "strategies (paper: 4 of 4) "
+            "([docs/results.md](docs/results.md#all-vehicles-at-once-paper-55-tables-34))")
+
+
+def lane_keeping(paper: Path) -> str:
+    table = pd.read_csv(paper / "lane_keeping.csv")
+    roads = table["road"].nunique()
+    kept = table.groupby(["trained_on", "noise_m", "seed"])["kept_whole_episode"].sum()
+    drawn, one_road = kept["lane_keeping_mixed"], kept["lane_keeping"]
+    seeds = drawn.index.get_level_values("seed").nunique()
+    every = int((drawn.groupby("seed").min() == roads).sum())
+    fresh = table[(table["trained_on"] == "lane_keeping_mixed") & table["fresh"]]
+    fresh_roads = fresh["road"].nunique()
+    fresh_kept = int(fresh.groupby("seed")["kept_whole_episode"].all().sum())
+    return (f"highway-env, camera offsets of the lane markings 5–20 m ahead: trained on roads "
+            f"drawn per situation, {every}/{seeds} seeds keep the lane for the capped 1000 "
+            f"steps on all {roads} fixed roads, none trained on (sines whose sharpest bend has "
+            f"a 17 m radius, circles down to 35 m, both ways), with 0.1 m of camera noise as "
+            f"without; {roads - fresh_roads} of those roads were read by earlier designs, the "
+            f"{fresh_roads} fresh ones too, {fresh_kept}/{seeds}; trained on the one "
+            f"road, {_span(one_road)} of {roads} "
+            "([docs/results.md](docs/results.md#lane-keeping-paper-56))")
+
+
+ROWS = [
+    ("Fig. 7, narrow 12 m track", "learnt in < 50 generations; stalls at the 180° turn (B)",
+     fig7),
+    ("Fig. 8, wide track", '"very high fitness", back and forth', fig8),
+    ("Fig. 9, sensor resolution", "1 beam fails; ≥ 3 beams learn; 5 fastest", fig9),
+    ("unseen tracks", '"navigates other tracks"', generalization),
+    ("Table 1, arena (§5.4)", "trained on one traffic strategy, deployed on each: the "
+     "diagonal ≈ 4.9× the rest and tops every row", table1),
+    ("Table 2, arena (§5.4.1)", "one controller, strategies added one at a time: the average "
+     "stays within 96%", table2),
+    ("Tables 3–4, arena (§5.5)", "collisions cut 54% by the winner driving every vehicle, 89% "
+     "by learning together", tables34),
+    ("lane keeping (§5.6)", "CarMaker camera; keeps the lane for hours after ~10 h of "
+     "learning", lane_keeping),
+]
+
+
+def results_table(paper: Path) -> str:
+    """The README's results table, with the markers around it, from the tables in ``paper``."""
+    lines = [BEGIN, "| | paper | here |", "|---|---|---|"]
+    lines += [f"| {name} | {claim} | {here(paper)} |" for name, claim, here in ROWS]
+    return "\n".join([*lines, END])
+
+
+def rewrite(readme: Path, paper: Path) -> None:
+    """Replace the results table between the markers of ``readme``."""
+    text = readme.read_text()
+    start, end = text.index(BEGIN), text.index(END) + len(END)
+    readme.write_text(text[:start] + results_table(paper) + text[end:])
+
+
+if __name__ == "__main__":
+    root = Path(sys.argv[1]) if len(sys.argv) > 1 else Path(".")
+    rewrite(root / "README.md", root / "results" / "paper")
