@@ -36,13 +36,13 @@ def save_controller(out: Path, name: str, scenario: Scenario, chromosome: np.nda
     return path
 
 
-def save_population(out: Path, name: str, population: np.ndarray) -> Path:
-    """The population a table's learners started from (Figure 1 layout, one chromosome per
-    row) as ``out/controllers/NAME.npz``, key ``population``: with the controllers, a
+def save_arrays(out: Path, name: str, **arrays: np.ndarray) -> Path:
+    """What a table's learners started from besides the controllers (an evolved population,
+    what validation showed of each candidate) as ``out/controllers/NAME.npz``: with them, a
     committed table's learning can be driven again."""
     path = out / "controllers" / f"{name}.npz"
     path.parent.mkdir(parents=True, exist_ok=True)
-    write_atomic(path, lambda handle: np.savez(handle, population=population), binary=True)
+    write_atomic(path, lambda handle: np.savez(handle, **arrays), binary=True)
     return path
 
 

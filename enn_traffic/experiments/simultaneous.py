@@ -31,6 +31,12 @@ The metric is :attr:`enn_traffic.sim.crowd.CrowdRun.collision_rate`. Evolved dri
 to §5.3's spin rule throughout: rotating in place ends a life (the vehicle respawns), so a
 chromosome cannot avoid collisions by circling on the spot; their spins per second are
 recorded beside the collisions.
+
+Committed with the tables, under ``controllers/``: each strategy's winner
+(``table3/strategyS.npz``), and for Table 4 its evolved population, what the validation
+situations showed of each candidate (``table4/strategyS_evolved.npz``, ``_validation.npz``)
+and each vehicle's own controller of the first situation (``table4/strategyS_vehicleV.npz``):
+with them, that situation's every span can be driven again.
 """
 
 from __future__ import annotations
@@ -46,7 +52,7 @@ import pandas as pd
 from enn_traffic import keys
 from enn_traffic.evolution.online import Evidence, OnlineLearning, VehicleGA
 from enn_traffic.experiments.choosing import evolved_candidates, final_population
-from enn_traffic.experiments.common import distinct, save_controller
+from enn_traffic.experiments.common import distinct, save_arrays, save_controller
 from enn_traffic.experiments.protocol import ARENA
 from enn_traffic.experiments.study import Study
 from enn_traffic.io import write_csv
@@ -102,11 +108,62 @@ def _ranked(world: ArenaWorld, candidates: np.ndarray) -> tuple[np.ndarray, Evid
     return candidates[np.argsort(rates, kind="stable")], evidence
 
 
+def evidence_arrays(evidence: Evidence) -> dict[str, np.ndarray]:
+    """``evidence`` as arrays in the order it was recorded (which decides ties): each
+    chromosome (source layout), the steps it drove and the lives it lost."""
+    keys = list(evidence.chromosomes)
+    return {"chromosomes": np.stack([evidence.chromosomes[k] for k in keys]),
+            "steps": np.array([evidence.steps[k] for k in keys]),
+            "losses": np.array([evidence.losses[k] for k in keys])}
+
+
+def evidence_from_arrays(arrays) -> Evidence:
+    """The :class:`Evidence` that :func:`evidence_arrays` wrote."""
+    evidence = Evidence()
+    for genes, steps, losses in zip(arrays["chromosomes"], arrays["steps"], arrays["losses"],
+                                    strict=True):
+        evidence.record(genes, int(steps), int(losses))
+    return evidence
+
+
 def _evolved_population(ranked: np.ndarray, run_population: np.ndarray, size: int
                         ) -> np.ndarray:
     """§5.5.2's evolved population: the ranked candidates, then the rest of the winner's run's
     final population, ``size`` distinct chromosomes at most."""
     return distinct(np.concatenate([ranked, run_population]))[:size]
+
+
+def situation_rates(world: ArenaWorld, situation: int, winner: np.ndarray, evolved: np.ndarray,
+                    validation: Evidence) -> tuple[dict[str, float], np.ndarray, tuple]:
+    """One situation's rates (the columns of ``simultaneous_situations.csv``), each vehicle's
+    own controller after learning (world layout) and the paths of the initial drivers, the
+    winner and the vehicles after learning. ``winner`` (G,) and ``evolved`` (N, G) in the
+    source layout; ``validation``: what the validation situations showed of the candidates."""
+    sc = world.scenario
+    network = np.full(world.vehicles, NETWORK)
+    arena, genes = _arena(world, situation)
+    initial = arena.run(SECONDS, genes)
+    # the same drivers over the next SECONDS: the span Table 4 measures
+    initial_next = arena.run(SECONDS, genes)
+    broadcast, broadcast_next = _broadcast(world, winner, situation, periods=2)
+    arena, _ = _arena(world, situation, network)
+    learners = [VehicleGA(evolved.copy(), np.random.default_rng([sc.seed, situation, v]))
+                for v in range(world.vehicles)]
+    learning = OnlineLearning(learners, ga_params(sc), share_elites=True,
+                              elite_count=sc.ga.elite_count, evidence=copy.deepcopy(validation))
+    learnt = arena.run(SECONDS, np.tile(winner, (world.vehicles, 1)), learning)
+    own = learning.own_controllers()
+    pooled = arena.fork().run(SECONDS, np.tile(learning.evidence.best(), (world.vehicles, 1)),
+                              check_spins=True)
+    after = arena.run(SECONDS, own.copy(), check_spins=True)
+    rates = {"initial": initial.collision_rate, "winner": broadcast.collision_rate,
+             "learning": learnt.collision_rate, "population": after.collision_rate,
+             "winner_spins": broadcast.spin_rate, "population_spins": after.spin_rate,
+             "initial_next": initial_next.collision_rate,
+             "winner_next": broadcast_next.collision_rate, "pooled": pooled.collision_rate,
+             "pooled_spins": pooled.spin_rate}
+    return (rates, world.spec.from_source_layout(own),
+            (initial.trace, broadcast.trace, after.trace, world.track.walls))
 
 
 def _strategy_rows(world: ArenaWorld, strategy: int, winner: np.ndarray, population: np.ndarray,
@@ -115,51 +172,22 @@ def _strategy_rows(world: ArenaWorld, strategy: int, winner: np.ndarray, populat
     """The strategy's mean rates (with the simulated and wall time they took) and each
     situation's; ``paths`` and ``controllers`` (each vehicle's own after learning) receive
     the first situation's."""
-    sc = world.scenario
-    params = ga_params(sc)
     winner_genes = world.spec.in_source_layout(winner)[0]
     evolved = world.spec.in_source_layout(population)
-    network = np.full(world.vehicles, NETWORK)
-    rates = {"initial": [], "winner": [], "learning": [], "population": [],
-             "winner_spins": [], "population_spins": [], "initial_next": [], "winner_next": [],
-             "pooled": [], "pooled_spins": []}
+    situations = []
     started = time.perf_counter()
     for situation in range(SITUATIONS):
-        arena, genes = _arena(world, situation)
-        initial = arena.run(SECONDS, genes)
-        rates["initial"].append(initial.collision_rate)
-        # the same drivers over the next SECONDS: the span Table 4 measures
-        rates["initial_next"].append(arena.run(SECONDS, genes).collision_rate)
-        broadcast, broadcast_next = _broadcast(world, winner_genes, situation, periods=2)
-        rates["winner"].append(broadcast.collision_rate)
-        rates["winner_spins"].append(broadcast.spin_rate)
-        rates["winner_next"].append(broadcast_next.collision_rate)
-        arena, _ = _arena(world, situation, network)
-        learners = [VehicleGA(evolved.copy(), np.random.default_rng([sc.seed, situation, v]))
-                    for v in range(world.vehicles)]
-        genes = np.tile(winner_genes, (world.vehicles, 1))
-        learning = OnlineLearning(learners, params, share_elites=True,
-                                  elite_count=sc.ga.elite_count,
-                                  evidence=copy.deepcopy(validation))
-        rates["learning"].append(arena.run(SECONDS, genes, learning).collision_rate)
-        own = learning.own_controllers()
-        pooled = arena.fork().run(SECONDS, np.tile(learning.evidence.best(), (world.vehicles, 1)),
-                                  check_spins=True)
-        after = arena.run(SECONDS, own.copy(), check_spins=True)
-        for name, run in (("population", after), ("pooled", pooled)):
-            rates[name].append(run.collision_rate)
-            rates[f"{name}_spins"].append(run.spin_rate)
+        rates, own, traces = situation_rates(world, situation, winner_genes, evolved,
+                                             validation)
+        situations.append({"strategy": strategy, "situation": situation, **rates})
         if situation == 0:
-            paths[strategy] = (initial.trace, broadcast.trace, after.trace, world.track.walls)
-            controllers[strategy] = world.spec.from_source_layout(own)
+            paths[strategy], controllers[strategy] = traces, own
     wall = time.perf_counter() - started
     # initial and winner (two spans each), learning, after learning by own and pooled controllers
     simulated = SITUATIONS * SECONDS * 7
-    situations = [{"strategy": strategy, "situation": situation,
-                   **{k: v[situation] for k, v in rates.items()}}
-                  for situation in range(SITUATIONS)]
-    return ({"strategy": strategy, **{k: float(np.mean(v)) for k, v in rates.items()},
-             "simulated_s": simulated, "wall_s": round(wall, 1)}, situations)
+    means = {k: float(np.mean([row[k] for row in situations])) for k in rates}
+    return ({"strategy": strategy, **means, "simulated_s": simulated,
+             "wall_s": round(wall, 1)}, situations)
 
 
 def _measure(study: Study) -> tuple[pd.DataFrame, pd.DataFrame]:
@@ -178,6 +206,8 @@ def _measure(study: Study) -> tuple[pd.DataFrame, pd.DataFrame]:
         population = _evolved_population(
             ranked, final_population(study, family, strategy, winner),
             world.scenario.ga.population_size)
+        save_arrays(out, f"table4/strategy{strategy}_evolved", population=population)
+        save_arrays(out, f"table4/strategy{strategy}_validation", **evidence_arrays(validation))
         means, each = _strategy_rows(world, strategy, winner, population, validation, paths,
                                      controllers)
         for vehicle, chromosome in enumerate(controllers[strategy]):

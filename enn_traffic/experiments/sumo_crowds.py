@@ -40,7 +40,7 @@ import pandas as pd
 from enn_traffic import keys
 from enn_traffic.evolution.online import OnlineLearning, VehicleGA
 from enn_traffic.experiments.choosing import final_population, specialists
-from enn_traffic.experiments.common import save_controller, save_population
+from enn_traffic.experiments.common import save_arrays, save_controller
 from enn_traffic.experiments.protocol import SUMO, Family
 from enn_traffic.experiments.study import Study
 from enn_traffic.io import write_csv
@@ -126,8 +126,8 @@ def measure(study: Study, family: Family) -> pd.DataFrame:
         winner = controllers[strategy]
         evolved = final_population(study, family, strategy, winner)
         source = world.spec.in_source_layout(np.vstack([winner, evolved]))
-        save_population(study.out, f"{family.folder}/table4/strategy{strategy}_evolved",
-                        evolved)
+        save_arrays(study.out, f"{family.folder}/table4/strategy{strategy}_evolved",
+                    population=evolved)
         for situation in range(spans.situations):
             rates, own = situation_rates(world, source[0], source[1:], situation, spans.seconds)
             rows.append({"strategy": strategy, "situation": situation, **rates})

@@ -34,8 +34,12 @@ def test_every_table_and_figure_is_written(tiny):
     assert any(line.startswith("tiny/table3:") for line in lines)
     # Table 4 (§5.5.2): every learner of the first situation ends with a controller of its own
     learners = TINY.scenario(1).traffic.learners
-    saved = sorted((folder.parent / "controllers" / "tiny" / "table4").glob("*.npz"))
+    table4 = folder.parent / "controllers" / "tiny" / "table4"
+    saved = sorted(table4.glob("*_learner*.npz"))
     assert len(saved) == 4 * learners and saved[0].name == "strategy1_learner0.npz"
+    # and the evolved population each strategy's learners started from
+    assert sorted(path.name for path in table4.glob("*_evolved.npz")) == [
+        f"strategy{s}_evolved.npz" for s in TINY.strategies]
 
 
 @pytest.mark.parametrize("trained, deployed", [(1, 4), (4, 1), (3, 3)])
