@@ -92,29 +92,11 @@ def test_a_committed_sumo_table1_controller_drives_its_table_entry(family, strat
     assert round(fitness, 1) == entry.loc[strategy, f"deploy_{strategy}"]
 
 
-def test_the_committed_table2_controller_drives_its_last_row(root):
+@pytest.mark.parametrize("family", [ARENA, SUMO, CITY], ids=["arena", "sumo", "city"])
+def test_the_committed_table2_controller_drives_its_last_row(family, root):
     """Table 2's last controller, trained on all four strategies with the incremental
-    network, on each strategy's 200 test situations: the committed last row, entry for
-    entry, and its average."""
-    from enn_traffic.experiments.choosing import fitness_on_test_traffic
-
-    paper = root / "results" / "paper"
-    last_row = pd.read_csv(paper / "table2.csv").iloc[-1]
-    controller = Controller.load(paper / "controllers" / "table2" / "last_iteration.npz")
-    study = Study(paper)
-    fitness = [fitness_on_test_traffic(study, ARENA.incremental(), controller.chromosome, s)
-               for s in ARENA.strategies]
-    # the table holds one decimal, as pandas rounds it
-    for strategy, value in zip(ARENA.strategies, fitness, strict=True):
-        assert value == pytest.approx(last_row[f"strategy_{strategy}"], abs=0.05 + 1e-9)
-    assert np.mean(fitness) == pytest.approx(last_row["average"], abs=0.05 + 1e-9)
-
-
-@pytest.mark.parametrize("family", [SUMO, CITY], ids=["sumo", "city"])
-def test_a_committed_sumo_table2_controller_drives_its_last_row(family, root):
-    """Table 2's last controller of a SUMO family, trained on all four strategies, replayed on
-    each strategy's 10 test situations: the committed last row, entry for entry, and its
-    average."""
+    network, on each strategy's test situations (200 in the arena, 10 among SUMO traffic):
+    the committed last row, entry for entry, and its average."""
     from enn_traffic.experiments.choosing import fitness_on_test_traffic
 
     paper = root / "results" / "paper"
@@ -124,6 +106,7 @@ def test_a_committed_sumo_table2_controller_drives_its_last_row(family, root):
     study = Study(paper)
     fitness = [fitness_on_test_traffic(study, family.incremental(), controller.chromosome, s)
                for s in family.strategies]
+    # the table holds one decimal, as pandas rounds it
     for strategy, value in zip(family.strategies, fitness, strict=True):
         assert value == pytest.approx(last_row[f"strategy_{strategy}"], abs=0.05 + 1e-9)
     assert np.mean(fitness) == pytest.approx(last_row["average"], abs=0.05 + 1e-9)
