@@ -48,6 +48,7 @@ from pathlib import Path
 import matplotlib.pyplot as plt
 import numpy as np
 import pandas as pd
+from tqdm import tqdm
 
 from enn_traffic import keys
 from enn_traffic.evolution.online import Evidence, OnlineLearning, VehicleGA
@@ -93,13 +94,15 @@ def _broadcast(world: ArenaWorld, genes: np.ndarray, situation: int, key: int = 
             for _ in range(periods)]
 
 
-def _ranked(world: ArenaWorld, candidates: np.ndarray) -> tuple[np.ndarray, Evidence]:
+def _ranked(world: ArenaWorld, candidates: np.ndarray, progress: bool = False
+            ) -> tuple[np.ndarray, Evidence]:
     """The candidates, fewest lives lost (collisions and spins) first when each drives every
     vehicle on validation situations — the first is §5.5.1's winning chromosome — and what
     those situations showed of each (world layout)."""
     evidence = Evidence()
     source = world.spec.in_source_layout(candidates)
-    for genes in source:
+    for genes in tqdm(source, desc=f"ranking {world.scenario.name}", unit="candidate",
+                      disable=not progress, leave=False):
         for situation in range(VALIDATION_SITUATIONS):
             run = _broadcast(world, genes, situation, VALIDATION_KEY)[0]
             evidence.record(genes, run.vehicle_steps,
@@ -167,7 +170,7 @@ def situation_rates(world: ArenaWorld, situation: int, winner: np.ndarray, evolv
 
 
 def _strategy_rows(world: ArenaWorld, strategy: int, winner: np.ndarray, population: np.ndarray,
-                   validation: Evidence, paths: dict, controllers: dict
+                   validation: Evidence, paths: dict, controllers: dict, progress: bool
                    ) -> tuple[dict, list[dict]]:
     """The strategy's mean rates (with the simulated and wall time they took) and each
     situation's; ``paths`` and ``controllers`` (each vehicle's own after learning) receive
@@ -176,7 +179,8 @@ def _strategy_rows(world: ArenaWorld, strategy: int, winner: np.ndarray, populat
     evolved = world.spec.in_source_layout(population)
     situations = []
     started = time.perf_counter()
-    for situation in range(SITUATIONS):
+    for situation in tqdm(range(SITUATIONS), desc=f"arena_strategy{strategy} crowds",
+                          unit="situation", disable=not progress, leave=False):
         rates, own, traces = situation_rates(world, situation, winner_genes, evolved,
                                              validation)
         situations.append({"strategy": strategy, "situation": situation, **rates})
@@ -199,7 +203,7 @@ def _measure(study: Study) -> tuple[pd.DataFrame, pd.DataFrame]:
     rows, situations, paths, controllers = [], [], {}, {}
     for strategy in ARENA.strategies:
         world = ArenaWorld(shipped_scenario(ARENA.name(strategy)))
-        ranked, validation = _ranked(world, candidates[strategy])
+        ranked, validation = _ranked(world, candidates[strategy], study.progress)
         winner = ranked[0]
         save_controller(out, f"table3/strategy{strategy}", world.scenario, winner,
                         float("nan"))  # chosen by lives lost, not by a fitness
@@ -209,7 +213,7 @@ def _measure(study: Study) -> tuple[pd.DataFrame, pd.DataFrame]:
         save_arrays(out, f"table4/strategy{strategy}_evolved", population=population)
         save_arrays(out, f"table4/strategy{strategy}_validation", **evidence_arrays(validation))
         means, each = _strategy_rows(world, strategy, winner, population, validation, paths,
-                                     controllers)
+                                     controllers, study.progress)
         for vehicle, chromosome in enumerate(controllers[strategy]):
             save_controller(out, f"table4/strategy{strategy}_vehicle{vehicle}", world.scenario,
                             chromosome, float("nan"))  # chosen by lives lost
