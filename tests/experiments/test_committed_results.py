@@ -164,8 +164,10 @@ def test_committed_arena_crowd_files_drive_their_first_situation(strategy, root)
 def test_committed_sumo_crowd_files_drive_their_first_situation(family, strategy, root):
     """Tables 3-4 among SUMO traffic, a strategy's first situation driven again from the
     committed files: the initial drivers, the winner (the Table 1 controller) and learning
-    from the committed evolved population give every rate and conflict rate of the committed
-    ``crowd_situations.csv`` row, and each learner ends with its committed own controller."""
+    from the committed evolved population give every collision rate of the committed
+    ``crowd_situations.csv`` row, and each learner ends with its committed own controller.
+    (Not the SSM conflict rates: the same span counts other conflicts in another process,
+    docs/results.md, "Among SUMO traffic".)"""
     from enn_traffic.experiments.sumo_crowds import CROWD_SPANS, crowd_world, situation_rates
 
     paper = root / "results" / "paper"
@@ -178,8 +180,9 @@ def test_committed_sumo_crowd_files_drive_their_first_situation(family, strategy
         evolved = saved["population"]
     source = world.spec.in_source_layout(np.vstack([winner, evolved]))
     rates, own = situation_rates(world, source[0], source[1:], 0, CROWD_SPANS.seconds)
+    collisions = {span: rate for span, rate in rates.items() if not span.endswith("_conflicts")}
     # the CSV keeps 6 significant digits
-    assert rates == pytest.approx(row[list(rates)].to_dict(), rel=5e-6, abs=1e-12)
+    assert collisions == pytest.approx(row[list(collisions)].to_dict(), rel=5e-6, abs=1e-12)
     for learner, genes in enumerate(world.spec.from_source_layout(own)):
         committed = Controller.load(controllers / "table4"
                                     / f"strategy{strategy}_learner{learner}.npz")
