@@ -25,6 +25,30 @@ def test_todays_code_writes_the_committed_navigation_tables(tmp_path, root):
         assert (tmp_path / table).read_text() == committed.read_text(), table
 
 
+@pytest.mark.parametrize("family, strategy", [(ARENA, 1), (SUMO, 2), (CITY, 4)],
+                         ids=["arena", "sumo", "city"])
+def test_the_first_generation_of_a_fig11_run_gives_its_row(family, strategy, tmp_path, root):
+    """Fig. 11's run of seed 1, its first generation evolved again: the committed row's
+    first best and mean fitness, and that best chromosome's fitness on the test situations
+    (a whole run is an hour's compute; its first generation is seconds)."""
+    from enn_traffic.deploy import EVALUATION_KEY
+    from enn_traffic.experiments.choosing import mean_fitness
+    from enn_traffic.experiments.common import run_or_reuse
+    from enn_traffic.runner import RunOutputs
+
+    paper = root / "results" / "paper"
+    table = pd.read_csv(paper / family.folder / "fig11.csv")
+    row = table[(table["strategy"] == strategy) & (table["seed"] == 1)].iloc[0]
+    scenario = family.scenario(strategy).with_overrides(
+        seed=1, ga={**dict(family.ga), "generations": 1})
+    generation = run_or_reuse(scenario, tmp_path, progress=False).iloc[0]
+    assert (generation["best_fitness"], generation["mean_fitness"]) == pytest.approx(
+        (row["first_best"], row["first_mean"]), rel=5e-6)  # 6 significant digits
+    champion = RunOutputs.load(tmp_path).champions[:1]
+    on_test = mean_fitness(Study(tmp_path), family, champion, strategy, EVALUATION_KEY)[0]
+    assert on_test == pytest.approx(row["first_held_out"], rel=5e-6)
+
+
 @pytest.mark.parametrize("road", ["tight sine (6 m, 70 m)", "circle, radius 35 m"])
 def test_a_committed_lane_keeping_controller_drives_its_table_row(road, root):
     """The drawn-road controller of seed 2 on a road of lane_keeping.csv, with the noisy
