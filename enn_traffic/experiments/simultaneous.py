@@ -114,10 +114,10 @@ def _ranked(world: ArenaWorld, candidates: np.ndarray, progress: bool = False
 def evidence_arrays(evidence: Evidence) -> dict[str, np.ndarray]:
     """``evidence`` as arrays in the order it was recorded (which decides ties): each
     chromosome (source layout), the steps it drove and the lives it lost."""
-    keys = list(evidence.chromosomes)
-    return {"chromosomes": np.stack([evidence.chromosomes[k] for k in keys]),
-            "steps": np.array([evidence.steps[k] for k in keys]),
-            "losses": np.array([evidence.losses[k] for k in keys])}
+    order = list(evidence.chromosomes)
+    return {"chromosomes": np.stack([evidence.chromosomes[k] for k in order]),
+            "steps": np.array([evidence.steps[k] for k in order]),
+            "losses": np.array([evidence.losses[k] for k in order])}
 
 
 def evidence_from_arrays(arrays) -> Evidence:
