@@ -14,11 +14,21 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from enn_traffic.experiments.protocol import ARENA
+from enn_traffic.shipped import shipped_scenario
+
 BEGIN = "<!-- results table: written by python -m enn_traffic.report.readme_results -->"
 END = "<!-- end of results table -->"
-# Table 2's acceptance threshold (docs/results.md), and the step cap of the navigation tracks.
-TABLE2_THRESHOLD = 600
-NAVIGATION_CAP = 20000
+
+
+def _table2_threshold() -> int:
+    """The arena's Table 2 acceptance threshold in steps (docs/results.md)."""
+    return round(ARENA.threshold)
+
+
+def _navigation_cap() -> int:
+    """The step cap of a navigation track's life."""
+    return shipped_scenario("navigation_wide").episode.max_steps
 
 
 def _span(values) -> str:
@@ -43,7 +53,7 @@ def fig8(paper: Path) -> str:
     table = pd.read_csv(paper / "fig8.csv")
     capped = table["capped_generation"].dropna().astype(int)
     at_once = int((table["reached_B_generation"] == 0).sum())
-    return (f"30 m track: best vehicle drives the {NAVIGATION_CAP:,}-step cap in {len(capped)}/"
+    return (f"30 m track: best vehicle drives the {_navigation_cap():,}-step cap in {len(capped)}/"
             f"{len(table)} seeds, at generations {', '.join(map(str, capped))}. There is "
             f"little to learn on this track: generation 0's untrained best already passes B "
             f"in {at_once} of {len(table)} seeds; learning shows on Fig. 7's narrow track")
@@ -70,7 +80,7 @@ def generalization(paper: Path) -> str:
     single = [shares[name] for name in ("navigation_narrow", "navigation_wide")]
     return (f"on {test['track'].nunique()} test tracks of 12–30 m, controllers trained on five "
             f"tracks at once from starts drawn anywhere on them (a departure from the paper's "
-            f"one track) reach the {NAVIGATION_CAP:,}-step cap in "
+            f"one track) reach the {_navigation_cap():,}-step cap in "
             f"{_percent(shares['navigation_mixed'])} of (controller, track) pairs; trained on "
             f"one track, {100 * min(single):.0f}–{_percent(max(single))} "
             "([docs/results.md](docs/results.md#generalisation-across-tracks-51))")
@@ -103,19 +113,20 @@ def table1(paper: Path) -> str:
 def table2(paper: Path) -> str:
     table = pd.read_csv(paper / "table2.csv")
     runs = pd.read_csv(paper / "table2_runs.csv")
+    threshold = _table2_threshold()
     first, last = table["average"].iloc[0], table["average"].iloc[-1]
     strategies = [c for c in table.columns if c.startswith("strategy_")]
-    kept = (table[strategies].iloc[-1] > TABLE2_THRESHOLD).all()
+    kept = (table[strategies].iloc[-1] > threshold).all()
     final = runs[runs["iteration"] == runs["iteration"].max()]
     others = final[~(final[strategies].to_numpy() == table[strategies].iloc[-1].to_numpy())
                    .all(axis=1)]
-    below = sorted(v for v in others[strategies].to_numpy().ravel() if v < TABLE2_THRESHOLD)
-    below_seeds = int((others[strategies] < TABLE2_THRESHOLD).any(axis=1).sum())
+    below = sorted(v for v in others[strategies].to_numpy().ravel() if v < threshold)
+    below_seeds = int((others[strategies] < threshold).any(axis=1).sum())
     return (f"6 hidden neurons, {runs['seed'].nunique()} seeds, the evolution chosen on "
             f"validation traffic: average {first:.0f} → {last:.0f} steps "
             f"({_percent(last / first)}), "
             f"{'every strategy above' if kept else 'not every strategy above'} the "
-            f"{TABLE2_THRESHOLD}-step threshold at the end; {below_seeds} of the other "
+            f"{threshold}-step threshold at the end; {below_seeds} of the other "
             f"{len(others)} seeds' last controllers end below it among wanderers "
             f"({', '.join(f'{v:.0f}' for v in below)})")
 
