@@ -189,7 +189,8 @@ def _strategy_rows(world: ArenaWorld, strategy: int, winner: np.ndarray, populat
     wall = time.perf_counter() - started
     # initial and winner (two spans each), learning, after learning by own and pooled controllers
     simulated = SITUATIONS * SECONDS * 7
-    means = {k: float(np.mean([row[k] for row in situations])) for k in rates}
+    columns = [k for k in situations[0] if k not in ("strategy", "situation")]
+    means = {k: float(np.mean([row[k] for row in situations])) for k in columns}
     return ({"strategy": strategy, **means, "simulated_s": simulated,
              "wall_s": round(wall, 1)}, situations)
 
@@ -277,6 +278,12 @@ def rates_table(measured: pd.DataFrame, after: str) -> pd.DataFrame:
                          "after_collisions_per_s": measured[after].round(4)})
 
 
+def mean_reduction(rates: pd.DataFrame, after: str, before: str = "initial") -> float:
+    """The mean over the strategies of 1 − ``after`` / ``before`` (columns of
+    ``simultaneous.csv``): how much fewer collisions, strategy by strategy."""
+    return float((1 - rates[after] / rates[before]).mean())
+
+
 def summary_lines(table: pd.DataFrame, measured: pd.DataFrame, situations: pd.DataFrame,
                   after: str, name: str, label: str) -> list[str]:
     """The summary's line for Table 3 or 4; Table 4's leads with the like-for-like
@@ -294,16 +301,16 @@ def summary_lines(table: pd.DataFrame, measured: pd.DataFrame, situations: pd.Da
                 f"{rates}; {measure}; {simulated}"]
     # Like for like first: the learners are measured in the span after learning, so the
     # initial drivers' and the winner's own second spans are the fair comparison.
-    same_span = 1 - measured["population"] / measured["initial_next"]
-    driving_on = 1 - measured["winner_next"] / measured["initial_next"]
-    pooled = 1 - measured["pooled"] / measured["initial_next"]
+    same_span = mean_reduction(measured, "population", "initial_next")
+    driving_on = mean_reduction(measured, "winner_next", "initial_next")
+    pooled = mean_reduction(measured, "pooled", "initial_next")
     like = ", ".join(f"strategy {s}: {i:.3f} -> {a:.3f}" for s, i, a in zip(
         measured["strategy"], measured["initial_next"], measured["population"], strict=True))
     return [f"{name} ({label}): like for like, both over the second {SECONDS:g} s, collisions "
             f"per second per vehicle, initial drivers -> after learning, each vehicle its own "
-            f"controller: {like}; mean reduction {same_span.mean():.0%}, where the winner "
-            f"driving on without learning reaches {driving_on.mean():.0%} and all driving one "
-            f"pooled chromosome after learning {pooled.mean():.0%}. Against the initial "
+            f"controller: {like}; mean reduction {same_span:.0%}, where the winner "
+            f"driving on without learning reaches {driving_on:.0%} and all driving one "
+            f"pooled chromosome after learning {pooled:.0%}. Against the initial "
             f"drivers' first {SECONDS:g} s (table4.csv): {rates}; {measure}; {simulated}"]
 
 

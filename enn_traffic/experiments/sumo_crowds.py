@@ -122,24 +122,25 @@ def measure(study: Study, family: Family) -> pd.DataFrame:
     controllers = specialists(study, family)
     spans = study.settings(CROWD_SPANS)
     rows = []
-    bar = tqdm(total=len(family.strategies) * spans.situations, unit="situation",
-               desc=f"{family.folder} crowds", disable=not study.progress, leave=False)
-    for strategy in family.strategies:
-        world = crowd_world(family, strategy)
-        winner = controllers[strategy]
-        evolved = final_population(study, family, strategy, winner)
-        source = world.spec.in_source_layout(np.vstack([winner, evolved]))
-        save_arrays(study.out, f"{family.folder}/table4/strategy{strategy}_evolved",
-                    population=evolved)
-        for situation in range(spans.situations):
-            rates, own = situation_rates(world, source[0], source[1:], situation, spans.seconds)
-            rows.append({"strategy": strategy, "situation": situation, **rates})
-            bar.update(1)
-            if situation == 0:  # each learner's own controller, committed with the tables
-                for learner, genes in enumerate(world.spec.from_source_layout(own)):
-                    save_controller(study.out, f"{family.folder}/table4/strategy{strategy}_"
-                                    f"learner{learner}", world.scenario, genes, float("nan"))
-    bar.close()
+    with tqdm(total=len(family.strategies) * spans.situations, unit="situation",
+              desc=f"{family.folder} crowds", disable=not study.progress, leave=False) as bar:
+        for strategy in family.strategies:
+            world = crowd_world(family, strategy)
+            winner = controllers[strategy]
+            evolved = final_population(study, family, strategy, winner)
+            source = world.spec.in_source_layout(np.vstack([winner, evolved]))
+            save_arrays(study.out, f"{family.folder}/table4/strategy{strategy}_evolved",
+                        population=evolved)
+            for situation in range(spans.situations):
+                rates, own = situation_rates(world, source[0], source[1:], situation,
+                                             spans.seconds)
+                rows.append({"strategy": strategy, "situation": situation, **rates})
+                bar.update(1)
+                if situation == 0:  # each learner's own controller, committed with the tables
+                    for learner, genes in enumerate(world.spec.from_source_layout(own)):
+                        save_controller(study.out, f"{family.folder}/table4/strategy"
+                                        f"{strategy}_learner{learner}", world.scenario, genes,
+                                        float("nan"))
     table = pd.DataFrame(rows)
     write_csv(study.out / family.folder / "crowd_situations.csv", table)
     return table

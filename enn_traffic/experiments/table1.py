@@ -50,13 +50,20 @@ def table1(study: Study, family: Family = ARENA) -> list[str]:
     return [summary_line(matrix, f"{family.folder}/table1" if family.folder else "table1")]
 
 
-def summary_line(matrix: np.ndarray, label: str) -> str:
-    """The summary's Table 1 line: the paper's pattern is a diagonal (trained and deployed on
-    the same strategy) above the rest of its row."""
+def diagonal_pattern(matrix: np.ndarray) -> tuple[float, float, int]:
+    """The paper's Table 1 pattern, a diagonal (trained and deployed on the same strategy)
+    above the rest of its row: the diagonal's mean, the rest's mean, and the rows where the
+    diagonal entry is above every other of its row."""
     size = len(matrix)
     diagonal = np.diag(matrix)
     off = matrix[~np.eye(size, dtype=bool)]
     rows_ok = sum(diagonal[i] > np.delete(matrix[i], i).max() for i in range(size))
-    return (f"{label}: mean diagonal {diagonal.mean():.0f}, mean off-diagonal {off.mean():.0f} "
-            f"(ratio {diagonal.mean() / off.mean():.2f}; paper 4.9); diagonal above the rest "
-            f"of its row in {rows_ok} of {size} rows (paper: 4 of 4)")
+    return float(diagonal.mean()), float(off.mean()), int(rows_ok)
+
+
+def summary_line(matrix: np.ndarray, label: str) -> str:
+    """The summary's Table 1 line (:func:`diagonal_pattern`)."""
+    own, rest, rows_ok = diagonal_pattern(matrix)
+    return (f"{label}: mean diagonal {own:.0f}, mean off-diagonal {rest:.0f} "
+            f"(ratio {own / rest:.2f}; paper 4.9); diagonal above the rest "
+            f"of its row in {rows_ok} of {len(matrix)} rows (paper: 4 of 4)")

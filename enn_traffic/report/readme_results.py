@@ -11,10 +11,11 @@ from __future__ import annotations
 import sys
 from pathlib import Path
 
-import numpy as np
 import pandas as pd
 
 from enn_traffic.experiments.protocol import ARENA
+from enn_traffic.experiments.simultaneous import mean_reduction
+from enn_traffic.experiments.table1 import diagonal_pattern
 from enn_traffic.shipped import shipped_scenario
 
 BEGIN = "<!-- results table: written by python -m enn_traffic.report.readme_results -->"
@@ -80,28 +81,21 @@ def generalization(paper: Path) -> str:
     single = [shares[name] for name in ("navigation_narrow", "navigation_wide")]
     return (f"on {test['track'].nunique()} test tracks of 12–30 m, controllers trained on five "
             f"tracks at once from starts drawn anywhere on them (a departure from the paper's "
-            f"one track) reach the {_navigation_cap():,}-step cap in "
+            f"one track) reach the {test['cap'].max():,}-step cap in "
             f"{_percent(shares['navigation_mixed'])} of (controller, track) pairs; trained on "
             f"one track, {100 * min(single):.0f}–{_percent(max(single))} "
             "([docs/results.md](docs/results.md#generalisation-across-tracks-51))")
 
 
-def _diagonal(matrix: pd.DataFrame) -> tuple[float, float, int]:
-    """Mean of the diagonal, mean of the rest, and the rows whose diagonal is on top."""
-    values = matrix.to_numpy()
-    own = values.diagonal()
-    rest = values[~np.eye(len(values), dtype=bool)]
-    on_top = int((own == values.max(axis=1)).sum())
-    return float(own.mean()), float(rest.mean()), on_top
-
-
 def table1(paper: Path) -> str:
     table = pd.read_csv(paper / "table1.csv").set_index("training_strategy")
-    own, rest, on_top = _diagonal(table)
+    own, rest, on_top = diagonal_pattern(table.to_numpy())
     unseen = pd.read_csv(paper / "table1_seed5000_matrix.csv", index_col=0)
-    unseen_own, unseen_rest, unseen_top = _diagonal(unseen)
+    unseen_own, unseen_rest, unseen_top = diagonal_pattern(unseen.to_numpy())
     rows = len(table)
-    return (f"100 generations, 200 test situations per entry: diagonal {own:.0f} against "
+    generations = shipped_scenario(ARENA.name(1)).ga.generations
+    return (f"{generations} generations, {ARENA.table_situations} test situations per entry: "
+            f"diagonal {own:.0f} against "
             f"{rest:.0f} steps ({own / rest:.2f}×), on top in {on_top} of {rows} rows; the "
             f"same controllers on traffic seed 5000: {unseen_own:.0f} against {unseen_rest:.0f}"
             f", {unseen_top} of {rows}. Strategies 2–4 are invented here (the paper defines "
@@ -122,7 +116,8 @@ def table2(paper: Path) -> str:
                    .all(axis=1)]
     below = sorted(v for v in others[strategies].to_numpy().ravel() if v < threshold)
     below_seeds = int((others[strategies] < threshold).any(axis=1).sum())
-    return (f"6 hidden neurons, {runs['seed'].nunique()} seeds, the evolution chosen on "
+    return (f"{ARENA.incremental_hidden[0]} hidden neurons, {runs['seed'].nunique()} seeds, "
+            f"the evolution chosen on "
             f"validation traffic: average {first:.0f} → {last:.0f} steps "
             f"({_percent(last / first)}), "
             f"{'every strategy above' if kept else 'not every strategy above'} the "
@@ -135,7 +130,7 @@ def tables34(paper: Path) -> str:
     table = pd.read_csv(paper / "simultaneous.csv")
 
     def cut(after: str, before: str = "initial") -> str:
-        return _percent((1 - table[after] / table[before]).mean())
+        return _percent(mean_reduction(table, after, before))
 
     below = int((table["population"] < table["winner"]).sum())
     return (f"per vehicle-second: {cut('winner')} by the winner; learning together, then each "
