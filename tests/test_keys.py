@@ -30,6 +30,12 @@ def test_experiments_draw_from_their_named_ranges():
     assert simultaneous.SITUATION_KEY in keys.CROWD_TEST
 
 
+def test_the_sumo_crowds_stay_on_the_spent_range_their_committed_tables_read():
+    from enn_traffic.experiments import sumo_crowds
+
+    assert sumo_crowds.SITUATION_KEY in keys.SPENT_CROWD_TEST
+
+
 def test_no_experiment_reads_a_retired_test_range():
     from enn_traffic import deploy
     from enn_traffic.experiments import choosing, lanekeeping, simultaneous

@@ -20,13 +20,19 @@ from enn_traffic.evolution import ga
 
 @dataclass
 class VehicleGA:
-    """One vehicle's own population, evaluated a chromosome per life (reference §7.1)."""
+    """One vehicle's own population, evaluated a chromosome per life (reference §7.1): a
+    chromosome's fitness is the steps its life lasted (0 for a spin), or the life cap when it
+    reached it. ``lives`` counts the lives it lost, ``tried`` the chromosomes whose evaluation
+    ended (a lost life or the cap)."""
 
     population: np.ndarray  # (P, G), the world's gene layout
     rng: np.random.Generator
     fitness: np.ndarray = field(init=False)
     index: int = 0
     generation: int = 0
+    lives: int = 0
+    tried: int = 0
+    bred_from: tuple[np.ndarray, np.ndarray] | None = None  # last whole generation, fitness
 
     def __post_init__(self):
         self.fitness = np.zeros(len(self.population))
@@ -36,9 +42,10 @@ class VehicleGA:
         return self.population[self.index]
 
     def record(self, fitness: float) -> None:
-        """The current chromosome's life ended with ``fitness``."""
+        """The current chromosome's evaluation ended with ``fitness``."""
         self.fitness[self.index] = fitness
         self.index += 1
+        self.tried += 1
 
     @property
     def exhausted(self) -> bool:
@@ -47,6 +54,7 @@ class VehicleGA:
     def advance(self, params: ga.GAParams, global_elites: np.ndarray | None = None) -> None:
         """The next generation; ``global_elites`` (the best chromosomes of all vehicles,
         reference §7.4) replace its own elites when given."""
+        self.bred_from = (self.population.copy(), self.fitness.copy())
         state = ga.tell(ga.GAState(self.generation, self.population, self.rng), self.fitness,
                         params)
         population = state.population
@@ -54,6 +62,14 @@ class VehicleGA:
             population[: len(global_elites)] = global_elites
         self.population, self.index, self.generation = population, 0, state.generation
         self.fitness = np.zeros(len(population))
+
+    def evolved(self) -> np.ndarray:
+        """What the vehicle drives once it stops learning, the authors' rule (reference §7.5):
+        the fittest chromosome of its last whole generation (the first of equals); before it
+        has finished one, the fittest it has tried of its first, or its first chromosome."""
+        population, fitness = self.bred_from or (self.population[: max(self.index, 1)],
+                                                 self.fitness[: max(self.index, 1)])
+        return population[int(np.argmax(fitness))]
 
 
 @dataclass
@@ -90,17 +106,20 @@ class OnlineLearning:
     vehicle v's own GA, or None for a vehicle that does not learn. With ``share_elites``, an
     exhausted population breeds with the ``elite_count`` best chromosomes of all vehicles
     (reference §7.4); every life goes into the pooled ``evidence`` and into the vehicle's own
-    (``own[v]``)."""
+    (``own[v]``). A chromosome whose life reaches ``life_cap`` steps (0: no cap) scores the
+    cap and the vehicle drives on, from where it is, with its next chromosome
+    (docs/departures.md, "Learning while driving")."""
 
     def __init__(self, learners: list[VehicleGA | None], params: ga.GAParams,
                  share_elites: bool = False, elite_count: int = 0,
-                 evidence: Evidence | None = None):
+                 evidence: Evidence | None = None, life_cap: int = 0):
         self.learners = learners
         self.params = params
         self.share_elites = share_elites
         self.elite_count = elite_count
         self.evidence = Evidence() if evidence is None else evidence
         self.own = [Evidence() for _ in learners]
+        self.life_cap = life_cap
 
     def learns(self, vehicle: int) -> bool:
         return self.learners[vehicle] is not None
@@ -114,10 +133,20 @@ class OnlineLearning:
         """The vehicle's life ended after ``steps`` steps (``unseen_steps`` of them not yet in
         the evidence) by a collision or a spin: record it, and give the chromosome of its next
         life."""
+        self.learners[vehicle].lives += 1
+        return self._next(vehicle, 0.0 if spun else float(steps), unseen_steps, losses=1)
+
+    def life_capped(self, vehicle: int, unseen_steps: int) -> np.ndarray:
+        """The vehicle's chromosome drove ``life_cap`` steps without losing its life: record
+        it, and give the chromosome it drives on with."""
+        return self._next(vehicle, float(self.life_cap), unseen_steps, losses=0)
+
+    def _next(self, vehicle: int, fitness: float, unseen_steps: int, losses: int
+              ) -> np.ndarray:
         learner = self.learners[vehicle]
-        self.evidence.record(learner.current, unseen_steps, losses=1)
-        self.own[vehicle].record(learner.current, unseen_steps, losses=1)
-        learner.record(0.0 if spun else float(steps))
+        self.evidence.record(learner.current, unseen_steps, losses)
+        self.own[vehicle].record(learner.current, unseen_steps, losses)
+        learner.record(fitness)
         if learner.exhausted:
             elites = (global_elites(self.learners, self.elite_count) if self.share_elites
                       else None)
@@ -130,10 +159,22 @@ class OnlineLearning:
         self.own[vehicle].record(self.learners[vehicle].current, unseen_steps, losses=0)
 
     def own_controllers(self) -> np.ndarray:
-        """Each learning vehicle's controller (V, G): of the chromosomes it drove itself, the
-        one that lost fewest lives per step in its own lives (:meth:`Evidence.best`)."""
+        """Each learning vehicle's controller by re-ranking (V, G): of the chromosomes it drove
+        itself, the one that lost fewest lives per step in its own lives
+        (:meth:`Evidence.best`)."""
         return np.stack([own.best() for own, learner in zip(self.own, self.learners,
                                                              strict=True) if learner is not None])
+
+    def evolved_controllers(self) -> np.ndarray:
+        """Each learning vehicle's controller from its evolved population (V, G): the
+        authors' rule, :meth:`VehicleGA.evolved`."""
+        return np.stack([learner.evolved() for learner in self.learners if learner is not None])
+
+    def learner_rows(self) -> list[dict[str, int]]:
+        """Per learning vehicle: generations bred, lives lost, chromosomes tried."""
+        return [{"learner": k, "generations_bred": g.generation, "lives": g.lives,
+                 "chromosomes_tried": g.tried}
+                for k, g in enumerate(g for g in self.learners if g is not None)]
 
 
 def global_elites(learners: list[VehicleGA | None], count: int) -> np.ndarray:

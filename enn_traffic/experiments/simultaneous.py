@@ -1,48 +1,48 @@
 """Paper §5.5: simultaneous collision avoidance — every vehicle of the arena driven by an
 evolved network, spreading what individual learning (§5.3) found to all of them.
 
-For each arena strategy and each of ``SITUATIONS`` traffic situations (the 8 start poses of
-``scenarios/arena_strategyN``, headings drawn per situation), over ``SECONDS`` of simulated
-time each:
+For each arena strategy and each of the ``CrowdLearning.situations`` traffic situations (the 8
+start poses of ``scenarios/arena_strategyN``, headings drawn per situation), every arm drives
+from the start poses in spans of ``SECONDS`` (100 s, the paper's):
 
 - initial behaviour: all 8 vehicles driven by the strategy's own drivers;
 - Table 3 (§5.5.1, broadcasting the winning chromosome): all 8 driven by the winning
   chromosome — of the controllers individual learning evolved on the strategy (every
   generation's best of every run, and the final elites), the one that loses fewest lives
   (collisions and spins) when it drives all 8 vehicles, judged on ``VALIDATION_SITUATIONS``
-  situations apart from the measured ones;
+  situations apart from the measured ones. Table 3 compares the first span;
 - Table 4 (§5.5.2, broadcasting the evolved population): every vehicle starts from a copy of the
   evolved population (the candidates, fewest broadcast lives lost first, then the rest of the
-  winner's run's final population) and all learn at once for ``SECONDS`` (each its own GA,
-  sharing the best chromosomes across vehicles, docs/design.md, "The authors' code" 6); then
-  each drives its own controller, "a customized solution for each different vehicle": of the
-  chromosomes it drove itself, the one that lost fewest lives per step in its own lives
-  (:meth:`~enn_traffic.evolution.online.OnlineLearning.own_controllers`), and the rate is
-  measured over the ``SECONDS`` that follow (``population``). An alternative, from the same
-  state after learning: all drive one pooled chromosome, the fewest lives lost per step over
-  what every vehicle saw while learning and what the validation situations showed of each
-  candidate (``pooled``).
+  winner's run's final population) and all learn at once, each its own GA a chromosome per
+  life, breeding when it has tried its population, with the best chromosomes of all vehicles
+  as its elites (reference §7.4). A life that reaches the cap ends its chromosome's trial
+  without a respawn. Learning lasts ``CrowdLearning.seconds``, long enough that every learner
+  breeds several generations (chosen on the validation situations, docs/results.md); then
+  each vehicle drives "a customized solution": the fittest chromosome of its last whole
+  generation (the authors' rule, :meth:`~enn_traffic.evolution.online.VehicleGA.evolved`),
+  measured over the next span. The initial drivers and the winner drive that long too, so
+  Table 4 sets all arms side by side over the same span, paired by situation; the named
+  alternative ``reranked`` (each vehicle the chromosome that lost fewest lives per step in
+  its own lives) drives from the same state after learning.
 
-Table 4 thus measures a later span than Table 3 and the initial behaviour, which start from
-the start poses. So the initial drivers and the winner also drive on for a second span
-(``initial_next``, ``winner_next`` in ``simultaneous.csv``): the like-for-like comparison.
+The metric is :attr:`enn_traffic.sim.crowd.CrowdRun.collision_rate` (per vehicle-second; the
+paper's unit, all vehicles together, is 8 times it: :mod:`enn_traffic.experiments.regime`).
+Evolved drivers are held to §5.3's spin rule throughout: rotating in place ends a life (the
+vehicle respawns); their spins per second are recorded beside the collisions.
 
-The metric is :attr:`enn_traffic.sim.crowd.CrowdRun.collision_rate`. Evolved drivers are held
-to §5.3's spin rule throughout: rotating in place ends a life (the vehicle respawns), so a
-chromosome cannot avoid collisions by circling on the spot; their spins per second are
-recorded beside the collisions.
-
-Committed with the tables, under ``controllers/``: each strategy's winner
-(``table3/strategyS.npz``), and for Table 4 its evolved population, what the validation
-situations showed of each candidate (``table4/strategyS_evolved.npz``, ``_validation.npz``)
-and each vehicle's own controller of the first situation (``table4/strategyS_vehicleV.npz``):
+Written beside the tables: ``table4_learners.csv`` (per learner: generations bred, lives lost,
+chromosomes tried), ``table4_learning.csv`` and its plot (the collision rate of every arm in
+each span of the learning), and under ``controllers/`` each strategy's winner
+(``table3/strategyS.npz``), its evolved population (``table4/strategyS_evolved.npz``) and each
+vehicle's controller after learning in the first situation (``table4/strategyS_vehicleV.npz``):
 with them, that situation's every span can be driven again.
 """
 
 from __future__ import annotations
 
-import copy
 import time
+from collections.abc import Mapping
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import matplotlib.pyplot as plt
@@ -51,6 +51,7 @@ import pandas as pd
 from tqdm import tqdm
 
 from enn_traffic import keys
+from enn_traffic.controller import Controller
 from enn_traffic.evolution.online import Evidence, OnlineLearning, VehicleGA
 from enn_traffic.experiments.choosing import evolved_candidates, final_population
 from enn_traffic.experiments.common import distinct, save_arrays, save_controller
@@ -65,17 +66,39 @@ from enn_traffic.sim.crowd import Crowd, CrowdRun
 from enn_traffic.traffic.strategies import DRIVER_KINDS as DRIVERS
 from enn_traffic.traffic.strategies import NETWORK
 
-SECONDS = 100.0  # the paper's training time, and each measuring period
-SITUATIONS = 20
+SECONDS = 100.0  # the paper's training time; each measured span and learning-curve window
 SITUATION_KEY = keys.CROWD_TEST.start  # the situations whose rates are reported
 VALIDATION_KEY = keys.CROWD_VALIDATION.start  # the situations that choose the winner
 VALIDATION_SITUATIONS = 20
 DRAWN_SECONDS = 20.0
 # Mean reduction of the collision rate over the four strategies in the paper's Tables 3 and 4.
 PAPER_REDUCTION = {"table3": 0.54, "table4": 0.89}
+# Table 4's arms over the span after learning, and the column each is compared with
+ARMS = {"population": "each vehicle's evolved controller",
+        "initial_after": "the initial drivers driving on",
+        "winner_after": "the winner driving on", "reranked": "the re-ranked controllers"}
+CONTRASTS = [("population", "initial_after"), ("population", "winner_after"),
+             ("population", "reranked")]
 
 
-def _arena(world: ArenaWorld, situation: int, kinds=None, key: int = SITUATION_KEY
+@dataclass(frozen=True)
+class CrowdLearning:
+    """How long the vehicles learn together (simulated seconds, a multiple of ``SECONDS``),
+    the life cap of a chromosome's trial (steps), how many situations each strategy is
+    measured in, and what ``--quick`` changes of them. The learning time and the cap were
+    chosen on the crowd validation situations so that every learner breeds at least 3
+    generations (docs/results.md, "Learning while driving")."""
+
+    seconds: float = 15000.0
+    life_cap_steps: int = 300
+    situations: int = 20
+    quick: Mapping[str, object] = field(default_factory=dict)
+
+
+LEARNING = CrowdLearning(quick={"seconds": 300.0, "situations": 2})
+
+
+def situation_crowd(world: ArenaWorld, situation: int, kinds=None, key: int = SITUATION_KEY
            ) -> tuple[Crowd, np.ndarray]:
     """The arena of one traffic situation: 8 start poses; ``kinds`` default to the strategy's
     own drivers; and the drivers' random genes (random-network strategy)."""
@@ -89,16 +112,15 @@ def _broadcast(world: ArenaWorld, genes: np.ndarray, situation: int, key: int = 
                periods: int = 1) -> list[CrowdRun]:
     """``periods`` spans of ``SECONDS``, one after another, of one situation with ``genes``
     (world layout) driving every vehicle, held to the spin rule."""
-    arena, _ = _arena(world, situation, np.full(world.vehicles, NETWORK), key)
+    arena, _ = situation_crowd(world, situation, np.full(world.vehicles, NETWORK), key)
     return [arena.run(SECONDS, np.tile(genes, (world.vehicles, 1)), check_spins=True)
             for _ in range(periods)]
 
 
-def _ranked(world: ArenaWorld, candidates: np.ndarray, progress: bool = False
-            ) -> tuple[np.ndarray, Evidence]:
-    """The candidates, fewest lives lost (collisions and spins) first when each drives every
-    vehicle on validation situations — the first is §5.5.1's winning chromosome — and what
-    those situations showed of each (world layout)."""
+def _ranked(world: ArenaWorld, candidates: np.ndarray, progress: bool = False) -> np.ndarray:
+    """The candidates, fewest lives lost per step (collisions and spins) first when each
+    drives every vehicle on validation situations: the first is §5.5.1's winning
+    chromosome."""
     evidence = Evidence()
     source = world.spec.in_source_layout(candidates)
     for genes in tqdm(source, desc=f"ranking {world.scenario.name}", unit="candidate",
@@ -108,25 +130,7 @@ def _ranked(world: ArenaWorld, candidates: np.ndarray, progress: bool = False
             evidence.record(genes, run.vehicle_steps,
                             int(run.collisions.sum() + run.spins.sum()))
     rates = [evidence.loss_rate(genes.tobytes()) for genes in source]
-    return candidates[np.argsort(rates, kind="stable")], evidence
-
-
-def evidence_arrays(evidence: Evidence) -> dict[str, np.ndarray]:
-    """``evidence`` as arrays in the order it was recorded (which decides ties): each
-    chromosome (source layout), the steps it drove and the lives it lost."""
-    order = list(evidence.chromosomes)
-    return {"chromosomes": np.stack([evidence.chromosomes[k] for k in order]),
-            "steps": np.array([evidence.steps[k] for k in order]),
-            "losses": np.array([evidence.losses[k] for k in order])}
-
-
-def evidence_from_arrays(arrays) -> Evidence:
-    """The :class:`Evidence` that :func:`evidence_arrays` wrote."""
-    evidence = Evidence()
-    for genes, steps, losses in zip(arrays["chromosomes"], arrays["steps"], arrays["losses"],
-                                    strict=True):
-        evidence.record(genes, int(steps), int(losses))
-    return evidence
+    return candidates[np.argsort(rates, kind="stable")]
 
 
 def _evolved_population(ranked: np.ndarray, run_population: np.ndarray, size: int
@@ -136,75 +140,139 @@ def _evolved_population(ranked: np.ndarray, run_population: np.ndarray, size: in
     return distinct(np.concatenate([ranked, run_population]))[:size]
 
 
+@dataclass
+class SituationResult:
+    """One situation of Tables 3–4: the rates (the columns of ``simultaneous_situations.csv``),
+    every arm's rate in each span of the learning (``windows``), each learner's counts, each
+    vehicle's controller after learning (world layout) and the paths drawn."""
+
+    rates: dict[str, float]
+    windows: list[dict[str, float]]
+    learners: list[dict[str, int]]
+    controllers: np.ndarray
+    traces: tuple
+
+
 def situation_rates(world: ArenaWorld, situation: int, winner: np.ndarray, evolved: np.ndarray,
-                    validation: Evidence) -> tuple[dict[str, float], np.ndarray, tuple]:
-    """One situation's rates (the columns of ``simultaneous_situations.csv``), each vehicle's
-    own controller after learning (world layout) and the paths of the initial drivers, the
-    winner and the vehicles after learning. ``winner`` (G,) and ``evolved`` (N, G) in the
-    source layout; ``validation``: what the validation situations showed of the candidates."""
+                    learning: CrowdLearning = LEARNING, key: int = SITUATION_KEY
+                    ) -> SituationResult:
+    """One situation's every arm. ``winner`` (G,) and ``evolved`` (N, G) in the source
+    layout."""
     sc = world.scenario
-    network = np.full(world.vehicles, NETWORK)
-    arena, genes = _arena(world, situation)
-    initial = arena.run(SECONDS, genes)
-    # the same drivers over the next SECONDS: the span Table 4 measures
-    initial_next = arena.run(SECONDS, genes)
-    broadcast, broadcast_next = _broadcast(world, winner, situation, periods=2)
-    arena, _ = _arena(world, situation, network)
+    spans = round(learning.seconds / SECONDS)
+    arena, genes = situation_crowd(world, situation, key=key)
+    initial = [arena.run(SECONDS, genes) for _ in range(spans + 1)]
+    broadcast = _broadcast(world, winner, situation, key, periods=spans + 1)
+    arena, _ = situation_crowd(world, situation, np.full(world.vehicles, NETWORK), key)
     learners = [VehicleGA(evolved.copy(), np.random.default_rng([sc.seed, situation, v]))
                 for v in range(world.vehicles)]
-    learning = OnlineLearning(learners, ga_params(sc), share_elites=True,
-                              elite_count=sc.ga.elite_count, evidence=copy.deepcopy(validation))
-    learnt = arena.run(SECONDS, np.tile(winner, (world.vehicles, 1)), learning)
-    own = learning.own_controllers()
-    pooled = arena.fork().run(SECONDS, np.tile(learning.evidence.best(), (world.vehicles, 1)),
-                              check_spins=True)
+    online = OnlineLearning(learners, ga_params(sc), share_elites=True,
+                            elite_count=sc.ga.elite_count, life_cap=learning.life_cap_steps)
+    genes = np.tile(winner, (world.vehicles, 1))
+    learnt = [arena.run(SECONDS, genes, online) for _ in range(spans)]
+    reranked = arena.fork().run(SECONDS, online.own_controllers(), check_spins=True)
+    own = online.evolved_controllers()
     after = arena.run(SECONDS, own.copy(), check_spins=True)
-    rates = {"initial": initial.collision_rate, "winner": broadcast.collision_rate,
-             "learning": learnt.collision_rate, "population": after.collision_rate,
-             "winner_spins": broadcast.spin_rate, "population_spins": after.spin_rate,
-             "initial_next": initial_next.collision_rate,
-             "winner_next": broadcast_next.collision_rate, "pooled": pooled.collision_rate,
-             "pooled_spins": pooled.spin_rate}
-    return (rates, world.spec.from_source_layout(own),
-            (initial.trace, broadcast.trace, after.trace, world.track.walls))
+    rates = {"initial": initial[0].collision_rate, "winner": broadcast[0].collision_rate,
+             "winner_spins": broadcast[0].spin_rate,
+             "learning": float(np.mean([run.collision_rate for run in learnt])),
+             "initial_after": initial[-1].collision_rate,
+             "winner_after": broadcast[-1].collision_rate,
+             "population": after.collision_rate, "population_spins": after.spin_rate,
+             "reranked": reranked.collision_rate, "reranked_spins": reranked.spin_rate}
+    windows = [{"window_start_s": span * SECONDS, "learning": learnt[span].collision_rate,
+                "initial_drivers": initial[span].collision_rate,
+                "winner_driving_on": broadcast[span].collision_rate}
+               for span in range(spans)]
+    return SituationResult(rates, windows, online.learner_rows(),
+                           world.spec.from_source_layout(own),
+                           (initial[0].trace, broadcast[0].trace, after.trace, world.track.walls))
 
 
-def _strategy_rows(world: ArenaWorld, strategy: int, winner: np.ndarray, population: np.ndarray,
-                   validation: Evidence, paths: dict, controllers: dict, progress: bool
-                   ) -> tuple[dict, list[dict]]:
-    """The strategy's mean rates (with the simulated and wall time they took) and each
-    situation's; ``paths`` and ``controllers`` (each vehicle's own after learning) receive
-    the first situation's."""
+@dataclass
+class Measured:
+    """Every strategy's situations of Tables 3–4, their learning windows and learners."""
+
+    situations: pd.DataFrame  # strategy, situation, one column per rate
+    windows: pd.DataFrame  # strategy, situation, window_start_s, one column per arm
+    learners: pd.DataFrame  # strategy, situation, learner, generations_bred, lives, ...
+    wall_s: dict[int, float]
+
+
+def measure_strategy(world: ArenaWorld, strategy: int, winner: np.ndarray,
+                     population: np.ndarray, learning: CrowdLearning, progress: bool = False
+                     ) -> tuple[list[dict], list[dict], list[dict], SituationResult]:
+    """One strategy's rows (situations, windows, learners) and its first situation."""
     winner_genes = world.spec.in_source_layout(winner)[0]
     evolved = world.spec.in_source_layout(population)
-    situations = []
-    started = time.perf_counter()
-    for situation in tqdm(range(SITUATIONS), desc=f"arena_strategy{strategy} crowds",
+    rows, windows, learners, first = [], [], [], None
+    for situation in tqdm(range(learning.situations), desc=f"arena_strategy{strategy} crowds",
                           unit="situation", disable=not progress, leave=False):
-        rates, own, traces = situation_rates(world, situation, winner_genes, evolved,
-                                             validation)
-        situations.append({"strategy": strategy, "situation": situation, **rates})
-        if situation == 0:
-            paths[strategy], controllers[strategy] = traces, own
-    wall = time.perf_counter() - started
-    # initial and winner (two spans each), learning, after learning by own and pooled controllers
-    simulated = SITUATIONS * SECONDS * 7
-    columns = [k for k in situations[0] if k not in ("strategy", "situation")]
-    means = {k: float(np.mean([row[k] for row in situations])) for k in columns}
-    return ({"strategy": strategy, **means, "simulated_s": simulated,
-             "wall_s": round(wall, 1)}, situations)
+        result = situation_rates(world, situation, winner_genes, evolved, learning)
+        label = {"strategy": strategy, "situation": situation}
+        rows.append(label | result.rates)
+        windows.extend(label | window for window in result.windows)
+        learners.extend(label | learner for learner in result.learners)
+        first = first or result
+    return rows, windows, learners, first
 
 
-def _measure(study: Study) -> tuple[pd.DataFrame, pd.DataFrame]:
-    """Every strategy's rates (Tables 3 and 4 share them): the means, also written to
-    ``simultaneous.csv`` with the simulated and wall time they took, and each situation's,
-    written to ``simultaneous_situations.csv``."""
+def validation_learners(inputs: dict[int, tuple[np.ndarray, np.ndarray]],
+                        learning: CrowdLearning, situations: int = 2) -> pd.DataFrame:
+    """The learners' counts in ``situations`` crowd validation situations per strategy: what
+    chose ``learning``'s time and cap (every learner breeds 3 generations or more)."""
+    rows = []
+    for strategy, (winner, population) in inputs.items():
+        world = ArenaWorld(shipped_scenario(ARENA.name(strategy)))
+        for situation in range(situations):
+            result = situation_rates(world, situation, world.spec.in_source_layout(winner)[0],
+                                     world.spec.in_source_layout(population), learning,
+                                     VALIDATION_KEY)
+            rows += [{"strategy": strategy, "situation": situation} | learner
+                     for learner in result.learners]
+    return pd.DataFrame(rows)
+
+
+def measure(out: Path, inputs: dict[int, tuple[np.ndarray, np.ndarray]],
+            learning: CrowdLearning, progress: bool = False) -> Measured:
+    """Tables 3–4's every strategy from its winner and evolved population (``inputs``:
+    strategy -> (winner, population), world layout), written under ``out``: the situations,
+    the learning windows, the learners and the first situation's controllers and paths."""
+    write_csv(out / "table4_validation_learners.csv", validation_learners(inputs, learning))
+    rows, windows, learners, paths, wall = [], [], [], {}, {}
+    for strategy, (winner, population) in inputs.items():
+        world = ArenaWorld(shipped_scenario(ARENA.name(strategy)))
+        started = time.perf_counter()
+        each, spans, counts, first = measure_strategy(world, strategy, winner, population,
+                                                      learning, progress)
+        wall[strategy] = round(time.perf_counter() - started, 1)
+        rows += each
+        windows += spans
+        learners += counts
+        paths[strategy] = first.traces
+        for vehicle, chromosome in enumerate(first.controllers):
+            save_controller(out, f"table4/strategy{strategy}_vehicle{vehicle}", world.scenario,
+                            chromosome, float("nan"))  # its generation's fittest, own lives
+    measured = Measured(pd.DataFrame(rows), pd.DataFrame(windows), pd.DataFrame(learners),
+                        wall)
+    write_csv(out / "simultaneous_situations.csv", measured.situations)
+    write_csv(out / "table4_learners.csv", measured.learners)
+    write_csv(out / "table4_learning.csv", learning_curve(measured.windows))
+    _draw_crowds(paths, out / "simultaneous_paths.png")
+    _draw_learning(learning_curve(measured.windows), measured.situations,
+                   out / "table4_learning.png", learning.seconds)
+    return measured
+
+
+def _inputs(study: Study) -> dict[int, tuple[np.ndarray, np.ndarray]]:
+    """Per strategy: the winning chromosome and the evolved population, from the runs of
+    individual learning (saved under ``controllers/``)."""
     family, out = study.settings(ARENA), study.out
     candidates = evolved_candidates(study, family)
-    rows, situations, paths, controllers = [], [], {}, {}
+    inputs = {}
     for strategy in ARENA.strategies:
         world = ArenaWorld(shipped_scenario(ARENA.name(strategy)))
-        ranked, validation = _ranked(world, candidates[strategy], study.progress)
+        ranked = _ranked(world, candidates[strategy], study.progress)
         winner = ranked[0]
         save_controller(out, f"table3/strategy{strategy}", world.scenario, winner,
                         float("nan"))  # chosen by lives lost, not by a fitness
@@ -212,35 +280,55 @@ def _measure(study: Study) -> tuple[pd.DataFrame, pd.DataFrame]:
             ranked, final_population(study, family, strategy, winner),
             world.scenario.ga.population_size)
         save_arrays(out, f"table4/strategy{strategy}_evolved", population=population)
-        save_arrays(out, f"table4/strategy{strategy}_validation", **evidence_arrays(validation))
-        means, each = _strategy_rows(world, strategy, winner, population, validation, paths,
-                                     controllers, study.progress)
-        for vehicle, chromosome in enumerate(controllers[strategy]):
-            save_controller(out, f"table4/strategy{strategy}_vehicle{vehicle}", world.scenario,
-                            chromosome, float("nan"))  # chosen by lives lost
-        rows.append(means)
-        situations.extend(each)
-    table, situations = pd.DataFrame(rows), pd.DataFrame(situations)
-    write_csv(out / "simultaneous.csv", table)
-    write_csv(out / "simultaneous_situations.csv", situations)
-    _draw_crowds(paths, out / "simultaneous_paths.png")
-    return table, situations
+        inputs[strategy] = winner, population
+    return inputs
 
 
-def reduction_interval(situations: pd.DataFrame, after: str, rng: np.random.Generator,
-                       draws: int = 2000, level: float = 0.9) -> tuple[float, float]:
-    """How far the mean reduction over the strategies (1 − after / initial, each strategy's
-    rates averaged over its situations) moves with the situations: its central ``level``
-    interval when each strategy's situations are drawn again with replacement (bootstrap)."""
-    groups = [group for _, group in situations.groupby("strategy")]
-    reductions = np.zeros(draws)
-    for group in groups:
-        initial, later = group["initial"].to_numpy(), group[after].to_numpy()
-        picks = rng.integers(0, len(group), (draws, len(group)))
-        reductions += 1 - later[picks].mean(axis=1) / initial[picks].mean(axis=1)
-    reductions /= len(groups)
-    low, high = np.quantile(reductions, [(1 - level) / 2, (1 + level) / 2])
+def saved_inputs(out: Path) -> dict[int, tuple[np.ndarray, np.ndarray]]:
+    """The winners and evolved populations :func:`_inputs` saved under ``out/controllers``."""
+    folder = out / "controllers"
+    inputs = {}
+    for strategy in ARENA.strategies:
+        with np.load(folder / "table4" / f"strategy{strategy}_evolved.npz") as saved:
+            population = saved["population"]
+        winner = Controller.load(folder / "table3" / f"strategy{strategy}.npz").chromosome
+        inputs[strategy] = winner, population
+    return inputs
+
+
+def learning_curve(windows: pd.DataFrame) -> pd.DataFrame:
+    """Per strategy and span of the learning: every arm's collisions per vehicle-second,
+    averaged over the situations (``collisions_per_vehicle_s``: the learners')."""
+    curve = windows.groupby(["strategy", "window_start_s"], as_index=False)[
+        ["learning", "initial_drivers", "winner_driving_on"]].mean()
+    return curve.rename(columns={"learning": "collisions_per_vehicle_s"}).round(5)
+
+
+def paired_interval(after: np.ndarray, before: np.ndarray, rng: np.random.Generator,
+                    draws: int = 2000, level: float = 0.9) -> tuple[float, float]:
+    """The central ``level`` interval of the mean difference ``after - before`` when the
+    situations (pairs) are drawn again with replacement (bootstrap)."""
+    differences = np.asarray(after, dtype=np.float64) - np.asarray(before, dtype=np.float64)
+    means = differences[rng.integers(0, len(differences), (draws, len(differences)))].mean(1)
+    low, high = np.quantile(means, [(1 - level) / 2, (1 + level) / 2])
     return float(low), float(high)
+
+
+def table4_comparisons(situations: pd.DataFrame) -> pd.DataFrame:
+    """Per strategy, Table 4's arms over the span after learning (``ARMS``) and the paired
+    differences of ``CONTRASTS`` with their 90% bootstrap intervals over the situations."""
+    rng = np.random.default_rng(0)
+    rows = []
+    for strategy, group in situations.groupby("strategy"):
+        row = {"strategy": strategy}
+        row |= {f"{arm}_collisions_per_s": round(group[arm].mean(), 4) for arm in ARMS}
+        for after, before in CONTRASTS:
+            low, high = paired_interval(group[after].to_numpy(), group[before].to_numpy(), rng)
+            name = f"{after}_minus_{before}"
+            row |= {name: round((group[after] - group[before]).mean(), 4),
+                    f"{name}_low": round(low, 4), f"{name}_high": round(high, 4)}
+        rows.append(row)
+    return pd.DataFrame(rows)
 
 
 def _draw_crowds(paths: dict, path: Path) -> None:
@@ -258,24 +346,56 @@ def _draw_crowds(paths: dict, path: Path) -> None:
             ax.set_xticks([])
             ax.set_yticks([])
             ax.set_title(f"strategy {strategy}: {titles[row]}", fontsize=9)
-    figure.suptitle(f"All 8 vehicles, first {DRAWN_SECONDS:g} s of simulated time")
+    figure.suptitle(f"All 8 vehicles, first {DRAWN_SECONDS:g} s of simulated time "
+                    "(after learning: the first seconds after it)")
     figure.tight_layout()
     save_figure(figure, path)
 
 
-def _table(study: Study, after: str, name: str, label: str) -> list[str]:
-    measured, situations = study.shared("simultaneous", lambda: _measure(study))
-    table = rates_table(measured, after)
-    write_csv(study.out / f"{name}.csv", table)
-    return summary_lines(table, measured, situations, after, name, label)
+def _draw_learning(curve: pd.DataFrame, situations: pd.DataFrame, path: Path,
+                   seconds: float) -> None:
+    """Per strategy: collisions per vehicle-second in each span while the vehicles learn,
+    beside the initial drivers and the winner over the same spans, and each arm over the
+    span after learning (the markers at its end: Table 4)."""
+    strategies = sorted(curve["strategy"].unique())
+    figure, axes = plt.subplots(1, len(strategies), figsize=(4 * len(strategies), 3.6),
+                                sharey=True, squeeze=False)
+    arms = [("collisions_per_vehicle_s", "learning together", "C3", "population"),
+            ("initial_drivers", "initial drivers", "C0", "initial_after"),
+            ("winner_driving_on", "winner driving on", "C2", "winner_after")]
+    for ax, strategy in zip(axes[0], strategies, strict=True):
+        rows = curve[curve["strategy"] == strategy]
+        after = situations[situations["strategy"] == strategy]
+        for column, label, color, arm in arms:
+            ax.plot(rows["window_start_s"] / 60, rows[column], color=color, label=label,
+                    linewidth=1)
+            ax.plot([seconds / 60], [after[arm].mean()], "o", color=color)
+        ax.set_title(f"strategy {strategy}", fontsize=10)
+        ax.set_xlabel("simulated minutes (markers: the span after learning)")
+    axes[0, 0].set_ylabel("collisions per vehicle-second")
+    axes[0, 0].legend(fontsize=8)
+    figure.suptitle("Learning while driving (paper §5.5.2): the arena's 8 vehicles, mean of "
+                    f"the situations in {SECONDS:g} s spans")
+    figure.tight_layout()
+    save_figure(figure, path)
 
 
-def rates_table(measured: pd.DataFrame, after: str) -> pd.DataFrame:
-    """Table 3 or 4 (``after``: ``winner`` or ``population``) from the strategies' mean
-    rates: collisions per second per vehicle of the initial drivers and after."""
+def _measured(study: Study) -> Measured:
+    return study.shared("simultaneous", lambda: measure(
+        study.out, _inputs(study), study.settings(LEARNING), study.progress))
+
+
+def rates_table(measured: pd.DataFrame, after: str, before: str = "initial") -> pd.DataFrame:
+    """Table 3 or 4 from the strategies' mean rates (``measured``: one row per strategy):
+    collisions per second per vehicle of ``before`` and ``after``."""
     return pd.DataFrame({"strategy": measured["strategy"],
-                         "initial_collisions_per_s": measured["initial"].round(4),
+                         "initial_collisions_per_s": measured[before].round(4),
                          "after_collisions_per_s": measured[after].round(4)})
+
+
+def strategy_means(situations: pd.DataFrame) -> pd.DataFrame:
+    """Every rate column's mean over each strategy's situations."""
+    return situations.drop(columns="situation").groupby("strategy", as_index=False).mean()
 
 
 def mean_reduction(rates: pd.DataFrame, after: str, before: str = "initial") -> float:
@@ -284,41 +404,77 @@ def mean_reduction(rates: pd.DataFrame, after: str, before: str = "initial") -> 
     return float((1 - rates[after] / rates[before]).mean())
 
 
-def summary_lines(table: pd.DataFrame, measured: pd.DataFrame, situations: pd.DataFrame,
-                  after: str, name: str, label: str) -> list[str]:
-    """The summary's line for Table 3 or 4; Table 4's leads with the like-for-like
-    comparison."""
-    reduction = 1 - table["after_collisions_per_s"] / table["initial_collisions_per_s"]
-    low, high = reduction_interval(situations, after, np.random.default_rng(0))
-    measure = (f"mean reduction {reduction.mean():.0%} (90% interval over the situations "
-               f"{low:.0%}-{high:.0%}; paper: {PAPER_REDUCTION[name]:.0%})")
-    rates = ", ".join(f"strategy {s}: {i:.3f} -> {a:.3f}"
-                      for s, i, a in table.itertuples(index=False))
-    simulated = (f"{measured['simulated_s'].sum():.0f} s simulated in "
-                 f"{measured['wall_s'].sum():.0f} s")
-    if after != "population":
-        return [f"{name} ({label}): collisions per second per vehicle, initial -> after: "
-                f"{rates}; {measure}; {simulated}"]
-    # Like for like first: the learners are measured in the span after learning, so the
-    # initial drivers' and the winner's own second spans are the fair comparison.
-    same_span = mean_reduction(measured, "population", "initial_next")
-    driving_on = mean_reduction(measured, "winner_next", "initial_next")
-    pooled = mean_reduction(measured, "pooled", "initial_next")
-    like = ", ".join(f"strategy {s}: {i:.3f} -> {a:.3f}" for s, i, a in zip(
-        measured["strategy"], measured["initial_next"], measured["population"], strict=True))
-    return [f"{name} ({label}): like for like, both over the second {SECONDS:g} s, collisions "
-            f"per second per vehicle, initial drivers -> after learning, each vehicle its own "
-            f"controller: {like}; mean reduction {same_span:.0%}, where the winner "
-            f"driving on without learning reaches {driving_on:.0%} and all driving one "
-            f"pooled chromosome after learning {pooled:.0%}. Against the initial "
-            f"drivers' first {SECONDS:g} s (table4.csv): {rates}; {measure}; {simulated}"]
+def reduction_interval(situations: pd.DataFrame, after: str, rng: np.random.Generator,
+                       before: str = "initial", draws: int = 2000, level: float = 0.9
+                       ) -> tuple[float, float]:
+    """How far the mean reduction over the strategies (1 − after / before, each strategy's
+    rates averaged over its situations) moves with the situations: its central ``level``
+    interval when each strategy's situations are drawn again with replacement (bootstrap,
+    the same draw for both columns: paired)."""
+    groups = [group for _, group in situations.groupby("strategy")]
+    reductions = np.zeros(draws)
+    for group in groups:
+        first, later = group[before].to_numpy(), group[after].to_numpy()
+        picks = rng.integers(0, len(group), (draws, len(group)))
+        reductions += 1 - later[picks].mean(axis=1) / first[picks].mean(axis=1)
+    reductions /= len(groups)
+    low, high = np.quantile(reductions, [(1 - level) / 2, (1 + level) / 2])
+    return float(low), float(high)
+
+
+def _reduction(means: pd.DataFrame, situations: pd.DataFrame, after: str, before: str) -> str:
+    low, high = reduction_interval(situations, after, np.random.default_rng(0), before)
+    return (f"{mean_reduction(means, after, before):.0%} (90% interval over the situations "
+            f"{low:.0%} to {high:.0%})")
+
+
+def summary_lines(situations: pd.DataFrame, learners: pd.DataFrame, name: str) -> list[str]:
+    """The summary's line for Table 3 (the first span) or Table 4 (the span after learning,
+    every arm paired by situation)."""
+    means = strategy_means(situations)
+    if name == "table3":
+        rates = ", ".join(f"strategy {s}: {i:.3f} -> {a:.3f}" for s, i, a in zip(
+            means["strategy"], means["initial"], means["winner"], strict=True))
+        return [f"table3 (winner): collisions per second per vehicle, initial -> after: "
+                f"{rates}; mean reduction {_reduction(means, situations, 'winner', 'initial')}"
+                f"; paper: {PAPER_REDUCTION['table3']:.0%}"]
+    bred = learners.groupby("strategy")["generations_bred"].median()
+    rates = ", ".join(f"strategy {s}: {i:.3f} -> {a:.3f}" for s, i, a in zip(
+        means["strategy"], means["initial_after"], means["population"], strict=True))
+    comparisons = table4_comparisons(situations)
+
+    def below(before: str) -> str:
+        name = f"population_minus_{before}"
+        lower = int((comparisons[name] < 0).sum())
+        apart = int((comparisons[f"{name}_high"] < 0).sum())
+        above = int((comparisons[f"{name}_low"] > 0).sum())
+        return (f"below {ARMS[before]} in {lower} of {len(comparisons)} strategies "
+                f"({apart} with the paired interval below 0, {above} above)")
+
+    return [f"table4 (learning together, then each vehicle its evolved controller; the span "
+            f"after learning): initial drivers driving on -> after learning: {rates}; mean "
+            f"reduction {_reduction(means, situations, 'population', 'initial_after')} "
+            f"(paper: {PAPER_REDUCTION['table4']:.0%}); {below('winner_after')}; "
+            f"{below('reranked')}; median generations bred per learner "
+            f"{', '.join(f'{g:g}' for g in bred)}"]
 
 
 def table3(study: Study) -> list[str]:
     """§5.5.1: the winning chromosome drives every vehicle."""
-    return _table(study, "winner", "table3", "winner")
+    measured = _measured(study)
+    means = strategy_means(measured.situations)
+    table = rates_table(means, "winner")
+    write_csv(study.out / "table3.csv", table)
+    write_csv(study.out / "simultaneous.csv", means.round(5).assign(
+        wall_s=means["strategy"].map(measured.wall_s)))
+    return summary_lines(measured.situations, measured.learners, "table3")
 
 
 def table4(study: Study) -> list[str]:
     """§5.5.2: the evolved population, all vehicles learning at once."""
-    return _table(study, "population", "table4", "population")
+    measured = _measured(study)
+    table = rates_table(strategy_means(measured.situations), "population", "initial_after")
+    comparisons = table4_comparisons(measured.situations)
+    write_csv(study.out / "table4.csv", table.merge(comparisons, on="strategy").drop(
+        columns=["population_collisions_per_s", "initial_after_collisions_per_s"]))
+    return summary_lines(measured.situations, measured.learners, "table4")

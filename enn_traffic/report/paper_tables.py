@@ -80,7 +80,8 @@ def paper_tables(out: Path) -> list[str]:
     if (out / "table3.csv").exists():
         sections += _rates(out / "table3.csv", "Table 3", PAPER_TABLE3)
     if (out / "table4.csv").exists():
-        sections += _rates(out / "table4.csv", "Table 4", PAPER_TABLE4)
+        sections += _rates(out / "table4.csv", "Table 4 (the span after learning; initial: the "
+                           "initial drivers driving on)", PAPER_TABLE4)
     return ["## The paper's tables beside these", "", *sections] if sections else []
 
 

@@ -40,7 +40,10 @@ ALIVE = -1
 
 
 class Learning(Protocol):
-    """What a crowd calls back for its learning vehicles."""
+    """What a crowd calls back for its learning vehicles. A life that reaches ``life_cap``
+    steps (0: no cap) ends its chromosome's evaluation without a respawn."""
+
+    life_cap: int
 
     def learns(self, vehicle: int) -> bool: ...
 
@@ -51,6 +54,10 @@ class Learning(Protocol):
     def life_ended(self, vehicle: int, steps: int, unseen_steps: int, spun: bool
                    ) -> np.ndarray:
         """A life of ``steps`` steps ended by a collision or a spin; the next chromosome."""
+        ...
+
+    def life_capped(self, vehicle: int, unseen_steps: int) -> np.ndarray:
+        """The vehicle's life reached the cap; the chromosome it drives on with."""
         ...
 
     def still_driving(self, vehicle: int, unseen_steps: int) -> None:
@@ -147,10 +154,15 @@ class CrowdRun:
 
 class Crowd:
     """V vehicles in one arena: the scenario's learner start and traffic starts, each vehicle
-    driven by genes of its own or by a scripted strategy (``kinds``)."""
+    driven by genes of its own or by a scripted strategy (``kinds``). A vehicle whose life
+    ends respawns at a random free spot, or with ``respawn_at_start`` at its own start pose
+    with no check that it is free, as the authors' code does (reference §7.3)."""
 
-    def __init__(self, world: ArenaWorld, starts: np.ndarray, kinds: np.ndarray, seed: int):
+    def __init__(self, world: ArenaWorld, starts: np.ndarray, kinds: np.ndarray, seed: int,
+                 respawn_at_start: bool = False):
         self.world = world
+        self.starts = np.asarray(starts, dtype=np.float64)
+        self.respawn_at_start = respawn_at_start
         self.kinds = np.asarray(kinds, dtype=np.int64)
         count = len(self.kinds)
         self.physics = p = world.physics
@@ -178,12 +190,18 @@ class Crowd:
 
     def respawn(self, v: int) -> None:
         """Vehicle ``v`` starts a new life at a free spot
-        (:func:`~enn_traffic.sim.rules.respawn`)."""
+        (:func:`~enn_traffic.sim.rules.respawn`), or at its start pose."""
+        self.life[v] = 0
+        if self.respawn_at_start:
+            place(v, *self.starts[v], self.physics, self.pose, self.corners, self.centres)
+            self.previous[v], self.previous_centres[v] = self.corners[v], self.centres[v]
+            self.fresh[v] = True
+            reset_memory(self.kinds[v], self.physics, self.rng, self.memory[v])
+            return
         _, _, walls, cell_start, cell_walls, all_walls, _ = self.geometry
         respawn(v, self.kinds[v], self.physics, walls, cell_start, cell_walls, all_walls,
                 self.pose, self.corners, self.centres, self.previous, self.previous_centres,
                 self.fresh, self.memory, self.rng)
-        self.life[v] = 0
 
     def fork(self) -> Crowd:
         """A crowd in this one's state (poses, lives, memories, random generator) that goes on
@@ -207,8 +225,9 @@ class Crowd:
             check_spins: bool = False) -> CrowdRun:
         """Drive for ``seconds`` of simulated time. ``genes`` (V, G, source layout) drive the
         network vehicles; a vehicle that ``learning`` learns drives with its current
-        chromosome, and its learning hears of every life it ends. Learning vehicles, and with
-        ``check_spins`` every network vehicle, lose their life when they spin in place."""
+        chromosome, and its learning hears of every life it ends and every life that reaches
+        its cap. Learning vehicles, and with ``check_spins`` every network vehicle, lose their
+        life when they spin in place."""
         count = len(self.kinds)
         learns = [learning is not None and learning.learns(v) for v in range(count)]
         spin_checked = np.array(learns) | (check_spins & (self.kinds == NETWORK))
@@ -220,8 +239,12 @@ class Crowd:
         trace = np.empty((steps + 1, count, 3))
         p, geometry = self.physics, self.geometry
         t, drive_first = 0, False
+        learners = np.flatnonzero(learns)
+        cap = learning.life_cap if learning is not None and len(learners) else 0
         while True:
-            t = advance(t, steps, drive_first, self.kinds, genes, self.world.layer_sizes, p,
+            # stop too when the oldest learning life reaches the cap
+            last = steps if not cap else min(steps, t + cap - int(self.life[learners].max()))
+            t = advance(t, last, drive_first, self.kinds, genes, self.world.layer_sizes, p,
                         geometry, self.pose, self.corners, self.centres, self.previous,
                         self.previous_centres, self.fresh, spin_checked, self.life, self.recent,
                         self.memory, self.rng, *self._work, self.events, trace)
@@ -234,6 +257,9 @@ class Crowd:
                                                    int(self.life[v] - unseen_from[v]), spun)
                 unseen_from[v] = 0
                 self.respawn(v)
+            for v in learners[self.life[learners] >= cap] if cap else ():
+                genes[v] = learning.life_capped(v, int(self.life[v] - unseen_from[v]))
+                unseen_from[v] = self.life[v] = 0
             if t == steps:
                 break
             drive_first = True

@@ -274,14 +274,15 @@ class SumoCrowd:
             ) -> SumoCrowdRun:
         """Drive on for ``seconds`` of SUMO time; ``genes`` (K, G, source layout) drive the
         learners, and a learner that ``learning`` learns drives with its current chromosome
-        and tells it of every life it ends."""
+        and tells it of every life it ends and every life that reaches its cap."""
         if self._simulation is None:
             self.start()
         world, count, lives = self.world, self.count, self.lives
         genes = np.array(genes, dtype=np.float64)
-        learns = [learning is not None and learning.learns(k) for k in range(count)]
+        learns = np.array([learning is not None and learning.learns(k) for k in range(count)])
         for k in np.flatnonzero(learns):
             genes[k] = learning.current(k)
+        cap = learning.life_cap if learning is not None else 0
         steps = round(seconds / world.scenario.vehicle.dt)
         outcomes = {COLLIDED: np.zeros(count, np.int64), SPUN: np.zeros(count, np.int64),
                     LEFT_NETWORK: np.zeros(count, np.int64)}
@@ -303,6 +304,9 @@ class SumoCrowd:
                     unseen_from[k] = 0
                     lives.enter(k, self.physics, world.geometry, self.slots, self.now,
                                 world.scenario)
+            for k in np.flatnonzero(learns & (lives.life >= cap)) if cap else ():
+                genes[k] = learning.life_capped(k, int(lives.life[k] - unseen_from[k]))
+                unseen_from[k] = lives.life[k] = 0
             if step == steps:
                 break
             drive(genes, world.layer_sizes, self.physics, world.geometry, ids, corners,

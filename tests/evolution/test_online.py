@@ -42,3 +42,21 @@ def test_evidence_trusts_a_chromosome_driven_long_over_one_lucky_life():
     np.testing.assert_array_equal(evidence.best(), driven_long)
     evidence.record(flawless, 2000, losses=0)
     np.testing.assert_array_equal(evidence.best(), flawless)
+
+
+def test_after_learning_a_vehicle_drives_the_fittest_of_its_last_whole_generation(world):
+    """The authors' rule (reference §7.5): the best of the generation it last bred from, not of
+    the one it is trying; before any, the best it has tried of its first."""
+    length = world.spec.chromosome_length
+    population = np.arange(4 * length, dtype=float).reshape(4, length)
+    learner = VehicleGA(population.copy(), np.random.default_rng(0))
+    np.testing.assert_array_equal(learner.evolved(), population[0])  # nothing tried yet
+    for fitness in (5.0, 9.0):
+        learner.record(fitness)
+    np.testing.assert_array_equal(learner.evolved(), population[1])
+    for fitness in (7.0, 9.0):
+        learner.record(fitness)
+    learner.advance(ga.GAParams(population_size=4, tournament_size=2, elite_count=1))
+    learner.record(100.0)  # the new generation's first: not whole yet
+    np.testing.assert_array_equal(learner.evolved(), population[1])  # first of the two 9s
+    assert (learner.generation, learner.tried) == (1, 5)

@@ -158,27 +158,33 @@ def test_a_committed_controller_drives_its_closed_loop_rows(family, strategy, ro
 @pytest.mark.parametrize("strategy", [1, 2, 3, 4])
 def test_committed_arena_crowd_files_drive_their_first_situation(strategy, root):
     """Tables 3-4 in the arena, a strategy's first situation driven again from the committed
-    files (the winner, the evolved population, what validation showed of each candidate):
-    every rate of the committed ``simultaneous_situations.csv`` row, and each vehicle ends
-    learning with its committed own controller."""
-    from enn_traffic.experiments.simultaneous import evidence_from_arrays, situation_rates
+    files (the winner, the evolved population): every rate of the committed
+    ``simultaneous_situations.csv`` row, every learner's ``table4_learners.csv`` row
+    (generations bred, lives, chromosomes tried), its learning windows, and each vehicle's
+    committed controller after learning."""
+    from enn_traffic.experiments.simultaneous import LEARNING, situation_rates
     from enn_traffic.sim.arena import ArenaWorld
 
     paper = root / "results" / "paper"
     controllers = paper / "controllers"
-    table = pd.read_csv(paper / "simultaneous_situations.csv")
-    row = table[(table["strategy"] == strategy) & (table["situation"] == 0)].iloc[0]
+
+    def first(name: str) -> pd.DataFrame:
+        table = pd.read_csv(paper / name)
+        return table[(table["strategy"] == strategy) & (table["situation"] == 0)]
+
     world = ArenaWorld(shipped_scenario(ARENA.name(strategy)))
     winner = Controller.load(controllers / "table3" / f"strategy{strategy}.npz").chromosome
     with np.load(controllers / "table4" / f"strategy{strategy}_evolved.npz") as saved:
         evolved = saved["population"]
-    with np.load(controllers / "table4" / f"strategy{strategy}_validation.npz") as saved:
-        validation = evidence_from_arrays(saved)
-    rates, own, _ = situation_rates(world, 0, world.spec.in_source_layout(winner)[0],
-                                    world.spec.in_source_layout(evolved), validation)
+    result = situation_rates(world, 0, world.spec.in_source_layout(winner)[0],
+                             world.spec.in_source_layout(evolved), LEARNING)
+    row = first("simultaneous_situations.csv").iloc[0]
     # the CSV keeps 6 significant digits
-    assert rates == pytest.approx(row[list(rates)].to_dict(), rel=5e-6, abs=1e-12)
-    for vehicle, genes in enumerate(own):
+    assert result.rates == pytest.approx(row[list(result.rates)].to_dict(), rel=5e-6,
+                                         abs=1e-12)
+    learners = first("table4_learners.csv").drop(columns=["strategy", "situation"])
+    assert learners.to_dict("records") == result.learners
+    for vehicle, genes in enumerate(result.controllers):
         committed = Controller.load(controllers / "table4"
                                     / f"strategy{strategy}_vehicle{vehicle}.npz")
         np.testing.assert_array_equal(genes, committed.chromosome)

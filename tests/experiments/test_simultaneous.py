@@ -34,50 +34,80 @@ def test_reduction_interval_follows_the_situations():
     assert 0.6 < low < 0.8 < high < 1.0
 
 
-def test_ranking_keeps_what_validation_showed_of_each_candidate(world):
-    """The winner of §5.5.1 is the candidate that lost fewest lives on the validation
-    situations; each candidate's steps and lives lost there are kept as evidence for §5.5.2."""
+def test_ranking_puts_the_candidate_losing_fewest_lives_on_validation_first(world):
+    """The winner of §5.5.1 is the candidate that lost fewest lives per step on the validation
+    situations when it drove every vehicle."""
     from enn_traffic.experiments import simultaneous
 
     straight = np.zeros(world.spec.chromosome_length)
     circling = straight.copy()
-    circling[-1] = 1.0  # spins out (see the test above)
-    candidates = np.stack([straight, circling])
-    ranked, evidence = simultaneous._ranked(world, candidates)
-    lost = {}
+    circling[-1] = 1.0  # spins out
+    candidates = np.stack([circling, straight])
+    lost = []
     for genes in world.spec.in_source_layout(candidates):  # the layout the arena drives
         runs = [simultaneous._broadcast(world, genes, s, simultaneous.VALIDATION_KEY)[0]
                 for s in range(simultaneous.VALIDATION_SITUATIONS)]
-        lost[genes.tobytes()] = sum(int(r.collisions.sum() + r.spins.sum()) for r in runs)
-        assert evidence.steps[genes.tobytes()] == sum(r.vehicle_steps for r in runs)
-        assert evidence.losses[genes.tobytes()] == lost[genes.tobytes()]
-    assert len(set(lost.values())) == 2
-    assert [lost[row.tobytes()] for row in world.spec.in_source_layout(ranked)] == sorted(
-        lost.values())
+        lost.append(sum(int(r.collisions.sum() + r.spins.sum()) for r in runs))
+    assert lost[0] != lost[1]
+    ranked = simultaneous._ranked(world, candidates)
+    np.testing.assert_array_equal(ranked, candidates[np.argsort(lost, kind="stable")])
 
 
-def test_tables_3_and_4_and_their_summary_lines():
+def test_table4_pairs_the_arms_by_situation():
+    """The paired difference's interval is narrow where every situation moves both arms
+    alike, though each arm alone varies widely between situations."""
     import pandas as pd
 
-    from enn_traffic.experiments.simultaneous import rates_table, summary_lines
+    from enn_traffic.experiments.simultaneous import table4_comparisons
 
-    measured = pd.DataFrame({  # two strategies' mean rates per span
-        "strategy": [1, 2], "initial": [0.10, 0.05], "initial_next": [0.08, 0.04],
-        "winner": [0.02, 0.01], "winner_next": [0.02, 0.01], "population": [0.02, 0.02],
-        "pooled": [0.04, 0.01], "simulated_s": [100.0, 100.0], "wall_s": [1.0, 1.0]})
-    situations = measured.drop(columns=["simulated_s", "wall_s"])
-    table4 = rates_table(measured, "population")
-    assert list(table4["after_collisions_per_s"]) == [0.02, 0.02]
-    assert list(table4["initial_collisions_per_s"]) == [0.10, 0.05]
-    (line,) = summary_lines(table4, measured, situations, "population", "table4", "population")
-    # like for like: 1 - 0.02/0.08 = 75%, 1 - 0.02/0.04 = 50% -> 62%; winner driving on:
-    # 75% and 75%; one pooled chromosome: 50% and 75% -> 62%; from the first span: 80% and
-    # 60% -> 70%
-    assert line.startswith("table4 (population): like for like")
-    assert ("mean reduction 62%, where the winner driving on without learning reaches 75% and "
-            "all driving one pooled chromosome after learning 62%") in line
-    assert line.index("62%") < line.index("mean reduction 70%")
-    (line,) = summary_lines(rates_table(measured, "winner"), measured, situations, "winner",
-                            "table3", "winner")
+    base = np.array([0.01, 0.10, 0.05, 0.20, 0.02, 0.15])
+    situations = pd.DataFrame({"strategy": 1, "situation": range(6), "population": base,
+                               "initial_after": base + 0.02, "winner_after": base - 0.01,
+                               "reranked": base[::-1]})
+    row = table4_comparisons(situations).iloc[0]
+    assert row["population_minus_initial_after"] == pytest.approx(-0.02)
+    assert (row["population_minus_initial_after_low"], row["population_minus_initial_after_high"]
+            ) == pytest.approx((-0.02, -0.02))
+    assert row["population_minus_winner_after_low"] == pytest.approx(0.01)
+    assert row["population_minus_reranked_low"] < -0.03 < 0.03 < row[
+        "population_minus_reranked_high"]
+
+
+def test_learning_curve_averages_each_span_over_the_situations():
+    import pandas as pd
+
+    from enn_traffic.experiments.simultaneous import learning_curve
+
+    windows = pd.DataFrame({"strategy": [1, 1, 1, 1], "situation": [0, 0, 1, 1],
+                            "window_start_s": [0.0, 100.0, 0.0, 100.0],
+                            "learning": [0.1, 0.3, 0.2, 0.5], "initial_drivers": 0.4,
+                            "winner_driving_on": 0.05})
+    curve = learning_curve(windows)
+    assert curve["collisions_per_vehicle_s"].tolist() == pytest.approx([0.15, 0.4])
+    assert curve["window_start_s"].tolist() == [0.0, 100.0]
+
+
+def test_tables_3_and_4_summary_lines():
+    import pandas as pd
+
+    from enn_traffic.experiments.simultaneous import summary_lines
+
+    situations = pd.DataFrame({  # two strategies, two situations each
+        "strategy": [1, 1, 2, 2], "situation": [0, 1, 0, 1],
+        "initial": [0.10, 0.10, 0.05, 0.05], "winner": [0.02, 0.02, 0.01, 0.01],
+        "initial_after": [0.08, 0.08, 0.04, 0.04], "winner_after": [0.01, 0.03, 0.01, 0.01],
+        "population": [0.02, 0.02, 0.02, 0.02], "reranked": [0.03, 0.03, 0.01, 0.03]})
+    learners = pd.DataFrame({"strategy": [1, 1, 2, 2], "generations_bred": [3, 5, 4, 4]})
+    (line,) = summary_lines(situations, learners, "table3")
     # 1 - 0.02/0.10 = 80%, 1 - 0.01/0.05 = 80%
     assert "strategy 1: 0.100 -> 0.020" in line and "mean reduction 80%" in line
+    (line,) = summary_lines(situations, learners, "table4")
+    # 1 - 0.02/0.08 = 75%, 1 - 0.02/0.04 = 50% -> 62%
+    assert "strategy 1: 0.080 -> 0.020" in line and "mean reduction 62%" in line
+    # population - winner_after: 0 (pairs +0.01, -0.01), then +0.01 (both); population -
+    # reranked: -0.01 (both), then 0 (pairs +0.01, -0.01)
+    assert "below the winner driving on in 0 of 2 strategies (0 with the paired interval " \
+           "below 0, 1 above)" in line
+    assert ("below the re-ranked controllers in 1 of 2 strategies (1 with the paired "
+            "interval below 0, 0 above)") in line
+    assert line.endswith("median generations bred per learner 4, 4")

@@ -98,3 +98,34 @@ def test_evolved_drivers_held_to_the_spin_rule_lose_their_life_circling_on_the_s
     held = Crowd(world, starts, kinds, seed=1).run(10.0, genes.copy(), check_spins=True)
     assert held.spins.min() >= 1 and held.collisions.tolist() == [0, 0]
     assert held.spin_rate == pytest.approx(held.spins.sum() / (2 * 10.0))
+
+
+def test_a_life_at_the_cap_ends_its_chromosome_trial_without_a_respawn(world):
+    """A learner driving a straight line with no wall ahead for 25 steps, cap 10: its first
+    two chromosomes score the cap (no lives lost), the vehicle drives on from where it is,
+    and after 2 of its 2 chromosomes it breeds its next generation."""
+    length = world.spec.chromosome_length
+    learner = VehicleGA(np.zeros((2, length)), np.random.default_rng(0))
+    starts = np.array([[10.0, 50.0, 0.0], [20.0, 10.0, np.pi / 2]])
+    arena = Crowd(world, starts, np.array([NETWORK, STRAIGHT]), seed=1)
+    learning = OnlineLearning([learner, None],
+                              ga.GAParams(population_size=2, tournament_size=2), life_cap=10)
+    run = arena.run(2.5, np.zeros((2, length)), learning)
+    assert run.collisions[0] == 0 and learner.lives == 0
+    assert learner.generation == 1 and learner.tried == 2
+    np.testing.assert_array_equal(learner.bred_from[1], [10.0, 10.0])
+    assert arena.life[0] == 5  # 25 steps: two trials of 10, then 5 of the third
+    assert arena.pose[0, 0] == pytest.approx(10.0 + 25.0, abs=0.1)  # never moved back: 1 m a step
+    assert learning.learner_rows() == [{"learner": 0, "generations_bred": 1, "lives": 0,
+                                        "chromosomes_tried": 2}]
+
+
+def test_respawn_at_start_puts_the_vehicle_back_on_its_own_start_pose(world):
+    """The authors' respawn (reference §7.3): after its crash at the wall, 20 m ahead, the
+    vehicle is back at its fixed start, heading as at first, not at a random free spot."""
+    starts = np.array([[80.0, 50.0, 0.0], [20.0, 20.0, np.pi / 2]])
+    kinds = np.array([STRAIGHT, STRAIGHT])
+    arena = Crowd(world, starts, kinds, seed=1, respawn_at_start=True)
+    run = arena.run(2.2, np.zeros((2, world.spec.chromosome_length)))
+    assert run.collisions[0] == 1
+    np.testing.assert_allclose(arena.pose[0], [80.0 + (22 - 20), 50.0, 0.0], atol=1.0)
