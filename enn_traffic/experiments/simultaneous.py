@@ -371,7 +371,7 @@ def _draw_learning(curve: pd.DataFrame, situations: pd.DataFrame, path: Path,
                     linewidth=1)
             ax.plot([seconds / 60], [after[arm].mean()], "o", color=color)
         ax.set_title(f"strategy {strategy}", fontsize=10)
-        ax.set_xlabel("simulated minutes (markers: the span after learning)")
+        ax.set_xlabel("simulated minutes (dots: the span after learning)")
     axes[0, 0].set_ylabel("collisions per vehicle-second")
     axes[0, 0].legend(fontsize=8)
     figure.suptitle("Learning while driving (paper §5.5.2): the arena's 8 vehicles, mean of "

@@ -44,7 +44,7 @@ def tables34(paper: Path) -> str:
     spans = round(LEARNING.seconds / SECONDS)
     lines = [
         f"`enn-traffic reproduce --only table3,table4,regime`: for each arena strategy, {count} "
-        f"traffic situations (sealed keys {keys.CROWD_TEST.start:.3g} + 0…{count - 1}, "
+        f"traffic situations (sealed keys {keys.CROWD_TEST.start // 10**9}·10⁹ + 0…{count - 1}, "
         "`keys.CROWD_TEST`, read once by this design). Every arm starts from the 8 start poses "
         f"and drives in spans of {SECONDS:g} s: the strategy's initial drivers, and the winning "
         "chromosome driving every vehicle (Table 3 compares their first span), each for "
@@ -55,7 +55,8 @@ def tables34(paper: Path) -> str:
         f"reaches {LEARNING.life_cap_steps} steps scores that and the vehicle drives on with "
         "its next. After learning each vehicle drives the fittest chromosome of its last whole "
         "generation (the authors' rule), and Table 4 sets every arm side by side over that "
-        f"same span, the {spans + 1}th, paired by situation. The learning time and the cap "
+        f"same span, from {LEARNING.seconds:g} s on, paired by situation. The learning time "
+        "and the cap "
         f"were chosen on {validation['situation'].nunique()} crowd validation situations per "
         "strategy (`table4_validation_learners.csv`), where every learner bred "
         f"{validation['generations_bred'].min()}–{validation['generations_bred'].max()} "
@@ -159,8 +160,9 @@ def _regime(regime: pd.DataFrame) -> list[str]:
                      f"{row.spins_per_s:g} | {row.lives_lost_per_s:g} | "
                      f"{middle / row.lives_lost_per_s:.0f}× |")
     authors = regime.iloc[-1]
-    lines += ["", "Counting as the paper seems to (all vehicles together) accounts for a factor "
-              "of 8; the authors' set-up, with its spin rule counted as lives lost, leaves "
+    lines += ["", "Summing over the 8 vehicles, as the paper seems to, multiplies our "
+              "per-vehicle rates by 8 (this table is in that unit already); the authors' "
+              "set-up, with its spin rule and spins counted as lives lost, leaves "
               f"{middle / authors.lives_lost_per_s:.0f}× between its "
               f"{authors.lives_lost_per_s:g} lives lost per second and the paper's "
               f"{middle:g}. The arena, the 8 cars at 10 m/s and the blame rule are the authors' "
