@@ -88,7 +88,8 @@ def paper_tables(out: Path) -> list[str]:
 def _sumo_rates(path: Path, title: str, paper, before: str, after: str) -> list[str]:
     table = pd.read_csv(path)
     lines = [f"### {title}: collisions per second, paper (its count) / here (per "
-             "learner, 90% interval over situations); SSM conflicts per learner-hour", "",
+             "learner, 90% interval over situations); SSM conflicts per learner-hour (not "
+             "reproducible yet: they depend on what ran before in the process)", "",
              "| strategy | initial | after | conflicts, initial -> after |", "|---|---|---|---|"]
 
     def cell(row, span: str, value: float) -> str:

@@ -28,6 +28,8 @@ def test_the_arena_crowd_passes_pettingzoos_parallel_api_test():
 class Lives:
     """A crowd's learning that keeps one chromosome and records every life that ends."""
 
+    life_cap = 0  # no cap: a life ends only by a collision, a spin or an exit
+
     def __init__(self, learners, genes):
         self.learners, self.genes, self.ended = learners, genes, []
 

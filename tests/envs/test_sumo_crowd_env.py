@@ -49,6 +49,8 @@ def test_every_agent_ends_and_leaves_sumo(env):
 class Lives:
     """A crowd's learning that keeps one chromosome and records every life that ends."""
 
+    life_cap = 0  # no cap: a life ends only by a collision, a spin or an exit
+
     def __init__(self, genes):
         self.genes, self.ended = genes, []
 

@@ -49,6 +49,8 @@ def test_a_changed_crowd_table_changes_the_results_md_text(root, tmp_path):
     paper = tmp_path / "paper"
     shutil.copytree(root / "results" / "paper", paper,
                     ignore=shutil.ignore_patterns("controllers", "*.png", "sumo", "city"))
+    shutil.copytree(root / "results" / "paper" / "controllers" / "table4",
+                    paper / "controllers" / "table4")
     learners = pd.read_csv(paper / "table4_learners.csv")
     learners.loc[learners["strategy"] == 1, "generations_bred"] = learners.loc[
         learners["strategy"] == 1, "generations_bred"].clip(upper=4)
