@@ -47,6 +47,7 @@ from enn_traffic.sim.crowd import Crowd
 from enn_traffic.traffic.strategies import NETWORK
 
 AUTHORS_SPIN = {"spin_window": 49, "spin_variance": 64.0}  # reference §6.2
+PAPER_INITIAL = [initial for initial, _ in PAPER_TABLE3]  # the paper's initial rates
 UNTRAINED = [  # (configuration, respawn at own start, learning, the authors' spin rule)
     ("untrained networks", False, False, False),
     ("untrained networks, respawn at own start", True, False, False),
@@ -107,15 +108,14 @@ def regime(study: Study) -> list[str]:
         runs = [untrained_run(world, s, at_start, learns) for s in range(situations)]
         rows.append(_row("any", configuration, runs, world.vehicles))
     table = pd.DataFrame(rows)
-    paper = [initial for initial, _ in PAPER_TABLE3]
-    table["paper_low"], table["paper_high"] = min(paper), max(paper)
+    table["paper_low"], table["paper_high"] = min(PAPER_INITIAL), max(PAPER_INITIAL)
     write_csv(study.out / "regime.csv", table)
     return [summary_line(table)]
 
 
 def summary_line(table: pd.DataFrame) -> str:
     """How far each configuration is from the paper's initial rates (its mean)."""
-    paper = float(np.mean([initial for initial, _ in PAPER_TABLE3]))
+    paper = float(np.mean(PAPER_INITIAL))
     parts = [f"{row.configuration}"
              + (f" (strategy {row.strategy})" if row.strategy != "any" else "")
              + f": {row.collisions_per_s:.2f} collisions + {row.spins_per_s:.2f} spins per s"

@@ -153,23 +153,33 @@ class SituationResult:
     traces: tuple
 
 
-def situation_rates(world: ArenaWorld, situation: int, winner: np.ndarray, evolved: np.ndarray,
-                    learning: CrowdLearning = LEARNING, key: int = SITUATION_KEY
-                    ) -> SituationResult:
-    """One situation's every arm. ``winner`` (G,) and ``evolved`` (N, G) in the source
-    layout."""
+def learn_together(world: ArenaWorld, situation: int, winner: np.ndarray, evolved: np.ndarray,
+                   learning: CrowdLearning, key: int = SITUATION_KEY
+                   ) -> tuple[Crowd, OnlineLearning, list[CrowdRun]]:
+    """Every vehicle of one situation learning from its own copy of ``evolved`` for
+    ``learning.seconds``, span by span: the crowd after it, the learning and each span's run.
+    ``winner`` (G,) and ``evolved`` (N, G) in the source layout."""
     sc = world.scenario
-    spans = round(learning.seconds / SECONDS)
-    arena, genes = situation_crowd(world, situation, key=key)
-    initial = [arena.run(SECONDS, genes) for _ in range(spans + 1)]
-    broadcast = _broadcast(world, winner, situation, key, periods=spans + 1)
     arena, _ = situation_crowd(world, situation, np.full(world.vehicles, NETWORK), key)
     learners = [VehicleGA(evolved.copy(), np.random.default_rng([sc.seed, situation, v]))
                 for v in range(world.vehicles)]
     online = OnlineLearning(learners, ga_params(sc), share_elites=True,
                             elite_count=sc.ga.elite_count, life_cap=learning.life_cap_steps)
     genes = np.tile(winner, (world.vehicles, 1))
-    learnt = [arena.run(SECONDS, genes, online) for _ in range(spans)]
+    spans = round(learning.seconds / SECONDS)
+    return arena, online, [arena.run(SECONDS, genes, online) for _ in range(spans)]
+
+
+def situation_rates(world: ArenaWorld, situation: int, winner: np.ndarray, evolved: np.ndarray,
+                    learning: CrowdLearning = LEARNING, key: int = SITUATION_KEY
+                    ) -> SituationResult:
+    """One situation's every arm. ``winner`` (G,) and ``evolved`` (N, G) in the source
+    layout."""
+    spans = round(learning.seconds / SECONDS)
+    arena, genes = situation_crowd(world, situation, key=key)
+    initial = [arena.run(SECONDS, genes) for _ in range(spans + 1)]
+    broadcast = _broadcast(world, winner, situation, key, periods=spans + 1)
+    arena, online, learnt = learn_together(world, situation, winner, evolved, learning, key)
     reranked = arena.fork().run(SECONDS, online.own_controllers(), check_spins=True)
     own = online.evolved_controllers()
     after = arena.run(SECONDS, own.copy(), check_spins=True)
@@ -196,7 +206,6 @@ class Measured:
     situations: pd.DataFrame  # strategy, situation, one column per rate
     windows: pd.DataFrame  # strategy, situation, window_start_s, one column per arm
     learners: pd.DataFrame  # strategy, situation, learner, generations_bred, lives, ...
-    wall_s: dict[int, float]
 
 
 def measure_strategy(world: ArenaWorld, strategy: int, winner: np.ndarray,
@@ -225,11 +234,12 @@ def validation_learners(inputs: dict[int, tuple[np.ndarray, np.ndarray]],
     for strategy, (winner, population) in inputs.items():
         world = ArenaWorld(shipped_scenario(ARENA.name(strategy)))
         for situation in range(situations):
-            result = situation_rates(world, situation, world.spec.in_source_layout(winner)[0],
-                                     world.spec.in_source_layout(population), learning,
-                                     VALIDATION_KEY)
+            _, online, _ = learn_together(world, situation,
+                                          world.spec.in_source_layout(winner)[0],
+                                          world.spec.in_source_layout(population), learning,
+                                          VALIDATION_KEY)
             rows += [{"strategy": strategy, "situation": situation} | learner
-                     for learner in result.learners]
+                     for learner in online.learner_rows()]
     return pd.DataFrame(rows)
 
 
@@ -253,14 +263,16 @@ def measure(out: Path, inputs: dict[int, tuple[np.ndarray, np.ndarray]],
         for vehicle, chromosome in enumerate(first.controllers):
             save_controller(out, f"table4/strategy{strategy}_vehicle{vehicle}", world.scenario,
                             chromosome, float("nan"))  # its generation's fittest, own lives
-    measured = Measured(pd.DataFrame(rows), pd.DataFrame(windows), pd.DataFrame(learners),
-                        wall)
+    measured = Measured(pd.DataFrame(rows), pd.DataFrame(windows), pd.DataFrame(learners))
+    means = strategy_means(measured.situations)
+    curve = learning_curve(measured.windows)
     write_csv(out / "simultaneous_situations.csv", measured.situations)
+    write_csv(out / "simultaneous.csv", means.round(5).assign(
+        wall_s=means["strategy"].map(wall)))
     write_csv(out / "table4_learners.csv", measured.learners)
-    write_csv(out / "table4_learning.csv", learning_curve(measured.windows))
+    write_csv(out / "table4_learning.csv", curve)
     _draw_crowds(paths, out / "simultaneous_paths.png")
-    _draw_learning(learning_curve(measured.windows), measured.situations,
-                   out / "table4_learning.png", learning.seconds)
+    _draw_learning(curve, measured.situations, out / "table4_learning.png", learning.seconds)
     return measured
 
 
@@ -302,6 +314,14 @@ def learning_curve(windows: pd.DataFrame) -> pd.DataFrame:
     curve = windows.groupby(["strategy", "window_start_s"], as_index=False)[
         ["learning", "initial_drivers", "winner_driving_on"]].mean()
     return curve.rename(columns={"learning": "collisions_per_vehicle_s"}).round(5)
+
+
+def curve_ends(curve: pd.DataFrame, column: str) -> tuple[float, float]:
+    """``column``'s mean over the first and over the last tenth of the learning's spans (of
+    one strategy's curve, or of every strategy's together)."""
+    spans = curve.groupby("window_start_s")[column].mean().sort_index()
+    tenth = max(1, len(spans) // 10)
+    return float(spans.head(tenth).mean()), float(spans.tail(tenth).mean())
 
 
 def paired_interval(after: np.ndarray, before: np.ndarray, rng: np.random.Generator,
@@ -466,8 +486,6 @@ def table3(study: Study) -> list[str]:
     means = strategy_means(measured.situations)
     table = rates_table(means, "winner")
     write_csv(study.out / "table3.csv", table)
-    write_csv(study.out / "simultaneous.csv", means.round(5).assign(
-        wall_s=means["strategy"].map(measured.wall_s)))
     return summary_lines(measured.situations, measured.learners, "table3")
 
 

@@ -15,7 +15,12 @@ import numpy as np
 import pandas as pd
 
 from enn_traffic.experiments.protocol import ARENA
-from enn_traffic.experiments.simultaneous import LEARNING, mean_reduction, reduction_interval
+from enn_traffic.experiments.simultaneous import (
+    LEARNING,
+    curve_ends,
+    mean_reduction,
+    reduction_interval,
+)
 from enn_traffic.experiments.table1 import diagonal_pattern
 from enn_traffic.shipped import shipped_scenario
 
@@ -137,10 +142,8 @@ def tables34(paper: Path) -> str:
     low, high = reduction_interval(situations, "population", np.random.default_rng(0),
                                    "initial_after")
     above = int((table4["population_minus_winner_after_low"] > 0).sum())
-    curve = pd.read_csv(paper / "table4_learning.csv").groupby("window_start_s")[
-        "collisions_per_vehicle_s"].mean()
-    tenth = max(1, len(curve) // 10)
-    first, last = curve.head(tenth).mean(), curve.tail(tenth).mean()
+    first, last = curve_ends(pd.read_csv(paper / "table4_learning.csv"),
+                             "collisions_per_vehicle_s")
     return (f"per vehicle-second: {_percent(mean_reduction(table, 'winner'))} by the winner; "
             f"after learning together for {LEARNING.seconds / 3600:.3g} h of simulated time "
             f"(median {learners['generations_bred'].median():g} generations bred per vehicle), "

@@ -19,10 +19,12 @@ import pandas as pd
 from enn_traffic import keys
 from enn_traffic.controller import Controller
 from enn_traffic.experiments.protocol import ARENA
+from enn_traffic.experiments.regime import PAPER_INITIAL
 from enn_traffic.experiments.simultaneous import (
     ARMS,
     LEARNING,
     SECONDS,
+    curve_ends,
     mean_reduction,
     reduction_interval,
 )
@@ -144,19 +146,19 @@ def _from_start(paper: Path, learners: pd.DataFrame) -> list[str]:
     for strategy in ARENA.strategies:
         with np.load(folder / f"strategy{strategy}_evolved.npz") as saved:
             start = {row.tobytes() for row in saved["population"]}
-        controllers = [Controller.load(folder / f"strategy{strategy}_vehicle{v}.npz")
-                       .chromosome for v in range(8)]
+        controllers = [Controller.load(path).chromosome
+                       for path in sorted(folder.glob(f"strategy{strategy}_vehicle*.npz"))]
         counts.append((sum(c.tobytes() in start for c in controllers),
-                       len({c.tobytes() for c in controllers})))
+                       len({c.tobytes() for c in controllers}), len(controllers)))
     capped = 1 - learners["lives"].sum() / learners["chromosomes_tried"].sum()
     return ["Learning together does not improve on what the vehicles started from: in the "
             "first situation (`controllers/table4/`), "
-            + ", ".join(f"{k} of 8" for k, _ in counts)
+            + ", ".join(f"{k} of {n}" for k, _, n in counts)
             + " vehicles' controllers after learning (strategies "
             f"{', '.join(str(s) for s in ARENA.strategies)}) are chromosomes of the starting "
             "evolved population, kept unchanged through the generations, and "
-            + ", ".join(str(d) for _, d in counts)
-            + f" of the 8 are distinct. {capped:.0%} of all trials reached the "
+            + ", ".join(f"{d} of {n}" for _, d, n in counts)
+            + f" are distinct. {capped:.0%} of all trials reached the "
             f"{LEARNING.life_cap_steps}-step cap; a generation's fittest is one of those, and "
             "of equals the first, where the elites stand.", ""]
 
@@ -176,13 +178,12 @@ def _learners(learners: pd.DataFrame, curve: pd.DataFrame, spans: int) -> list[s
              "| strategy | generations bred: median (min–max) | lives lost: median | "
              "chromosomes tried: median | learning: first → last | initial drivers: first → "
              "last | winner driving on: first → last |", "|---|---|---|---|---|---|---|"]
-    tenth = max(1, spans // 10)
     for strategy, group in learners.groupby("strategy"):
-        rows = curve[curve["strategy"] == strategy].sort_values("window_start_s")
+        rows = curve[curve["strategy"] == strategy]
 
         def ends(column: str, rows=rows) -> str:
-            return (f"{_g(rows[column].head(tenth).mean())} → "
-                    f"{_g(rows[column].tail(tenth).mean())}")
+            first, last = curve_ends(rows, column)
+            return f"{_g(first)} → {_g(last)}"
 
         bred = group["generations_bred"]
         lines.append(f"| {strategy} | {bred.median():g} ({bred.min()}–{bred.max()}) | "
@@ -205,7 +206,7 @@ def _learners(learners: pd.DataFrame, curve: pd.DataFrame, spans: int) -> list[s
 def _regime(regime: pd.DataFrame) -> list[str]:
     """``regime.csv``: the paper's unit, from our set-up to the authors' one step at a time."""
     paper = (regime["paper_low"].iloc[0], regime["paper_high"].iloc[0])
-    middle = round(float(np.mean([initial for initial, _ in PAPER_TABLE3])), 2)
+    middle = round(float(np.mean(PAPER_INITIAL)), 2)
     lines = ["**The paper's regime.** The paper's initial rates are "
              f"{paper[0]:g}–{paper[1]:g} collisions per second among its vehicles. In that "
              "unit (all 8 vehicles together; `regime.csv`, the first span of the same "

@@ -162,7 +162,7 @@ def test_committed_arena_crowd_files_drive_their_first_situation(strategy, root)
     ``simultaneous_situations.csv`` row, every learner's ``table4_learners.csv`` row
     (generations bred, lives, chromosomes tried), its learning windows, and each vehicle's
     committed controller after learning."""
-    from enn_traffic.experiments.simultaneous import LEARNING, situation_rates
+    from enn_traffic.experiments.simultaneous import LEARNING, saved_inputs, situation_rates
     from enn_traffic.sim.arena import ArenaWorld
 
     paper = root / "results" / "paper"
@@ -173,9 +173,7 @@ def test_committed_arena_crowd_files_drive_their_first_situation(strategy, root)
         return table[(table["strategy"] == strategy) & (table["situation"] == 0)]
 
     world = ArenaWorld(shipped_scenario(ARENA.name(strategy)))
-    winner = Controller.load(controllers / "table3" / f"strategy{strategy}.npz").chromosome
-    with np.load(controllers / "table4" / f"strategy{strategy}_evolved.npz") as saved:
-        evolved = saved["population"]
+    winner, evolved = saved_inputs(paper)[strategy]
     result = situation_rates(world, 0, world.spec.in_source_layout(winner)[0],
                              world.spec.in_source_layout(evolved), LEARNING)
     row = first("simultaneous_situations.csv").iloc[0]

@@ -111,3 +111,30 @@ def test_tables_3_and_4_summary_lines():
     assert ("below the re-ranked controllers in 1 of 2 strategies (1 with the paired "
             "interval below 0, 0 above)") in line
     assert line.endswith("median generations bred per learner 4, 4")
+
+
+def test_measure_writes_every_table_3_4_output_from_the_committed_inputs(tmp_path, root):
+    """A short measurement (200 s of learning, one situation) from the committed winners and
+    evolved populations writes what ``--only table3`` or ``--only table4`` alone needs:
+    the situations, their per-strategy means, the learners, the learning curve and plots."""
+    import pandas as pd
+
+    from enn_traffic.experiments.simultaneous import (
+        CrowdLearning,
+        measure,
+        saved_inputs,
+        strategy_means,
+    )
+
+    learning = CrowdLearning(seconds=200.0, situations=1)
+    measured = measure(tmp_path, saved_inputs(root / "results" / "paper"), learning)
+    files = {p.name for p in tmp_path.iterdir()}
+    assert {"simultaneous.csv", "simultaneous_situations.csv", "table4_learners.csv",
+            "table4_learning.csv", "table4_learning.png", "simultaneous_paths.png",
+            "table4_validation_learners.csv"} <= files
+    means = pd.read_csv(tmp_path / "simultaneous.csv")
+    expected = strategy_means(measured.situations).round(5)
+    pd.testing.assert_frame_equal(means.drop(columns="wall_s"), expected, check_dtype=False)
+    assert len(pd.read_csv(tmp_path / "table4_learners.csv")) == 4 * 8  # 4 strategies x 8
+    assert sorted(pd.read_csv(tmp_path / "table4_learning.csv")["window_start_s"].unique()
+                  ) == [0.0, 100.0]

@@ -168,3 +168,20 @@ def test_runs_one_after_another_are_one_run_cut_in_pieces():
         assert sum(getattr(piece, counted) for piece in pieces).tolist() == getattr(
             whole, counted).tolist(), counted
     assert whole.collisions.sum() > 0 and whole.suffered.sum() > 0  # there was something to count
+
+
+def test_a_learner_at_the_cap_drives_on_with_its_next_chromosome(world):
+    """Two learners driving east side by side, nothing ahead for 25 steps, cap 10: each tries
+    both of its 2 chromosomes to the cap without losing a life, breeds, and drives on from where
+    it is (no re-entry)."""
+    starts = np.array([[20.0, 5.0, 0.0], [20.0, -5.0, 0.0]])
+    length = world.spec.chromosome_length
+    learners = [VehicleGA(np.zeros((2, length)), np.random.default_rng(k)) for k in range(2)]
+    learning = OnlineLearning(learners, ga.GAParams(population_size=2, tournament_size=2),
+                              life_cap=10)
+    with SumoCrowd(world, seed=1, starts=starts) as crowd:
+        run = crowd.run(2.5, straight(world), learning)
+        pose = crowd.lives.pose.copy()
+    assert run.collisions.tolist() == [0, 0]
+    assert [(g.generation, g.tried, g.lives) for g in learners] == [(1, 2, 0), (1, 2, 0)]
+    np.testing.assert_allclose(pose[:, 0], [45.0, 45.0], atol=0.1)
