@@ -3,15 +3,16 @@
 import os
 from pathlib import Path
 
-from enn_traffic.provenance import code_version
+from enn_traffic.provenance import kernels_version
 
 __version__ = "0.1.0"
 
 
 def _numba_cache_dir() -> str:
     """numba's on-disk cache checks only each function's own file, not the modules it calls;
-    a cache folder per version of the package's source keeps a stale kernel from running."""
-    return str(Path.home() / ".cache" / "enn-traffic" / f"numba-{code_version()}")
+    a cache folder per version of the kernels' sources (:func:`~enn_traffic.provenance.
+    kernels_version`) keeps a stale kernel from running."""
+    return str(Path.home() / ".cache" / "enn-traffic" / f"numba-{kernels_version()}")
 
 
 os.environ.setdefault("NUMBA_CACHE_DIR", _numba_cache_dir())

@@ -18,12 +18,13 @@ CROWD_VALIDATION = range(4 * SPAN, 5 * SPAN)  # Tables 3–4: choosing the winni
 # What is reported, sealed: read once, by the final configuration (docs/design.md, "Traffic
 # keys"). `evaluate`, Tables 1–2, the figures; Tables 3–4's rates.
 TEST = range(6 * SPAN, 7 * SPAN)
-# The arena's Tables 3–4 and regime.csv: fresh for learning while driving (issue 48), as the
-# range before it had been read twice by the arena's earlier designs of Table 4.
+# Tables 3–4 and regime.csv, the arena's and the SUMO and city families': fresh for learning
+# while driving (issue 48), as the range before it had been read twice by earlier designs of
+# Table 4. A SUMO world's situations on it were never read before the SUMO crowds were
+# measured by today's method.
 CROWD_TEST = range(9 * SPAN, 10 * SPAN)
 # Read twice by Tables 3–4 (the arena's, then the SUMO and city families' pooled and per-learner
-# Table 4): still what the committed SUMO and city crowd tables were measured on, until they are
-# measured again by today's method on CROWD_TEST; nothing else reads it.
+# Table 4): nothing reads it any more.
 SPENT_CROWD_TEST = range(7 * SPAN, 8 * SPAN)
 # Test ranges read while the design was still being chosen: never used again, for anything.
 RETIRED_TEST = range(SPAN, 2 * SPAN)

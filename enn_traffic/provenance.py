@@ -50,6 +50,19 @@ def rules_version(root: Path = PACKAGE) -> str:
     return source_digest(paths, root)
 
 
+@cache
+def kernels_version(root: Path = PACKAGE) -> str:
+    """A digest of what numba compiles from: the rules' sources (:data:`RULES`, whose
+    constants kernels freeze in) and every module that defines a kernel. An edit to a report,
+    an experiment or the command line leaves the compiled kernels valid."""
+    paths = {root / part for part in RULES if not (root / part).is_dir()}
+    for part in RULES:
+        if (root / part).is_dir():
+            paths.update((root / part).rglob("*.py"))
+    paths.update(path for path in root.rglob("*.py") if "@njit" in path.read_text())
+    return source_digest(paths, root)
+
+
 def sources_of(*deciders: object) -> str:
     """A digest of the files that define ``deciders`` (an evaluator's class, a stopping
     rule) outside :data:`RULES`, which a run's fingerprint takes in too: empty when they all

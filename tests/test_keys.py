@@ -30,18 +30,21 @@ def test_experiments_draw_from_their_named_ranges():
     assert simultaneous.SITUATION_KEY in keys.CROWD_TEST
 
 
-def test_the_sumo_crowds_stay_on_the_spent_range_their_committed_tables_read():
+def test_the_sumo_crowds_read_the_fresh_crowd_ranges():
     from enn_traffic.experiments import sumo_crowds
 
-    assert sumo_crowds.SITUATION_KEY in keys.SPENT_CROWD_TEST
+    assert sumo_crowds.SITUATION_KEY in keys.CROWD_TEST
+    assert sumo_crowds.VALIDATION_KEY in keys.CROWD_VALIDATION
 
 
 def test_no_experiment_reads_a_retired_test_range():
     from enn_traffic import deploy
-    from enn_traffic.experiments import choosing, lanekeeping, simultaneous
+    from enn_traffic.experiments import choosing, lanekeeping, simultaneous, sumo_crowds
 
     used = [deploy.EVALUATION_KEY, lanekeeping.TEST_KEY, choosing.VALIDATION_KEY,
-            choosing.ACCEPTANCE_KEY, simultaneous.VALIDATION_KEY, simultaneous.SITUATION_KEY]
-    for retired in (keys.RETIRED_TEST, keys.RETIRED_CROWD_TEST, keys.DESIGN_TRIALS):
+            choosing.ACCEPTANCE_KEY, simultaneous.VALIDATION_KEY, simultaneous.SITUATION_KEY,
+            sumo_crowds.SITUATION_KEY, sumo_crowds.VALIDATION_KEY]
+    for retired in (keys.RETIRED_TEST, keys.RETIRED_CROWD_TEST, keys.DESIGN_TRIALS,
+                    keys.SPENT_CROWD_TEST):
         assert not any(key in retired for key in used)
     assert lanekeeping.TEST_KEY in keys.TEST

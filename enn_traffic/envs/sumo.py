@@ -207,8 +207,7 @@ class SumoCrowdEnv(ParallelEnv):
         crowd.start()
         if crowd.detect():  # a learner whose entry is taken enters again
             for k in np.flatnonzero(crowd.lives.events != ALIVE):
-                crowd.lives.enter(k, crowd.physics, world.geometry, crowd.slots, crowd.now,
-                                  world.scenario)
+                crowd.reenter(k)
         self.agents = self.possible_agents[:]
         self.steps = 0
         readings = self._readings()

@@ -334,16 +334,18 @@ def paired_interval(after: np.ndarray, before: np.ndarray, rng: np.random.Genera
     return float(low), float(high)
 
 
-def table4_comparisons(situations: pd.DataFrame) -> pd.DataFrame:
-    """Per strategy, Table 4's arms over the span after learning (``ARMS``) and the paired
-    differences of ``CONTRASTS`` with their 90% bootstrap intervals over the situations."""
+def table4_comparisons(situations: pd.DataFrame,
+                       arms: tuple[str, ...] = ("initial_after", "population", "winner_after",
+                                                "reranked"),
+                       contrasts: list[tuple[str, str]] = CONTRASTS) -> pd.DataFrame:
+    """Per strategy, Table 4's ``arms`` over the span after learning and the paired
+    differences of ``contrasts`` with their 90% bootstrap intervals over the situations."""
     rng = np.random.default_rng(0)
     rows = []
     for strategy, group in situations.groupby("strategy"):
         row = {"strategy": strategy}  # the initial drivers first, then after learning
-        row |= {f"{arm}_collisions_per_s": round(group[arm].mean(), 4)
-                for arm in ("initial_after", "population", "winner_after", "reranked")}
-        for after, before in CONTRASTS:
+        row |= {f"{arm}_collisions_per_s": round(group[arm].mean(), 4) for arm in arms}
+        for after, before in contrasts:
             low, high = paired_interval(group[after].to_numpy(), group[before].to_numpy(), rng)
             name = f"{after}_minus_{before}"
             row |= {name: round((group[after] - group[before]).mean(), 4),
@@ -374,7 +376,9 @@ def _draw_crowds(paths: dict, path: Path) -> None:
 
 
 def _draw_learning(curve: pd.DataFrame, situations: pd.DataFrame, path: Path,
-                   seconds: float) -> None:
+                   seconds: float, title: str = "the arena's 8 vehicles, mean of the "
+                   f"situations in {SECONDS:g} s spans",
+                   unit: str = "collisions per vehicle-second") -> None:
     """Per strategy: collisions per vehicle-second in each span while the vehicles learn,
     beside the initial drivers and the winner over the same spans, and each arm over the
     span after learning (the markers at its end: Table 4)."""
@@ -393,10 +397,9 @@ def _draw_learning(curve: pd.DataFrame, situations: pd.DataFrame, path: Path,
             ax.plot([seconds / 60], [after[arm].mean()], "o", color=color)
         ax.set_title(f"strategy {strategy}", fontsize=10)
         ax.set_xlabel("simulated minutes (dots: the span after learning)")
-    axes[0, 0].set_ylabel("collisions per vehicle-second")
+    axes[0, 0].set_ylabel(unit)
     axes[0, 0].legend(fontsize=8)
-    figure.suptitle("Learning while driving (paper §5.5.2): the arena's 8 vehicles, mean of "
-                    f"the situations in {SECONDS:g} s spans")
+    figure.suptitle(f"Learning while driving (paper §5.5.2): {title}")
     figure.tight_layout()
     save_figure(figure, path)
 

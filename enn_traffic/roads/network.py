@@ -140,6 +140,34 @@ def anywhere_poses(net_file: Path, area: Polygon | MultiPolygon, length: float, 
     return poses
 
 
+def lane_spots(net_file: Path, surface: Surface = "passenger", spacing: float = 5.0
+               ) -> np.ndarray:
+    """(S, 3): x, y and heading every ``spacing`` metres along the centre line of every lane
+    of the surface outside junctions, facing its direction of travel: where learners re-enter
+    a SUMO network (:class:`~enn_traffic.sim.sumo_crowd.SumoCrowd`), whatever share of its
+    bounding box the roads fill."""
+    spots = []
+    for edge in read_net(net_file).getEdges():
+        if edge.getFunction() == "internal":  # not inside junctions
+            continue
+        for lane in edge.getLanes():
+            if not drives_on(lane, surface):
+                continue
+            shape = LineString(lane.getShape())
+            along = np.arange(spacing / 2, shape.length, spacing)
+            if not len(along):
+                continue
+            ahead = shapely.line_interpolate_point(shape, np.minimum(along + 0.1, shape.length))
+            behind = shapely.line_interpolate_point(shape, np.maximum(along - 0.1, 0.0))
+            points = shapely.get_coordinates(shapely.line_interpolate_point(shape, along))
+            delta = shapely.get_coordinates(ahead) - shapely.get_coordinates(behind)
+            spots.append(np.column_stack([points, np.arctan2(delta[:, 1], delta[:, 0])]))
+    if not spots:
+        raise InputError(f"no lane of the {surface!r} surface is longer than {spacing:g} m",
+                         net_file)
+    return np.concatenate(spots)
+
+
 def _lane(net: sumolib.net.Net, lane_id: str):
     """The lane ``EDGE_INDEX``, or None."""
     edge_id, _, index = lane_id.rpartition("_")

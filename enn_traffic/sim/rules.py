@@ -369,26 +369,50 @@ def respawn(v, kind, physics, walls, cell_start, cell_walls, all_walls, pose, co
         heading = math.pi * (2.0 * next_uniform(rng) - 1.0)
         if not inside(x, y, walls):
             continue
-        body_corners(x, y, heading, physics.length, physics.width, trial)
-        candidates = nearby_walls(x, y, physics, cell_start, cell_walls, all_walls)
-        if box_hits_walls(trial, walls, candidates, candidates.shape[0]):
-            continue
-        if not inside(trial[2, 0], trial[2, 1], walls):
-            continue
-        free = True
-        for other in range(pose.shape[0]):
-            if (other != v
-                    and math.hypot(x - pose[other, 0], y - pose[other, 1]) < physics.clearance):
-                free = False
-                break
-        if free:
-            place(v, x, y, heading, physics, pose, corners, centres)
-            previous[v] = corners[v]
-            previous_centres[v] = centres[v]
-            fresh[v] = True
-            reset_memory(kind, physics, rng, memory[v])
+        if _enter_if_free(v, x, y, heading, kind, physics, walls, cell_start, cell_walls,
+                          all_walls, pose, corners, centres, previous, previous_centres, fresh,
+                          memory, rng, trial):
             return True
     return False
+
+
+@njit(cache=True)
+def respawn_on_lanes(v, kind, spots, physics, walls, cell_start, cell_walls, all_walls, pose,
+                     corners, centres, previous, previous_centres, fresh, memory, rng) -> bool:
+    """:func:`respawn` at one of ``spots`` (S, 3: x, y, heading along the lanes, facing their
+    traffic): a network's roads can fill little of its bounding box."""
+    trial = np.empty((4, 2))
+    for _ in range(200):
+        spot = min(int(next_uniform(rng) * spots.shape[0]), spots.shape[0] - 1)
+        x, y, heading = spots[spot, 0], spots[spot, 1], spots[spot, 2]
+        if _enter_if_free(v, x, y, heading, kind, physics, walls, cell_start, cell_walls,
+                          all_walls, pose, corners, centres, previous, previous_centres, fresh,
+                          memory, rng, trial):
+            return True
+    return False
+
+
+@njit(cache=True)
+def _enter_if_free(v, x, y, heading, kind, physics, walls, cell_start, cell_walls, all_walls,
+                   pose, corners, centres, previous, previous_centres, fresh, memory, rng,
+                   trial) -> bool:
+    """Place vehicle ``v`` at (x, y, heading) with a fresh life if its body there touches no
+    wall, its rear is on the area and every other vehicle is ``clearance`` away."""
+    body_corners(x, y, heading, physics.length, physics.width, trial)
+    candidates = nearby_walls(x, y, physics, cell_start, cell_walls, all_walls)
+    if box_hits_walls(trial, walls, candidates, candidates.shape[0]):
+        return False
+    if not inside(trial[2, 0], trial[2, 1], walls):
+        return False
+    for other in range(pose.shape[0]):
+        if other != v and math.hypot(x - pose[other, 0], y - pose[other, 1]) < physics.clearance:
+            return False
+    place(v, x, y, heading, physics, pose, corners, centres)
+    previous[v] = corners[v]
+    previous_centres[v] = centres[v]
+    fresh[v] = True
+    reset_memory(kind, physics, rng, memory[v])
+    return True
 
 
 @njit(cache=True)

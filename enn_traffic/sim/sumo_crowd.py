@@ -39,7 +39,7 @@ from enn_traffic.sim.rules import (
     left_network,
     move_all,
     place,
-    respawn,
+    respawn_on_lanes,
     responsible,
     sense,
     sense_bodies,
@@ -202,13 +202,19 @@ class SumoCrowd:
         self._read()
         for k in range(self.count):
             if self._starts is None:
-                lives.enter(k, self.physics, world.geometry, self.slots, self.now, scenario)
+                self.reenter(k)
             else:
                 lives.place(k, self._starts[k], self.physics)
             sumo.add_learner(vehicle.length, vehicle.width, vehicle.speed, self.ids[k])
         self._move_learners()
         self.t = 0  # steps since the learners entered
         self._detected_at = -1  # the step last detected: once a step, whoever asks
+
+    def reenter(self, k: int) -> None:
+        """Learner ``k`` starts a new life at a free spot along the lanes."""
+        world = self.world
+        self.lives.enter(k, self.physics, world.geometry, world.lane_spots, self.slots,
+                         self.now, world.scenario)
 
     def _move_learners(self) -> None:
         """Place every learner in SUMO for its next step (libsumo moves one vehicle a call)."""
@@ -302,8 +308,7 @@ class SumoCrowd:
                                                        int(lives.life[k] - unseen_from[k]),
                                                        outcome == SPUN)
                     unseen_from[k] = 0
-                    lives.enter(k, self.physics, world.geometry, self.slots, self.now,
-                                world.scenario)
+                    self.reenter(k)
             for k in np.flatnonzero(learns & (lives.life >= cap)) if cap else ():
                 genes[k] = learning.life_capped(k, int(lives.life[k] - unseen_from[k]))
                 unseen_from[k] = lives.life[k] = 0
@@ -365,20 +370,22 @@ class _Lives:
         self.life[k] = 0
         self.gone[k] = -1
 
-    def enter(self, k: int, physics, geometry, slots: tuple, row: int, scenario) -> None:
-        """Learner ``k`` starts a life at a free spot: on the drivable area, touching no wall,
-        ``respawn_clearance`` from every learner and, if one is found within
-        :data:`RESPAWN_TRIES` draws, from every SUMO vehicle."""
+    def enter(self, k: int, physics, geometry, spots: np.ndarray, slots: tuple, row: int,
+              scenario) -> None:
+        """Learner ``k`` starts a life at a free spot: one of ``spots`` along the lanes
+        (facing their traffic), touching no wall, ``respawn_clearance`` from every learner
+        and, if one is found within :data:`RESPAWN_TRIES` draws, from every SUMO vehicle."""
         _, _, walls, cell_start, cell_walls, all_walls, _ = geometry
         ids, _, centres = slots
         present = ids[row] >= 0
         for _ in range(RESPAWN_TRIES):
-            if not respawn(k, NETWORK, physics, walls, cell_start, cell_walls, all_walls,
-                           self.pose, self.body, self.centre, self.body_before,
-                           self.centre_before, self.fresh, self.memory, self.rng):
-                raise InputError("no free spot for a learner on the drivable area in 200 "
-                                 "draws (a network whose roads fill little of its bounding "
-                                 "box)", scenario.source, "track.net")
+            if not respawn_on_lanes(k, NETWORK, spots, physics, walls, cell_start,
+                                    cell_walls, all_walls, self.pose, self.body, self.centre,
+                                    self.body_before, self.centre_before, self.fresh,
+                                    self.memory, self.rng):
+                raise InputError("no free spot for a learner along the lanes in 200 draws "
+                                 "(learners packed closer than traffic.respawn_clearance?)",
+                                 scenario.source, "track.net")
             gaps = np.hypot(*(centres[row][present] - self.centre[k]).T)
             if not np.any(gaps < physics.clearance):
                 break

@@ -16,6 +16,7 @@ and differ by their own seed from the learner's start on (:func:`shared_warmup`)
 
 from __future__ import annotations
 
+import functools
 from collections import OrderedDict
 from pathlib import Path
 from typing import NamedTuple
@@ -26,6 +27,7 @@ import numpy as np
 from enn_traffic import keys
 from enn_traffic.progress import slow_step
 from enn_traffic.roads import Track
+from enn_traffic.roads.network import lane_spots
 from enn_traffic.scenario import Scenario
 from enn_traffic.sim.arena import LearnerWorld
 from enn_traffic.sim.replay import (
@@ -133,6 +135,12 @@ class SumoWorld(LearnerWorld):
         self._checked = False  # closed loop: has some traffic been seen on the network?
         self._states: dict[tuple, Path] = {}  # closed loop: each situation's saved warm-up
         self._steps: dict = {}  # closed loop: the compiled step, by the genes' numba type
+
+    @functools.cached_property
+    def lane_spots(self) -> np.ndarray:
+        """Where learners of a SUMO crowd re-enter: spots along the lanes
+        (:func:`~enn_traffic.roads.network.lane_spots`)."""
+        return lane_spots(self.scenario.track.net, self.scenario.track.surface)
 
     @property
     def vehicles(self) -> int:

@@ -29,7 +29,9 @@ def tiny(tmp_path_factory):
 def test_every_table_and_figure_is_written(tiny):
     folder, lines = tiny
     for name in ("fig11.csv", "fig11.png", "table1.csv", "fig12.png", "table2.csv",
-                 "closed_loop.csv", "table3.csv", "table4.csv", "crowd_situations.csv"):
+                 "closed_loop.csv", "table3.csv", "table4.csv", "crowd_situations.csv",
+                 "table4_learners.csv", "table4_learning.csv", "table4_learning.png",
+                 "table4_validation_learners.csv"):
         assert (folder / name).is_file(), name
     assert any(line.startswith("tiny/table3:") for line in lines)
     # Table 4 (§5.5.2): every learner of the first situation ends with a controller of its own
@@ -65,18 +67,36 @@ def test_a_table1_entry_is_its_saved_controller_on_that_strategys_test_traffic(
 
 
 def test_tables_3_and_4_are_the_means_of_the_situations(tiny):
+    """Table 3: the first window's means with intervals over the situations; Table 4: the
+    window after learning, every arm's mean and the paired differences, whose intervals hold
+    them; every learner of every situation counted, every window of the learning drawn."""
     folder, _ = tiny
     situations = pd.read_csv(folder / "crowd_situations.csv")
     assert sorted(situations.strategy.unique()) == SUMO.strategies
     means = situations.groupby("strategy").mean()
     table3 = pd.read_csv(folder / "table3.csv").set_index("strategy")
+    for span in ("initial", "winner"):
+        assert table3[f"{span}_collisions_per_s"].to_numpy() == pytest.approx(
+            means[span].to_numpy(), abs=1e-4)
+        assert table3[f"{span}_conflicts_per_h"].to_numpy() == pytest.approx(
+            means[f"{span}_conflicts"].to_numpy(), abs=0.051)  # rounded to 0.1
+        # both rounded to 4 places: one step of 1e-4 apart at most, and a float's ulp
+        assert (table3[f"{span}_low"] <= table3[f"{span}_collisions_per_s"] + 1.001e-4).all()
     table4 = pd.read_csv(folder / "table4.csv").set_index("strategy")
-    for table, spans in ((table3, ("initial", "winner")),
-                         (table4, ("initial_next", "winner_next", "population"))):
-        for span in spans:
-            assert table[f"{span}_collisions_per_s"].to_numpy() == pytest.approx(
-                means[span].to_numpy(), abs=1e-4)
-            assert table[f"{span}_conflicts_per_h"].to_numpy() == pytest.approx(
-                means[f"{span}_conflicts"].to_numpy(), abs=0.051)  # rounded to 0.1
-            # both rounded to 4 places: one step of 1e-4 apart at most, and a float's ulp
-            assert (table[f"{span}_low"] <= table[f"{span}_collisions_per_s"] + 1.001e-4).all()
+    for arm in ("initial_after", "winner_after", "population"):
+        assert table4[f"{arm}_collisions_per_s"].to_numpy() == pytest.approx(
+            means[arm].to_numpy(), abs=1e-4)
+    for before in ("initial_after", "winner_after"):
+        name = f"population_minus_{before}"
+        assert table4[name].to_numpy() == pytest.approx(
+            (means["population"] - means[before]).to_numpy(), abs=1e-4)
+        assert (table4[f"{name}_low"] <= table4[name] + 1.001e-4).all()
+        assert (table4[name] <= table4[f"{name}_high"] + 1.001e-4).all()
+    learners = pd.read_csv(folder / "table4_learners.csv")
+    count = TINY.scenario(1).traffic.learners
+    assert len(learners) == len(situations) * count
+    assert (learners["chromosomes_tried"] >= learners["lives"]).all()
+    curve = pd.read_csv(folder / "table4_learning.csv")
+    from enn_traffic.experiments.sumo_crowds import SUMO_LEARNING
+    quick = Study(folder, quick=True).settings(SUMO_LEARNING)
+    assert curve.groupby("strategy").size().tolist() == [quick.windows] * 4

@@ -127,3 +127,29 @@ def test_walls_and_grid_are_kept_and_built_again_when_the_network_changes(root, 
     monkeypatch.setenv("ENN_TRAFFIC_CACHE", str(blocked))
     np.testing.assert_array_equal(load_track(net, exits=False).walls,
                                   load_track(net, exits=False).walls)
+
+
+def test_lane_spots_lie_along_each_lane_facing_its_traffic(root):
+    """The ring's start lane: its first spot is 2.5 m along its centre line, facing along it
+    (:meth:`Track.lane_pose`), its spots 5 m apart; every spot of the network lies on the
+    drivable area, and there are as many as whole 5 m stretches of lane shape (plus one per
+    lane at most)."""
+    import sumolib
+
+    from enn_traffic.roads.network import lane_spots
+
+    net_file = root / "sumo_nets" / "sumo_ring.net.xml"
+    track = load_track(net_file)
+    spots = lane_spots(net_file)
+    x, y, heading = track.lane_pose(net_file, "g0_0to1_0_2", 2.5)
+    first = np.flatnonzero(np.hypot(spots[:, 0] - x, spots[:, 1] - y) < 1e-6)
+    assert len(first) == 1
+    assert spots[first[0], 2] == pytest.approx(heading)
+    following = spots[first[0] + 1]
+    assert np.hypot(following[0] - x, following[1] - y) == pytest.approx(5.0)
+    assert all(track.contains(sx, sy) for sx, sy, _ in spots)
+    lengths = [LineString(lane.getShape()).length
+               for edge in sumolib.net.readNet(str(net_file)).getEdges()
+               for lane in edge.getLanes() if lane.allows("passenger")]
+    assert sum(int(length // 5) for length in lengths) <= len(spots) <= sum(
+        int(length // 5) + 1 for length in lengths)

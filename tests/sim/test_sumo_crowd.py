@@ -91,22 +91,31 @@ def test_learners_move_through_their_populations(world):
 
 
 def test_one_situation_of_the_sumo_tables_is_the_same_run_again(world):
-    """Every span of a situation (initial drivers, winner, learning, after learning) from the
-    situation's seed alone: the same call gives the same rates, and a winner that drives
-    straight into walls loses lives in every span it drives."""
-    from enn_traffic.experiments.sumo_crowds import SPANS, situation_rates
+    """Every arm of a situation (initial drivers, winner, learning, after learning) from the
+    situation's seed alone: the same call gives the same rates, windows, learners and
+    controllers; the random initial drivers lose lives in the first window and the window
+    after learning, and so do the learners; learners with a 10-step cap and 4 chromosomes
+    breed within 6 s."""
+    from enn_traffic.experiments.sumo_crowds import CONFLICTS, SumoLearning, situation_result
 
     winner = straight(world)[0]
-    evolved = np.random.default_rng(0).uniform(-1, 1, (4, world.spec.chromosome_length))
-    first, controllers = situation_rates(world, winner, evolved, situation=0, seconds=3.0)
-    assert set(first) == set(SPANS) | {f"{span}_conflicts" for span in SPANS}
-    again, same = situation_rates(world, winner, evolved, situation=0, seconds=3.0)
-    assert first == again
-    np.testing.assert_array_equal(controllers, same)
-    assert first["winner"] > 0 and first["winner_next"] > 0
-    # each learner ends with a chromosome of the population it was given
-    assert controllers.shape == (world.scenario.traffic.learners, len(winner))
-    assert all(any(np.array_equal(row, given) for given in evolved) for row in controllers)
+    evolved = np.random.default_rng(0).uniform(-1, 1, (6, world.spec.chromosome_length))
+    learning = SumoLearning(seconds=6.0, window_seconds=3.0, life_cap_steps=10,
+                            population_size=4, elite_count=1, situations=1)
+    first = situation_result(world, winner, evolved, 0, learning)
+    assert set(first.rates) == {"initial", "winner", "initial_after", "winner_after",
+                                "population", "learning"} | {f"{arm}_conflicts"
+                                                             for arm in CONFLICTS}
+    again = situation_result(world, winner, evolved, 0, learning)
+    assert (first.rates, first.windows, first.learners) == (again.rates, again.windows,
+                                                           again.learners)
+    np.testing.assert_array_equal(first.controllers, again.controllers)
+    assert first.rates["initial"] > 0 and first.rates["initial_after"] > 0
+    assert first.rates["learning"] > 0
+    assert [w["window_start_s"] for w in first.windows] == [0.0, 3.0]
+    assert all(learner["generations_bred"] >= 1 for learner in first.learners)
+    # each learner ends with a chromosome of its evolved population, bred from the first 4
+    assert first.controllers.shape == (world.scenario.traffic.learners, len(winner))
 
 
 def test_a_sumo_vehicle_that_drives_into_a_learner_leaves_that_learners_world_only(world):

@@ -1,0 +1,26 @@
+"""Which digests move with which edits: numba's compiled kernels are kept until a source they
+compile from changes, not when a report or an experiment does."""
+
+import shutil
+
+from enn_traffic.provenance import PACKAGE, code_version, kernels_version
+
+
+def test_kernels_version_moves_with_the_kernels_sources_only(tmp_path):
+    package = tmp_path / "enn_traffic"
+    shutil.copytree(PACKAGE, package, ignore=shutil.ignore_patterns("__pycache__"))
+    kernels, code = kernels_version(package), code_version(package)
+
+    def edit(relative: str, text: str) -> None:
+        with open(package / relative, "a") as handle:
+            handle.write(text)
+
+    edit("report/results_doc.py", "\n# a report's edit\n")
+    assert kernels_version.__wrapped__(package) == kernels
+    assert code_version.__wrapped__(package) != code
+    edit("sim/world.py", "\n# a constant kernels read may change here\n")
+    moved = kernels_version.__wrapped__(package)
+    assert moved != kernels
+    edit("experiments/regime.py", "\nfrom numba import njit\n\n\n@njit\ndef kernel():\n"
+         "    return 1\n")
+    assert kernels_version.__wrapped__(package) != moved
