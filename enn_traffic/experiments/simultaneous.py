@@ -58,6 +58,7 @@ from enn_traffic.experiments.common import distinct, save_arrays, save_controlle
 from enn_traffic.experiments.protocol import ARENA
 from enn_traffic.experiments.study import Study
 from enn_traffic.io import write_csv
+from enn_traffic.report.paper_tables import PAPER_TABLE3, PAPER_TABLE4
 from enn_traffic.report.plots import draw_paths, save_figure
 from enn_traffic.runner import ga_params
 from enn_traffic.shipped import shipped_scenario
@@ -72,7 +73,8 @@ VALIDATION_KEY = keys.CROWD_VALIDATION.start  # the situations that choose the w
 VALIDATION_SITUATIONS = 20
 DRAWN_SECONDS = 20.0
 # Mean reduction of the collision rate over the four strategies in the paper's Tables 3 and 4.
-PAPER_REDUCTION = {"table3": 0.54, "table4": 0.89}
+PAPER_REDUCTION = {name: float(np.mean([1 - after / before for before, after in table]))
+                   for name, table in (("table3", PAPER_TABLE3), ("table4", PAPER_TABLE4))}
 # Table 4's arms over the span after learning, and the column each is compared with
 ARMS = {"population": "each vehicle's evolved controller",
         "initial_after": "the initial drivers driving on",
@@ -87,7 +89,8 @@ class CrowdLearning:
     the life cap of a chromosome's trial (steps), how many situations each strategy is
     measured in, and what ``--quick`` changes of them. The learning time and the cap were
     chosen on the crowd validation situations so that every learner breeds at least 3
-    generations (docs/results.md, "Learning while driving")."""
+    generations (``table4_validation_learners.csv``; docs/results.md, "All vehicles at
+    once")."""
 
     seconds: float = 15000.0
     life_cap_steps: int = 300

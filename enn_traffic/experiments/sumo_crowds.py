@@ -44,7 +44,7 @@ from __future__ import annotations
 import hashlib
 import json
 from collections.abc import Mapping
-from dataclasses import asdict, dataclass, field
+from dataclasses import asdict, dataclass, field, replace
 from pathlib import Path
 
 import numpy as np
@@ -64,16 +64,17 @@ from enn_traffic.experiments.simultaneous import (
 )
 from enn_traffic.experiments.study import Study
 from enn_traffic.io import write_csv, write_text
-from enn_traffic.provenance import rules_version
+from enn_traffic.provenance import rules_version, source_digest
 from enn_traffic.runner import ga_params
 from enn_traffic.sim.sumo_crowd import SumoCrowd
 from enn_traffic.sim.sumo_world import SumoWorld
 from enn_traffic.worlds import make_world
 
-# The situations whose rates are reported: fresh in CROWD_TEST, past the first two the city
-# family measured before learners re-entered along the lanes (a crash, not a result, changed
-# that design: docs/departures.md).
-SITUATION_KEY = keys.CROWD_TEST.start + 1_000_000
+# The situations whose rates are reported: fresh in CROWD_TEST, past those that two designs
+# measured before this one (values not read; docs/departures.md): learners that re-entered
+# from the network's bounding box (a crash in the city, from + 0), and learners whose GA kept
+# its whole population of 20 as elites, so bred no children (from + 10^6).
+SITUATION_KEY = keys.CROWD_TEST.start + 2_000_000
 VALIDATION_KEY = keys.CROWD_VALIDATION.start  # the situations that chose SUMO_LEARNING
 # Table 4's paired differences among SUMO traffic (no re-ranked arm: a live SUMO has no fork)
 CONTRASTS = [("population", "initial_after"), ("population", "winner_after")]
@@ -84,7 +85,8 @@ CONFLICTS = ["initial", "winner", "initial_after", "winner_after", "population"]
 class SumoLearning:
     """Learning together among SUMO traffic: how long (SUMO seconds, a multiple of
     ``window_seconds``), each chromosome's life cap (steps), how many rows of the evolved
-    population each learner copies and how many of the best are shared elites, the
+    population each learner copies and how many of the best are elites (a learner's own
+    breeding keeps that many, which the best of all learners then replace), the
     situations measured per strategy and the validation situations that chose these
     settings, and what ``--quick`` changes of them."""
 
@@ -113,7 +115,8 @@ def _learning(world: SumoWorld, evolved: np.ndarray, situation: int, learning: S
     population = evolved[:learning.population_size]
     learners = [VehicleGA(population.copy(), np.random.default_rng([scenario.seed, situation, k]))
                 for k in range(scenario.traffic.learners)]
-    return OnlineLearning(learners, ga_params(scenario), share_elites=True,
+    params = replace(ga_params(scenario), elite_count=learning.elite_count)
+    return OnlineLearning(learners, params, share_elites=True,
                           elite_count=learning.elite_count, life_cap=learning.life_cap_steps)
 
 
@@ -146,12 +149,12 @@ def situation_result(world: SumoWorld, winner: np.ndarray, evolved: np.ndarray, 
         with SumoCrowd(world, seed) as crowd:
             arms[arm] = [crowd.run(learning.window_seconds, genes) for _ in range(windows + 1)]
     learnt, after, online = learn_together(world, winner, evolved, situation, learning, key)
-    first = {"initial": arms["initial"][0], "winner": arms["winner"][0],
-             "initial_after": arms["initial"][-1], "winner_after": arms["winner"][-1],
-             "population": after}
-    rates = {arm: run.collision_rate for arm, run in first.items()}
+    measured = {"initial": arms["initial"][0], "winner": arms["winner"][0],
+                "initial_after": arms["initial"][-1], "winner_after": arms["winner"][-1],
+                "population": after}
+    rates = {arm: run.collision_rate for arm, run in measured.items()}
     rates["learning"] = float(np.mean([run.collision_rate for run in learnt]))
-    rates |= {f"{arm}_conflicts": first[arm].conflict_rate for arm in CONFLICTS}
+    rates |= {f"{arm}_conflicts": measured[arm].conflict_rate for arm in CONFLICTS}
     window_rows = [{"window_start_s": w * learning.window_seconds,
                     "learning": learnt[w].collision_rate,
                     "initial_drivers": arms["initial"][w].collision_rate,
@@ -166,6 +169,11 @@ def crowd_world(family: Family, strategy: int) -> SumoWorld:
     GA settings its populations evolved with."""
     return make_world(family.scenario(strategy).with_overrides(
         ga=dict(family.ga), traffic={"mode": "closed-loop"}))
+
+
+def _settings_digest() -> str:
+    """This module's source: how a kept situation was measured, beside the rules."""
+    return source_digest([Path(__file__).resolve()])
 
 
 def _kept(path: Path, settings: dict) -> dict | None:
@@ -221,7 +229,7 @@ def crowd_inputs(study: Study, family: Family
 
 def _settings(learning: SumoLearning) -> dict:
     """What a kept situation was measured with: ``learning`` and the simulation's rules."""
-    settings = asdict(learning) | {"rules": rules_version()}
+    settings = asdict(learning) | {"rules": rules_version(), "measured_by": _settings_digest()}
     settings.pop("quick")
     return settings
 
@@ -326,36 +334,40 @@ def table4(situations: pd.DataFrame) -> pd.DataFrame:
         columns={f"{arm}_conflicts": f"{arm}_conflicts_per_h" for arm in arms}), on="strategy")
 
 
-def sumo_tables(study: Study, family: Family = SUMO) -> list[str]:
-    """A SUMO family's Table 3 (the winner broadcast, against the initial drivers, the first
-    window) and Table 4 (after learning together, against both drivers driving on, the window
-    after learning), into ``<family folder>/table3.csv`` and ``table4.csv``."""
-    family = study.settings(family)
-    learning = study.settings(SUMO_LEARNING)
-    measured = measure(study, family, learning)
-    situations = measured["situations"]
-    table3 = table(situations, ["initial", "winner"])
-    write_csv(study.out / family.folder / "table3.csv", table3)
+def write_tables(folder: Path, situations: pd.DataFrame, learners: pd.DataFrame) -> list[str]:
+    """Table 3 (the winner broadcast against the initial drivers, the first window) and
+    Table 4 (after learning together against both drivers driving on, the window after
+    learning), each with paired intervals, into ``folder/table3.csv`` and ``table4.csv``; the
+    summary's lines."""
+    table3 = table(situations, ["initial", "winner"]).merge(
+        table4_comparisons(situations, (), [("winner", "initial")]), on="strategy")
+    write_csv(folder / "table3.csv", table3)
     table4_rows = table4(situations)
-    write_csv(study.out / family.folder / "table4.csv", table4_rows)
-    bred = measured["learners"].groupby("strategy")["generations_bred"].median()
+    write_csv(folder / "table4.csv", table4_rows)
+    bred = learners.groupby("strategy")["generations_bred"].median()
 
     def entries(frame: pd.DataFrame, before: str, after: str) -> str:
         return ", ".join(
             f"strategy {int(r['strategy'])}: {r[f'{before}_collisions_per_s']:.3f} -> "
             f"{r[f'{after}_collisions_per_s']:.3f}" for _, r in frame.iterrows())
 
-    def below(before: str) -> str:
-        name = f"population_minus_{before}"
-        return (f"{int((table4_rows[f'{name}_high'] < 0).sum())} of {len(table4_rows)} "
-                f"strategies with the paired interval below 0, "
-                f"{int((table4_rows[f'{name}_low'] > 0).sum())} above")
+    def below(frame: pd.DataFrame, name: str) -> str:
+        return (f"{int((frame[f'{name}_high'] < 0).sum())} of {len(frame)} strategies with the "
+                f"paired interval below 0, {int((frame[f'{name}_low'] > 0).sum())} above")
 
-    return [f"{family.folder}/table3: collisions per learner-second, initial drivers -> winner: "
-            f"{entries(table3, 'initial', 'winner')}",
-            f"{family.folder}/table4: collisions per learner-second over the window after "
+    return [f"{folder.name}/table3: collisions per learner-second, initial drivers -> winner: "
+            f"{entries(table3, 'initial', 'winner')} ({below(table3, 'winner_minus_initial')})",
+            f"{folder.name}/table4: collisions per learner-second over the window after "
             f"learning, initial drivers -> after learning together: "
             f"{entries(table4_rows, 'initial_after', 'population')} (against the initial "
-            f"drivers: {below('initial_after')}; against the winner driving on: "
-            f"{below('winner_after')}); median generations bred per learner "
-            f"{', '.join(f'{g:g}' for g in bred)}"]
+            f"drivers: {below(table4_rows, 'population_minus_initial_after')}; against the "
+            f"winner driving on: {below(table4_rows, 'population_minus_winner_after')}); median "
+            f"generations bred per learner {', '.join(f'{g:g}' for g in bred)}"]
+
+
+def sumo_tables(study: Study, family: Family = SUMO) -> list[str]:
+    """A SUMO family's Tables 3–4 (:func:`write_tables`), measured into its folder."""
+    family = study.settings(family)
+    measured = measure(study, family, study.settings(SUMO_LEARNING))
+    return write_tables(study.out / family.folder, measured["situations"],
+                        measured["learners"])

@@ -169,17 +169,16 @@ def _reduction(paper: list[tuple[float, float]]) -> float:
     return sum(1 - after / before for before, after in paper) / len(paper)
 
 
-def _learners(learners: pd.DataFrame, curve: pd.DataFrame, spans: int) -> list[str]:
-    ga = shipped_scenario(ARENA.name(1)).ga
-    """Per strategy, what the learners did (``table4_learners.csv``) and the learning curve's
-    first and last tenth against the other arms over the same spans."""
-    lines = ["Per learner (`table4_learners.csv`, every vehicle of every situation) and the "
-             "learning curve (`table4_learning.csv`: each arm's mean collisions per "
-             "vehicle-second over the situations, span by span), the first and the last "
-             f"{max(1, spans // 10)} spans of the learning:", "",
-             "| strategy | generations bred: median (min–max) | lives lost: median | "
-             "chromosomes tried: median | learning: first → last | initial drivers: first → "
-             "last | winner driving on: first → last |", "|---|---|---|---|---|---|---|"]
+_LEARNERS_HEADER = ["| strategy | generations bred: median (min–max) | lives lost: median | "
+                    "chromosomes tried: median | learning: first → last | initial drivers: "
+                    "first → last | winner driving on: first → last |",
+                    "|---|---|---|---|---|---|---|"]
+
+
+def _learner_rows(learners: pd.DataFrame, curve: pd.DataFrame) -> list[str]:
+    """Per strategy: the learners' generations bred, lives and chromosomes tried, and each
+    arm's learning curve from its first to its last tenth."""
+    lines = []
     for strategy, group in learners.groupby("strategy"):
         rows = curve[curve["strategy"] == strategy]
 
@@ -192,6 +191,19 @@ def _learners(learners: pd.DataFrame, curve: pd.DataFrame, spans: int) -> list[s
                      f"{group['lives'].median():g} | {group['chromosomes_tried'].median():g} | "
                      f"{ends('collisions_per_vehicle_s')} | {ends('initial_drivers')} | "
                      f"{ends('winner_driving_on')} |")
+    return lines
+
+
+def _learners(learners: pd.DataFrame, curve: pd.DataFrame, spans: int) -> list[str]:
+    """Per strategy, what the learners did (``table4_learners.csv``) and the learning curve's
+    first and last tenth against the other arms over the same spans."""
+    ga = shipped_scenario(ARENA.name(1)).ga
+    lines = ["Per learner (`table4_learners.csv`, every vehicle of every situation) and the "
+             "learning curve (`table4_learning.csv`: each arm's mean collisions per "
+             "vehicle-second over the situations, span by span), the first and the last "
+             f"{max(1, spans // 10)} spans of the learning:", "",
+             *_LEARNERS_HEADER]
+    lines += _learner_rows(learners, curve)
     during = curve["collisions_per_vehicle_s"].mean()
     winner = curve["winner_driving_on"].mean()
     lines += ["", f"While they learn, the vehicles collide {during / winner:.1f} times as often "
@@ -292,21 +304,8 @@ def family_tables34(paper: Path, family: Family) -> str:
               "SSM conflict columns of the CSVs are not reproducible yet (below).", "",
               "Per learner (`table4_learners.csv`) and the learning curve "
               "(`table4_learning.csv`), its first and last windows:", "",
-              "| strategy | generations bred: median (min–max) | lives lost: median | "
-              "chromosomes tried: median | learning: first → last | initial drivers: first → "
-              "last | winner driving on: first → last |", "|---|---|---|---|---|---|---|"]
-    for strategy, group in learners.groupby("strategy"):
-        rows = curve[curve["strategy"] == strategy]
-
-        def ends(column: str, rows=rows) -> str:
-            first, last = curve_ends(rows, column)
-            return f"{_g(first)} → {_g(last)}"
-
-        bred = group["generations_bred"]
-        lines.append(f"| {strategy} | {bred.median():g} ({bred.min()}–{bred.max()}) | "
-                     f"{group['lives'].median():g} | {group['chromosomes_tried'].median():g} | "
-                     f"{ends('collisions_per_vehicle_s')} | {ends('initial_drivers')} | "
-                     f"{ends('winner_driving_on')} |")
+              *_LEARNERS_HEADER]
+    lines += _learner_rows(learners, curve)
     during = curve["collisions_per_vehicle_s"].mean()
     winner = curve["winner_driving_on"].mean()
     lines += ["", f"While they learn, the learners collide {during / winner:.1f} times as often "

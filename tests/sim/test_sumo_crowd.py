@@ -114,8 +114,16 @@ def test_one_situation_of_the_sumo_tables_is_the_same_run_again(world):
     assert first.rates["learning"] > 0
     assert [w["window_start_s"] for w in first.windows] == [0.0, 3.0]
     assert all(learner["generations_bred"] >= 1 for learner in first.learners)
-    # each learner ends with a chromosome of its evolved population, bred from the first 4
     assert first.controllers.shape == (world.scenario.traffic.learners, len(winner))
+    # breeding makes children: 3 of each generation's 4 beside the 1 elite, even where the
+    # scenario's own GA keeps 4 elites
+    from enn_traffic.experiments.sumo_crowds import learn_together
+
+    four_elites = make_world(world.scenario.with_overrides(ga={"elite_count": 4}))
+    *_, online = learn_together(four_elites, winner, evolved, 0, learning)
+    started = {row.tobytes() for row in evolved[:4]}
+    for learner in online.learners:
+        assert sum(row.tobytes() not in started for row in learner.population) >= 3
 
 
 def test_a_sumo_vehicle_that_drives_into_a_learner_leaves_that_learners_world_only(world):
