@@ -259,12 +259,14 @@ def family_tables34(paper: Path, family: Family) -> str:
     learning = SUMO_LEARNING
     first_key = SUMO_SITUATION_KEY - keys.CROWD_TEST.start
     lines = [
-        f"`enn-traffic reproduce --only {family.folder}`, its Tables 3–4: "
+        f"`enn-traffic reproduce --only {family.folder}`, its Tables 3–4 (measured again "
+        "at the commit `summary.md` names for them): "
         f"{family.scenario(1).traffic.learners} learners in one live SUMO among each "
         f"strategy's traffic, {count} situations per strategy (sealed keys "
         f"{keys.CROWD_TEST.start // 10**9}·10⁹ + {first_key:,} + 0…{count - 1}, "
         "`sumo_crowds.SITUATION_KEY`, read once by this design). Three arms start from the "
-        f"same SUMO state and drive in windows of {learning.window_seconds:g} s: random "
+        "situation's SUMO seed and warm-up, each in a SUMO of its own, and drive in windows of "
+        f"{learning.window_seconds:g} s: random "
         "networks (the initial drivers) and the strategy's Table 1 controller driving every "
         f"learner (the winner), each for {learning.windows + 1} windows, and the learners "
         f"learning together for {learning.seconds:g} s, each from its own copy of the first "
@@ -293,9 +295,12 @@ def family_tables34(paper: Path, family: Family) -> str:
              for b in ("initial_after", "winner_after")}
     above = {b: int((table4[f"population_minus_{b}_low"] > 0).sum())
              for b in ("initial_after", "winner_after")}
-    winner_below = int((table3["winner_high"] < table3["initial_low"]).sum())
-    lines += ["", f"Table 3: the winner is below the initial drivers, intervals apart, in "
-              f"{winner_below} of {len(table3)} strategies. Table 4 is below the initial "
+    winner_below = int((table3["winner_minus_initial_high"] < 0).sum())
+    lines += ["", f"Table 3: the winner is below the initial drivers, the paired interval "
+              f"below 0, in {winner_below} of {len(table3)} strategies (winner minus initial "
+              "drivers: " + ", ".join(_interval(row, "winner_minus_initial")
+                                      for row in table3.to_dict("records"))
+              + "). Table 4 is below the initial "
               f"drivers driving on in {below['initial_after']} and above in "
               f"{above['initial_after']} of {len(table4)} (paired intervals apart); against the "
               f"winner driving on, below in {below['winner_after']} and above in "
