@@ -313,9 +313,12 @@ def family_tables34(paper: Path, family: Family) -> str:
     lines += _learner_rows(learners, curve)
     during = curve["collisions_per_vehicle_s"].mean()
     winner = curve["winner_driving_on"].mean()
+    children = 1 - learning.elite_count / learning.population_size
     lines += ["", f"While they learn, the learners collide {during / winner:.1f} times as often "
               f"as the winner driving on over the same windows ({_g(during)} against "
-              f"{_g(winner)} per learner-second, all strategies).", "",
+              f"{_g(winner)} per learner-second, all strategies): as in the arena, the rate is "
+              "low while they try their first generation, rows of the evolved population, and "
+              f"rises once they try its children, {children:.0%} of every later generation.", "",
               f"![Learning while driving, {family.folder}](../results/paper/{family.folder}/"
               "table4_learning.png)"]
     return "\n".join(lines)

@@ -50,3 +50,32 @@ def test_paper_tables_set_ours_beside_the_papers(tmp_path):
     table4 = lines[lines.index("| strategy | initial | after |") + 2:][:4]
     assert table4 == ["| 1 | 16.33 / 0.1 | 2.11 / 0.01 |", "| 2 | 20.05 / 0.2 | 1.58 / 0.02 |",
                       "| 3 | 16.82 / 0.3 | 1.76 / 0.03 |", "| 4 | 13.49 / 0.4 | 1.9 / 0.04 |"]
+
+
+def test_sumo_tables_carry_paired_intervals_into_the_summary(tmp_path):
+    """Two situations per strategy: Table 4's difference is the mean of the paired
+    differences (strategy 1: -0.2 and -0.3, so -0.25 with an interval inside [-0.3, -0.2]),
+    Table 3 the same for the winner, and summary.md's SUMO Table 4 sets the paper's rates
+    beside these."""
+    from enn_traffic.experiments.sumo_crowds import CONFLICTS, write_tables
+
+    arms = {"initial": [0.5, 0.7, 0.6, 0.6], "winner": [0.1, 0.2, 0.0, 0.0],
+            "initial_after": [0.2, 0.4, 0.6, 0.6], "winner_after": [0.0, 0.0, 0.1, 0.1],
+            "population": [0.0, 0.1, 0.2, 0.2], "learning": [0.1, 0.1, 0.1, 0.1]}
+    situations = pd.DataFrame({"strategy": [1, 1, 2, 2], "situation": [0, 1, 0, 1], **arms,
+                               **{f"{arm}_conflicts": [3.0, 5.0, 0.0, 0.0]
+                                  for arm in CONFLICTS}})
+    learners = pd.DataFrame({"strategy": [1, 2], "situation": [0, 0], "learner": [0, 0],
+                             "generations_bred": [3, 4]})
+    lines = write_tables(tmp_path / "sumo", situations, learners)
+    table3 = pd.read_csv(tmp_path / "sumo" / "table3.csv").set_index("strategy")
+    table4 = pd.read_csv(tmp_path / "sumo" / "table4.csv").set_index("strategy")
+    assert table3.loc[1, "winner_minus_initial"] == pytest.approx(-0.45)
+    assert table4.loc[1, "population_minus_initial_after"] == pytest.approx(-0.25)
+    assert -0.3 <= table4.loc[1, "population_minus_initial_after_low"] <= -0.25
+    assert -0.25 <= table4.loc[1, "population_minus_initial_after_high"] <= -0.2
+    assert table4.loc[2, "population_minus_winner_after"] == pytest.approx(0.1)
+    assert table4.loc[1, "population_conflicts_per_h"] == pytest.approx(4.0)
+    assert "median generations bred per learner 3, 4" in lines[1]
+    text = "\n".join(paper_tables(tmp_path))
+    assert "| 1 | 16.33 / 0.3 | 2.11 / 0.05 | -0.25 (" in text
