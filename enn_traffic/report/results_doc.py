@@ -31,6 +31,7 @@ from enn_traffic.experiments.simultaneous import (
 from enn_traffic.experiments.sumo_crowds import SITUATION_KEY as SUMO_SITUATION_KEY
 from enn_traffic.experiments.sumo_crowds import SUMO_LEARNING
 from enn_traffic.report.paper_tables import PAPER_TABLE3, PAPER_TABLE4
+from enn_traffic.roads.network import read_net
 from enn_traffic.shipped import shipped_scenario
 
 
@@ -313,6 +314,17 @@ def family_tables34(paper: Path, family: Family) -> str:
     lines += _learner_rows(learners, curve)
     during = curve["collisions_per_vehicle_s"].mean()
     winner = curve["winner_driving_on"].mean()
+    scenario = family.scenario(1)
+    lanes = [(lane.getWidth(), lane.getLength()) for edge in read_net(scenario.track.net)
+             .getEdges() if edge.getFunction() != "internal" for lane in edge.getLanes()
+             if lane.allows("passenger")]
+    width = float(np.average([w for w, _ in lanes], weights=[length for _, length in lanes]))
+    margin = (width - scenario.vehicle.width) / 2
+    lines += ["", "The initial drivers, random networks, live "
+              f"{1 / situations['initial'].mean():.2g} s on average between collisions: they "
+              "enter at spots along the lanes facing their traffic, and the lanes of "
+              f"`{scenario.name}` are {width:.2g} m wide (length-weighted mean), "
+              f"{margin:.2g} m on each side of a {scenario.vehicle.width:g} m car."]
     children = 1 - learning.elite_count / learning.population_size
     lines += ["", f"While they learn, the learners collide {during / winner:.1f} times as often "
               f"as the winner driving on over the same windows ({_g(during)} against "
