@@ -275,7 +275,7 @@ def measure(out: Path, inputs: dict[int, tuple[np.ndarray, np.ndarray]],
     write_csv(out / "table4_learners.csv", measured.learners)
     write_csv(out / "table4_learning.csv", curve)
     _draw_crowds(paths, out / "simultaneous_paths.png")
-    _draw_learning(curve, measured.situations, out / "table4_learning.png", learning.seconds)
+    draw_learning(curve, measured.situations, out / "table4_learning.png", learning.seconds)
     return measured
 
 
@@ -378,10 +378,10 @@ def _draw_crowds(paths: dict, path: Path) -> None:
     save_figure(figure, path)
 
 
-def _draw_learning(curve: pd.DataFrame, situations: pd.DataFrame, path: Path,
-                   seconds: float, title: str = "the arena's 8 vehicles, mean of the "
-                   f"situations in {SECONDS:g} s spans",
-                   unit: str = "collisions per vehicle-second") -> None:
+def draw_learning(curve: pd.DataFrame, situations: pd.DataFrame, path: Path,
+                  seconds: float, title: str = "the arena's 8 vehicles, mean of the "
+                  f"situations in {SECONDS:g} s spans",
+                  unit: str = "collisions per vehicle-second") -> None:
     """Per strategy: collisions per vehicle-second in each span while the vehicles learn,
     beside the initial drivers and the winner over the same spans, and each arm over the
     span after learning (the markers at its end: Table 4)."""

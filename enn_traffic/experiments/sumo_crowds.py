@@ -57,14 +57,15 @@ from enn_traffic.experiments.choosing import final_population, specialists
 from enn_traffic.experiments.common import save_arrays, save_controller
 from enn_traffic.experiments.protocol import SUMO, Family
 from enn_traffic.experiments.simultaneous import (
+    Measured,
     SituationResult,
-    _draw_learning,
+    draw_learning,
     learning_curve,
     table4_comparisons,
 )
 from enn_traffic.experiments.study import Study
 from enn_traffic.io import write_csv, write_text
-from enn_traffic.provenance import rules_version, source_digest
+from enn_traffic.provenance import rules_version, sources_of
 from enn_traffic.runner import ga_params
 from enn_traffic.sim.sumo_crowd import SumoCrowd
 from enn_traffic.sim.sumo_world import SumoWorld
@@ -171,11 +172,6 @@ def crowd_world(family: Family, strategy: int) -> SumoWorld:
         ga=dict(family.ga), traffic={"mode": "closed-loop"}))
 
 
-def _settings_digest() -> str:
-    """This module's source: how a kept situation was measured, beside the rules."""
-    return source_digest([Path(__file__).resolve()])
-
-
 def _kept(path: Path, settings: dict) -> dict | None:
     """What :func:`_keep` kept at ``path`` with the same ``settings``, or None."""
     if path.is_file():
@@ -228,8 +224,10 @@ def crowd_inputs(study: Study, family: Family
 
 
 def _settings(learning: SumoLearning) -> dict:
-    """What a kept situation was measured with: ``learning`` and the simulation's rules."""
-    settings = asdict(learning) | {"rules": rules_version(), "measured_by": _settings_digest()}
+    """What a kept situation was measured with: ``learning``, the simulation's rules and the
+    sources outside them that measure a situation."""
+    settings = asdict(learning) | {"rules": rules_version(),
+                                   "measured_by": sources_of(situation_result)}
     settings.pop("quick")
     return settings
 
@@ -251,7 +249,7 @@ def validation(folder: Path, inputs: dict[int, tuple[SumoWorld, np.ndarray, np.n
     return table
 
 
-def measure(study: Study, family: Family, learning: SumoLearning) -> dict[str, pd.DataFrame]:
+def measure(study: Study, family: Family, learning: SumoLearning) -> Measured:
     """Every strategy's situations, their learning windows and learners, written under the
     family's folder (the module's list)."""
     folder = study.out / family.folder
@@ -283,17 +281,16 @@ def measure(study: Study, family: Family, learning: SumoLearning) -> dict[str, p
                 windows += [label | window for window in kept["windows"]]
                 learners += [label | learner for learner in kept["learners"]]
                 bar.update(1)
-    measured = {"situations": pd.DataFrame(rows), "windows": pd.DataFrame(windows),
-                "learners": pd.DataFrame(learners)}
-    curve = learning_curve(measured["windows"])
-    write_csv(folder / "crowd_situations.csv", measured["situations"])
-    write_csv(folder / "table4_learners.csv", measured["learners"])
+    measured = Measured(pd.DataFrame(rows), pd.DataFrame(windows), pd.DataFrame(learners))
+    curve = learning_curve(measured.windows)
+    write_csv(folder / "crowd_situations.csv", measured.situations)
+    write_csv(folder / "table4_learners.csv", measured.learners)
     write_csv(folder / "table4_learning.csv", curve)
-    _draw_learning(curve, measured["situations"], folder / "table4_learning.png",
-                   learning.seconds, f"{len(inputs)} strategies of {family.folder}: "
-                   f"{world.scenario.traffic.learners} learners among SUMO traffic, mean of the "
-                   f"situations in {learning.window_seconds:g} s windows",
-                   "collisions per learner-second")
+    draw_learning(curve, measured.situations, folder / "table4_learning.png", learning.seconds,
+                  f"{len(inputs)} strategies of {family.folder}: "
+                  f"{family.scenario(family.strategies[0]).traffic.learners} learners among SUMO "
+                  f"traffic, mean of the situations in {learning.window_seconds:g} s windows",
+                  "collisions per learner-second")
     return measured
 
 
@@ -369,5 +366,4 @@ def sumo_tables(study: Study, family: Family = SUMO) -> list[str]:
     """A SUMO family's Tables 3–4 (:func:`write_tables`), measured into its folder."""
     family = study.settings(family)
     measured = measure(study, family, study.settings(SUMO_LEARNING))
-    return write_tables(study.out / family.folder, measured["situations"],
-                        measured["learners"])
+    return write_tables(study.out / family.folder, measured.situations, measured.learners)
