@@ -28,6 +28,7 @@ from enn_traffic.deploy import EVALUATION_KEY
 from enn_traffic.envs.rangefinder import RangefinderVectorEnv, rangefinder_world
 from enn_traffic.errors import InputError
 from enn_traffic.evolution import ga
+from enn_traffic.report.plots import save_figure
 from enn_traffic.runner import ga_params
 from enn_traffic.scenario import Scenario
 
@@ -195,7 +196,6 @@ def plot(table: pd.DataFrame, path: Path) -> None:
     """Test fitness against learner-steps and against wall time, a line per run."""
     import matplotlib.pyplot as plt
 
-    from enn_traffic.report.plots import save_figure
 
     figure, axes = plt.subplots(1, 2, figsize=(10, 4), sharey=True)
     colours = {"GA": "tab:blue", "PPO": "tab:orange"}

@@ -31,11 +31,14 @@ import numba
 import numpy as np
 import pandas as pd
 
+from enn_traffic.envs import env_id
 from enn_traffic.evolution import ga
-from enn_traffic.evolution.backends import Evaluator
+from enn_traffic.evolution.backends import Evaluator, LocalEvaluator, ProcessEvaluator
+from enn_traffic.roads import load_track
 from enn_traffic.runner import ga_params
 from enn_traffic.shipped import shipped_scenario
-from enn_traffic.sim.reference import reference_episode
+from enn_traffic.sim.reference import reference_episode, reference_wall_grid
+from enn_traffic.sim.sensors import WallGrid
 from enn_traffic.sim.sumo_crowd import SumoCrowd
 from enn_traffic.sim.world import World
 from enn_traffic.traffic import sumo
@@ -125,7 +128,6 @@ def env_bench(steps: int = 200, sync_seconds: float = 5.0) -> pd.DataFrame:
     worlds counts N env-steps (one vehicle each)."""
     import gymnasium as gym
 
-    from enn_traffic.envs import env_id
 
     name = env_id("navigation_narrow")
     rng = np.random.default_rng(0)
@@ -325,8 +327,6 @@ def _ga_generations(world, params, rng, population, generations: int) -> list[np
 def lane_keeping_bench(generations: int = 3) -> pd.DataFrame:
     """highway-env lane keeping: environment steps per second, in this process and over a
     process pool (one environment per worker), on the generations of a GA run."""
-    from enn_traffic.evolution.backends import LocalEvaluator, ProcessEvaluator
-
     world, params, rng, population = _workload("lane_keeping")
     populations = _ga_generations(world, params, rng, population, generations)
     rows = []
@@ -374,10 +374,6 @@ def network_bench(quick: bool = False) -> pd.DataFrame:
     """Preparing a large network: its walls and the wall grid, built the first time and
     loaded from the cache after; the grid also as it was built until issue 39 (cells ×
     walls), in the same run, on a network where that takes seconds."""
-    from enn_traffic.roads import load_track
-    from enn_traffic.sim.reference import reference_wall_grid
-    from enn_traffic.sim.sensors import WallGrid
-
     reach = 29.5  # the default sensor's: 25 m range, a 4.3 m body, 1 m spare
     rows = []
 

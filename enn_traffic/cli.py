@@ -262,10 +262,11 @@ def _cmd_render(args) -> int:
 
 def _cmd_lanes(args) -> int:
     from enn_traffic.io import write_csv
+    from enn_traffic.roads.lanes import lane_table
+    from enn_traffic.scenario import sumo_sources
     from enn_traffic.shipped import scenario_path
-    from enn_traffic.traffic.lanes import lane_table, sources
 
-    net, routes, additional = sources(scenario_path(args.source))
+    net, routes, additional = sumo_sources(scenario_path(args.source))
     table = lane_table(net, routes, additional)
     learner = table[table["learner_may_start"]]
     others = table[~table["learner_may_start"]]

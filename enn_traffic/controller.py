@@ -11,7 +11,7 @@ import numpy as np
 
 from enn_traffic.errors import InputError
 from enn_traffic.io import write_atomic
-from enn_traffic.network import NetworkSpec
+from enn_traffic.neural import NetworkSpec
 from enn_traffic.scenario import Scenario
 
 
@@ -29,6 +29,8 @@ class Controller:
     # The spin rule of its training (paper §5.3); None in files written before it was kept.
     spin_window: int | None = None
     spin_variance: float | None = None
+    # The sensor's further rings (beams, span_deg, range, centre_deg each; [sensor] rings).
+    rings: tuple[tuple[float, float, float, float], ...] = ()
 
     @classmethod
     def from_scenario(
@@ -46,6 +48,8 @@ class Controller:
             generation=int(generation),
             spin_window=scenario.episode.spin_window,
             spin_variance=scenario.episode.spin_variance,
+            rings=tuple((ring.beams, ring.span_deg, ring.range, ring.centre_deg)
+                        for ring in scenario.sensor.rings),
         )
 
     def save(self, path: str | Path) -> None:
@@ -63,6 +67,7 @@ class Controller:
             generation=self.generation,
             **({} if self.spin_window is None else
                {"spin_window": self.spin_window, "spin_variance": self.spin_variance}),
+            **({"rings": np.array(self.rings, dtype=np.float64)} if self.rings else {}),
         )
         write_atomic(path, lambda handle: handle.write(buffer.getvalue()), binary=True)
 
@@ -86,6 +91,8 @@ class Controller:
                     **({"spin_window": int(data["spin_window"]),
                         "spin_variance": float(data["spin_variance"])}
                        if "spin_window" in data.files else {}),
+                    rings=(tuple(tuple(float(x) for x in ring) for ring in data["rings"])
+                           if "rings" in data.files else ()),
                 )
         except Exception as exc:  # numpy raises many types on a damaged archive
             raise InputError(f"not a readable controller file ({type(exc).__name__}: {exc})",
@@ -114,11 +121,12 @@ class Controller:
                 raise InputError(
                     f"the controller's network takes {self.layer_sizes[0]} inputs, the "
                     f"scenario's camera gives {scenario.inputs}", path, "lane_keeping.lookahead_m")
-        elif self.layer_sizes[0] != scenario.sensor.beams:
+        elif self.layer_sizes[0] != scenario.sensor.beams + sum(r[0] for r in self.rings):
             raise InputError(
                 f"the controller's network takes {self.layer_sizes[0]} beams, the scenario's "
-                f"sensor has {scenario.sensor.beams}", path, "sensor.beams"
-            )
+                f"sensor has {scenario.sensor.beams}"
+                + (f" and its rings {sum(int(r[0]) for r in self.rings)}" if self.rings else ""),
+                path, "sensor.beams")
         spin = ({} if self.spin_window is None else
                 {"episode": {"spin_window": self.spin_window,
                              "spin_variance": self.spin_variance}})
@@ -128,6 +136,8 @@ class Controller:
                 "layout": self.layout,
                 "steering_gain_deg": self.steering_gain_deg,
             },
-            sensor={"span_deg": self.span_deg, "range": self.range},
+            sensor={"span_deg": self.span_deg, "range": self.range,
+                    "rings": [dict(zip(("beams", "span_deg", "range", "centre_deg"), ring,
+                                       strict=True)) for ring in self.rings]},
             **spin,
         )

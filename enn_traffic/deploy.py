@@ -19,7 +19,10 @@ from tqdm import tqdm
 from enn_traffic import keys
 from enn_traffic.controller import Controller
 from enn_traffic.errors import InputError
+from enn_traffic.evolution.backends import connect_ray
 from enn_traffic.io import write_csv
+from enn_traffic.report.animate import animate_run
+from enn_traffic.report.plots import heat_map, learner_among_traffic, trajectories
 from enn_traffic.scenario import Scenario
 from enn_traffic.sim.world import (
     CAPPED,
@@ -149,8 +152,6 @@ def evaluate_batch(controllers: dict[str, Controller], scenarios: Sequence[Scena
                     tables.append(future.result())
                     bar.update(1)
         elif executor == "ray":
-            from enn_traffic.evolution.backends import connect_ray
-
             ray = connect_ray(address)
             task = ray.remote(num_cpus=1)(_evaluate_pair)
             futures = [task.remote(*pair, episodes) for pair in pairs]
@@ -175,8 +176,6 @@ def fitness_matrix(table: pd.DataFrame) -> pd.DataFrame:
 
 def write_batch(table: pd.DataFrame, out: Path) -> list[Path]:
     """``out`` (the tidy table), ``<out>_matrix.csv`` and ``<out>_matrix.png`` (heat map)."""
-    from enn_traffic.report.plots import heat_map
-
     matrix = fitness_matrix(table)
     stem = out.with_name(out.stem + "_matrix")
     write_csv(out, table)
@@ -207,9 +206,6 @@ def render(
     controller: Controller, scenario: Scenario, out: str | Path, max_steps: int | None = None
 ) -> dict:
     """Draw the controller's path on the track (PNG) or animate it (GIF)."""
-    from enn_traffic.report.animate import animate_run
-    from enn_traffic.report.plots import trajectories
-
     out = Path(out)
     if scenario.traffic.is_sumo and not isinstance(scenario.track, list) \
             and out.suffix.lower() != ".gif":
@@ -233,8 +229,6 @@ def render(
 def _render_among_traffic(controller: Controller, scenario: Scenario, out: Path,
                           max_steps: int | None) -> dict:
     """A life among SUMO's traffic, cropped to the learner's path, with what it ran into."""
-    from enn_traffic.report.plots import learner_among_traffic
-
     world = make_world(evaluation_scenario(controller, scenario, 1))
     life = world.trace_life(controller.chromosome, EVALUATION_KEY, 0, max_steps)
     steps, outcome = len(life.poses) - 1, OUTCOMES[life.outcome]

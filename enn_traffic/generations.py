@@ -12,7 +12,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from enn_traffic.scenario import Scenario
-from enn_traffic.sim.sumo_world import warmups_used
+from enn_traffic.sim.sumo_situations import warmups_used
 from enn_traffic.sim.world import CAPPED, COLLIDED, LEFT_LANE, LEFT_NETWORK, SPUN, SituationResults
 
 

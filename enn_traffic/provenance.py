@@ -20,7 +20,7 @@ PACKAGE = Path(__file__).resolve().parent
 # What decides a GA run's result: the step rules and worlds, the GA and its loop, the traffic,
 # the roads' walls, lane keeping, the network, the geometry, the keys that draw traffic, and
 # the scenario schema that resolves a scenario file into settings.
-RULES = ("sim", "evolution", "traffic", "roads", "lanekeeping", "geometry.py", "network.py",
+RULES = ("sim", "evolution", "traffic", "roads", "lanekeeping", "geometry.py", "neural.py",
          "worlds.py", "keys.py", "scenario.py", "runner.py")
 
 

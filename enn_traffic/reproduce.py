@@ -15,6 +15,9 @@ from pathlib import Path
 from tqdm import tqdm
 
 from enn_traffic.errors import InputError
+from enn_traffic.experiments import EXPERIMENTS
+from enn_traffic.experiments.common import executor as runs_on
+from enn_traffic.experiments.study import Study
 from enn_traffic.io import write_text
 from enn_traffic.provenance import code_version, commit
 from enn_traffic.report.paper_tables import paper_tables
@@ -25,10 +28,6 @@ def reproduce(out: Path, quick: bool = False, only: list[str] | None = None,
               ) -> dict:
     """Run the experiments ``only`` (default: all) into ``out``; their independent runs go to
     ``executor`` (local, or ray at ``address``)."""
-    from enn_traffic.experiments import EXPERIMENTS
-    from enn_traffic.experiments.common import executor as runs_on
-    from enn_traffic.experiments.study import Study
-
     names = only or list(EXPERIMENTS)
     unknown = [n for n in names if n not in EXPERIMENTS]
     if unknown:
@@ -59,8 +58,6 @@ def reproduce(out: Path, quick: bool = False, only: list[str] | None = None,
 def write_summary(out: Path, records: dict) -> None:
     """``summary.md`` from every experiment's record (``summary.json``) and the tables in
     ``out``."""
-    from enn_traffic.experiments import EXPERIMENTS
-
     done = [n for n in EXPERIMENTS if n in records]
     summary = ["# enn-traffic: reproduction of Eraqi et al. (2016)", ""]
     summary += [f"- {line}" for n in done for line in records[n]["lines"]]

@@ -25,9 +25,10 @@ from enn_traffic.errors import InputError
 from enn_traffic.evolution import ga
 from enn_traffic.evolution.backends import Evaluator, make_evaluator
 from enn_traffic.io import write_atomic, write_csv, write_text
-from enn_traffic.network import NetworkSpec
+from enn_traffic.neural import NetworkSpec
 from enn_traffic.provenance import rules_version, sources_of
 from enn_traffic.report.plots import learning_curve
+from enn_traffic.roads.sumocfg import read_sumocfg
 from enn_traffic.scenario import Scenario
 
 CHECKPOINT = "checkpoint.npz"
@@ -101,8 +102,6 @@ def fingerprint(scenario: Scenario, others: Sequence[Scenario] = (),
 def input_files(scenario: Scenario) -> list[Path]:
     """The files a scenario reads: its tracks' networks, SUMO's route files, and a
     ``.sumocfg`` with every file it names; with several tracks, each track's own."""
-    from enn_traffic.traffic.sumocfg import read_sumocfg
-
     parts = ([scenario.on_track(i) for i in range(len(scenario.tracks))]
              if isinstance(scenario.track, list) else [scenario])
     files = []

@@ -7,6 +7,7 @@ after loading is in metres, seconds and radians. See docs/scenarios.md.
 
 from __future__ import annotations
 
+import functools
 import importlib.util
 import math
 import re
@@ -22,10 +23,15 @@ from pydantic import (
     Field,
     Tag,
     ValidationError,
+    model_serializer,
     model_validator,
 )
 
 from enn_traffic.errors import InputError
+from enn_traffic.kinds import STRATEGIES, SUMO
+from enn_traffic.roads.lanes import auto_lane
+from enn_traffic.roads.network import ANYWHERE_AHEAD_M
+from enn_traffic.roads.sumocfg import SumoConfig, read_sumocfg
 
 PositiveFloat = Annotated[float, Field(gt=0, allow_inf_nan=False)]
 
@@ -115,8 +121,21 @@ class VehicleConfig(_Section):
         0.1, description="time step (s); with the default speed one step is 1 m")
 
 
+class RingConfig(_Section):
+    """A further ring of rangefinder beams: ``beams`` equally spaced over ``span_deg`` around
+    ``centre_deg``, right to left, each ``range`` long."""
+
+    beams: int = Field(ge=1, le=361, description="beams of the ring")
+    span_deg: float = Field(gt=0, le=360, allow_inf_nan=False, description="horizontal span")
+    range: PositiveFloat = Field(description="beam length (m)")
+    centre_deg: float = Field(
+        0.0, ge=-180, le=180, allow_inf_nan=False, description="direction of the ring's middle, "
+        "relative to the heading: 0 ahead, 180 behind, positive to the left")
+
+
 class SensorConfig(_Section):
-    """Rangefinder: ``beams`` equally spaced over ``span_deg``, right to left (paper §3, §5.2)."""
+    """Rangefinder: ``beams`` equally spaced over ``span_deg``, right to left (paper §3, §5.2),
+    and any further ``rings``."""
 
     beams: int = Field(
         19, ge=1, le=361, description="rangefinder beams, equally spaced, right to left; 1 = "
@@ -125,6 +144,36 @@ class SensorConfig(_Section):
         180.0, gt=0, le=360, allow_inf_nan=False, description="horizontal span of the beams")
     range: PositiveFloat = Field(
         25.0, description="beam length (m); a beam that hits nothing reads the range")
+    rings: list[RingConfig] = Field(
+        [], max_length=8, description="further rings of beams (`[[sensor.rings]]`: `beams`, "
+        "`span_deg`, `range`, `centre_deg`), say a short fan behind; the network reads the "
+        "beams above, then each ring's, right to left")
+
+    @model_serializer(mode="wrap")
+    def _without_empty_rings(self, handler):
+        """Leave ``rings`` out when there are none: a scenario written before rings existed
+        keeps its settings' text, and with it its runs' folders (experiments/study.py)."""
+        data = handler(self)
+        if not self.rings:
+            data.pop("rings", None)
+        return data
+
+    @property
+    def beam_list(self) -> list[tuple[float, float]]:
+        """Every beam as (angle relative to the heading in radians, range in metres): the
+        first ring's, then each further ring's, right to left within a ring."""
+        rings = [(self.beams, self.span_deg, self.range, 0.0)]
+        rings += [(ring.beams, ring.span_deg, ring.range, ring.centre_deg) for ring in self.rings]
+        return [(angle, reach) for count, span, reach, centre in rings
+                for angle in fan(count, math.radians(span), math.radians(centre))]
+
+
+def fan(count: int, span: float, centre: float = 0.0) -> list[float]:
+    """``count`` beam angles (radians) equally spaced over ``span`` around ``centre``, right
+    (negative) to left; one beam points at the centre."""
+    if count == 1:
+        return [centre]
+    return [centre + (-span / 2 + span * i / (count - 1)) for i in range(count)]
 
 
 class NetworkConfig(_Section):
@@ -185,7 +234,8 @@ class EpisodeConfig(_Section):
         64.0, ge=0, allow_inf_nan=False, description="see `spin_window` (m²)")
 
 
-Strategy = Literal["random_network", "straight", "circling", "wander", "sumo"]
+# the arena's strategies (enn_traffic.kinds.STRATEGIES; "none" is no traffic, not a choice) or SUMO
+Strategy = Literal[(*(name for name in STRATEGIES if name != "none"), SUMO)]
 CarFollowing = Literal["Krauss", "KraussPS", "KraussOrig1", "IDM", "EIDM", "IDMM", "ACC", "CACC",
                        "W99", "Wiedemann", "SmartSK", "PWagner2009", "BKerner"]
 
@@ -525,12 +575,31 @@ class Scenario(_Section):
         return fringe == "exit" or (fringe is None and self.traffic.is_sumo)
 
     @property
+    def world_kind(self) -> str:
+        """The kind of world it describes (a name of :data:`enn_traffic.worlds.WORLDS`):
+        several tracks side by side, a lane-keeping road, SUMO traffic, or the arena (arena and
+        navigation tracks)."""
+        if isinstance(self.track, list):
+            return "tracks" if len(self.track) > 1 else self.on_track(0).world_kind
+        if self.lane_keeping is not None:
+            return "lane_keeping"
+        return SUMO if self.traffic.is_sumo else "arena"
+
+    @property
+    def beams(self) -> list[tuple[float, float]]:
+        """The rangefinder's beams, (angle relative to the heading in radians, range in
+        metres), in the network's input order (:attr:`SensorConfig.beam_list`)."""
+        return self.sensor.beam_list
+
+    @property
     def beam_angles(self) -> list[float]:
         """Beam directions relative to the heading, radians, right (negative) to left."""
-        n, span = self.sensor.beams, math.radians(self.sensor.span_deg)
-        if n == 1:
-            return [0.0]
-        return [-span / 2 + span * i / (n - 1) for i in range(n)]
+        return [angle for angle, _ in self.beams]
+
+    @property
+    def max_range(self) -> float:
+        """The longest beam's range (m): nothing farther is sensed."""
+        return max(reach for _, reach in self.beams)
 
     @property
     def layer_sizes(self) -> tuple[int, ...]:
@@ -546,7 +615,7 @@ class Scenario(_Section):
         """Network inputs: one per beam, or two marking offsets per look-ahead distance."""
         if self.lane_keeping is not None:
             return 2 * len(self.lane_keeping.lookahead_m)
-        return self.sensor.beams
+        return len(self.beams)
 
     def with_overrides(self, **sections: dict) -> Scenario:
         """A copy with some section fields replaced, validated again."""
@@ -732,11 +801,7 @@ AUTO = "auto"  # [track] start_lane = "auto"
 
 
 def _with_auto_lane(scenario: Scenario, path: Path) -> Scenario:
-    """``start_lane = "auto"`` made the lane it stands for (enn_traffic.traffic.lanes)."""
-    from enn_traffic.roads.network import ANYWHERE_AHEAD_M
-    from enn_traffic.traffic.lanes import auto_lane
-    from enn_traffic.traffic.sumo import route_files, sumo_config
-
+    """``start_lane = "auto"`` made the lane it stands for (enn_traffic.roads.lanes)."""
     track = scenario.track
     length = track.start_offset + ANYWHERE_AHEAD_M + scenario.vehicle.length
     config = sumo_config(scenario)
@@ -751,8 +816,6 @@ def _with_auto_lane(scenario: Scenario, path: Path) -> Scenario:
 def _with_sumocfg(scenario: Scenario, path: Path) -> Scenario:
     """Check the ``.sumocfg`` and the learner's start time against its begin and end; fill
     ``[track] net`` from it when left out."""
-    from enn_traffic.traffic.sumocfg import read_sumocfg
-
     traffic = scenario.traffic
     config = read_sumocfg(traffic.sumocfg)
     begin = traffic.begin_s if traffic.begin_s is not None else (config.begin or 0.0)
@@ -770,3 +833,65 @@ def _with_sumocfg(scenario: Scenario, path: Path) -> Scenario:
         track = scenario.track.model_copy(update={"net": config.net_file})
         scenario = scenario.model_copy(update={"track": track})
     return scenario
+
+
+@functools.lru_cache(maxsize=16)
+def _config(path: Path) -> SumoConfig:
+    return read_sumocfg(path)
+
+
+def sumo_config(scenario: Scenario) -> SumoConfig | None:
+    """The scenario's ``.sumocfg`` as read (None without one)."""
+    sumocfg = scenario.traffic.sumocfg
+    return None if sumocfg is None else _config(sumocfg)
+
+
+def begin_time(scenario: Scenario) -> float:
+    """SUMO time at which the traffic starts: ``traffic.begin_s``, else the ``.sumocfg``'s
+    begin, else 0."""
+    config = sumo_config(scenario)
+    if scenario.traffic.begin_s is not None:
+        return scenario.traffic.begin_s
+    return config.begin if config is not None and config.begin is not None else 0.0
+
+
+def learner_start_time(scenario: Scenario) -> float:
+    """SUMO time at which the learner starts: ``warmup_s`` after the begin."""
+    return begin_time(scenario) + scenario.traffic.warmup_s
+
+
+def episode_steps(scenario: Scenario) -> int:
+    """The step cap of a life among this traffic: ``episode.max_steps``, or fewer when the
+    ``.sumocfg`` ends the simulation sooner (its ``end``)."""
+    config = sumo_config(scenario)
+    limit = scenario.episode.max_steps
+    if config is not None and config.end is not None and config.end >= 0:
+        left = (config.end - learner_start_time(scenario)) / scenario.vehicle.dt
+        limit = min(limit, max(int(math.floor(left + 1e-9)), 1))
+    return limit
+
+
+def route_files(scenario: Scenario) -> list[Path]:
+    """The route files SUMO runs: the ``.sumocfg``'s, then ``traffic.routes``."""
+    config = sumo_config(scenario)
+    return [*(config.route_files if config is not None else ()), *scenario.traffic.routes]
+
+
+def sumo_sources(path: Path) -> tuple[Path, list[Path], list[Path]]:
+    """The network, route files and additional files of a ``.sumocfg``, or of a scenario of
+    one track (its SUMO traffic's; no route files without SUMO traffic)."""
+    if path.suffix == ".sumocfg":
+        if not path.is_file():
+            raise InputError("SUMO configuration not found", path)
+        config = read_sumocfg(path)
+        if config.net_file is None:
+            raise InputError("names no net-file", path, "net-file")
+        return config.net_file, list(config.route_files), list(config.additional_files)
+    scenario = load_scenario(path)
+    if isinstance(scenario.track, list):
+        raise InputError("give a scenario of one track (or its .sumocfg)", path, "track")
+    if scenario.track is None:
+        raise InputError("a lane-keeping scenario has no SUMO network", path, "lane_keeping")
+    config = sumo_config(scenario)
+    return (scenario.track.net, route_files(scenario) if scenario.traffic.is_sumo else [],
+            list(config.additional_files) if config is not None else [])

@@ -20,6 +20,7 @@ from enn_traffic.scenario import (
     GAConfig,
     LaneKeepingConfig,
     NetworkConfig,
+    RingConfig,
     RoadDraw,
     Scenario,
     SensorConfig,
@@ -30,8 +31,8 @@ from enn_traffic.scenario import (
 
 DOCUMENT = Path(__file__).resolve().parents[1] / "docs" / "scenarios.md"
 SECTIONS = {"track": TrackConfig, "vehicle": VehicleConfig, "sensor": SensorConfig,
-            "network": NetworkConfig, "ga": GAConfig, "episode": EpisodeConfig,
-            "traffic": TrafficConfig, "traffic.drivers": DriversConfig}
+            "sensor.rings": RingConfig, "network": NetworkConfig, "ga": GAConfig,
+            "episode": EpisodeConfig, "traffic": TrafficConfig, "traffic.drivers": DriversConfig}
 _MARKED = re.compile(r"(<!-- reference:(\w+) -->\n)(.*?)(<!-- /reference -->)", re.S)
 
 

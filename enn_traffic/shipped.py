@@ -21,7 +21,6 @@ def shipped_folder(name: str) -> Path:
 
 
 SCENARIOS = shipped_folder("scenarios")
-NETWORKS = shipped_folder("sumo_nets")
 
 
 def shipped_scenario(name: str) -> Scenario:

@@ -1,33 +1,34 @@
-"""The world a scenario describes (:class:`enn_traffic.sim.world.World`)."""
+"""The world a scenario describes (:class:`enn_traffic.sim.world.World`), by its kind
+(:attr:`enn_traffic.scenario.Scenario.world_kind`)."""
 
 from __future__ import annotations
 
+from enn_traffic.kinds import Registry
 from enn_traffic.roads import Track
 from enn_traffic.scenario import Scenario
 from enn_traffic.sim.world import World
+
+# Each world kind's class, imported when first made (an arena run does not load SUMO). A
+# world is made as ``World(scenario, track)``; several tracks as ``World(scenario, worlds)``.
+WORLDS = Registry("world kind", {
+    "arena": "enn_traffic.sim.arena:ArenaWorld",
+    "sumo": "enn_traffic.sim.sumo_world:SumoWorld",
+    "lane_keeping": "enn_traffic.lanekeeping.world:LaneKeepingWorld",
+    "tracks": "enn_traffic.sim.tracks:TracksWorld",
+})
 
 
 def make_world(scenario: Scenario, track: Track | None = None) -> World:
     """Arena and navigation worlds, SUMO traffic worlds, or a highway-env lane-keeping road;
     with several tracks, one of these per track side by side
-    (:class:`~enn_traffic.sim.tracks.TracksWorld`)."""
-    if isinstance(scenario.track, list):
-        if len(scenario.track) == 1:
-            return make_world(scenario.on_track(0), track)
-        from enn_traffic.sim.tracks import TracksWorld
-
+    (:class:`~enn_traffic.sim.tracks.TracksWorld`). ``track``: the road already read, for a
+    scenario of one track."""
+    if isinstance(scenario.track, list) and len(scenario.track) == 1:
+        scenario = scenario.on_track(0)
+    kind = scenario.world_kind
+    if kind == "tracks":
         if track is not None:
             raise ValueError("a track may be given only for a single-track scenario")
-        return TracksWorld(scenario, [make_world(scenario.on_track(index))
-                                      for index in range(len(scenario.track))])
-    if scenario.lane_keeping is not None:
-        from enn_traffic.lanekeeping.world import LaneKeepingWorld
-
-        return LaneKeepingWorld(scenario)
-    if scenario.traffic.is_sumo:
-        from enn_traffic.sim.sumo_world import SumoWorld
-
-        return SumoWorld(scenario, track)
-    from enn_traffic.sim.arena import ArenaWorld
-
-    return ArenaWorld(scenario, track)
+        return WORLDS[kind](scenario, [make_world(scenario.on_track(index))
+                                       for index in range(len(scenario.track))])
+    return WORLDS[kind](scenario, track)

@@ -10,7 +10,7 @@ from conftest import ROOT
 from enn_traffic.cli import main
 from enn_traffic.controller import Controller
 from enn_traffic.deploy import evaluate_batch, fitness_matrix
-from enn_traffic.network import NetworkSpec
+from enn_traffic.neural import NetworkSpec
 from enn_traffic.scenario import load_scenario
 
 

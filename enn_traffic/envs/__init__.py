@@ -25,6 +25,7 @@ from pathlib import Path
 import gymnasium as gym
 from gymnasium.envs.registration import register, registry
 
+from enn_traffic.kinds import Registry
 from enn_traffic.scenario import Scenario, load_scenario
 from enn_traffic.shipped import SCENARIOS
 
@@ -48,6 +49,30 @@ def _scenario(scenario: str | Path | Scenario, track: int | None) -> Scenario:
     return loaded.single_track(track)
 
 
+# Each world kind's environments, imported when first made (an arena environment does not
+# load SUMO); a kind missing here has none (lane keeping: highway-env's own environment).
+ENVS = Registry("world kind with a gymnasium environment", {
+    "arena": "enn_traffic.envs.rangefinder:RangefinderEnv",
+    "sumo": "enn_traffic.envs.sumo:SumoEnv",
+})
+VECTOR_ENVS = Registry("world kind with a vector environment", {
+    "arena": "enn_traffic.envs.rangefinder:RangefinderVectorEnv",
+    "sumo": "enn_traffic.envs:sumo_vector_env",
+})
+PARALLEL_ENVS = Registry("world kind with a PettingZoo environment", {
+    "arena": "enn_traffic.envs.crowd:ArenaCrowdEnv",
+    "sumo": "enn_traffic.envs.sumo:SumoCrowdEnv",
+})
+
+
+def _table_entry(table: Registry, scenario: Scenario):
+    """The class ``table`` names for the scenario's world kind (a clear error if none)."""
+    try:
+        return table[scenario.world_kind]
+    except KeyError as exc:
+        raise ValueError(f"{scenario.name}: {exc.args[0]}") from None
+
+
 def make_env(scenario: str | Path | Scenario, render_mode: str | None = None,
              track: int | None = None) -> gym.Env:
     """The environment of an arena or navigation scenario
@@ -55,13 +80,7 @@ def make_env(scenario: str | Path | Scenario, render_mode: str | None = None,
     (:class:`~enn_traffic.envs.sumo.SumoEnv`); ``track`` picks one of a scenario of several
     (``navigation_mixed``)."""
     scenario = _scenario(scenario, track)
-    if scenario.traffic.is_sumo:
-        from enn_traffic.envs.sumo import SumoEnv
-
-        return SumoEnv(scenario, render_mode=render_mode)
-    from enn_traffic.envs.rangefinder import RangefinderEnv
-
-    return RangefinderEnv(scenario, render_mode=render_mode)
+    return _table_entry(ENVS, scenario)(scenario, render_mode=render_mode)
 
 
 def make_vector_env(scenario: str | Path | Scenario, num_envs: int = 1, situations: int = 64,
@@ -72,13 +91,17 @@ def make_vector_env(scenario: str | Path | Scenario, num_envs: int = 1, situatio
     gymnasium's ``SyncVectorEnv`` of replays or ``AsyncVectorEnv`` of closed loops (libsumo
     runs one SUMO per process). ``track`` as in :func:`make_env`."""
     scenario = _scenario(scenario, track)
-    if scenario.traffic.is_sumo:
-        vector = (gym.vector.AsyncVectorEnv if scenario.traffic.mode == "closed-loop"
-                  else gym.vector.SyncVectorEnv)
-        return vector([lambda: make_env(scenario, render_mode)] * num_envs)
-    from enn_traffic.envs.rangefinder import RangefinderVectorEnv
+    return _table_entry(VECTOR_ENVS, scenario)(scenario, num_envs, situations, render_mode)
 
-    return RangefinderVectorEnv(scenario, num_envs, situations, render_mode)
+
+def sumo_vector_env(scenario: Scenario, num_envs: int, situations: int,
+                    render_mode: str | None) -> gym.vector.VectorEnv:
+    """SUMO scenarios' vector environment: gymnasium's ``SyncVectorEnv`` of replays, or
+    ``AsyncVectorEnv`` of closed loops (libsumo runs one SUMO per process); ``situations`` is
+    the arena's pool and unused here."""
+    vector = (gym.vector.AsyncVectorEnv if scenario.traffic.mode == "closed-loop"
+              else gym.vector.SyncVectorEnv)
+    return vector([lambda: make_env(scenario, render_mode)] * num_envs)
 
 
 def parallel_env(scenario: str | Path | Scenario, learners: int | None = None,
@@ -89,26 +112,18 @@ def parallel_env(scenario: str | Path | Scenario, learners: int | None = None,
     among its live traffic (:class:`~enn_traffic.envs.sumo.SumoCrowdEnv`; no rendering).
     ``track`` as in :func:`make_env`."""
     scenario = _scenario(scenario, track)
-    if scenario.traffic.is_sumo:
-        from enn_traffic.envs.sumo import SumoCrowdEnv
-
-        if render_mode is not None:
-            raise ValueError(f"{scenario.name}: the SUMO crowd does not render")
-        return SumoCrowdEnv(scenario, learners)
-    from enn_traffic.envs.crowd import ArenaCrowdEnv
-
-    return ArenaCrowdEnv(scenario, learners, render_mode)
+    return _table_entry(PARALLEL_ENVS, scenario)(scenario, learners, render_mode)
 
 
 def register_envs() -> None:
     """Register the ids (once)."""
     if f"{NAMESPACE}/Scenario-v0" in registry:
         return
-    register(f"{NAMESPACE}/Scenario-v0", entry_point=make_env,
-             vector_entry_point=make_vector_env)
+    entry_points = {"entry_point": f"{__name__}:make_env",
+                    "vector_entry_point": f"{__name__}:make_vector_env"}
+    register(f"{NAMESPACE}/Scenario-v0", **entry_points)
     for name in REGISTERED:
-        register(env_id(name), entry_point=make_env,
-                 vector_entry_point=make_vector_env,
+        register(env_id(name), **entry_points,
                  kwargs={"scenario": str(SCENARIOS / f"{name}.toml")})
 
 

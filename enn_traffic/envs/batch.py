@@ -2,7 +2,7 @@
 by an action from outside (:mod:`enn_traffic.envs.rangefinder`).
 
 A world here is the GA's world (:func:`enn_traffic.sim.arena.run_episode`) with its learner's
-steering given instead of computed: the same situations (:meth:`ArenaWorld.episodes`), the
+steering given instead of computed: the same situations (:meth:`ArenaWorld.situations`), the
 same :func:`~enn_traffic.sim.arena.start_world`, :func:`~enn_traffic.sim.arena.settle` and
 :func:`~enn_traffic.sim.rules.drive_all`, in the same order, so that a network's outputs fed
 as actions drive the GA's trajectory step for step. An action is the paper's two network
@@ -22,10 +22,10 @@ import numba
 import numpy as np
 from numba import njit, prange
 
+from enn_traffic.kinds import ACTION
 from enn_traffic.sim.arena import ArenaWorld, settle, start_world
 from enn_traffic.sim.rules import drive_all, sense
 from enn_traffic.sim.world import RUNNING, SPUN
-from enn_traffic.traffic.strategies import ACTION
 
 
 class Situations(NamedTuple):
@@ -40,7 +40,7 @@ class Situations(NamedTuple):
     @classmethod
     def of_keys(cls, world: ArenaWorld, keys) -> Situations:
         """Every situation of the traffic ``keys``, in order (each key's strategies and
-        episodes, as :meth:`ArenaWorld.episodes` gives them), the learner an ``ACTION``."""
+        episodes, as :meth:`ArenaWorld.situations` gives them), the learner an ``ACTION``."""
         episodes = [episode for key in keys for episode in world.situations(int(key))]
         kinds = np.stack([e.kinds for e in episodes]).astype(np.int64)
         kinds[:, 0] = ACTION
@@ -82,7 +82,7 @@ class Worlds(NamedTuple):
     @classmethod
     def empty(cls, count: int, world: ArenaWorld, genes: int) -> Worlds:
         """Room for ``count`` worlds of ``world`` whose drivers have ``genes`` genes."""
-        vehicles, beams = world.vehicles, len(world.geometry.beam_cos)
+        vehicles, beams = world.vehicles, len(world.geometry.beams)
         width = max(int(world.layer_sizes.max()), 2)
         shape = (count, vehicles)
         return cls(
@@ -98,86 +98,84 @@ class Worlds(NamedTuple):
 
 
 @njit(cache=True, inline="always")
-def observe(i, pose, corners, centres, physics, beam_cos, beam_sin, walls, cell_start,
+def observe(i, pose, corners, centres, physics, beams, walls, cell_start,
             cell_walls, all_walls, out):
     """The learner of world ``i`` senses walls and the other bodies into ``out``."""
-    sense(0, pose[i], physics, beam_cos, beam_sin, walls, cell_start, cell_walls, all_walls,
+    sense(0, pose[i], physics, beams, walls, cell_start, cell_walls, all_walls,
           pose.shape[1] > 1, corners[i], centres[i], 0, out)
 
 
 @njit(cache=True, inline="always")
-def begin(i, m, pool_start, pool_kinds, pool_genes, pool_seed, kinds, drivers, pose, corners,
-          centres, previous, previous_centres, fresh, memory, rng, recent, steps, tally,
-          situation, observation, physics, geometry, max_steps):
-    """World ``i`` starts situation ``m`` of the pool: step 0's rules, then the learner's
-    first observation."""
-    beam_cos, beam_sin, walls, cell_start, cell_walls, all_walls, _ = geometry
-    kinds[i] = pool_kinds[m]
-    drivers[i] = pool_genes[m]
-    situation[i] = m
-    steps[i] = 0
-    start_world(pool_start[m], kinds[i], pose[i], corners[i], centres[i], previous[i],
-                previous_centres[i], fresh[i], memory[i], rng[i], pool_seed[m], physics,
+def begin(i, m, pool, worlds, physics, geometry, max_steps):
+    """World ``i`` of ``worlds`` (:class:`Worlds`) starts situation ``m`` of ``pool``
+    (:class:`Situations`): step 0's rules, then the learner's first observation."""
+    walls, cell_start = geometry.walls, geometry.cell_start
+    cell_walls, all_walls = geometry.cell_walls, geometry.all_walls
+    kinds, pose, corners, centres = worlds.kinds, worlds.pose, worlds.corners, worlds.centres
+    previous, previous_centres = worlds.previous, worlds.previous_centres
+    fresh, memory, rng, tally = worlds.fresh, worlds.memory, worlds.rng, worlds.tally
+    kinds[i] = pool.kinds[m]
+    worlds.drivers[i] = pool.genes[m]
+    worlds.situation[i] = m
+    worlds.steps[i] = 0
+    start_world(pool.start[m], kinds[i], pose[i], corners[i], centres[i], previous[i],
+                previous_centres[i], fresh[i], memory[i], rng[i], pool.seed[m], physics,
                 tally[i])
     settle(0, kinds[i], pose[i], corners[i], centres[i], previous[i], previous_centres[i],
-           fresh[i], memory[i], rng[i], recent[i], physics, walls, cell_start, cell_walls,
-           all_walls, max_steps, tally[i])
-    observe(i, pose, corners, centres, physics, beam_cos, beam_sin, walls, cell_start,
-            cell_walls, all_walls, observation[i])
+           fresh[i], memory[i], rng[i], worlds.recent[i], physics, walls, cell_start,
+           cell_walls, all_walls, max_steps, tally[i])
+    observe(i, pose, corners, centres, physics, geometry.beams, walls, cell_start,
+            cell_walls, all_walls, worlds.observation[i])
 
 
 @njit(cache=True, parallel=True)
-def begin_worlds(first, pool_start, pool_kinds, pool_genes, pool_seed, kinds, drivers, pose,
-                 corners, centres, previous, previous_centres, fresh, memory, rng, recent, steps,
-                 tally, situation, observation, physics, geometry, max_steps):
-    """Every world ``i`` starts situation ``(first + i) % M`` of the pool."""
-    count, size = pose.shape[0], pool_seed.shape[0]
+def begin_worlds(first, pool, worlds, physics, geometry, max_steps):
+    """Every world ``i`` of ``worlds`` starts situation ``(first + i) % M`` of ``pool``."""
+    count, size = worlds.pose.shape[0], pool.seed.shape[0]
     for i in prange(count):
-        begin(i, (first + i) % size, pool_start, pool_kinds, pool_genes, pool_seed, kinds,
-              drivers, pose, corners, centres, previous, previous_centres, fresh, memory, rng,
-              recent, steps, tally, situation, observation, physics, geometry, max_steps)
+        begin(i, (first + i) % size, pool, worlds, physics, geometry, max_steps)
 
 
 @njit(cache=True, parallel=True)
-def step_worlds(actions, autoreset, pool_start, pool_kinds, pool_genes, pool_seed, kinds,
-                drivers, pose, corners, centres, previous, previous_centres, fresh, memory, rng,
-                recent, steps, tally, steering, readings, activation, scratch, situation,
-                observation, reward, outcome, life, final_observation, final_tally,
-                layer_sizes, physics, geometry, max_steps):
-    """One step of every world (N, spread over the cores): each learner steers by its action
-    (N, 2), every vehicle senses, decides and moves, then the rules of
-    :func:`~enn_traffic.sim.arena.settle`. ``reward`` is 1 per step lived, and a spin takes
-    back the life's steps, so that a life's return is the paper's fitness (§5, §5.3). A world
-    whose life ended keeps its learner's last readings in ``final_observation`` and, with
-    ``autoreset``, starts its next situation."""
-    beam_cos, beam_sin, walls, cell_start, cell_walls, all_walls, _ = geometry
-    count, size = pose.shape[0], pool_seed.shape[0]
+def step_worlds(actions, autoreset, pool, worlds, layer_sizes, physics, geometry, max_steps):
+    """One step of every world of ``worlds`` (:class:`Worlds`, N, spread over the cores): each
+    learner steers by its action (N, 2), every vehicle senses, decides and moves, then the
+    rules of :func:`~enn_traffic.sim.arena.settle`. ``reward`` is 1 per step lived, and a spin
+    takes back the life's steps, so that a life's return is the paper's fitness (§5, §5.3). A
+    world whose life ended keeps its learner's last readings in ``final_observation`` and,
+    with ``autoreset``, starts its next situation of ``pool``."""
+    beams, walls, cell_start = geometry.beams, geometry.walls, geometry.cell_start
+    cell_walls, all_walls = geometry.cell_walls, geometry.all_walls
+    kinds, pose, corners, centres = worlds.kinds, worlds.pose, worlds.corners, worlds.centres
+    previous, previous_centres = worlds.previous, worlds.previous_centres
+    fresh, memory, rng, tally = worlds.fresh, worlds.memory, worlds.rng, worlds.tally
+    steps, steering, outcome = worlds.steps, worlds.steering, worlds.outcome
+    observation, reward = worlds.observation, worlds.reward
+    count, size = pose.shape[0], pool.seed.shape[0]
     for i in prange(count):
         steering[i, 0] = physics.gain * (actions[i, 1] - actions[i, 0])
-        drive_all(kinds[i], drivers[i], layer_sizes, physics, beam_cos, beam_sin, walls,
+        drive_all(kinds[i], worlds.drivers[i], layer_sizes, physics, beams, walls,
                   cell_start, cell_walls, all_walls, pose[i], corners[i], centres[i],
-                  previous[i], previous_centres[i], fresh[i], memory[i], rng[i], readings[i],
-                  activation[i], scratch[i], steering[i])
+                  previous[i], previous_centres[i], fresh[i], memory[i], rng[i],
+                  worlds.readings[i], worlds.activation[i], worlds.scratch[i], steering[i])
         steps[i] += 1
         outcome[i] = settle(steps[i], kinds[i], pose[i], corners[i], centres[i], previous[i],
-                            previous_centres[i], fresh[i], memory[i], rng[i], recent[i],
-                            physics, walls, cell_start, cell_walls, all_walls, max_steps,
-                            tally[i])
-        observe(i, pose, corners, centres, physics, beam_cos, beam_sin, walls, cell_start,
+                            previous_centres[i], fresh[i], memory[i], rng[i],
+                            worlds.recent[i], physics, walls, cell_start, cell_walls,
+                            all_walls, max_steps, tally[i])
+        observe(i, pose, corners, centres, physics, beams, walls, cell_start,
                 cell_walls, all_walls, observation[i])
         reward[i] = 1.0
         if outcome[i] == RUNNING:
             continue
         if outcome[i] == SPUN:
             reward[i] = 1.0 - steps[i]
-        life[i] = steps[i]
-        final_observation[i] = observation[i]
-        final_tally[i] = tally[i]
+        worlds.life[i] = steps[i]
+        worlds.final_observation[i] = observation[i]
+        worlds.final_tally[i] = tally[i]
         if autoreset:
-            begin(i, (situation[i] + count) % size, pool_start, pool_kinds, pool_genes,
-                  pool_seed, kinds, drivers, pose, corners, centres, previous, previous_centres,
-                  fresh, memory, rng, recent, steps, tally, situation, observation, physics,
-                  geometry, max_steps)
+            begin(i, (worlds.situation[i] + count) % size, pool, worlds, physics, geometry,
+                  max_steps)
 
 
 # The same two kernels, run on one thread: a parallel call's start costs more than a single
@@ -212,10 +210,7 @@ class Batch:
             raise ValueError("the pool's drivers have another number of genes")
         self.pool = pool
         w = self.worlds
-        args = (first, *pool, w.kinds, w.drivers, w.pose, w.corners, w.centres, w.previous,
-                w.previous_centres, w.fresh, w.memory, w.rng, w.recent, w.steps, w.tally,
-                w.situation, w.observation, self.world.physics, self.world.geometry,
-                self.max_steps)
+        args = (first, pool, w, self.world.physics, self.world.geometry, self.max_steps)
         if self._begin is None:
             self._begin = compiled(begin_one if self.count == 1 else begin_worlds, *args)
         self._begin(*args)
@@ -224,7 +219,7 @@ class Batch:
     def step(self, actions: np.ndarray, autoreset: bool) -> None:
         """Every world steps with its learner's action (N, 2)."""
         w = self.worlds
-        args = (np.ascontiguousarray(actions, dtype=np.float64), autoreset, *self.pool, *w,
+        args = (np.ascontiguousarray(actions, dtype=np.float64), autoreset, self.pool, w,
                 self.world.layer_sizes, self.world.physics, self.world.geometry, self.max_steps)
         if self._step is None:
             self._step = compiled(step_one if self.count == 1 else step_worlds, *args)

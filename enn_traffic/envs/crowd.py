@@ -25,19 +25,20 @@ from pettingzoo import ParallelEnv
 
 from enn_traffic.envs.batch import compiled
 from enn_traffic.envs.rangefinder import TRAINING_KEYS, picture, rangefinder_world, spaces_of
+from enn_traffic.kinds import ACTION
 from enn_traffic.scenario import Scenario
 from enn_traffic.sim.crowd import ALIVE, Crowd, crowd_events, step_once
 from enn_traffic.sim.rules import sense
 from enn_traffic.sim.world import OUTCOMES, SPUN
-from enn_traffic.traffic.strategies import ACTION
 
 
 @njit(cache=True)
 def observe(learners, pose, corners, centres, physics, geometry, out) -> None:
     """The first ``learners`` vehicles sense walls and the other bodies into ``out`` (L, B)."""
-    beam_cos, beam_sin, walls, cell_start, cell_walls, all_walls, _ = geometry
+    beams, walls, cell_start = geometry.beams, geometry.walls, geometry.cell_start
+    cell_walls, all_walls = geometry.cell_walls, geometry.all_walls
     for v in range(learners):
-        sense(v, pose, physics, beam_cos, beam_sin, walls, cell_start, cell_walls, all_walls,
+        sense(v, pose, physics, beams, walls, cell_start, cell_walls, all_walls,
               pose.shape[0] > 1, corners, centres, v, out[v])
 
 
@@ -89,7 +90,8 @@ class ArenaCrowdEnv(ParallelEnv):
         self.crowd = crowd = Crowd(world, episode.start, kinds, int(episode.seed))
         self.genes = np.ascontiguousarray(episode.traffic_genes, dtype=np.float64)
         self.spin_checked = kinds == ACTION
-        _, _, walls, cell_start, cell_walls, all_walls, _ = crowd.geometry
+        walls, cell_start = crowd.geometry.walls, crowd.geometry.cell_start
+        cell_walls, all_walls = crowd.geometry.cell_walls, crowd.geometry.all_walls
         crowd_events(crowd.pose, crowd.corners, crowd.centres, crowd.previous,
                      crowd.previous_centres, crowd.fresh, self.spin_checked, crowd.life,
                      crowd.recent, crowd.physics, walls, cell_start, cell_walls, all_walls,
@@ -106,7 +108,7 @@ class ArenaCrowdEnv(ParallelEnv):
     def _observe(self) -> np.ndarray:
         """The live learners' readings (L, B): rows 0..L-1 of the crowd are the learners."""
         crowd = self.crowd
-        out = np.empty((len(self.agents), len(crowd.geometry.beam_cos)))
+        out = np.empty((len(self.agents), len(crowd.geometry.beams)))
         observe(len(self.agents), crowd.pose, crowd.corners, crowd.centres, crowd.physics,
                 crowd.geometry, out)
         return out

@@ -8,7 +8,7 @@ takes the life's steps back, so that an episode's return is the paper's fitness 
 ``steps``, its ``outcome`` (:data:`~enn_traffic.sim.world.OUTCOMES`), ``fitness``, the
 collisions it ``suffered`` and what it ``hit``.
 
-A situation is the GA's (:meth:`ArenaWorld.episodes`): ``reset(options={"key": k,
+A situation is the GA's (:meth:`ArenaWorld.situations`): ``reset(options={"key": k,
 "situation": e})`` starts situation ``e`` of traffic key ``k``; without them, a training key
 and situation are drawn from the reset's seed. :class:`RangefinderVectorEnv` steps N worlds
 in one compiled call (:mod:`enn_traffic.envs.batch`), autoresetting in the same step.
@@ -27,6 +27,7 @@ from gymnasium.vector.utils import batch_space
 from enn_traffic.envs.batch import Batch, Situations
 from enn_traffic.scenario import Scenario, load_scenario
 from enn_traffic.sim.arena import HIT, SUFFERED, ArenaWorld
+from enn_traffic.sim.sensors import COS, RANGE, SIN
 from enn_traffic.sim.world import CAPPED, OUTCOMES, RUNNING, SPUN
 
 TRAINING_KEYS = 1_000_000  # reset draws its traffic key among the first training keys
@@ -45,8 +46,8 @@ def rangefinder_world(scenario: str | Path | Scenario) -> ArenaWorld:
 
 def spaces_of(world: ArenaWorld) -> tuple[spaces.Box, spaces.Box]:
     """The observation (beam readings) and action (two outputs) spaces of a world."""
-    beams = len(world.geometry.beam_cos)
-    observation = spaces.Box(0.0, world.physics.max_range, (beams,), np.float64)
+    ranges = world.geometry.beams[:, RANGE]  # each beam reads 0 to its own range
+    observation = spaces.Box(np.zeros_like(ranges), ranges.copy(), ranges.shape, np.float64)
     return observation, spaces.Box(0.0, 1.0, (2,), np.float64)
 
 
@@ -161,7 +162,8 @@ def picture(world: ArenaWorld, corners: np.ndarray, pose: np.ndarray,
     axes = figure.add_axes((0, 0, 1, 1))
     walls = world.geometry.walls
     axes.add_collection(LineCollection(walls.reshape(-1, 2, 2), colors="black", linewidths=1))
-    beams = np.arctan2(world.geometry.beam_sin, world.geometry.beam_cos)
+    table = world.geometry.beams
+    beams = np.arctan2(table[:, SIN], table[:, COS])
     for v, reading in enumerate(readings):
         angles = pose[v, 2] + beams
         ends = pose[v, :2] + reading[:, None] * np.column_stack([np.cos(angles), np.sin(angles)])

@@ -21,10 +21,11 @@ import numpy as np
 from pettingzoo import ParallelEnv
 
 from enn_traffic.envs.batch import compiled
-from enn_traffic.envs.rangefinder import TRAINING_KEYS, spaces_of
+from enn_traffic.envs.rangefinder import TRAINING_KEYS, picture, spaces_of
 from enn_traffic.scenario import Scenario, load_scenario
 from enn_traffic.sim.crowd import ALIVE
 from enn_traffic.sim.replay import clear_start, learner_state, move_once, sense_once
+from enn_traffic.sim.sensors import RANGE
 from enn_traffic.sim.sumo_crowd import SumoCrowd, observe
 from enn_traffic.sim.sumo_crowd import move_once as move_learners
 from enn_traffic.sim.sumo_world import LiveTraffic, SumoWorld
@@ -50,7 +51,7 @@ class ReplayTraffic:
         self.ids, self.corners, self.centres = record.ids, record.corners, record.centres
         self.names, self.types = record.names, record.types
         self.physics = world._learner_physics(record.radius)
-        self.state = learner_state(start, self.physics, len(world.geometry.beam_cos),
+        self.state = learner_state(start, self.physics, len(world.geometry.beams),
                                    world.layer_sizes, self.ids.shape[1])
         clear_start(self.state.centre, self.ids[0], self.centres[0], self.state.gone,
                     self.physics.clearance)
@@ -103,7 +104,7 @@ class SumoEnv(gym.Env):
             self.traffic = ReplayTraffic(world, sumo_seed, warmup, start)
         self.outcome = self._sensed()
         if self.outcome != RUNNING:  # a life that ends where it starts sensed nothing
-            self.traffic.state.readings[:] = world.physics.max_range
+            self.traffic.state.readings[:] = world.geometry.beams[:, RANGE]
         return self.traffic.state.readings.copy(), {"key": key, "situation": situation}
 
     def _sensed(self) -> int:
@@ -140,7 +141,6 @@ class SumoEnv(gym.Env):
     def render(self):
         if self.render_mode != "rgb_array" or self.traffic is None:
             return None
-        from enn_traffic.envs.rangefinder import picture
 
         traffic, state = self.traffic, self.traffic.state
         present = traffic.ids[traffic.now] >= 0
@@ -167,8 +167,11 @@ class SumoCrowdEnv(ParallelEnv):
 
     metadata = {"name": "enn_traffic_sumo_crowd_v0", "render_modes": []}
 
-    def __init__(self, scenario: str | Path | Scenario, learners: int | None = None):
+    def __init__(self, scenario: str | Path | Scenario, learners: int | None = None,
+                 render_mode: str | None = None):
         world = sumo_world(scenario)
+        if render_mode is not None:
+            raise ValueError(f"{world.scenario.name}: the SUMO crowd does not render")
         if learners is not None:
             if int(learners) < 1:
                 raise ValueError(f"{world.scenario.name}: learners must be at least 1, "
@@ -217,7 +220,7 @@ class SumoCrowdEnv(ParallelEnv):
     def _readings(self) -> np.ndarray:
         """Every learner still on the network senses (K, B)."""
         crowd, lives = self.crowd, self.crowd.lives
-        out = np.zeros((len(self.possible_agents), len(self.world.geometry.beam_cos)))
+        out = np.zeros((len(self.possible_agents), len(self.world.geometry.beams)))
         args = (lives.active, crowd.physics, self.world.geometry, *crowd.slots, crowd.now,
                 lives.pose, lives.body, lives.centre, lives.gone, lives.visible, out)
         if self._observe is None:

@@ -1,4 +1,4 @@
-"""One module per paper experiment; each writes its tables and figures into the reproduce folder.
+"""The paper's experiments; each writes its tables and figures into the reproduce folder.
 
 ``EXPERIMENTS`` maps the names that ``enn-traffic reproduce --only`` takes to functions
 ``(study: Study) -> list[str]`` that return summary lines
@@ -8,29 +8,21 @@ dynamic-traffic experiments share their protocol (:mod:`~enn_traffic.experiments
 the statistics of choosing controllers (:mod:`~enn_traffic.experiments.choosing`).
 """
 
-from enn_traffic.experiments import (
-    fig11,
-    lanekeeping,
-    navigation,
-    regime,
-    simultaneous,
-    sumo_family,
-    table1,
-    table2,
-)
+from enn_traffic.kinds import Registry
 
-EXPERIMENTS = {
-    "fig7": navigation.fig7,
-    "fig8": navigation.fig8,
-    "fig9": navigation.fig9,
-    "generalization": navigation.generalization,
-    "fig11": fig11.fig11,
-    "table1": table1.table1,
-    "table2": table2.table2,
-    "table3": simultaneous.table3,
-    "table4": simultaneous.table4,
-    "regime": regime.regime,
-    "sumo": sumo_family.sumo,
-    "city": sumo_family.city,
-    "lane_keeping": lanekeeping.lane_keeping,
-}
+# Imported when first run: an arena experiment does not load SUMO.
+EXPERIMENTS = Registry("experiment", {
+    "fig7": "enn_traffic.experiments.navigation:fig7",
+    "fig8": "enn_traffic.experiments.navigation:fig8",
+    "fig9": "enn_traffic.experiments.navigation:fig9",
+    "generalization": "enn_traffic.experiments.navigation:generalization",
+    "fig11": "enn_traffic.experiments.fig11:fig11",
+    "table1": "enn_traffic.experiments.table1:table1",
+    "table2": "enn_traffic.experiments.table2:table2",
+    "table3": "enn_traffic.experiments.simultaneous:table3",
+    "table4": "enn_traffic.experiments.simultaneous:table4",
+    "regime": "enn_traffic.experiments.regime:regime",
+    "sumo": "enn_traffic.experiments.sumo_family:sumo",
+    "city": "enn_traffic.experiments.sumo_family:city",
+    "lane_keeping": "enn_traffic.experiments.lanekeeping:lane_keeping",
+})

@@ -6,7 +6,6 @@ from __future__ import annotations
 import tempfile
 from collections.abc import Hashable
 from pathlib import Path
-from typing import TYPE_CHECKING
 
 import numpy as np
 import pandas as pd
@@ -14,13 +13,10 @@ from tqdm import tqdm
 
 from enn_traffic.controller import Controller
 from enn_traffic.errors import InputError
+from enn_traffic.evolution.backends import connect_ray
 from enn_traffic.io import write_atomic
 from enn_traffic.runner import CHECKPOINT, evolve
 from enn_traffic.scenario import Scenario
-from enn_traffic.shipped import shipped_scenario
-
-if TYPE_CHECKING:
-    from enn_traffic.experiments.study import Runs, Study
 
 
 def save_controller(out: Path, name: str, scenario: Scenario, chromosome: np.ndarray,
@@ -94,8 +90,6 @@ class RayRuns:
     shared disk; a run's result depends on its scenario only, never on where it ran."""
 
     def __init__(self, address: str | None = None):
-        from enn_traffic.evolution.backends import connect_ray
-
         self.ray = connect_ray(address)
         self.task = self.ray.remote(num_cpus=1)(_run_in_folder_files)
 
@@ -128,17 +122,6 @@ def executor(name: str = "local", address: str | None = None) -> LocalRuns | Ray
         raise InputError(f"unknown executor {name!r} for whole runs; use local or ray",
                          key="--executor")
     return RayRuns(address) if name == "ray" else LocalRuns()
-
-
-def seed_runs(study: Study, name: str, runs: Runs) -> dict[int, pd.DataFrame]:
-    """One run of scenario ``name`` per seed of ``runs`` (as ``study`` runs them) under
-    ``runs/NAME/seedN``; experiments that share runs (Fig. 7 and Fig. 9's 19 beams) find them
-    done."""
-    runs = study.settings(runs)
-    base = shipped_scenario(name)
-    jobs = {seed: (base.with_overrides(seed=seed, ga=dict(runs.ga)),
-                   study.out / "runs" / name / f"seed{seed}") for seed in runs.seeds}
-    return study.run_all(jobs)
 
 
 def first_generation(table: pd.DataFrame, threshold: float) -> float:

@@ -14,8 +14,8 @@ from tqdm import tqdm
 
 from enn_traffic.controller import Controller
 from enn_traffic.deploy import controller_trace
-from enn_traffic.experiments.common import first_generation, save_controller, seed_runs
-from enn_traffic.experiments.study import Runs, Study
+from enn_traffic.experiments.common import first_generation, save_controller
+from enn_traffic.experiments.study import Runs, Study, seed_runs
 from enn_traffic.io import write_csv
 from enn_traffic.report.plots import draw_paths, heat_map, learning_curves, save_figure
 from enn_traffic.shipped import shipped_scenario

@@ -44,7 +44,7 @@ from enn_traffic.runner import ga_params
 from enn_traffic.shipped import shipped_scenario
 from enn_traffic.sim.arena import ArenaWorld
 from enn_traffic.sim.crowd import Crowd
-from enn_traffic.traffic.strategies import NETWORK
+from enn_traffic.sim.strategies import NETWORK
 
 AUTHORS_SPIN = {"spin_window": 49, "spin_variance": 64.0}  # reference §6.2
 PAPER_INITIAL = [initial for initial, _ in PAPER_TABLE3]  # the paper's initial rates

@@ -58,14 +58,14 @@ from enn_traffic.experiments.common import distinct, save_arrays, save_controlle
 from enn_traffic.experiments.protocol import ARENA
 from enn_traffic.experiments.study import Study
 from enn_traffic.io import write_csv
+from enn_traffic.kinds import STRATEGIES
 from enn_traffic.report.paper_tables import PAPER_TABLE3, PAPER_TABLE4
 from enn_traffic.report.plots import draw_paths, save_figure
 from enn_traffic.runner import ga_params
 from enn_traffic.shipped import shipped_scenario
 from enn_traffic.sim.arena import ArenaWorld
 from enn_traffic.sim.crowd import Crowd, CrowdRun
-from enn_traffic.traffic.strategies import DRIVER_KINDS as DRIVERS
-from enn_traffic.traffic.strategies import NETWORK
+from enn_traffic.sim.strategies import NETWORK
 
 SECONDS = 100.0  # the paper's training time; each measured span and learning-curve window
 SITUATION_KEY = keys.CROWD_TEST.start  # the situations whose rates are reported
@@ -106,7 +106,7 @@ def situation_crowd(world: ArenaWorld, situation: int, kinds=None, key: int = SI
     """The arena of one traffic situation: 8 start poses; ``kinds`` default to the strategy's
     own drivers; and the drivers' random genes (random-network strategy)."""
     episode = world.situations(key + situation)[0]
-    strategy = DRIVERS[world.scenario.traffic.strategy_list[0]]
+    strategy = STRATEGIES[world.scenario.traffic.strategy_list[0]]
     kinds = np.full(world.vehicles, strategy) if kinds is None else kinds
     return Crowd(world, episode.start, kinds, int(episode.seed)), episode.traffic_genes.copy()
 

@@ -24,6 +24,7 @@ import pandas as pd
 
 from enn_traffic.experiments.common import Jobs, LocalRuns, RayRuns, distinct
 from enn_traffic.scenario import Scenario
+from enn_traffic.shipped import shipped_scenario
 from enn_traffic.sim.world import SituationResults, World
 from enn_traffic.worlds import make_world
 
@@ -90,3 +91,14 @@ class Study:
         if key not in self._shared:
             self._shared[key] = compute()
         return self._shared[key]
+
+
+def seed_runs(study: Study, name: str, runs: Runs) -> dict[int, pd.DataFrame]:
+    """One run of scenario ``name`` per seed of ``runs`` (as ``study`` runs them) under
+    ``runs/NAME/seedN``; experiments that share runs (Fig. 7 and Fig. 9's 19 beams) find them
+    done."""
+    runs = study.settings(runs)
+    base = shipped_scenario(name)
+    jobs = {seed: (base.with_overrides(seed=seed, ga=dict(runs.ga)),
+                   study.out / "runs" / name / f"seed{seed}") for seed in runs.seeds}
+    return study.run_all(jobs)

@@ -17,8 +17,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from enn_traffic.lanekeeping.env import lane_markings, lane_offset, make_env, marking_segments
-from enn_traffic.network import NetworkSpec, network_buffers
-from enn_traffic.network import steering as network_steering
+from enn_traffic.neural import NetworkSpec, network_buffers
+from enn_traffic.neural import steering as network_steering
 from enn_traffic.scenario import LaneKeepingConfig, Scenario
 from enn_traffic.sim.world import CAPPED, LEFT_LANE, SituationResults
 
@@ -39,7 +39,9 @@ class LaneKeepingWorld:
 
     vehicles = 1
 
-    def __init__(self, scenario: Scenario):
+    def __init__(self, scenario: Scenario, track: None = None):
+        if track is not None:
+            raise ValueError("a lane-keeping world draws its own road; it takes no track")
         self.scenario = scenario
         self.config = scenario.lane_keeping
         self.spec = NetworkSpec(scenario.layer_sizes, scenario.network.layout)

@@ -2,7 +2,7 @@
 
 A world holds one learning vehicle (index 0), driven by the chromosome under evaluation, and
 ``V - 1`` uncontrolled vehicles driven by a traffic strategy
-(:mod:`enn_traffic.traffic.strategies`). Every evaluation resets the whole world to the same
+(:mod:`enn_traffic.sim.strategies`). Every evaluation resets the whole world to the same
 start (§5.3). Each step applies the rules of :mod:`enn_traffic.sim.rules`:
 
 1. blame: the learner's life ends at its first responsible collision; an uncontrolled vehicle
@@ -26,7 +26,8 @@ from numba import njit, prange
 
 from enn_traffic import keys
 from enn_traffic.errors import InputError
-from enn_traffic.network import NetworkSpec, network_buffers
+from enn_traffic.kinds import NETWORK, STRATEGIES
+from enn_traffic.neural import NetworkSpec, network_buffers
 from enn_traffic.roads import Track, load_track
 from enn_traffic.roads.network import anywhere_poses, lane_start_poses
 from enn_traffic.scenario import Scenario
@@ -42,9 +43,8 @@ from enn_traffic.sim.rules import (
     within_range,
 )
 from enn_traffic.sim.sensors import WallGrid
+from enn_traffic.sim.strategies import reset_memory, strategy_settings
 from enn_traffic.sim.world import CAPPED, COLLIDED, RUNNING, SPUN, SituationResults
-from enn_traffic.traffic import strategies
-from enn_traffic.traffic.strategies import reset_memory, strategy_settings
 
 START_STREAM = 5  # the last key of the seed that draws a situation's start from a list
 
@@ -124,8 +124,9 @@ def run_episode(genes, layer_sizes, start, kinds, traffic_genes, physics, geomet
     drivers[0] = genes
     rng = np.empty(1, dtype=np.uint64)
     tally = np.empty(4, dtype=np.int64)
-    beam_cos, beam_sin, walls, cell_start, cell_walls, all_walls, _ = geometry
-    readings = np.empty(beam_cos.shape[0])
+    beams, walls, cell_start = geometry.beams, geometry.walls, geometry.cell_start
+    cell_walls, all_walls = geometry.cell_walls, geometry.all_walls
+    readings = np.empty(beams.shape[0])
     activation, scratch = network_buffers(layer_sizes)
     recent = np.empty((physics.spin_window, 2))
     start_world(start, kinds, pose, corners, centres, previous, previous_centres, fresh, memory,
@@ -140,7 +141,7 @@ def run_episode(genes, layer_sizes, start, kinds, traffic_genes, physics, geomet
         if outcome != RUNNING:
             return steps, outcome, tally[SUFFERED], tally[NEAR_STEPS], tally[NEAR_MAX], tally[HIT]
         # 3. sense and decide, 4. move
-        drive_all(kinds, drivers, layer_sizes, physics, beam_cos, beam_sin, walls, cell_start,
+        drive_all(kinds, drivers, layer_sizes, physics, beams, walls, cell_start,
                   cell_walls, all_walls, pose, corners, centres, previous, previous_centres,
                   fresh, memory, rng, readings, activation, scratch, steering)
         steps += 1
@@ -186,22 +187,21 @@ class LearnerWorld:
                                          surface=scenario.track.surface)
         self.exits = self.track.exits if scenario.fringe_exits else np.empty((0, 4))
         self.spec = NetworkSpec(scenario.layer_sizes, scenario.network.layout)
-        vehicle, sensor, traffic = scenario.vehicle, scenario.sensor, scenario.traffic
-        reach = max(sensor.range, math.hypot(vehicle.length, vehicle.width / 2)) + 1.0
+        vehicle, traffic = scenario.vehicle, scenario.traffic
+        reach = max(scenario.max_range, math.hypot(vehicle.length, vehicle.width / 2)) + 1.0
         self.grid = WallGrid.cached(self.track.walls, reach)
         self.starts = start_poses(scenario, self.track, listed)
         self.start = self.starts[0]
         self.layer_sizes = self.spec.layer_array
         episode = scenario.episode
         self.physics, self.geometry = build_constants(
-            self.grid, self.track.bounds, scenario.beam_angles, self.exits,
+            self.grid, self.track.bounds, scenario.beams, self.exits,
             strategy_settings(traffic),
             length=vehicle.length,
             width=vehicle.width,
             wheelbase=vehicle.wheelbase,
             distance=vehicle.speed * vehicle.dt,
             radius=0.5 * math.hypot(vehicle.length, vehicle.width),
-            max_range=sensor.range,
             gain=math.radians(scenario.network.steering_gain_deg),
             spin_window=episode.spin_window,
             spin_variance=episode.spin_variance,
@@ -252,8 +252,8 @@ class ArenaWorld(LearnerWorld):
                 low, high = np.radians(traffic.start_heading_deg)
                 start = np.array([self.start_of(key, s, e)] + [
                     (x, y, rng.uniform(low, high)) for x, y in self.traffic_starts])
-                kind = strategies.DRIVER_KINDS.get(name, strategies.NONE)
-                kinds = np.array([strategies.NETWORK] + [kind] * len(self.traffic_starts))
+                kind = STRATEGIES[name]
+                kinds = np.array([NETWORK] + [kind] * len(self.traffic_starts))
                 genes = rng.uniform(-1, 1, size=(self.vehicles,
                                                  self.traffic_spec.chromosome_length))
                 result.append(Situation(start, kinds, self.spec.embed(genes, self.traffic_spec),

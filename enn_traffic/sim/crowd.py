@@ -30,11 +30,12 @@ from typing import Protocol
 import numpy as np
 from numba import njit
 
-from enn_traffic.network import network_buffers
+from enn_traffic.kinds import NETWORK
+from enn_traffic.neural import network_buffers
 from enn_traffic.sim.arena import ArenaWorld
 from enn_traffic.sim.rules import NO_HIT, drive_all, place, respawn, responsible, spun
+from enn_traffic.sim.strategies import reset_memory
 from enn_traffic.sim.world import COLLIDED, SPUN
-from enn_traffic.traffic.strategies import NETWORK, reset_memory
 
 ALIVE = -1
 
@@ -89,8 +90,9 @@ def step(kinds, genes, layer_sizes, physics, geometry, pose, corners, centres, p
          scratch, steering, events) -> bool:
     """One step of the crowd: every vehicle senses, decides (an ``ACTION`` vehicle keeps the
     ``steering[v]`` it was given) and moves, then :func:`crowd_events`. Did any life end?"""
-    beam_cos, beam_sin, walls, cell_start, cell_walls, all_walls, _ = geometry
-    drive_all(kinds, genes, layer_sizes, physics, beam_cos, beam_sin, walls, cell_start,
+    beams, walls, cell_start = geometry.beams, geometry.walls, geometry.cell_start
+    cell_walls, all_walls = geometry.cell_walls, geometry.all_walls
+    drive_all(kinds, genes, layer_sizes, physics, beams, walls, cell_start,
               cell_walls, all_walls, pose, corners, centres, previous, previous_centres, fresh,
               memory, rng, readings, activation, scratch, steering)
     life += 1
@@ -110,7 +112,8 @@ def advance(t, last, drive_first, kinds, genes, layer_sizes, physics, geometry, 
     ``t`` have been dealt with) until a life ends or step ``last`` is reached: each step,
     :func:`step` (without ``drive_first``, only :func:`crowd_events` at ``t``) and record the poses
     in ``trace``. Returns the step it stopped at."""
-    _, _, walls, cell_start, cell_walls, all_walls, _ = geometry
+    walls, cell_start, cell_walls = geometry.walls, geometry.cell_start, geometry.cell_walls
+    all_walls = geometry.all_walls
     while True:
         if drive_first:
             ended = step(kinds, genes, layer_sizes, physics, geometry, pose, corners, centres,
@@ -180,7 +183,7 @@ class Crowd:
         self.recent = np.zeros((count, p.spin_window, 2))
         self.events = np.empty(count, dtype=np.int64)
         self.geometry = world.geometry
-        self._work = (np.empty(len(self.geometry.beam_cos)), *network_buffers(world.layer_sizes),
+        self._work = (np.empty(len(self.geometry.beams)), *network_buffers(world.layer_sizes),
                       np.zeros(count))
 
     @property
@@ -198,7 +201,8 @@ class Crowd:
             self.fresh[v] = True
             reset_memory(self.kinds[v], self.physics, self.rng, self.memory[v])
             return
-        _, _, walls, cell_start, cell_walls, all_walls, _ = self.geometry
+        walls, cell_start = self.geometry.walls, self.geometry.cell_start
+        cell_walls, all_walls = self.geometry.cell_walls, self.geometry.all_walls
         respawn(v, self.kinds[v], self.physics, walls, cell_start, cell_walls, all_walls,
                 self.pose, self.corners, self.centres, self.previous, self.previous_centres,
                 self.fresh, self.memory, self.rng)

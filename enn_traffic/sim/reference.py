@@ -12,6 +12,7 @@ from itertools import pairwise
 import numpy as np
 
 from enn_traffic.sim.arena import ArenaWorld
+from enn_traffic.sim.sensors import point_segment_distance
 from enn_traffic.sim.world import CAPPED, COLLIDED, SPUN
 
 
@@ -40,20 +41,20 @@ def reference_episode(world: ArenaWorld, chromosome: np.ndarray) -> tuple[int, i
     genes = [float(g) for g in world.spec.in_source_layout(chromosome)[0]]
     sizes = list(scenario.layer_sizes)
     gain = math.radians(scenario.network.steering_gain_deg)
-    vehicle, sensor, episode = scenario.vehicle, scenario.sensor, scenario.episode
+    vehicle, episode = scenario.vehicle, scenario.episode
     distance = vehicle.speed * vehicle.dt
     walls = [tuple(map(float, w)) for w in world.track.walls]
-    angles = scenario.beam_angles
+    beams = scenario.beams
     x, y, heading = world.start
     recent = []
     steps = 0
     while True:
         readings = []
         cos_h, sin_h = math.cos(heading), math.sin(heading)
-        for angle in angles:
+        for angle, reach in beams:
             cos_b, sin_b = math.cos(angle), math.sin(angle)
             ux, uy = cos_h * cos_b - sin_h * sin_b, sin_h * cos_b + cos_h * sin_b
-            best = sensor.range
+            best = reach
             for x1, y1, x2, y2 in walls:
                 ex, ey = x2 - x1, y2 - y1
                 den = ux * ey - uy * ex
@@ -110,8 +111,6 @@ def reference_wall_grid(walls: np.ndarray, reach: float, cell_size: float = 5.0
     """The wall grid's cell lists (``cell_start``, ``cell_walls`` of
     :class:`~enn_traffic.sim.sensors.WallGrid`) the obvious way, as they were built until issue
     39: the distance from every cell's centre to every wall, cells × walls."""
-    from enn_traffic.sim.sensors import point_segment_distance
-
     low = np.minimum(walls[:, :2], walls[:, 2:]).min(axis=0) - reach
     high = np.maximum(walls[:, :2], walls[:, 2:]).max(axis=0) + reach
     nx, ny = np.ceil((high - low) / cell_size).astype(int)

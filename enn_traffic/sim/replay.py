@@ -26,8 +26,8 @@ import numpy as np
 from numba import njit, prange
 
 from enn_traffic.geometry import boxes_overlap
-from enn_traffic.network import network_buffers
-from enn_traffic.network import steering as network_steering
+from enn_traffic.neural import network_buffers
+from enn_traffic.neural import steering as network_steering
 from enn_traffic.sim.rules import (
     HIT_WALL,
     NO_HIT,
@@ -150,7 +150,8 @@ def learner_sense(t, physics, geometry, ids, corners, centres, before, now, max_
     outcome code, or ``RUNNING``."""
     (pose, body, centre, body_before, centre_before, fresh, steering, recent, suffered, met,
      readings, activation, scratch, gone, visible, absent, hit) = state
-    beam_cos, beam_sin, walls, cell_start, cell_walls, all_walls, exits = geometry
+    beams, walls, cell_start = geometry.beams, geometry.walls, geometry.cell_start
+    cell_walls, all_walls, exits = geometry.cell_walls, geometry.all_walls, geometry.exits
     ids_before, corners_before, centres_before = ids[before], corners[before], centres[before]
     ids_now, corners_now, centres_now = ids[now], corners[now], centres[now]
     # 0. the fringe: an exit reached ends the life, whatever else the body touches
@@ -176,7 +177,7 @@ def learner_sense(t, physics, geometry, ids, corners, centres, before, now, max_
     within = within_range(pose[0, 0], pose[0, 1], visible, 0, physics.max_range + physics.radius)
     met[0] += within
     met[1] = max(met[1], within)
-    sense(0, pose, physics, beam_cos, beam_sin, walls, cell_start, cell_walls, all_walls, True,
+    sense(0, pose, physics, beams, walls, cell_start, cell_walls, all_walls, True,
           corners_now, visible, -1, readings)
     return RUNNING
 
@@ -225,7 +226,7 @@ def run_replay_episode(genes, layer_sizes, physics, geometry, start, ids, corner
     ``max_steps + 1`` steps). Returns (steps moved, outcome, collisions suffered, vehicle-steps
     within sensor range, most at once, what it hit: ``NO_HIT``, ``HIT_WALL`` or the vehicle's
     id); ``trace`` (n, 3) receives the learner's poses of steps 0..n-1 when n > 0."""
-    state = learner_state(start, physics, geometry.beam_cos.shape[0], layer_sizes, ids.shape[1])
+    state = learner_state(start, physics, geometry.beams.shape[0], layer_sizes, ids.shape[1])
     pose, centre, suffered, met, gone = (state.pose, state.centre, state.suffered, state.met,
                                          state.gone)
     clear_start(centre, ids[0], centres[0], gone, physics.clearance)

@@ -34,78 +34,72 @@ from enn_traffic.geometry import (
     box_hits_walls,
     boxes_overlap,
 )
-from enn_traffic.network import steering as network_steering
+from enn_traffic.kinds import ACTION, NETWORK, NONE
+from enn_traffic.neural import steering as network_steering
 from enn_traffic.sim.bicycle import bicycle_step
 from enn_traffic.sim.sensors import (
+    COS,
+    FAN_BEAM,
+    RANGE,
+    SIN,
     WallGrid,
+    beam_table,
     beams_towards,
     nearby_walls,
     ray_segment_distance,
     sense_walls,
 )
-from enn_traffic.sim.world import HIT_WALL, NO_HIT
-from enn_traffic.traffic.strategies import (
-    ACTION,
-    NETWORK,
-    NONE,
+from enn_traffic.sim.strategies import (
+    STRATEGY_FIELDS,
     next_uniform,
     reset_memory,
     scripted_steering,
     senses_vehicles,
 )
+from enn_traffic.sim.world import HIT_WALL, NO_HIT
 
 # What the blame rule finds (:func:`responsible`), besides the index of a vehicle: HIT_WALL,
 # NO_HIT (enn_traffic.sim.world).
 
 
-class Physics(NamedTuple):
-    """Every number a step needs, in the one form the compiled rules take. Flat and numbers
-    only: a compiled parallel loop cannot take a tuple within a tuple, and a compiled function
-    that takes an array out of a tuple it was given is many times slower (the arrays travel in
-    :class:`Geometry`, unpacked whole). It also holds the wall grid's numbers
-    (:class:`~enn_traffic.sim.sensors.WallGrid`) and the scripted strategies' settings
-    (:data:`~enn_traffic.traffic.strategies.STRATEGY_FIELDS`)."""
-
-    length: float  # body, m
-    width: float
-    wheelbase: float
-    distance: float  # metres moved per step
-    radius: float  # half diagonal of the largest body: farther apart, bodies cannot touch
-    max_range: float
-    beam_first: float  # the first beam's angle and the spacing of the beams, rad (§3)
-    beam_step: float
-    gain: float  # steering angle per unit of (left − right) network output, rad
-    cell_x0: float  # the wall grid: lower-left corner, cell size, cells along x and y
-    cell_y0: float
-    cell_size: float
-    cells_x: int
-    cells_y: int
-    x_min: float  # the drivable area's bounding box, where respawns are drawn
-    y_min: float
-    x_max: float
-    y_max: float
-    spin_window: int
-    spin_variance: float
-    clearance: float  # a respawned vehicle's least distance to every other
-    turn_distance: float  # the scripted strategies' settings
-    turn_steering: float
-    turn_cone: float
-    circle_radius_min: float
-    circle_radius_max: float
-    wander_sigma: float
-    wander_decay: float
-    wander_max: float
-    turn_side: float
-    sees_vehicles: bool
+# Every number a step needs, in the one form the compiled rules take (:data:`Physics`).
+PHYSICS_FIELDS = [
+    ("length", float),  # body, m
+    ("width", float),
+    ("wheelbase", float),
+    ("distance", float),  # metres moved per step
+    ("radius", float),  # half diagonal of the largest body: farther apart, bodies cannot touch
+    ("max_range", float),  # the longest beam's range, m: farther walls and bodies are not sensed
+    ("gain", float),  # steering angle per unit of (left − right) network output, rad
+    ("cell_x0", float),  # the wall grid: lower-left corner, cell size, cells along x and y
+    ("cell_y0", float),
+    ("cell_size", float),
+    ("cells_x", int),
+    ("cells_y", int),
+    ("x_min", float),  # the drivable area's bounding box, where respawns are drawn
+    ("y_min", float),
+    ("x_max", float),
+    ("y_max", float),
+    ("spin_window", int),
+    ("spin_variance", float),
+    ("clearance", float),  # a respawned vehicle's least distance to every other
+]
+Physics = NamedTuple("Physics", PHYSICS_FIELDS + list(STRATEGY_FIELDS.items()))
+Physics.__doc__ = """Every number a step needs, in the one form the compiled rules take: the
+:data:`PHYSICS_FIELDS` and the scripted strategies' settings
+(:data:`~enn_traffic.sim.strategies.STRATEGY_FIELDS`, so that a strategy's new setting is
+written in its own module). Flat and numbers only: a compiled parallel loop cannot take a tuple
+within a tuple, and a compiled function that takes an array out of a tuple it was given is many
+times slower (the arrays travel in :class:`Geometry`). It also holds the wall grid's numbers
+(:class:`~enn_traffic.sim.sensors.WallGrid`)."""
 
 
 class Geometry(NamedTuple):
-    """The arrays a step needs: beam directions, walls, the wall grid's cells and the exits.
-    The loops unpack it once (``beam_cos, beam_sin, ... = geometry``) and hand the rules the
-    arrays themselves: a compiled call that takes a tuple of arrays is many times slower."""
+    """The arrays a step needs: the beams, walls, the wall grid's cells and the exits. The
+    loops take them out by name once (``walls = geometry.walls``) and hand the rules the arrays
+    themselves: a compiled call that takes a tuple of arrays is many times slower."""
 
-    beam_cos: np.ndarray  # cos and sin of each beam angle (right to left)
-    beam_sin: np.ndarray
+    beams: np.ndarray  # the rangefinder's beams (enn_traffic.sim.sensors.beam_table)
     walls: np.ndarray  # (S, 4)
     cell_start: np.ndarray  # the wall grid (WallGrid)
     cell_walls: np.ndarray
@@ -113,20 +107,19 @@ class Geometry(NamedTuple):
     exits: np.ndarray  # (X, 4) segments that end a life as "left network"
 
 
-def build_constants(grid: WallGrid, bounds, beam_angles, exits: np.ndarray, strategy: dict,
-                    **numbers) -> tuple[Physics, Geometry]:
+def build_constants(grid: WallGrid, bounds, beams: list[tuple[float, float]],
+                    exits: np.ndarray, strategy: dict, **numbers) -> tuple[Physics, Geometry]:
     """The :class:`Physics` and :class:`Geometry` of a world, from its wall grid, the drivable
-    area's bounds, the beam angles, the exits, the strategies' settings
-    (:func:`~enn_traffic.traffic.strategies.strategy_settings`) and the other numbers."""
+    area's bounds, the beams (angle, range) of the scenario's rings, the exits, the
+    strategies' settings (:func:`~enn_traffic.sim.strategies.strategy_settings`) and the other
+    numbers."""
     x_min, y_min, x_max, y_max = map(float, bounds)
-    angles = np.asarray(beam_angles, dtype=np.float64)
-    step = float(angles[-1] - angles[0]) / (len(angles) - 1) if len(angles) > 1 else 0.0
-    physics = Physics(beam_first=float(angles[0]), beam_step=step, cell_x0=grid.cell_x0,
+    table = beam_table(beams)
+    physics = Physics(max_range=float(table[:, RANGE].max()), cell_x0=grid.cell_x0,
                       cell_y0=grid.cell_y0, cell_size=grid.cell_size, cells_x=grid.cells_x,
                       cells_y=grid.cells_y, x_min=x_min, y_min=y_min, x_max=x_max, y_max=y_max,
                       **strategy, **numbers)
-    geometry = Geometry(np.cos(beam_angles), np.sin(beam_angles), grid.walls, grid.cell_start,
-                        grid.cell_walls, grid.all_walls,
+    geometry = Geometry(table, grid.walls, grid.cell_start, grid.cell_walls, grid.all_walls,
                         np.ascontiguousarray(exits, dtype=np.float64).reshape(-1, 4))
     return physics, geometry
 
@@ -221,7 +214,7 @@ def _variance(points, axis) -> float:
 
 
 @njit(cache=True, inline="always")
-def sense(v, pose, physics, beam_cos, beam_sin, walls, cell_start, cell_walls, all_walls, bodies,
+def sense(v, pose, physics, beams, walls, cell_start, cell_walls, all_walls, bodies,
           corners, centres, me, readings) -> None:
     """Rangefinder readings of vehicle ``v`` (paper §3): the nearest wall along each beam and,
     when ``bodies``, the nearest edge of any other body (``corners``, ``centres``; ``me``, its
@@ -229,25 +222,22 @@ def sense(v, pose, physics, beam_cos, beam_sin, walls, cell_start, cell_walls, a
     x, y, heading = pose[v, 0], pose[v, 1], pose[v, 2]
     cos_h, sin_h = math.cos(heading), math.sin(heading)
     candidates = nearby_walls(x, y, physics, cell_start, cell_walls, all_walls)
-    sense_walls(x, y, cos_h, sin_h, beam_cos, beam_sin, physics.beam_first, physics.beam_step,
-                physics.max_range, walls, candidates, readings)
+    sense_walls(x, y, cos_h, sin_h, beams, walls, candidates, readings)
     if bodies:
-        sense_bodies(me, x, y, cos_h, sin_h, beam_cos, beam_sin, physics.beam_first,
-                     physics.beam_step, corners, centres, physics.radius, readings)
+        sense_bodies(me, x, y, cos_h, sin_h, beams, corners, centres, physics.radius, readings)
 
 
 @njit(cache=True, inline="always")
-def sense_bodies(me, x, y, cos_h, sin_h, beam_cos, beam_sin, first, step, corners, centres,
-                 radius, readings):
+def sense_bodies(me, x, y, cos_h, sin_h, beams, corners, centres, radius, readings):
     """Lower ``readings`` of a vehicle at (x, y) (heading cosine ``cos_h``, sine ``sin_h``)
-    to the nearest edge of any body but ``me`` (the beams at ``first`` + b·``step`` radians
-    from the heading). A body is skipped when its bounding circle lies beyond every reading,
-    and its edges are tested only along the beams that pass through that circle: those
-    within the circle's angular half-width of its bearing
+    to the nearest edge of any body but ``me`` (``beams``: a
+    :func:`~enn_traffic.sim.sensors.beam_table`). A body is skipped when its bounding circle
+    lies beyond every reading, and its edges are tested only along the beams that pass
+    through that circle: those within the circle's angular half-width of its bearing
     (:func:`~enn_traffic.sim.sensors.beams_towards`), each checked as before. Of a body the
     vehicle is outside of, only the edges that face it are tested: a ray enters a convex body
     through one of those (:func:`facing_edges`)."""
-    beams = beam_cos.shape[0]
+    count = beams.shape[0]
     far = largest(readings) + radius + 1e-9  # readings only fall: a looser cut, same result
     for other in range(corners.shape[0]):
         if other == me:
@@ -256,16 +246,17 @@ def sense_bodies(me, x, y, cos_h, sin_h, beam_cos, beam_sin, first, step, corner
         squared = dx * dx + dy * dy
         if squared > far * far:
             continue
-        lo, hi = 0, beams - 1
-        if squared > 4.0 * radius * radius and beams > 1:
+        lo, hi = 0, count - 1
+        if squared > 4.0 * radius * radius and count > 1:
             lo, hi = beams_towards(dx * cos_h + dy * sin_h, dy * cos_h - dx * sin_h,
-                                   math.sqrt(squared), radius, first, step, beams)
+                                   math.sqrt(squared), radius, beams)
         if lo > hi:
             continue
         facing = facing_edges(corners[other], x, y)
-        for b in range(lo, hi + 1):
-            ux = cos_h * beam_cos[b] - sin_h * beam_sin[b]
-            uy = sin_h * beam_cos[b] + cos_h * beam_sin[b]
+        for rank in range(lo, hi + 1):
+            b = int(beams[rank, FAN_BEAM])
+            ux = cos_h * beams[b, COS] - sin_h * beams[b, SIN]
+            uy = sin_h * beams[b, COS] + cos_h * beams[b, SIN]
             along = dx * ux + dy * uy
             if along < -radius or along - radius > readings[b] or abs(dx * uy - dy * ux) > radius:
                 continue  # the beam passes clear of the body's bounding circle
@@ -309,7 +300,7 @@ def largest(values) -> float:
 
 
 @njit(cache=True, inline="always")
-def decide(v, kind, genes, layer_sizes, readings, physics, beam_cos, beam_sin, memory, rng,
+def decide(v, kind, genes, layer_sizes, readings, physics, beams, memory, rng,
            activation, scratch):
     """The steering angle of vehicle ``v``, driven by ``kind``: its network (``genes[v]``,
     source layout) or its scripted strategy (``memory[v]``: the strategy's state for this
@@ -319,12 +310,12 @@ def decide(v, kind, genes, layer_sizes, readings, physics, beam_cos, beam_sin, m
         return network_steering(genes[v], layer_sizes, readings, activation, scratch,
                                 physics.gain)
     if kind != NONE:
-        return scripted_steering(kind, readings, beam_cos, beam_sin, physics, memory[v], rng)
+        return scripted_steering(kind, readings, beams, physics, memory[v], rng)
     return 0.0
 
 
 @njit(cache=True, inline="always")
-def drive_all(kinds, genes, layer_sizes, physics, beam_cos, beam_sin, walls, cell_start,
+def drive_all(kinds, genes, layer_sizes, physics, beams, walls, cell_start,
               cell_walls, all_walls, pose, corners, centres, previous, previous_centres, fresh,
               memory, rng, readings, activation, scratch, steering):
     """Every vehicle senses and decides (``genes[v]`` for a network driver; an ``ACTION``
@@ -336,9 +327,9 @@ def drive_all(kinds, genes, layer_sizes, physics, beam_cos, beam_sin, walls, cel
         if kind == ACTION:
             continue
         if kind != NONE:
-            sense(v, pose, physics, beam_cos, beam_sin, walls, cell_start, cell_walls, all_walls,
+            sense(v, pose, physics, beams, walls, cell_start, cell_walls, all_walls,
                   count > 1 and senses_vehicles(kind, physics), corners, centres, v, readings)
-        steering[v] = decide(v, kind, genes, layer_sizes, readings, physics, beam_cos, beam_sin,
+        steering[v] = decide(v, kind, genes, layer_sizes, readings, physics, beams,
                              memory, rng, activation, scratch)
     move_all(steering, physics, pose, corners, centres, previous, previous_centres, fresh)
 

@@ -1,8 +1,9 @@
 """Rangefinder (paper §3, §5.2; docs/design.md, "The authors' code" 3) and the wall-culling grid.
 
-Beam i points at heading + beam_angles[i] (right to left) from the pose at the front bumper;
-its reading is the distance to the nearest wall or vehicle-body edge it crosses, or the range
-when it crosses none. Readings are raw metres, as the authors feed them to the network.
+Beam i points at heading + its angle from the pose at the front bumper (the scenario's rings
+of beams, :attr:`enn_traffic.scenario.Scenario.beams`); its reading is the distance to the
+nearest wall or vehicle-body edge it crosses, or its range when it crosses none. Readings are
+raw metres, as the authors feed them to the network.
 
 Walls are culled with a uniform grid: each cell lists the walls within reach of any point in
 the cell, so a sensing step only tests the walls that can matter (docs/design.md, "Speed").
@@ -176,30 +177,75 @@ def ray_segment_distance(x, y, ux, uy, max_range, x1, y1, x2, y2) -> float:
     return max_range
 
 
-@njit(cache=True, inline="always")
-def sense_walls(x, y, cos_h, sin_h, beam_cos, beam_sin, first, step, max_range, walls,
-                candidates, readings):
-    """Fill ``readings`` with each beam's distance to the nearest candidate wall, for a
-    vehicle at (x, y) whose heading has cosine ``cos_h`` and sine ``sin_h``.
+# The beams as the kernels take them (:func:`beam_table`): one row per beam, in the network's
+# input order, with its direction's cosine and sine relative to the heading and its range; and
+# one row per rank of angle, right to left, with that angle and the beam that has it (a
+# sensing step finds the beams that can reach a wall or a body by bisecting the angles).
+COS, SIN, RANGE, FAN_ANGLE, FAN_BEAM = range(5)
 
-    ``beam_cos``, ``beam_sin`` hold the cosine and sine of each beam angle (``first`` +
-    b·``step`` radians from the heading); a beam's direction is that rotated by the heading.
-    Each wall is tested only along the beams within its angular extent
+
+def beam_table(beams: list[tuple[float, float]]) -> np.ndarray:
+    """The (B, 5) table of ``beams``, each (angle relative to the heading in radians, range in
+    metres), in the network's input order (paper §3: the rangefinder's beams)."""
+    angles = np.array([angle for angle, _ in beams], dtype=np.float64)
+    table = np.empty((len(beams), 5))
+    table[:, COS], table[:, SIN] = np.cos(angles), np.sin(angles)
+    table[:, RANGE] = [reach for _, reach in beams]
+    # bearings are measured in [-π, π]: a beam past either end (a ring behind) is put back in
+    angles = np.where(angles > math.pi, angles - 2 * math.pi,
+                      np.where(angles < -math.pi, angles + 2 * math.pi, angles))
+    order = np.argsort(angles, kind="stable")
+    table[:, FAN_ANGLE], table[:, FAN_BEAM] = angles[order], order
+    return table
+
+
+@njit(cache=True, inline="always")
+def sense_walls(x, y, cos_h, sin_h, beams, walls, candidates, readings):
+    """Fill ``readings`` with each beam's distance to the nearest candidate wall (its range
+    when none is nearer), for a vehicle at (x, y) whose heading has cosine ``cos_h`` and sine
+    ``sin_h``; ``beams`` is a :func:`beam_table`, a beam's direction its row's rotated by the
+    heading. Each wall is tested only along the beams within its angular extent
     (:func:`beams_across`): the nearest hit along a beam is the same, found with a fraction
     of the ray tests (docs/bench.md, "Instructions").
     """
-    beams = beam_cos.shape[0]
-    for b in range(beams):
-        readings[b] = max_range
+    for b in range(beams.shape[0]):
+        readings[b] = beams[b, RANGE]
     for w in candidates:
         x1, y1, x2, y2 = walls[w, 0], walls[w, 1], walls[w, 2], walls[w, 3]
-        lo, hi = beams_across(x1 - x, y1 - y, x2 - x, y2 - y, cos_h, sin_h, first, step, beams)
-        for b in range(lo, hi + 1):
-            ux = cos_h * beam_cos[b] - sin_h * beam_sin[b]
-            uy = sin_h * beam_cos[b] + cos_h * beam_sin[b]
+        lo, hi = beams_across(x1 - x, y1 - y, x2 - x, y2 - y, cos_h, sin_h, beams)
+        for rank in range(lo, hi + 1):
+            b = int(beams[rank, FAN_BEAM])
+            ux = cos_h * beams[b, COS] - sin_h * beams[b, SIN]
+            uy = sin_h * beams[b, COS] + cos_h * beams[b, SIN]
             d = ray_segment_distance(x, y, ux, uy, readings[b], x1, y1, x2, y2)
             if d < readings[b]:
                 readings[b] = d
+
+
+@njit(cache=True, inline="always")
+def first_rank_from(beams, angle) -> int:
+    """The first rank whose beam angle is ``angle`` or more (the number of beams if none)."""
+    lo, hi = 0, beams.shape[0]
+    while lo < hi:
+        middle = (lo + hi) // 2
+        if beams[middle, FAN_ANGLE] < angle:
+            lo = middle + 1
+        else:
+            hi = middle
+    return lo
+
+
+@njit(cache=True, inline="always")
+def last_rank_to(beams, angle) -> int:
+    """The last rank whose beam angle is ``angle`` or less (-1 if none)."""
+    lo, hi = 0, beams.shape[0]
+    while lo < hi:
+        middle = (lo + hi) // 2
+        if beams[middle, FAN_ANGLE] <= angle:
+            lo = middle + 1
+        else:
+            hi = middle
+    return lo - 1
 
 
 ANGLE_MARGIN = 1e-4  # rad: windows of beams are widened by this much, 5× rough_atan2's error
@@ -226,49 +272,46 @@ def rough_atan2(y, x) -> float:
 
 
 @njit(cache=True, inline="always")
-def beams_across(ax, ay, bx, by, cos_h, sin_h, first, step, beams):
-    """The first and last beam (``first`` + b·``step`` radians from the heading ``cos_h``,
-    ``sin_h``) whose direction lies between those of the segment's ends (``ax``, ``ay``) and
-    (``bx``, ``by``), relative to the vehicle: the only beams that can cross the segment.
-    Widened by ``ANGLE_MARGIN``; the whole fan when the segment passes (nearly) through the
-    vehicle or when its extent straddles the bearing ±π and beams lie on both sides; an
-    empty range (lo > hi) when none lies between."""
-    if beams == 1:
+def beams_across(ax, ay, bx, by, cos_h, sin_h, beams):
+    """The first and last rank (``beams``: a :func:`beam_table`) of the beams, relative to the
+    heading ``cos_h``, ``sin_h``, whose direction lies between those of the segment's ends
+    (``ax``, ``ay``) and (``bx``, ``by``), relative to the vehicle: the only beams that can
+    cross the segment. Widened by ``ANGLE_MARGIN``; every rank when the segment passes
+    (nearly) through the vehicle or when its extent straddles the bearing ±π and beams lie on
+    both sides; an empty range (lo > hi) when none lies between."""
+    count = beams.shape[0]
+    if count == 1:
         return 0, 0
     alpha = rough_atan2(ay * cos_h - ax * sin_h, ax * cos_h + ay * sin_h)
     beta = rough_atan2(by * cos_h - bx * sin_h, bx * cos_h + by * sin_h)
     low, high = min(alpha, beta), max(alpha, beta)
     extent = high - low
     if abs(extent - math.pi) < 2.0 * ANGLE_MARGIN:
-        return 0, beams - 1
+        return 0, count - 1
     if extent < math.pi:
-        lo = math.ceil((low - ANGLE_MARGIN - first) / step)
-        hi = math.floor((high + ANGLE_MARGIN - first) / step)
-        return max(lo, 0), min(hi, beams - 1)
+        return (first_rank_from(beams, low - ANGLE_MARGIN),
+                last_rank_to(beams, high + ANGLE_MARGIN))
     # the extent runs from high up through ±π to low: beams at or past either end
-    above = math.ceil((high - ANGLE_MARGIN - first) / step)  # beams >= above
-    below = math.floor((low + ANGLE_MARGIN - first) / step)  # beams <= below
-    if above <= beams - 1 and below >= 0:
-        return 0, beams - 1
-    if above <= beams - 1:
-        return max(above, 0), beams - 1
-    return 0, min(below, beams - 1)
+    above = first_rank_from(beams, high - ANGLE_MARGIN)  # ranks >= above
+    below = last_rank_to(beams, low + ANGLE_MARGIN)  # ranks <= below
+    if above <= count - 1 and below >= 0:
+        return 0, count - 1
+    if above <= count - 1:
+        return above, count - 1
+    return 0, below
 
 
 @njit(cache=True, inline="always")
-def beams_towards(ahead, left, distance, radius, first, step, beams):
-    """The first and last beam (``first`` + b·``step`` radians from the heading) that may
-    pass within ``radius`` of a point ``ahead``, ``left`` of the vehicle and ``distance``
-    (more than twice ``radius``) from it: those within asin(radius / distance) of its
-    bearing. The window is taken wider, never narrower: the bearing by
-    :func:`rough_atan2` widened by ``ANGLE_MARGIN``, the half-width
-    by tan(asin z) = z / sqrt(1 − z²) ≥ asin z. An empty range (lo > hi) when no beam lies in
-    it; the whole fan when the window wraps past ±π."""
+def beams_towards(ahead, left, distance, radius, beams):
+    """The first and last rank (``beams``: a :func:`beam_table`) of the beams that may pass
+    within ``radius`` of a point ``ahead``, ``left`` of the vehicle and ``distance`` (more
+    than twice ``radius``) from it: those within asin(radius / distance) of its bearing. The
+    window is taken wider, never narrower: the bearing by :func:`rough_atan2` widened by
+    ``ANGLE_MARGIN``, the half-width by tan(asin z) = z / sqrt(1 − z²) ≥ asin z. An empty
+    range (lo > hi) when no beam lies in it; every rank when the window wraps past ±π."""
     bearing = rough_atan2(left, ahead)
     z = radius / distance
     half = z / math.sqrt(1.0 - z * z) + ANGLE_MARGIN
-    lo = math.ceil((bearing - half - first) / step)
-    hi = math.floor((bearing + half - first) / step)
     if bearing - half < -math.pi or bearing + half > math.pi:
-        return 0, beams - 1
-    return max(lo, 0), min(hi, beams - 1)
+        return 0, beams.shape[0] - 1
+    return first_rank_from(beams, bearing - half), last_rank_to(beams, bearing + half)

@@ -29,8 +29,8 @@ import numpy as np
 from numba import njit
 
 from enn_traffic.errors import InputError
-from enn_traffic.network import network_buffers
-from enn_traffic.network import steering as network_steering
+from enn_traffic.neural import network_buffers
+from enn_traffic.neural import steering as network_steering
 from enn_traffic.sim.crowd import ALIVE, CrowdRun, Learning
 from enn_traffic.sim.replay import mark_absent, struck_by_traffic, visible_centres
 from enn_traffic.sim.rules import (
@@ -45,10 +45,10 @@ from enn_traffic.sim.rules import (
     sense_bodies,
     spun,
 )
+from enn_traffic.sim.strategies import NETWORK
 from enn_traffic.sim.sumo_world import SumoWorld
 from enn_traffic.sim.world import COLLIDED, LEFT_NETWORK, SPUN
 from enn_traffic.traffic import sumo
-from enn_traffic.traffic.strategies import NETWORK
 from enn_traffic.traffic.sumo import FAR
 
 RESPAWN_TRIES = 50  # free spots drawn before a learner re-enters beside SUMO's vehicles anyway
@@ -62,7 +62,8 @@ def learner_events(t, pose, body, centre, body_before, centre_before, fresh, lif
     collision, ``LEFT_NETWORK`` at an exit, ``SPUN`` for a spin, else ``ALIVE``; count the
     collisions SUMO vehicles cause (``suffered``) and take those vehicles out of the learner's
     world (``gone[k]``). Did any life end?"""
-    _, _, walls, cell_start, cell_walls, all_walls, exits = geometry
+    walls, cell_start, cell_walls = geometry.walls, geometry.cell_start, geometry.cell_walls
+    all_walls, exits = geometry.all_walls, geometry.exits
     ids_before, corners_before, centres_before = ids[before], corners[before], centres[before]
     ids_now, corners_now, centres_now = ids[now], corners[now], centres[now]
     near = 4.0 * physics.radius * physics.radius
@@ -98,12 +99,13 @@ def sense_learner(k, physics, geometry, ids_now, corners_now, centres_now, pose,
                   gone, visible, readings) -> None:
     """Learner ``k`` senses the walls, the SUMO vehicles in its world and the other
     learners into ``readings``."""
-    beam_cos, beam_sin, walls, cell_start, cell_walls, all_walls, _ = geometry
+    beams, walls, cell_start = geometry.beams, geometry.walls, geometry.cell_start
+    cell_walls, all_walls = geometry.cell_walls, geometry.all_walls
     visible_centres(ids_now, centres_now, gone[k], visible)
-    sense(k, pose, physics, beam_cos, beam_sin, walls, cell_start, cell_walls, all_walls,
+    sense(k, pose, physics, beams, walls, cell_start, cell_walls, all_walls,
           True, corners_now, visible, -1, readings)
     sense_bodies(k, pose[k, 0], pose[k, 1], math.cos(pose[k, 2]), math.sin(pose[k, 2]),
-                 beam_cos, beam_sin, physics.beam_first, physics.beam_step, body, centre,
+                 beams, body, centre,
                  physics.radius, readings)
 
 
@@ -197,7 +199,7 @@ class SumoCrowd:
         self.physics = world._learner_physics(simulation.largest_radius())
         self.slots = sumo.slot_arrays(2, 64)
         self.before, self.now = 0, 1  # rows of the slot arrays; they swap every step
-        self.lives = lives = _Lives(self.count, self.physics, len(world.geometry.beam_cos),
+        self.lives = lives = _Lives(self.count, self.physics, len(world.geometry.beams),
                                     world.layer_sizes, self.slots[0].shape[1], self.seed)
         self._read()
         for k in range(self.count):
@@ -375,7 +377,8 @@ class _Lives:
         """Learner ``k`` starts a life at a free spot: one of ``spots`` along the lanes
         (facing their traffic), touching no wall, ``respawn_clearance`` from every learner
         and, if one is found within :data:`RESPAWN_TRIES` draws, from every SUMO vehicle."""
-        _, _, walls, cell_start, cell_walls, all_walls, _ = geometry
+        walls, cell_start, cell_walls = geometry.walls, geometry.cell_start, geometry.cell_walls
+        all_walls = geometry.all_walls
         ids, _, centres = slots
         present = ids[row] >= 0
         for _ in range(RESPAWN_TRIES):

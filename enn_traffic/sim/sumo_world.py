@@ -24,11 +24,10 @@ from typing import NamedTuple
 import numba
 import numpy as np
 
-from enn_traffic import keys
 from enn_traffic.progress import slow_step
 from enn_traffic.roads import Track
 from enn_traffic.roads.network import lane_spots
-from enn_traffic.scenario import Scenario
+from enn_traffic.scenario import Scenario, episode_steps
 from enn_traffic.sim.arena import LearnerWorld
 from enn_traffic.sim.replay import (
     RUNNING,
@@ -40,6 +39,7 @@ from enn_traffic.sim.replay import (
     with_slots,
 )
 from enn_traffic.sim.rules import Physics
+from enn_traffic.sim.sumo_situations import WARMUP_STREAM, shared_warmup, situation_seed
 from enn_traffic.sim.world import SituationResults
 from enn_traffic.traffic import sumo
 
@@ -87,41 +87,8 @@ def named(hit: np.ndarray, names: tuple[str, ...], types: tuple[str, ...]) -> np
 
 
 RECORDINGS_KEPT = 24  # a test world holds 10 test and 10 validation situations
-WARMUP_STREAM = 7  # the key of the shared warm-ups' seeds (traffic.warmup_states)
 
 
-def situation_seed(scenario: Scenario, key: int, episode: int) -> int:
-    """The SUMO seed of situation ``episode`` of traffic key ``key`` (as the world draws it:
-    after ``traffic.vary``)."""
-    sequence = np.random.SeedSequence([scenario.traffic.seed, key, 0, episode])
-    return int(sequence.generate_state(1)[0] % 2**31)
-
-
-def shared_warmup(scenario: Scenario, key: int, episode: int) -> int | None:
-    """Which of the ``traffic.warmup_states`` shared warm-ups situation ``episode`` of traffic
-    key ``key`` loads (None: none are shared). A training generation's situations take them in
-    turn, (generation × episodes + episode) mod N, so that consecutive generations meet every
-    warm-up equally often; a held-out situation, one of a sample, draws one by its seed."""
-    shared = scenario.traffic.warmup_states
-    if not shared:
-        return None
-    if keys.is_training(key):
-        return (key * scenario.traffic.episodes + episode) % shared
-    return situation_seed(scenario, key, episode) % shared
-
-
-def warmups_used(scenario: Scenario, key: int) -> str:
-    """The shared warm-ups the situations of a training ``key`` load, in order (``"0 1"``), a
-    track's after another's (``"0 1; 2 3"``); empty without shared warm-ups."""
-    parts = ([scenario.on_track(i) for i in range(len(scenario.tracks))]
-             if isinstance(scenario.track, list) else [scenario])
-    used = []
-    for part in parts:
-        traffic_key = 0 if part.traffic.vary == "fixed" and keys.is_training(key) else key
-        indices = [shared_warmup(part, traffic_key, e) for e in range(part.traffic.episodes)]
-        if part.traffic.is_sumo and part.traffic.warmup_states:
-            used.append(" ".join(str(i) for i in indices))
-    return "; ".join(used)
 
 
 class SumoWorld(LearnerWorld):
@@ -131,7 +98,7 @@ class SumoWorld(LearnerWorld):
         super().__init__(scenario, track)
         self._recordings: OrderedDict[tuple, sumo.Recording] = OrderedDict()
         self._traffic_seen: list[float] = []  # the last replay's mean SUMO vehicles
-        self.max_steps = sumo.episode_steps(scenario)  # or where the .sumocfg ends
+        self.max_steps = episode_steps(scenario)  # or where the .sumocfg ends
         self._checked = False  # closed loop: has some traffic been seen on the network?
         self._states: dict[tuple, Path] = {}  # closed loop: each situation's saved warm-up
         self._steps: dict = {}  # closed loop: the compiled step, by the genes' numba type
@@ -350,7 +317,7 @@ class LiveTraffic:
             self.physics = world._learner_physics(simulation.largest_radius())
             self.ids, self.corners, self.centres = sumo.slot_arrays(2, 64)
             self.before, self.now = 0, 1
-            self.state = learner_state(start, self.physics, len(world.geometry.beam_cos),
+            self.state = learner_state(start, self.physics, len(world.geometry.beams),
                                        world.layer_sizes, self.ids.shape[1])
             self._read()
             self.at_start = int((self.ids[self.now] >= 0).sum())
@@ -361,7 +328,7 @@ class LiveTraffic:
             # nor be hit within a step: the sensor's range, two bodies and two steps of both
             # vehicles' travel.
             travel = (simulation.largest_speed() + vehicle.speed) * vehicle.dt
-            self.reach = world.scenario.sensor.range + 2.0 * travel
+            self.reach = world.scenario.max_range + 2.0 * travel
             simulation.follow_learner(self.reach + 4.0 * self.physics.radius)
         except BaseException:
             simulation.close()

@@ -14,7 +14,7 @@ from typing import Protocol, runtime_checkable
 
 import numpy as np
 
-from enn_traffic.network import NetworkSpec
+from enn_traffic.neural import NetworkSpec
 from enn_traffic.scenario import Scenario
 
 # How a life ended. LEFT_NETWORK: the learner reached the network's fringe (SUMO traffic,
@@ -30,9 +30,6 @@ OUTCOMES = {CAPPED: "capped", COLLIDED: "collision", SPUN: "spin", LEFT_NETWORK:
 # Columns of :attr:`SituationResults.traffic`: vehicles in the world when the learner starts,
 # vehicle-steps within the learner's sensor range, most vehicles within range at once.
 MET_START, MET_NEAR_STEPS, MET_NEAR_MAX = range(3)
-# Columns of :attr:`SituationResults.safety` (closed loop with SUMO only): the lowest
-# time-to-collision its SSM device saw (s; inf: none), conflicts by TTC, DRAC and PET.
-SAFETY_MIN_TTC, SAFETY_TTC, SAFETY_DRAC, SAFETY_PET = range(4)
 
 
 class Drawn(Protocol):
@@ -83,7 +80,9 @@ class SituationResults:
     suffered: np.ndarray
     vehicles: int = 1
     traffic: np.ndarray | None = None
-    safety: np.ndarray | None = None  # (P, E, 4), ``SAFETY_*``: measured in closed loop only
+    # (P, E, 4), closed loop with SUMO only: the lowest time-to-collision its SSM device saw
+    # (s; inf: none), then conflicts by TTC, DRAC and PET
+    safety: np.ndarray | None = None
     hit: np.ndarray | None = None
     hit_vehicle: np.ndarray | None = None  # (P, E) objects: (id, type), or None
 

@@ -29,7 +29,6 @@ from __future__ import annotations
 
 import contextlib
 import ctypes
-import functools
 import gzip
 import hashlib
 import math
@@ -49,8 +48,14 @@ from numba import njit
 from enn_traffic.errors import InputError
 from enn_traffic.geometry import body_corners
 from enn_traffic.progress import slow_step
-from enn_traffic.scenario import Scenario
-from enn_traffic.traffic.sumocfg import SumoConfig, departure_span, read_sumocfg
+from enn_traffic.roads.sumocfg import departure_span
+from enn_traffic.scenario import (
+    Scenario,
+    begin_time,
+    learner_start_time,
+    route_files,
+    sumo_config,
+)
 
 LEARNER = "enn_learner"
 LEARNER_TYPE = LEARNER + "_type"  # the learners' vehicle type (:func:`add_learner`)
@@ -103,48 +108,6 @@ def fill_frame(rows, ids, corners, centres) -> float:
         centres[slot, 1] = 0.5 * (corners[slot, 0, 1] + corners[slot, 2, 1])
         radius = max(radius, 0.5 * math.hypot(length, width))
     return radius
-
-
-@functools.lru_cache(maxsize=16)
-def _config(path: Path) -> SumoConfig:
-    return read_sumocfg(path)
-
-
-def sumo_config(scenario: Scenario) -> SumoConfig | None:
-    """The scenario's ``.sumocfg`` as read (None without one)."""
-    sumocfg = scenario.traffic.sumocfg
-    return None if sumocfg is None else _config(sumocfg)
-
-
-def begin_time(scenario: Scenario) -> float:
-    """SUMO time at which the traffic starts: ``traffic.begin_s``, else the ``.sumocfg``'s
-    begin, else 0."""
-    config = sumo_config(scenario)
-    if scenario.traffic.begin_s is not None:
-        return scenario.traffic.begin_s
-    return config.begin if config is not None and config.begin is not None else 0.0
-
-
-def learner_start_time(scenario: Scenario) -> float:
-    """SUMO time at which the learner starts: ``warmup_s`` after the begin."""
-    return begin_time(scenario) + scenario.traffic.warmup_s
-
-
-def episode_steps(scenario: Scenario) -> int:
-    """The step cap of a life among this traffic: ``episode.max_steps``, or fewer when the
-    ``.sumocfg`` ends the simulation sooner (its ``end``)."""
-    config = sumo_config(scenario)
-    limit = scenario.episode.max_steps
-    if config is not None and config.end is not None and config.end >= 0:
-        left = (config.end - learner_start_time(scenario)) / scenario.vehicle.dt
-        limit = min(limit, max(int(math.floor(left + 1e-9)), 1))
-    return limit
-
-
-def route_files(scenario: Scenario) -> list[Path]:
-    """The route files SUMO runs: the ``.sumocfg``'s, then ``traffic.routes``."""
-    config = sumo_config(scenario)
-    return [*(config.route_files if config is not None else ()), *scenario.traffic.routes]
 
 
 def sumo_command(scenario: Scenario, seed: int, folder: Path, state: Path | None = None,

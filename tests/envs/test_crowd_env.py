@@ -10,7 +10,7 @@ from enn_traffic import keys
 from enn_traffic.envs.crowd import ArenaCrowdEnv
 from enn_traffic.shipped import shipped_scenario
 from enn_traffic.sim.crowd import Crowd
-from enn_traffic.traffic.strategies import NETWORK
+from enn_traffic.sim.strategies import NETWORK
 
 
 def test_the_arena_crowd_passes_pettingzoos_parallel_api_test():

@@ -12,7 +12,7 @@ from enn_traffic.experiments.navigation import (
     VALIDATION_TRACKS,
     unseen_matrix,
 )
-from enn_traffic.network import NetworkSpec
+from enn_traffic.neural import NetworkSpec
 from enn_traffic.shipped import shipped_scenario
 
 

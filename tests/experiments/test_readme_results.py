@@ -5,7 +5,7 @@ import shutil
 
 import pandas as pd
 
-from enn_traffic.report.readme_results import results_table, rewrite
+from enn_traffic.experiments.readme_results import results_table, rewrite
 
 
 def test_the_readme_results_table_is_the_committed_tables(root):
@@ -34,7 +34,7 @@ def test_a_changed_table_changes_the_readme_row(root, tmp_path):
 
 
 def test_the_generated_sections_of_results_md_are_the_committed_tables(root):
-    from enn_traffic.report.results_doc import SECTIONS, section
+    from enn_traffic.experiments.results_doc import SECTIONS, section
 
     doc = (root / "docs" / "results.md").read_text()
     for name in SECTIONS:
@@ -44,7 +44,7 @@ def test_the_generated_sections_of_results_md_are_the_committed_tables(root):
 def test_a_changed_crowd_table_changes_the_results_md_text(root, tmp_path):
     """One learner of strategy 1 breeding 9 generations: the generated section's range for
     strategy 1 reads 4–9, and nothing else of it changes."""
-    from enn_traffic.report.results_doc import rewrite
+    from enn_traffic.experiments.results_doc import rewrite
 
     paper = tmp_path / "paper"
     shutil.copytree(root / "results" / "paper", paper,

@@ -3,7 +3,7 @@ import pytest
 from conftest import local_and_spread
 
 from enn_traffic.errors import InputError
-from enn_traffic.network import NetworkSpec
+from enn_traffic.neural import NetworkSpec
 from enn_traffic.scenario import load_scenario
 from enn_traffic.sim.arena import ArenaWorld
 from enn_traffic.sim.reference import reference_episode
@@ -72,9 +72,19 @@ def test_the_arena_scenarios_spin_rule_ends_the_wide_circle(tmp_path, root):
     assert results.steps[0, 0] == episode.spin_window - 1 < 500
 
 
-def test_compiled_episodes_equal_the_plain_reference_loop(root):
-    scenario = load_scenario(root / "scenarios" / "navigation_narrow.toml")
+# A second ring behind, shorter (a scenario edit: [[sensor.rings]]), and an uneven front: the
+# rangefinder is data, the rules read whatever beams the scenario lists.
+REAR_RING = {"rings": [{"beams": 5, "span_deg": 90.0, "range": 8.0, "centre_deg": 180.0},
+                       {"beams": 3, "span_deg": 20.0, "range": 40.0}]}
+
+
+@pytest.mark.parametrize("sensor", [{}, REAR_RING], ids=["paper", "two more rings"])
+def test_compiled_episodes_equal_the_plain_reference_loop(sensor, root):
+    scenario = load_scenario(root / "scenarios" / "navigation_narrow.toml").with_overrides(
+        sensor=sensor)
     world = ArenaWorld(scenario)
+    assert world.spec.layer_sizes[0] == 19 + sum(ring["beams"] for ring in
+                                                 sensor.get("rings", []))
     rng = np.random.default_rng(11)
     population = rng.uniform(-1, 1, (40, world.spec.chromosome_length))
     results = world.evaluate(population)
@@ -214,3 +224,20 @@ def test_traffic_networks_larger_than_the_learners_are_refused(root):
         load_scenario(root / "scenarios" / "arena_strategy1.toml").with_overrides(
             network={"hidden": [2]})
     assert info.value.key == "traffic.network_hidden"
+
+
+def test_a_controller_keeps_its_rings(root, tmp_path):
+    """A controller evolved with further rings carries them: fitted to the plain scenario it
+    drives with its own 27 beams, as it did in its world."""
+    from enn_traffic.controller import Controller
+
+    ringed = load_scenario(root / "scenarios" / "navigation_narrow.toml").with_overrides(
+        sensor=REAR_RING)
+    world = ArenaWorld(ringed)
+    chromosome = np.random.default_rng(5).uniform(-1, 1, world.spec.chromosome_length)
+    Controller.from_scenario(ringed, chromosome, 0.0, 0).save(tmp_path / "ringed.npz")
+    controller = Controller.load(tmp_path / "ringed.npz")
+    fitted = controller.fit(load_scenario(root / "scenarios" / "navigation_narrow.toml"))
+    assert fitted.beams == ringed.beams and len(fitted.beams) == 27
+    assert ArenaWorld(fitted).evaluate(chromosome[None]).steps[0, 0] == world.evaluate(
+        chromosome[None]).steps[0, 0]

@@ -9,6 +9,7 @@ from enn_traffic.sim.rules import sense_bodies
 from enn_traffic.sim.sensors import (
     ANGLE_MARGIN,
     WallGrid,
+    beam_table,
     nearby_walls,
     ray_segment_distance,
     rough_atan2,
@@ -62,13 +63,13 @@ SQUARE = np.array([[0, 0, 100, 0], [100, 0, 100, 100], [100, 100, 0, 100], [0, 1
 
 
 def _readings(x, y, heading, angles, max_range=25.0, walls=SQUARE, candidates=None):
-    """Readings of equally spaced beams at ``angles`` against ``candidates`` (every wall)."""
+    """Readings of beams at ``angles`` (all ``max_range`` long, or each its own) against
+    ``candidates`` (every wall)."""
     out = np.empty(len(angles))
-    angles = np.asarray(angles, dtype=float)
-    step = (angles[-1] - angles[0]) / (len(angles) - 1) if len(angles) > 1 else 0.0
+    ranges = np.broadcast_to(max_range, (len(angles),))
     candidates = np.arange(len(walls)) if candidates is None else candidates
-    sense_walls(x, y, math.cos(heading), math.sin(heading), np.cos(angles), np.sin(angles),
-                angles[0], step, max_range, walls, candidates, out)
+    sense_walls(x, y, math.cos(heading), math.sin(heading),
+                beam_table(list(zip(angles, ranges, strict=True))), walls, candidates, out)
     return out
 
 
@@ -111,8 +112,9 @@ def test_rough_bearing_stays_well_inside_the_beam_windows_margin():
 
 
 def _every_beam_every_segment(x, y, heading, angles, max_range, segments):
-    """The rangefinder's rule without any culling: every beam against every segment."""
-    readings = np.full(len(angles), max_range)
+    """The rangefinder's rule without any culling: every beam against every segment
+    (``max_range``: every beam's, or each its own)."""
+    readings = np.array(np.broadcast_to(max_range, (len(angles),)), dtype=float)
     for b, angle in enumerate(angles):
         ux, uy = math.cos(heading) * math.cos(angle) - math.sin(heading) * math.sin(angle), \
             math.sin(heading) * math.cos(angle) + math.cos(heading) * math.sin(angle)
@@ -140,6 +142,38 @@ def test_beam_windows_find_what_every_beam_against_every_wall_finds(beams, span_
             _every_beam_every_segment(x, y, heading, angles, 25.0, walls))
 
 
+def test_a_second_ring_behind_reads_what_every_beam_against_every_wall_reads():
+    """Two rings (``[[sensor.rings]]``): the paper's 19 beams over 180° ahead, 25 m, and 5
+    beams over 90° behind, 8 m (angles past ±π). Walls and bodies all around give bit for bit
+    what each beam, with its own range, reads against every edge."""
+    from enn_traffic.scenario import fan
+
+    angles = np.array(fan(19, math.pi) + fan(5, math.pi / 2, math.pi))
+    ranges = np.array([25.0] * 19 + [8.0] * 5)
+    table = beam_table(list(zip(angles, ranges, strict=True)))
+    rng = np.random.default_rng(7)
+    radius = 0.5 * math.hypot(4.3, 1.8)
+    behind = 0
+    for _ in range(300):
+        heading = rng.uniform(-math.pi, math.pi)
+        middle = rng.uniform(-20, 20, (6, 2))
+        half = rng.uniform(-10, 10, (6, 2)) * rng.choice([0.05, 1.0], (6, 1))
+        walls = np.hstack([middle - half, middle + half])
+        poses = np.column_stack([rng.uniform(-12, 12, (4, 2)), rng.uniform(-math.pi, math.pi, 4)])
+        corners = np.stack([body_polygon(*pose, 4.3, 1.8) for pose in poses])
+        readings = np.empty(24)
+        sense_walls(0.0, 0.0, math.cos(heading), math.sin(heading), table, walls,
+                    np.arange(len(walls)), readings)
+        sense_bodies(-1, 0.0, 0.0, math.cos(heading), math.sin(heading), table, corners,
+                     corners.mean(axis=1), radius, readings)
+        edges = np.concatenate([walls] + [np.hstack([body, np.roll(body, -1, axis=0)])
+                                          for body in corners])
+        np.testing.assert_array_equal(
+            readings, _every_beam_every_segment(0.0, 0.0, heading, angles, ranges, edges))
+        behind += int((readings[19:] < 8.0).sum())
+    assert behind > 100  # the rear ring saw things, within its own 8 m
+
+
 def test_bodies_seen_through_facing_edges_as_through_all_four():
     """Another body is tested only along the edges that face the sensing vehicle, and along
     the beams near its bearing: bodies all around, touching and overlapping the vehicle's
@@ -154,9 +188,8 @@ def test_bodies_seen_through_facing_edges_as_through_all_four():
         corners = np.stack([body_polygon(*pose, 4.3, 1.8) for pose in poses])
         centres = corners.mean(axis=1)
         readings = np.full(19, 25.0)
-        sense_bodies(-1, 0.0, 0.0, math.cos(heading), math.sin(heading), np.cos(angles),
-                     np.sin(angles), angles[0], angles[1] - angles[0], corners, centres, radius,
-                     readings)
+        sense_bodies(-1, 0.0, 0.0, math.cos(heading), math.sin(heading),
+                     beam_table([(a, 25.0) for a in angles]), corners, centres, radius, readings)
         edges = np.concatenate([np.hstack([body, np.roll(body, -1, axis=0)]) for body in corners])
         np.testing.assert_array_equal(
             readings, _every_beam_every_segment(0.0, 0.0, heading, angles, 25.0, edges))

@@ -7,7 +7,7 @@ from conftest import two_cars
 from enn_traffic.evolution import ga
 from enn_traffic.evolution.online import Evidence, OnlineLearning, VehicleGA
 from enn_traffic.sim.crowd import Crowd
-from enn_traffic.traffic.strategies import NETWORK, STRAIGHT
+from enn_traffic.sim.strategies import NETWORK, STRAIGHT
 
 
 @pytest.fixture

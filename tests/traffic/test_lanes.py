@@ -8,8 +8,8 @@ from sumo_road import road_scenario
 
 from enn_traffic.cli import main
 from enn_traffic.errors import InputError
+from enn_traffic.roads.lanes import demand_per_edge, lane_table
 from enn_traffic.scenario import load_scenario
-from enn_traffic.traffic.lanes import demand_per_edge, lane_table
 
 # Every way a route file sends vehicles, with the vehicles each edge gets, by hand:
 #   route r1 (a b) twice by vehicles: a 2, b 2

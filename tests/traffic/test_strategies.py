@@ -11,6 +11,7 @@ from enn_traffic.geometry import body_polygon
 from enn_traffic.scenario import load_scenario
 from enn_traffic.sim.arena import ArenaWorld
 from enn_traffic.sim.rules import sense_bodies
+from enn_traffic.sim.sensors import beam_table
 from enn_traffic.sim.world import COLLIDED
 
 
@@ -42,8 +43,8 @@ def test_beams_see_other_vehicles_bodies():
     centres = corners.mean(axis=1)
     angles = np.array([-math.pi / 2, 0.0, math.pi / 2])
     readings = np.full(3, 25.0)
-    sense_bodies(0, 0.0, 0.0, 1.0, 0.0, np.cos(angles), np.sin(angles), -math.pi / 2, math.pi / 2,
-                 corners, centres, 0.5 * math.hypot(4.3, 2.5), readings)
+    sense_bodies(0, 0.0, 0.0, 1.0, 0.0, beam_table([(a, 25.0) for a in angles]), corners,
+                 centres, 0.5 * math.hypot(4.3, 2.5), readings)
     np.testing.assert_allclose(readings, [25.0, 10.0, 25.0])
 
 
@@ -132,7 +133,7 @@ def test_circle_steering_drives_the_drawn_radius(radius):
     """Holding circle_steering(R) and -circle_steering(R), the bicycle model's poses lie on
     circles of radius R (the circumcircle of three poses), turning left and right."""
     from enn_traffic.sim.bicycle import bicycle_step
-    from enn_traffic.traffic.strategies import circle_steering
+    from enn_traffic.sim.strategies import circle_steering
 
     for side in (1.0, -1.0):
         x, y, heading = 50.0, 50.0, 0.3

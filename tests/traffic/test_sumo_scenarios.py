@@ -11,7 +11,7 @@ from sumo_road import CONFIG, road_scenario, straight
 from enn_traffic.cli import main
 from enn_traffic.errors import InputError
 from enn_traffic.roads import load_track
-from enn_traffic.scenario import load_scenario
+from enn_traffic.scenario import episode_steps, learner_start_time, load_scenario
 from enn_traffic.sim.world import COLLIDED, LEFT_NETWORK, MET_START
 from enn_traffic.traffic import sumo
 from enn_traffic.worlds import make_world
@@ -23,7 +23,7 @@ def test_sumocfg_begin_time_and_network_are_used(tmp_path, road_net):
     and nothing would be met.) [track] names no net: the .sumocfg's is the track."""
     scenario = load_scenario(road_scenario(tmp_path, road_net))
     assert scenario.track.net == (tmp_path / "road.net.xml").resolve()
-    assert sumo.learner_start_time(scenario) == 1010.0
+    assert learner_start_time(scenario) == 1010.0
     world = make_world(scenario)
     results = world.evaluate(straight(world))
     assert (results.traffic[0, :, MET_START] == 1).all()  # the first bus, 10 s along
@@ -33,7 +33,7 @@ def test_sumocfg_begin_time_and_network_are_used(tmp_path, road_net):
 def test_begin_s_overrides_the_sumocfg(tmp_path, road_net):
     scenario = load_scenario(road_scenario(tmp_path, road_net, begin=0.0, departs=500.0,
                                            extra="begin_s = 600.0"))
-    assert sumo.learner_start_time(scenario) == 610.0
+    assert learner_start_time(scenario) == 610.0
     world = make_world(scenario)
     assert world.evaluate(straight(world)).traffic[0, 0, MET_START] >= 1
 
@@ -182,7 +182,7 @@ def test_learner_start_after_the_end_is_refused(tmp_path, road_net):
 def test_a_life_ends_where_the_sumocfg_ends(tmp_path, road_net):
     """The .sumocfg ends 15 s after the learner's start: lives are capped at 150 steps."""
     scenario = load_scenario(road_scenario(tmp_path, road_net, end=1025.0))
-    assert sumo.episode_steps(scenario) == 150
+    assert episode_steps(scenario) == 150
     world = make_world(scenario)
     results = world.evaluate(straight(world))
     assert results.steps[0, 0] == 150 and results.outcome[0, 0] == 0  # capped
@@ -283,7 +283,7 @@ def test_training_generations_take_the_shared_warmups_in_turn(tmp_path, road_net
     """``warmup_states = 3`` and two situations a generation: generations 0, 1, 2 load warm-ups
     0 1, 2 0, 1 2 (each twice in three generations), as generations.csv says; a held-out
     situation draws its warm-up by its own seed."""
-    from enn_traffic.sim.sumo_world import shared_warmup, situation_seed
+    from enn_traffic.sim.sumo_situations import shared_warmup, situation_seed
 
     path = road_scenario(tmp_path, road_net, warmup=30.0, extra="warmup_states = 3")
     run = tmp_path / "run"

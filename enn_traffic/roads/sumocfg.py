@@ -26,8 +26,6 @@ import sumolib
 from enn_traffic.errors import InputError
 
 FILE_OPTIONS = ("net-file", "route-files", "additional-files")
-# SUMO's messages: enn-traffic sets these itself (traffic/sumo.py).
-OWN_OUTPUTS = ("log", "error-log", "message-log")
 
 
 @dataclass(frozen=True)

@@ -31,25 +31,19 @@ import math
 import numpy as np
 from numba import njit
 
-# Who steers a vehicle: nobody (it stands), a network (the learner's, an evolved driver's, or
-# the random-network strategy's fixed random genes), a scripted strategy, or an action given
-# from outside the step (a gymnasium or PettingZoo environment's, :mod:`enn_traffic.envs`).
-NONE, NETWORK, STRAIGHT, CIRCLING, WANDER, ACTION = 0, 1, 2, 3, 4, 5
-DRIVER_KINDS = {
-    "random_network": NETWORK,
-    "straight": STRAIGHT,
-    "circling": CIRCLING,
-    "wander": WANDER,
-}
+from enn_traffic.kinds import CIRCLING, NETWORK, NONE, STRAIGHT, WANDER
+from enn_traffic.sim.sensors import COS, RANGE, SIN
+
 TURN_SIDES = {"open": 0.0, "left": 1.0, "right": -1.0}
 
 
-# The scripted strategies' settings (``[traffic]``) travel in the world's constants
-# (:class:`enn_traffic.sim.rules.Physics`), the ``params`` of the kernels below, as these fields;
-# the kernels also read its ``max_range`` and ``wheelbase``.
-STRATEGY_FIELDS = ("turn_distance", "turn_steering", "turn_cone", "circle_radius_min",
-                   "circle_radius_max", "wander_sigma", "wander_decay", "wander_max",
-                   "turn_side", "sees_vehicles")
+# The scripted strategies' settings (``[traffic]``, :func:`strategy_settings`) travel in the
+# world's constants (:data:`enn_traffic.sim.rules.Physics`), the ``params`` of the kernels
+# below, as these fields; the kernels also read its ``wheelbase``.
+STRATEGY_FIELDS = {"turn_distance": float, "turn_steering": float, "turn_cone": float,
+                   "circle_radius_min": float, "circle_radius_max": float,
+                   "wander_sigma": float, "wander_decay": float, "wander_max": float,
+                   "turn_side": float, "sees_vehicles": bool}
 
 
 def strategy_settings(traffic) -> dict[str, float | bool]:
@@ -120,7 +114,7 @@ def circle_steering(radius, wheelbase) -> float:
 
 
 @njit(cache=True)
-def scripted_steering(kind, readings, beam_cos, beam_sin, params, memory, rng) -> float:
+def scripted_steering(kind, readings, beams, params, memory, rng) -> float:
     """Steering of a scripted (non-network) strategy: a turn away from a wall when there is
     one, else the strategy's own steering ``memory[0]`` (0 when driving straight, the circle's,
     or the wander process's, updated here)."""
@@ -129,32 +123,34 @@ def scripted_steering(kind, readings, beam_cos, beam_sin, params, memory, rng) -
         value = params.wander_decay * memory[0] + params.wander_sigma * next_normal(rng)
         memory[0] = min(max(value, -limit), limit)
     if kind in (STRAIGHT, CIRCLING, WANDER):
-        turn = wall_turn(readings, beam_cos, beam_sin, params, memory)
+        turn = wall_turn(readings, beams, params, memory)
         return turn if turn != 0.0 else memory[0]
     return 0.0
 
 
 @njit(cache=True)
-def wall_turn(readings, beam_cos, beam_sin, params, memory) -> float:
+def wall_turn(readings, beams, params, memory) -> float:
     """Turn away from what is ahead: start when something is nearer than ``turn_distance`` in
     the cone ahead, keep turning the same way until nothing at all is in range there (a vehicle
     that meets a wall head-on turns about 90° and drives on along it). The way is the more open
     side, or always left or right (``turn_side``: 1 left, -1 right, 0 open). 0: no turn."""
     cone = math.cos(params.turn_cone)
     nearest = np.inf
+    clear = True  # every beam in the cone reads its full range
     left, right = 0.0, 0.0
     for b in range(readings.shape[0]):
-        if beam_cos[b] >= cone:
+        if beams[b, COS] >= cone:
             nearest = min(nearest, readings[b])
-        if beam_sin[b] > 0.0:
+            clear = clear and readings[b] >= beams[b, RANGE]
+        if beams[b, SIN] > 0.0:
             left += readings[b]
-        elif beam_sin[b] < 0.0:
+        elif beams[b, SIN] < 0.0:
             right += readings[b]
     if memory[1] == 0.0 and nearest < params.turn_distance:
         side = params.turn_side
         if side == 0.0:
             side = 1.0 if left >= right else -1.0
         memory[1] = side * params.turn_steering
-    elif memory[1] != 0.0 and nearest >= params.max_range:
+    elif memory[1] != 0.0 and clear:
         memory[1] = 0.0
     return memory[1]

@@ -2,7 +2,7 @@
 than typed: every figure a generated section states is read from its CSV (or from the
 settings that produced it), so the text says what was measured.
 
-``python -m enn_traffic.report.results_doc`` rewrites each section between its markers
+``python -m enn_traffic.experiments.results_doc`` rewrites each section between its markers
 (``<!-- generated: NAME -->`` … ``<!-- end generated: NAME -->``) after a reproduction; a test
 checks that the committed docs/results.md holds what the committed tables give.
 """

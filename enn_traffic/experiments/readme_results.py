@@ -1,7 +1,7 @@
 """The README's table of results, written from the committed tables in ``results/paper`` rather
 than typed: each row's figures are read from its CSV, so the README says what was measured.
 
-``python -m enn_traffic.report.readme_results`` rewrites the table between the README's
+``python -m enn_traffic.experiments.readme_results`` rewrites the table between the README's
 markers after a reproduction; a test checks that the committed README holds what the
 committed tables give.
 """
@@ -24,7 +24,7 @@ from enn_traffic.experiments.simultaneous import (
 from enn_traffic.experiments.table1 import diagonal_pattern
 from enn_traffic.shipped import shipped_scenario
 
-BEGIN = "<!-- results table: written by python -m enn_traffic.report.readme_results -->"
+BEGIN = "<!-- results table: written by python -m enn_traffic.experiments.readme_results -->"
 END = "<!-- end of results table -->"
 
 

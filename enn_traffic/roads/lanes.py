@@ -21,7 +21,7 @@ import pandas as pd
 
 from enn_traffic.errors import InputError
 from enn_traffic.roads.network import LEARNER_CLASS, read_net
-from enn_traffic.traffic.sumocfg import parse_time
+from enn_traffic.roads.sumocfg import parse_time
 
 # The vehicle classes the ``allowed`` column names (of SUMO's 41), in this order.
 SHOWN_CLASSES = ("passenger", "taxi", "bus", "delivery", "truck", "motorcycle", "bicycle",
@@ -166,30 +166,6 @@ def lane_table(net_file: Path, route_files: list[Path] | tuple[Path, ...],
     table = table.sort_values(["learner_may_start", "vehicles", "length_m", "lane"],
                               ascending=[False, False, False, True], kind="stable")
     return table.reset_index(drop=True)
-
-
-def sources(path: Path) -> tuple[Path, list[Path], list[Path]]:
-    """The network, route files and additional files of a ``.sumocfg``, or of a scenario of
-    one track (its SUMO traffic's; no route files without SUMO traffic)."""
-    from enn_traffic.scenario import load_scenario
-    from enn_traffic.traffic.sumo import route_files, sumo_config
-    from enn_traffic.traffic.sumocfg import read_sumocfg
-
-    if path.suffix == ".sumocfg":
-        if not path.is_file():
-            raise InputError("SUMO configuration not found", path)
-        config = read_sumocfg(path)
-        if config.net_file is None:
-            raise InputError("names no net-file", path, "net-file")
-        return config.net_file, list(config.route_files), list(config.additional_files)
-    scenario = load_scenario(path)
-    if isinstance(scenario.track, list):
-        raise InputError("give a scenario of one track (or its .sumocfg)", path, "track")
-    if scenario.track is None:
-        raise InputError("a lane-keeping scenario has no SUMO network", path, "lane_keeping")
-    config = sumo_config(scenario)
-    return (scenario.track.net, route_files(scenario) if scenario.traffic.is_sumo else [],
-            list(config.additional_files) if config is not None else [])
 
 
 def auto_lane(net_file: Path, route_files: list[Path] | tuple[Path, ...],
