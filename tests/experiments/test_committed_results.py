@@ -1,6 +1,10 @@
 """The committed results are today's code's (issue 26, "results tied to code"): an experiment
 rerun from scratch at its full settings writes the committed table byte for byte, and the
-committed controllers drive as the committed tables say."""
+committed controllers drive as the committed tables say.
+
+Two tiers (docs/design.md, "Tests"): ``pytest`` checks a sample of every committed table (a
+run's first generations, one row, one family among SUMO traffic) in seconds; the tests marked
+``full`` check them whole (``pytest -m full``, minutes; ``.ci/run`` runs both)."""
 
 import numpy as np
 import pandas as pd
@@ -13,7 +17,36 @@ from enn_traffic.experiments.protocol import ARENA, CITY, SUMO
 from enn_traffic.experiments.study import Study
 from enn_traffic.shipped import shipped_scenario
 
+FULL = pytest.mark.full
 
+
+def full(*values, id: str):
+    """A parameter of the ``full`` tier."""
+    return pytest.param(*values, id=id, marks=FULL)
+
+
+@pytest.mark.parametrize("name, seed, column, threshold", [
+    ("navigation_narrow", 2, "passed_A_generation", 100),
+    ("navigation_wide", 2, "capped_generation", None)], ids=["fig7", "fig8"])
+def test_the_first_generations_of_a_navigation_run_give_its_row(name, seed, column, threshold,
+                                                               tmp_path, root):
+    """A seed's Fig. 7 or Fig. 8 run evolved again from scratch up to the generation of a
+    committed column (the first to pass location A; the first whose best life is capped):
+    that generation is the committed one (the whole tables: the ``full`` tier)."""
+    from enn_traffic.experiments.common import first_generation, run_or_reuse
+
+    paper = root / "results" / "paper"
+    row = pd.read_csv(paper / f"{'fig7' if threshold else 'fig8'}.csv").set_index("seed")
+    generation = int(row.loc[seed, column])
+    scenario = shipped_scenario(name)
+    scenario = scenario.with_overrides(seed=seed, ga={"generations": generation + 1})
+    table = run_or_reuse(scenario, tmp_path, progress=False)
+    threshold = threshold or scenario.episode.max_steps
+    assert first_generation(table, threshold) == generation
+    assert first_generation(table.iloc[:-1], threshold) != generation
+
+
+@FULL
 def test_todays_code_writes_the_committed_navigation_tables(tmp_path, root):
     """Figs. 7, 8 and 9 rerun from scratch at full settings in one study (Fig. 9's 19 beams
     are Fig. 7's runs): every committed table, byte for byte."""
@@ -25,8 +58,9 @@ def test_todays_code_writes_the_committed_navigation_tables(tmp_path, root):
         assert (tmp_path / table).read_text() == committed.read_text(), table
 
 
-@pytest.mark.parametrize("family, strategy", [(ARENA, 1), (SUMO, 2), (CITY, 4)],
-                         ids=["arena", "sumo", "city"])
+@pytest.mark.parametrize("family, strategy", [pytest.param(ARENA, 1, id="arena"),
+                                              full(SUMO, 2, id="sumo"),
+                                              pytest.param(CITY, 4, id="city")])
 def test_the_first_generation_of_a_fig11_run_gives_its_row(family, strategy, tmp_path, root):
     """Fig. 11's run of seed 1, its first generation evolved again: the committed row's
     first best and mean fitness, and that best chromosome's fitness on the test situations
@@ -64,6 +98,7 @@ def test_a_committed_lane_keeping_controller_drives_its_table_row(road, root):
     assert (steps, round(offset, 3)) == (row["steps_in_lane"], row["mean_abs_offset_m"])
 
 
+@FULL
 def test_committed_table1_controllers_keep_the_pattern_on_unseen_traffic(root):
     """Each committed Table 1 specialist on 200 situations of traffic seed 5000, which no
     training and no choice of controller drew (the scenarios' own seed is 1000): every entry
@@ -86,15 +121,17 @@ def test_committed_table1_controllers_keep_the_pattern_on_unseen_traffic(root):
         assert own > np.delete(matrix.to_numpy()[row], row).max(), matrix
 
 
-def test_the_committed_table1_controllers_drive_every_entry_of_their_table(root):
-    """Each committed specialist on each strategy's 200 test situations: the whole committed
-    Table 1, entry for entry."""
+@pytest.mark.parametrize("rows", [pytest.param([1], id="first row"),
+                                  full(ARENA.strategies, id="every row")])
+def test_the_committed_table1_controllers_drive_every_entry_of_their_table(rows, root):
+    """Each committed specialist on each strategy's 200 test situations: the committed
+    Table 1, entry for entry (its first row; the ``full`` tier: every row)."""
     from enn_traffic.experiments.choosing import fitness_on_test_traffic
 
     paper = root / "results" / "paper"
     table = pd.read_csv(paper / "table1.csv").set_index("training_strategy")
     study = Study(paper)
-    for trained in ARENA.strategies:
+    for trained in rows:
         controller = Controller.load(paper / "controllers" / "table1" / f"strategy{trained}.npz")
         for deployed in ARENA.strategies:
             fitness = fitness_on_test_traffic(study, ARENA, controller.chromosome, deployed)
@@ -102,7 +139,8 @@ def test_the_committed_table1_controllers_drive_every_entry_of_their_table(root)
                                                                                   deployed)
 
 
-@pytest.mark.parametrize("family, strategy", [(SUMO, 2), (CITY, 3)], ids=["sumo", "city"])
+@pytest.mark.parametrize("family, strategy", [full(SUMO, 2, id="sumo"),
+                                              pytest.param(CITY, 3, id="city")])
 def test_a_committed_sumo_table1_controller_drives_its_table_entry(family, strategy, root):
     """A specialist among SUMO traffic (crossing flows; Cologne's stop-and-go), replayed on
     its strategy's 10 test situations: the committed diagonal entry of its ``table1.csv``."""
@@ -116,11 +154,13 @@ def test_a_committed_sumo_table1_controller_drives_its_table_entry(family, strat
     assert round(fitness, 1) == entry.loc[strategy, f"deploy_{strategy}"]
 
 
-@pytest.mark.parametrize("family", [ARENA, SUMO, CITY], ids=["arena", "sumo", "city"])
-def test_the_committed_table2_controller_drives_its_last_row(family, root):
+@pytest.mark.parametrize("family, strategies", [
+    pytest.param(ARENA, None, id="arena"), pytest.param(SUMO, [1], id="sumo strategy 1"),
+    full(SUMO, None, id="sumo"), full(CITY, None, id="city")])
+def test_the_committed_table2_controller_drives_its_last_row(family, strategies, root):
     """Table 2's last controller, trained on all four strategies with the incremental
     network, on each strategy's test situations (200 in the arena, 10 among SUMO traffic):
-    the committed last row, entry for entry, and its average."""
+    the committed last row, entry for entry, and its average (a sample: one entry)."""
     from enn_traffic.experiments.choosing import fitness_on_test_traffic
 
     paper = root / "results" / "paper"
@@ -128,15 +168,18 @@ def test_the_committed_table2_controller_drives_its_last_row(family, root):
     controller = Controller.load(paper / "controllers" / family.folder / "table2"
                                  / "last_iteration.npz")
     study = Study(paper)
+    strategies = strategies or family.strategies
     fitness = [fitness_on_test_traffic(study, family.incremental(), controller.chromosome, s)
-               for s in family.strategies]
+               for s in strategies]
     # the table holds one decimal, as pandas rounds it
-    for strategy, value in zip(family.strategies, fitness, strict=True):
+    for strategy, value in zip(strategies, fitness, strict=True):
         assert value == pytest.approx(last_row[f"strategy_{strategy}"], abs=0.05 + 1e-9)
-    assert np.mean(fitness) == pytest.approx(last_row["average"], abs=0.05 + 1e-9)
+    if len(strategies) == len(family.strategies):
+        assert np.mean(fitness) == pytest.approx(last_row["average"], abs=0.05 + 1e-9)
 
 
-@pytest.mark.parametrize("family, strategy", [(SUMO, 3), (CITY, 2)], ids=["sumo", "city"])
+@pytest.mark.parametrize("family, strategy", [full(SUMO, 3, id="sumo"),
+                                              pytest.param(CITY, 2, id="city")])
 def test_a_committed_controller_drives_its_closed_loop_rows(family, strategy, root):
     """A strategy's committed Table 1 controller on its test situations, traffic replayed and
     in closed loop: every episode's two lifetimes in the committed ``closed_loop.csv``."""
@@ -188,7 +231,8 @@ def test_committed_arena_crowd_files_drive_their_first_situation(strategy, root)
         np.testing.assert_array_equal(genes, committed.chromosome)
 
 
-@pytest.mark.parametrize("family, strategy", [(SUMO, 3), (CITY, 1)], ids=["sumo", "city"])
+@pytest.mark.parametrize("family, strategy", [pytest.param(SUMO, 3, id="sumo"),
+                                              full(CITY, 1, id="city")])
 def test_committed_sumo_crowd_files_drive_their_first_situation(family, strategy, root):
     """Table 4 among SUMO traffic, a strategy's first situation's learning driven again from
     the committed files (the Table 1 controller as winner, the evolved population): every
