@@ -24,3 +24,22 @@ def test_kernels_version_moves_with_the_kernels_sources_only(tmp_path):
     edit("experiments/regime.py", "\nfrom numba import njit\n\n\n@njit\ndef kernel():\n"
          "    return 1\n")
     assert kernels_version.__wrapped__(package) != moved
+
+
+def test_numbas_cache_follows_the_users_cache_folder(tmp_path):
+    """numba's kernels lie in the project's cache folder, which ``XDG_CACHE_HOME`` moves (and
+    ``NUMBA_CACHE_DIR``, when set, overrides)."""
+    import os
+    import subprocess
+    import sys
+
+    env = {k: v for k, v in os.environ.items()
+           if k not in ("NUMBA_CACHE_DIR", "ENN_TRAFFIC_CACHE")}
+    code = "import os, enn_traffic; print(os.environ['NUMBA_CACHE_DIR'])"
+    folder = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                            env={**env, "XDG_CACHE_HOME": str(tmp_path)}, check=True).stdout
+    assert folder.strip().startswith(str(tmp_path / "enn-traffic" / "numba-"))
+    chosen = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                            env={**env, "NUMBA_CACHE_DIR": str(tmp_path / "mine")},
+                            check=True).stdout
+    assert chosen.strip() == str(tmp_path / "mine")
