@@ -125,8 +125,8 @@ class Controller:
             raise InputError(
                 f"the controller's network takes {self.layer_sizes[0]} beams, the scenario's "
                 f"sensor has {scenario.sensor.beams}"
-                + (f" and its rings {sum(int(r[0]) for r in self.rings)}" if self.rings else ""),
-                path, "sensor.beams")
+                + (f" (and the controller's own rings {sum(int(r[0]) for r in self.rings)})"
+                   if self.rings else ""), path, "sensor.beams")
         spin = ({} if self.spin_window is None else
                 {"episode": {"spin_window": self.spin_window,
                              "spin_variance": self.spin_variance}})

@@ -1,5 +1,5 @@
 """The columns of a run's ``generations.csv``, one registered function each, in the order
-they are written: a new column is one function here (docs/design.md, "The code").
+they are written: a new column is one function here (docs/design.md, "Architecture").
 
 Each function takes the :class:`Generation` just evaluated and returns the column's value.
 """

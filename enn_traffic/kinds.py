@@ -9,7 +9,7 @@ are :class:`Registry` tables. A name missing from a table is an error, never a s
 from __future__ import annotations
 
 import importlib
-from collections.abc import Iterator, Mapping
+from collections.abc import Iterator
 
 # Who steers a vehicle in the compiled rules: nobody (it stands), a network (the learner's, an
 # evolved driver's, or the random-network strategy's fixed random genes), a scripted strategy
@@ -18,7 +18,8 @@ from collections.abc import Iterator, Mapping
 NONE, NETWORK, STRAIGHT, CIRCLING, WANDER, ACTION = range(6)
 
 # The arena's traffic strategies (``[traffic] strategy``) and the driver kind of their vehicles;
-# ``none`` is a scenario without traffic vehicles.
+# ``none`` is a scenario without traffic vehicles. A strategy's steering is a branch of
+# enn_traffic.sim.strategies.scripted_steering.
 STRATEGIES = {
     "none": NONE,
     "random_network": NETWORK,
@@ -29,10 +30,11 @@ STRATEGIES = {
 SUMO = "sumo"  # ``strategy = "sumo"``: the vehicles come from SUMO (docs/sumo.md)
 
 
-class Registry(Mapping[str, object]):
+class Registry:
     """Names bound to objects written ``"package.module:attribute"``, imported on first look-up
     (as gymnasium's entry points are), so that naming SUMO's world does not load SUMO for an
-    arena run. An unknown name is a ``KeyError`` that lists the known ones."""
+    arena run. An unknown name is a ``KeyError`` that lists the known ones; there is no
+    ``get`` with a default, and ``name in table`` imports nothing."""
 
     def __init__(self, what: str, entries: dict[str, str]):
         self.what = what
@@ -43,6 +45,9 @@ class Registry(Mapping[str, object]):
             raise KeyError(f"unknown {self.what} {name!r}; known: {', '.join(self._entries)}")
         module, attribute = self._entries[name].split(":")
         return getattr(importlib.import_module(module), attribute)
+
+    def __contains__(self, name: object) -> bool:
+        return name in self._entries
 
     def __iter__(self) -> Iterator[str]:
         return iter(self._entries)

@@ -18,10 +18,12 @@ from pathlib import Path
 PACKAGE = Path(__file__).resolve().parent
 
 # What decides a GA run's result: the step rules and worlds, the GA and its loop, the traffic,
-# the roads' walls, lane keeping, the network, the geometry, the keys that draw traffic, and
-# the scenario schema that resolves a scenario file into settings.
+# the roads' walls, lane keeping, the network, the geometry, the keys that draw traffic, the
+# strategies' driver kinds, and the scenario schema that resolves a scenario file into
+# settings (tests/test_provenance.py checks that everything these import is here or named
+# as deciding nothing).
 RULES = ("sim", "evolution", "traffic", "roads", "lanekeeping", "geometry.py", "neural.py",
-         "worlds.py", "keys.py", "scenario.py", "runner.py")
+         "worlds.py", "keys.py", "kinds.py", "scenario.py", "runner.py")
 
 
 def source_digest(paths: Iterable[Path], root: Path = PACKAGE) -> str:

@@ -10,29 +10,39 @@ from __future__ import annotations
 import re
 import sys
 from pathlib import Path
+from typing import get_args
 
 from pydantic import BaseModel
 from pydantic_core import PydanticUndefined
 
-from enn_traffic.scenario import (
-    DriversConfig,
-    EpisodeConfig,
-    GAConfig,
-    LaneKeepingConfig,
-    NetworkConfig,
-    RingConfig,
-    RoadDraw,
-    Scenario,
-    SensorConfig,
-    TrackConfig,
-    TrafficConfig,
-    VehicleConfig,
-)
+from enn_traffic.scenario import Scenario
 
 DOCUMENT = Path(__file__).resolve().parents[1] / "docs" / "scenarios.md"
-SECTIONS = {"track": TrackConfig, "vehicle": VehicleConfig, "sensor": SensorConfig,
-            "sensor.rings": RingConfig, "network": NetworkConfig, "ga": GAConfig,
-            "episode": EpisodeConfig, "traffic": TrafficConfig, "traffic.drivers": DriversConfig}
+
+
+def _models(annotation) -> list[type[BaseModel]]:
+    """The pydantic models an annotation names (``X``, ``X | None``, ``list[X]``, ...)."""
+    if isinstance(annotation, type) and issubclass(annotation, BaseModel):
+        return [annotation]
+    return [model for argument in get_args(annotation) for model in _models(argument)]
+
+
+def sections(model: type[BaseModel] = Scenario, prefix: str = "") -> dict[str, type[BaseModel]]:
+    """Every section of the schema by its dotted name (``track``, ``sensor.rings``,
+    ``traffic.drivers``, ...), found in the models' own fields: a new section is documented
+    without being listed here."""
+    found = {}
+    for name, field in model.model_fields.items():
+        for section in _models(field.annotation)[:1]:
+            found[prefix + name] = section
+            found.update(sections(section, f"{prefix}{name}."))
+    return found
+
+
+SECTIONS = {name: model for name, model in sections().items()
+            if not name.startswith("lane_keeping")}
+LANE_KEEPING = {name: model for name, model in sections().items()
+                if name.startswith("lane_keeping")}
 _MARKED = re.compile(r"(<!-- reference:(\w+) -->\n)(.*?)(<!-- /reference -->)", re.S)
 
 
@@ -70,18 +80,18 @@ def tables() -> dict[str, str]:
     scenario = _rows(Scenario, None)
     for section, model in SECTIONS.items():
         scenario += _rows(model, section)
+    lane_keeping = [row for section, model in LANE_KEEPING.items()
+                    for row in _rows(model, section)]
     return {"scenario": "\n".join(head + scenario) + "\n",
-            "lane_keeping": "\n".join(head + _rows(LaneKeepingConfig, "lane_keeping")
-                                      + _rows(RoadDraw, "lane_keeping.draw")) + "\n"}
+            "lane_keeping": "\n".join(head + lane_keeping) + "\n"}
 
 
 def undocumented() -> list[str]:
     """Fields of the schema without a description (each must have one)."""
     missing = [f"{name}" for name, f in Scenario.model_fields.items()
                if f.description is None and not f.exclude
-               and name not in (*SECTIONS, "lane_keeping")]
-    for section, model in {**SECTIONS, "lane_keeping": LaneKeepingConfig,
-                           "lane_keeping.draw": RoadDraw}.items():
+               and name not in (*SECTIONS, *LANE_KEEPING)]
+    for section, model in {**SECTIONS, **LANE_KEEPING}.items():
         missing += [f"{section}.{name}" for name, f in model.model_fields.items()
                     if f.description is None]
     return missing

@@ -130,15 +130,38 @@ def test_libsumo_loads_only_where_sumo_runs(module):
     assert result.stdout.strip() == "False"
 
 
-def test_every_registry_entry_resolves_within_the_layers():
-    """The names that tables bind to code lazily (world kinds, environments, experiments)
-    resolve, to parts no higher than the table's own."""
-    from enn_traffic.envs import ENVS, PARALLEL_ENVS, VECTOR_ENVS
-    from enn_traffic.experiments import EXPERIMENTS
-    from enn_traffic.worlds import WORLDS
+def test_only_the_registry_imports_by_name():
+    """Code is imported by a name in a string only through :class:`enn_traffic.kinds.Registry`
+    (whose tables the next test checks), so that the import checks above see every edge."""
+    found = []
+    for module, path in modules().items():
+        source = path.read_text()
+        for call in ("import_module(", "__import__("):
+            if call in source and module != "enn_traffic.kinds":
+                found.append(f"{module} calls {call}")
+    assert not found, found
 
-    for holder, table in (("worlds", WORLDS), ("envs", ENVS), ("envs", VECTOR_ENVS),
-                          ("envs", PARALLEL_ENVS), ("experiments", EXPERIMENTS)):
+
+def registries() -> list[tuple[str, str]]:
+    """Every module-level ``NAME = Registry(...)`` of the package: (module, NAME)."""
+    found = []
+    for module, path in modules().items():
+        for node in ast.parse(path.read_text()).body:
+            if (isinstance(node, ast.Assign) and isinstance(node.value, ast.Call)
+                    and getattr(node.value.func, "id", None) == "Registry"):
+                found += [(module, target.id) for target in node.targets]
+    return found
+
+
+def test_every_registry_entry_resolves_within_the_layers():
+    """The names that tables bind to code lazily (world kinds, environments, experiments:
+    every ``Registry`` of the package) resolve, to parts no higher than the table's own."""
+    import importlib
+
+    tables = registries()
+    assert len(tables) >= 5
+    for module, name in tables:
+        holder, table = part_of(module), getattr(importlib.import_module(module), name)
         for name in table:
             assert callable(table[name]), name
             part = part_of(table.target(name).split(":")[0])

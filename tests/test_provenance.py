@@ -43,3 +43,28 @@ def test_numbas_cache_follows_the_users_cache_folder(tmp_path):
                             env={**env, "NUMBA_CACHE_DIR": str(tmp_path / "mine")},
                             check=True).stdout
     assert chosen.strip() == str(tmp_path / "mine")
+
+
+# What the rules' modules import that decides no result: messages, files, the cache (keyed by
+# content), the saved controller, the generations table's columns, and the learning curve.
+DECIDES_NOTHING = {"enn_traffic", "enn_traffic.errors", "enn_traffic.io", "enn_traffic.progress",
+                   "enn_traffic.provenance", "enn_traffic.cache", "enn_traffic.controller",
+                   "enn_traffic.generations", "enn_traffic.report.plots"}
+
+
+def test_everything_the_rules_import_is_in_the_rules():
+    """A module that a run's rules import (a constant frozen into a kernel, a table of names)
+    moves the rules' digest when it changes: it is in ``RULES``, or listed here as deciding
+    nothing."""
+    from test_imports import imported, modules
+
+    from enn_traffic.provenance import RULES
+
+    def in_rules(module: str) -> bool:
+        names = module.split(".")
+        return len(names) > 1 and (names[1] in RULES or f"{names[1]}.py" in RULES)
+
+    known = modules()
+    outside = {target for module, path in known.items() if in_rules(module)
+               for target in imported(module, path, known) if not in_rules(target)}
+    assert outside <= DECIDES_NOTHING, sorted(outside - DECIDES_NOTHING)

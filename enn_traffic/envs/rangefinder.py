@@ -39,8 +39,9 @@ def rangefinder_world(scenario: str | Path | Scenario) -> ArenaWorld:
     if not isinstance(scenario, Scenario):
         scenario = load_scenario(scenario)
     scenario = scenario.single_track()
-    if scenario.lane_keeping is not None or scenario.traffic.is_sumo:
-        raise ValueError(f"{scenario.name}: not an arena or navigation scenario")
+    if scenario.world_kind != "arena":
+        raise ValueError(f"{scenario.name}: not an arena or navigation scenario (a "
+                         f"{scenario.world_kind} world)")
     return ArenaWorld(scenario)
 
 

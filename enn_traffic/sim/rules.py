@@ -1,4 +1,4 @@
-"""The rules of a step, written once (paper §4–§5.3; docs/design.md, "The step").
+"""The rules of a step, written once (paper §4–§5.3; docs/design.md, "Units and the step").
 
 Every loop that moves vehicles calls these compiled rules: the arena's episode
 (:mod:`enn_traffic.sim.arena`), the learner among SUMO's traffic in replay and closed loop
