@@ -263,22 +263,25 @@ def _cmd_render(args) -> int:
 def _cmd_lanes(args) -> int:
     from enn_traffic.io import write_csv
     from enn_traffic.roads.lanes import lane_table
+    from enn_traffic.roads.network import ANYWHERE_AHEAD_M
     from enn_traffic.scenario import sumo_sources
     from enn_traffic.shipped import scenario_path
 
-    net, routes, additional = sumo_sources(scenario_path(args.source))
-    table = lane_table(net, routes, additional)
+    net, routes, additional, shortest = sumo_sources(scenario_path(args.source))
+    table = lane_table(net, routes, additional, shortest)
     learner = table[table["learner_may_start"]]
-    others = table[~table["learner_may_start"]]
-    print(f"{net.name}: {len(table):,} lanes; {len(learner):,} allow passenger cars (a learner "
-          f"may start there), {len(others):,} do not")
-    if len(others):
-        kinds = others["allowed"].replace("", "no vehicle").value_counts()
+    cars = table["allows_cars"]
+    print(f"{net.name}: {len(table):,} lanes; {int(cars.sum()):,} allow passenger cars, of "
+          f"which {len(learner):,} are {shortest:g} m long or longer (a learner may start "
+          f"there: start_offset + body + {ANYWHERE_AHEAD_M:g} m ahead, as start_lane = \"auto\" "
+          f"asks); {int((~cars).sum()):,} do not allow cars")
+    if (~cars).any():
+        kinds = table[~cars]["allowed"].replace("", "no vehicle").value_counts()
         print("  not for cars: " + ", ".join(f"{count:,} {kind}" for kind, count
                                                in kinds.head(6).items()))
     demand = "routes: " + ", ".join(p.name for p in routes) if routes else "no route files"
     print(f"the learner's lanes by the vehicles the demand sends over them ({demand}):")
-    shown = learner.head(args.top).drop(columns="learner_may_start")
+    shown = learner.head(args.top).drop(columns=["allows_cars", "learner_may_start"])
     print(shown.to_string(index=False))
     if len(learner):
         print(f'\nstart there: [track] start_lane = "{learner.iloc[0]["lane"]}" '

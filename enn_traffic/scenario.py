@@ -30,7 +30,7 @@ from pydantic import (
 from enn_traffic.errors import InputError
 from enn_traffic.kinds import STRATEGIES, SUMO
 from enn_traffic.roads.lanes import auto_lane
-from enn_traffic.roads.network import ANYWHERE_AHEAD_M
+from enn_traffic.roads.network import least_start_length
 from enn_traffic.roads.sumocfg import SumoConfig, read_sumocfg
 
 PositiveFloat = Annotated[float, Field(gt=0, allow_inf_nan=False)]
@@ -152,7 +152,8 @@ class SensorConfig(_Section):
     @model_serializer(mode="wrap")
     def _without_empty_rings(self, handler):
         """Leave ``rings`` out when there are none: a scenario written before rings existed
-        keeps its settings' text, and with it its runs' folders (experiments/study.py)."""
+        keeps its settings' text (its ``scenario.toml``, which ``--resume`` compares, and the
+        name of its run folder in a study, experiments/study.py)."""
         data = handler(self)
         if not self.rings:
             data.pop("rings", None)
@@ -803,7 +804,7 @@ AUTO = "auto"  # [track] start_lane = "auto"
 def _with_auto_lane(scenario: Scenario, path: Path) -> Scenario:
     """``start_lane = "auto"`` made the lane it stands for (enn_traffic.roads.lanes)."""
     track = scenario.track
-    length = track.start_offset + ANYWHERE_AHEAD_M + scenario.vehicle.length
+    length = least_start_length(track.start_offset, scenario.vehicle.length)
     config = sumo_config(scenario)
     additional = config.additional_files if config is not None else ()
     try:
@@ -877,16 +878,21 @@ def route_files(scenario: Scenario) -> list[Path]:
     return [*(config.route_files if config is not None else ()), *scenario.traffic.routes]
 
 
-def sumo_sources(path: Path) -> tuple[Path, list[Path], list[Path]]:
+def sumo_sources(path: Path) -> tuple[Path, list[Path], list[Path], float]:
     """The network, route files and additional files of a ``.sumocfg``, or of a scenario of
-    one track (its SUMO traffic's; no route files without SUMO traffic)."""
+    one track (its SUMO traffic's; no route files without SUMO traffic), and the shortest lane
+    its learner may start on (:func:`~enn_traffic.roads.network.least_start_length`; a
+    ``.sumocfg``'s: by the default ``start_offset`` and body)."""
     if path.suffix == ".sumocfg":
         if not path.is_file():
             raise InputError("SUMO configuration not found", path)
         config = read_sumocfg(path)
         if config.net_file is None:
             raise InputError("names no net-file", path, "net-file")
-        return config.net_file, list(config.route_files), list(config.additional_files)
+        shortest = least_start_length(TrackConfig.model_fields["start_offset"].default,
+                                      VehicleConfig.model_fields["length"].default)
+        return (config.net_file, list(config.route_files), list(config.additional_files),
+                shortest)
     scenario = load_scenario(path)
     if isinstance(scenario.track, list):
         raise InputError("give a scenario of one track (or its .sumocfg)", path, "track")
@@ -894,4 +900,5 @@ def sumo_sources(path: Path) -> tuple[Path, list[Path], list[Path]]:
         raise InputError("a lane-keeping scenario has no SUMO network", path, "lane_keeping")
     config = sumo_config(scenario)
     return (scenario.track.net, route_files(scenario) if scenario.traffic.is_sumo else [],
-            list(config.additional_files) if config is not None else [])
+            list(config.additional_files) if config is not None else [],
+            least_start_length(scenario.track.start_offset, scenario.vehicle.length))

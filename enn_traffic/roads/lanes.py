@@ -141,12 +141,14 @@ def _allowed(lane) -> str:
 
 
 def lane_table(net_file: Path, route_files: list[Path] | tuple[Path, ...],
-               additional_files: list[Path] | tuple[Path, ...] = ()) -> pd.DataFrame:
+               additional_files: list[Path] | tuple[Path, ...] = (),
+               min_length: float = 0.0) -> pd.DataFrame:
     """Every lane of the network (internal ones excepted): its edge, length, speed limit,
     allowed classes (of :data:`SHOWN_CLASSES`), whether the learner may start on it (it allows
-    passenger cars) and the demand's vehicles over it that it allows; the learner's lanes
-    first, ranked by that demand, then by length. ``additional_files``: where vehicle types
-    may be defined too."""
+    passenger cars and is ``min_length`` long or longer,
+    :func:`~enn_traffic.roads.network.least_start_length`) and the demand's vehicles over it
+    that it allows; the learner's lanes first, ranked by that demand, then by length.
+    ``additional_files``: where vehicle types may be defined too."""
     net = read_net(net_file)
     demand: dict[str, list[tuple[str, float]]] = {}
     for (edge, kind), vehicles in demand_per_edge(route_files,
@@ -159,10 +161,12 @@ def lane_table(net_file: Path, route_files: list[Path] | tuple[Path, ...],
 
     rows = [{"lane": lane.getID(), "edge": edge.getID(), "vehicles": carried(edge, lane),
              "length_m": round(lane.getLength(), 1), "speed_limit_ms": round(lane.getSpeed(), 2),
-             "allowed": _allowed(lane), "learner_may_start": lane.allows(LEARNER_CLASS)}
+             "allowed": _allowed(lane), "allows_cars": lane.allows(LEARNER_CLASS),
+             "learner_may_start": lane.allows(LEARNER_CLASS) and lane.getLength() >= min_length}
             for edge in net.getEdges(withInternal=False) for lane in edge.getLanes()]
     table = pd.DataFrame(rows, columns=["lane", "edge", "vehicles", "length_m",
-                                        "speed_limit_ms", "allowed", "learner_may_start"])
+                                        "speed_limit_ms", "allowed", "allows_cars",
+                                        "learner_may_start"])
     table = table.sort_values(["learner_may_start", "vehicles", "length_m", "lane"],
                               ascending=[False, False, False, True], kind="stable")
     return table.reset_index(drop=True)
@@ -172,8 +176,8 @@ def auto_lane(net_file: Path, route_files: list[Path] | tuple[Path, ...],
               min_length: float, additional_files: list[Path] | tuple[Path, ...] = ()) -> str:
     """``start_lane = "auto"``: the learner's lane that the demand uses most, among those at
     least ``min_length`` long (an InputError if there is none)."""
-    table = lane_table(net_file, route_files, additional_files)
-    fit = table[table["learner_may_start"] & (table["length_m"] >= min_length)]
+    table = lane_table(net_file, route_files, additional_files, min_length)
+    fit = table[table["learner_may_start"]]
     if fit.empty:
         raise InputError(f"no lane that allows passenger cars is {min_length:g} m long or "
                          "longer", net_file)

@@ -41,6 +41,15 @@ EXIT_MARGIN_M = 0.5  # a fringe cut reaches this far past the road's outer lane 
 ANYWHERE_SPACING_M = 5.0
 ANYWHERE_CLEARANCE_M = 1.0
 ANYWHERE_AHEAD_M = 10.0
+
+
+def least_start_length(offset: float, body: float) -> float:
+    """The shortest lane a learner may start on (``start_lane = "auto"``, and what
+    ``enn-traffic lanes`` lists): room for its ``start_offset``, its ``body`` and
+    :data:`ANYWHERE_AHEAD_M` of road ahead."""
+    return offset + body + ANYWHERE_AHEAD_M
+
+
 REMNANT_M = 0.25  # junction remnants thinner than twice this, once walking areas are cut out
 LEARNER_CLASS = "passenger"  # the SUMO vehicle class the learner drives as
 Surface = Literal["passenger", "all"]
@@ -89,8 +98,8 @@ def lane_start_poses(net_file: Path, names: list[tuple[str, str]], offset: float
                 ) -> list[tuple[float, float, float]]:
     """(x, y, heading) at ``offset`` metres along each start's centre line: a lane
     ``("lane", id)``, or an edge ``("edge", id)``, whose rightmost lane that allows passenger
-    cars is taken. A ValueError ``(index, message)`` for a start that does not exist or does
-    not allow passenger cars."""
+    cars is taken. A ValueError ``(index, message)`` for a start that does not exist, does
+    not allow passenger cars, or is shorter than ``offset``."""
     net = read_net(net_file)
     poses = []
     for index, (kind, name) in enumerate(names):
@@ -108,6 +117,10 @@ def lane_start_poses(net_file: Path, names: list[tuple[str, str]], offset: float
                 raise ValueError(index, f"no lane {name!r} in the network {net_file.name}")
             if not lane.allows("passenger"):
                 raise ValueError(index, f"lane {name!r} does not allow passenger cars")
+        length = LineString(lane.getShape()).length
+        if offset > length:
+            raise ValueError(index, f"lane {lane.getID()!r} is {length:.1f} m long, shorter "
+                             f"than start_offset = {offset:g} m")
         poses.append(_along(lane, offset))
     return poses
 

@@ -65,9 +65,34 @@ def test_the_buses_lane_ranks_first_and_auto_picks_it(tmp_path, road_net, capsys
     assert list(table["learner_may_start"]) == [True, True, True, False]
     assert main(["lanes", str(path), "--top", "2", "--out", str(tmp_path / "lanes.csv")]) == 0
     printed = capsys.readouterr().out
-    assert "4 lanes; 3 allow passenger cars" in printed and "1 bus" in printed
+    assert "4 lanes; 3 allow passenger cars, of which 3 are 34.3 m long" in printed
+    assert "1 bus" in printed
     assert 'start_lane = "ew_0"' in printed
     assert (tmp_path / "lanes.csv").read_text().count("\n") == 5
+
+
+def test_lanes_lists_the_lanes_auto_may_choose(tmp_path, road_net, capsys):
+    """``lanes`` and ``start_lane = "auto"`` apply one rule: a lane at least start_offset +
+    body + 10 m long. With start_offset = 95 m, none of the road's 100 m lanes is (109.3 m):
+    ``lanes`` lists none, and ``auto`` finds none."""
+    path = road_scenario(tmp_path, road_net)
+    path.write_text(path.read_text().replace("start_offset = 20.0", "start_offset = 95.0"))
+    assert main(["lanes", str(path)]) == 0
+    assert "3 allow passenger cars, of which 0 are 109.3 m long" in capsys.readouterr().out
+    path.write_text(path.read_text().replace('start_lane = "we_0"', 'start_lane = "auto"'))
+    with pytest.raises(InputError, match="no lane that allows passenger cars is 109.3 m"):
+        load_scenario(path)
+
+
+def test_a_start_lane_shorter_than_the_offset_is_an_error_naming_both(tmp_path, road_net):
+    path = road_scenario(tmp_path, road_net, start='start_lane = "me_0"')
+    path.write_text(path.read_text().replace("start_offset = 20.0", "start_offset = 500.0"))
+    with pytest.raises(InputError, match=r"lane 'me_0' is [\d.]+ m long, shorter than "
+                                         r"start_offset = 500 m") as error:
+        from enn_traffic.worlds import make_world
+
+        make_world(load_scenario(path))
+    assert "start_lane" in error.value.key
 
 
 def test_auto_needs_a_lane_long_enough(tmp_path, road_net):
