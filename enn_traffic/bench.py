@@ -128,7 +128,6 @@ def env_bench(steps: int = 200, sync_seconds: float = 5.0) -> pd.DataFrame:
     worlds counts N env-steps (one vehicle each)."""
     import gymnasium as gym
 
-
     name = env_id("navigation_narrow")
     rng = np.random.default_rng(0)
     rows = []
@@ -176,6 +175,58 @@ def sumo_bench(generations: int = 10, closed_loop_steps: int = 10_000) -> pd.Dat
     rows.append((f"sumo crowd: {learners} learners driving the best controller, strategy 1",
                  "libsumo step by step, 1 process", 1, steps, steps, seconds))
     return _rate_table(rows)
+
+
+def recording_bench(generations: int = 2) -> pd.DataFrame:
+    """A SUMO scenario as docs/sumo.md's template writes it, the step cap left at its default
+    (20,000 steps: 33 min of SUMO time) while lives last seconds (issue 50): Cologne, P = 20,
+    ``generations`` generations of a GA run, and a gymnasium environment's reset and
+    random-policy life, with the whole cap recorded first (before) and recorded only as far
+    as the lives reach (after), in the same run. The shared warm-ups are simulated before
+    the timing."""
+    from enn_traffic.envs.sumo import SumoEnv
+    from enn_traffic.scenario import EpisodeConfig
+    from enn_traffic.sim import sumo_world
+
+    cap = EpisodeConfig().max_steps
+    scenario = shipped_scenario("city_cologne3").with_overrides(
+        episode={"max_steps": cap}, ga={"population_size": 20})
+    rows, saved = [], sumo_world.FIRST_RECORDING
+    for label, first in ((f"the whole cap recorded first ({cap:,} steps)", cap),
+                         ("recorded as far as the lives reach", saved)):
+        sumo_world.FIRST_RECORDING = first
+        try:
+            world = make_world(scenario)
+            rng = np.random.default_rng(scenario.seed)
+            params = ga_params(scenario)
+            population = ga.initial_population(rng, params.population_size,
+                                               world.spec.chromosome_length, params.init_range)
+            world.evaluate(population[:2], 0)  # compile and warm up outside the timing
+            steps, learner_steps, seconds, _ = _timed_generations(
+                world, params, rng, population, range(1, generations + 1))
+            rows.append((f"sumo default cap: Cologne, P=20, {generations} generations", label,
+                         numba.get_num_threads(), steps, learner_steps, seconds))
+            env = SumoEnv(scenario)
+            actions = np.random.default_rng(1)
+            started = time.perf_counter()
+            env.reset(options={"key": generations + 1, "situation": 0})
+            lived = 0
+            while True:
+                lived += 1
+                *_, terminated, truncated, _ = env.step(actions.random(2))
+                if terminated or truncated:
+                    break
+            rows.append(("sumo env: a reset and a random-policy life, Cologne, default cap",
+                         label, 1, lived, lived, time.perf_counter() - started))
+            env.close()
+        finally:
+            sumo_world.FIRST_RECORDING = saved
+    table = _rate_table(rows)
+    for workload in table["workload"].unique():
+        rows_of = table["workload"] == workload
+        before = table.loc[rows_of, "seconds"].iloc[0]
+        table.loc[rows_of, "speedup_vs_reference"] = before / table.loc[rows_of, "seconds"]
+    return table
 
 
 def _crowd(scenario, chromosome, generation: int, learner_steps: int) -> tuple[int, float]:
@@ -423,6 +474,7 @@ def run_bench(quick: bool = False) -> pd.DataFrame:
         arena_bench(generations=3 if quick else 10),
         env_bench(steps=50 if quick else 200, sync_seconds=2.0 if quick else 5.0),
         sumo_bench(generations=3 if quick else 10, closed_loop_steps=2_000 if quick else 10_000),
+        recording_bench(generations=1 if quick else 2),
         city_bench(generations=3 if quick else 20, closed_loop_steps=1_000 if quick else 5_000),
         lane_keeping_bench(generations=2 if quick else 4),
     ], ignore_index=True)

@@ -23,8 +23,9 @@ from pettingzoo import ParallelEnv
 from enn_traffic.envs.batch import compiled
 from enn_traffic.envs.rangefinder import TRAINING_KEYS, picture, spaces_of
 from enn_traffic.scenario import Scenario, load_scenario
+from enn_traffic.sim import sumo_world as recordings
 from enn_traffic.sim.crowd import ALIVE
-from enn_traffic.sim.replay import clear_start, learner_state, move_once, sense_once
+from enn_traffic.sim.replay import clear_start, learner_state, move_once, sense_once, with_slots
 from enn_traffic.sim.sensors import RANGE
 from enn_traffic.sim.sumo_crowd import SumoCrowd, observe
 from enn_traffic.sim.sumo_crowd import move_once as move_learners
@@ -47,19 +48,29 @@ class ReplayTraffic:
     ``t`` reads rows ``t - 1`` (``before``) and ``t`` (``now``) of the recording."""
 
     def __init__(self, world: SumoWorld, seed: int, warmup: int | None, start: np.ndarray):
-        record = world.recording(seed, warmup)
-        self.ids, self.corners, self.centres = record.ids, record.corners, record.centres
-        self.names, self.types = record.names, record.types
-        self.physics = world._learner_physics(record.radius)
+        self.world, self.seed, self.warmup = world, seed, warmup
+        self._use(world.recording(seed, warmup, recordings.FIRST_RECORDING))
         self.state = learner_state(start, self.physics, len(world.geometry.beams),
                                    world.layer_sizes, self.ids.shape[1])
         clear_start(self.state.centre, self.ids[0], self.centres[0], self.state.gone,
                     self.physics.clearance)
         self.t = self.before = self.now = 0
 
+    def _use(self, record) -> None:
+        self.ids, self.corners, self.centres = record.ids, record.corners, record.centres
+        self.names, self.types = record.names, record.types
+        self.physics = self.world._learner_physics(record.radius)
+
     def advance(self) -> None:
+        """The next step; past the end of the recording, a recording
+        :data:`~enn_traffic.sim.sumo_world.RECORDING_GROWTH` times longer (which begins with
+        this one: the life goes on unchanged), up to the step cap."""
         self.t += 1
         self.before, self.now = self.t - 1, self.t
+        if self.t >= self.ids.shape[0] and self.t <= self.world.max_steps:
+            steps = (self.ids.shape[0] - 1) * recordings.RECORDING_GROWTH
+            self._use(self.world.recording(self.seed, self.warmup, steps))
+            self.state = with_slots(self.state, self.ids.shape[1])
 
     def vehicle(self, hit: int) -> tuple[str, str] | None:
         return (self.names[hit], self.types[hit]) if hit >= 0 and self.names else None

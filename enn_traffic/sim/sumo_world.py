@@ -40,7 +40,7 @@ from enn_traffic.sim.replay import (
 )
 from enn_traffic.sim.rules import Physics
 from enn_traffic.sim.sumo_situations import WARMUP_STREAM, shared_warmup, situation_seed
-from enn_traffic.sim.world import SituationResults
+from enn_traffic.sim.world import CAPPED, SituationResults
 from enn_traffic.traffic import sumo
 
 
@@ -87,6 +87,9 @@ def named(hit: np.ndarray, names: tuple[str, ...], types: tuple[str, ...]) -> np
 
 
 RECORDINGS_KEPT = 24  # a test world holds 10 test and 10 validation situations
+# Replay records SUMO as far as the lives reach: this many steps first, then this many times
+# longer while a life outlives the recording (SumoWorld.replay).
+FIRST_RECORDING, RECORDING_GROWTH = 256, 4
 
 
 
@@ -149,20 +152,49 @@ class SumoWorld(LearnerWorld):
     def situation_labels(self) -> list[str]:
         return [f"sumo ({self.scenario.traffic.mode})"] * self.scenario.traffic.episodes
 
-    def recording(self, seed: int, warmup: int | None = None) -> sumo.Recording:
+    def recording(self, seed: int, warmup: int | None = None,
+                  steps: int | None = None) -> sumo.Recording:
         """The SUMO run of ``seed`` without the learner, from shared warm-up ``warmup`` (see
-        :meth:`warm_state`; recorded once, then kept)."""
-        if (seed, warmup) not in self._recordings:
+        :meth:`warm_state`), at least ``steps`` steps long (the step cap by default): recorded
+        once and kept, and recorded again, longer, when a life needs more. SUMO runs the same
+        way every time from the same seed and state, so a longer recording begins with the
+        shorter one."""
+        steps = self.max_steps if steps is None else min(steps, self.max_steps)
+        kept = self._recordings.get((seed, warmup))
+        if kept is None or kept.ids.shape[0] - 1 < steps:
             state = self.warm_state(seed, warmup)
             own = "" if state else f"{self.scenario.traffic.warmup_s:g} s of warm-up, then "
-            with slow_step(f"simulating SUMO traffic ({own}{self.max_steps} steps, "
-                           f"seed {seed})"):
-                self._recordings[seed, warmup] = sumo.record(self.scenario, seed,
-                                                             self.max_steps, state)
+            with slow_step(f"simulating SUMO traffic ({own}{steps} steps, seed {seed})"):
+                record = sumo.record(self.scenario, seed, steps, state,
+                                     empty=steps < self.max_steps)
+            if steps < self.max_steps and not (record.ids >= 0).any():
+                # no vehicle yet: refuse traffic that never reaches the network within the cap
+                sumo.first_traffic(self.scenario, seed, state, self.max_steps)
+            self._recordings[seed, warmup] = record
             while len(self._recordings) > RECORDINGS_KEPT:
                 self._recordings.popitem(last=False)
         self._recordings.move_to_end((seed, warmup))
         return self._recordings[seed, warmup]
+
+    def replay(self, genes: np.ndarray, seed: int, start: np.ndarray, warmup: int | None
+               ) -> tuple[tuple[np.ndarray, ...], sumo.Recording]:
+        """Every chromosome (source-layout genes) through the recorded traffic of ``seed``:
+        the life columns of :func:`run_replay_population` and the recording. SUMO is recorded
+        only as far as the lives reach (docs/sumo.md, "Replay"): first
+        :data:`FIRST_RECORDING` steps, then :data:`RECORDING_GROWTH` times longer while a life
+        outlives the recording, up to the step cap; a life's result is the same as on a
+        recording of the whole cap, which it never reads past its end."""
+        steps = min(self.max_steps, FIRST_RECORDING)
+        while True:
+            record = self.recording(seed, warmup, steps)
+            steps = min(record.ids.shape[0] - 1, self.max_steps)
+            with numba.parallel_chunksize(1):
+                runs = run_replay_population(
+                    genes, self.layer_sizes, self._learner_physics(record.radius), self.geometry,
+                    start, record.ids, record.corners, record.centres, steps)
+            if steps >= self.max_steps or not (runs[1] == CAPPED).any():
+                return runs, record
+            steps *= RECORDING_GROWTH
 
     def _learner_physics(self, radius: float) -> Physics:
         """The constants, with bodies as large as the traffic's largest (``radius``)."""
@@ -187,13 +219,10 @@ class SumoWorld(LearnerWorld):
                                         for life in lives], dtype=np.float64).reshape(-1, 4))
                 hit_vehicle.append(objects([life.hit_vehicle for life in lives]))
                 continue
-            record = self.recording(seed, warmup)
+            lives, record = self.replay(genes, seed, start, warmup)
+            runs.append(lives)
             vehicles.append(record.mean_vehicles)
             at_start.append(int((record.ids[0] >= 0).sum()))
-            with numba.parallel_chunksize(1):
-                runs.append(run_replay_population(
-                    genes, self.layer_sizes, self._learner_physics(record.radius), self.geometry,
-                    start, record.ids, record.corners, record.centres, self.max_steps))
             hit_vehicle.append(named(runs[-1][5], record.names, record.types))
         if vehicles:
             self._traffic_seen = vehicles
@@ -278,7 +307,10 @@ class SumoWorld(LearnerWorld):
             for t, (_, frame_ids, frame_corners) in enumerate(frames):
                 ids[t, : len(frame_ids)], corners[t, : len(frame_ids)] = frame_ids, frame_corners
         else:
-            record = self.recording(seed, warmup)
+            if limit >= self.max_steps:  # record only as far as this life reaches
+                record = self.replay(genes[None], seed, start, warmup)[1]
+            else:
+                record = self.recording(seed, warmup, limit)
             limit = min(limit, record.ids.shape[0] - 1)  # a replay ends with its recording
             learner = np.full((limit + 1, 3), np.nan)
             steps, outcome, *_, hit = run_replay_episode(

@@ -575,9 +575,11 @@ def read_frame(simulation: Simulation, row: int, slots: tuple) -> tuple[tuple, f
     return (ids, corners, centres), fill_frame(rows, ids[row], corners[row], centres[row])
 
 
-def record(scenario: Scenario, seed: int, steps: int, state: Path | None = None) -> Recording:
+def record(scenario: Scenario, seed: int, steps: int, state: Path | None = None,
+           empty: bool = False) -> Recording:
     """Run SUMO for the warm-up (or load its ``state``) and then ``steps`` steps; keep steps
-    0..steps. An InputError if no vehicle is on the network at any of them."""
+    0..steps. An InputError if no vehicle is on the network at any of them, unless
+    ``empty`` (a recording of the first steps only, whose traffic may come later)."""
     simulation = Simulation(scenario, seed, state)
     frames = []
     try:
@@ -589,7 +591,7 @@ def record(scenario: Scenario, seed: int, steps: int, state: Path | None = None)
             frames.append(simulation.read())
     finally:
         simulation.close()
-    if not any(len(rows) for rows in frames):
+    if not empty and not any(len(rows) for rows in frames):
         raise no_traffic_error(scenario, steps)
     ids, corners, centres = slot_arrays(steps + 1, simulation.slots_used)
     radius = max((fill_frame(rows, ids[t], corners[t], centres[t])

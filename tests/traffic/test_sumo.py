@@ -147,6 +147,32 @@ def test_replay_and_closed_loop_agree_where_traffic_does_not_react(tmp_path, roo
     assert (alone.steps[own_side] != replayed.steps[own_side]).any()
 
 
+def test_replay_records_sumo_only_as_far_as_the_lives_reach(tmp_path, root, monkeypatch):
+    """A replay records 16 steps first (here), then 4 times more while a life outlives the
+    recording: every life, trace and environment step is what a recording of the whole cap
+    (2,000 steps) gives, and SUMO ran only as far as the longest life."""
+    from enn_traffic.sim import sumo_world
+
+    scenario = sumo_scenario(tmp_path, root, CLOCKWISE, steps=2000)
+    monkeypatch.setattr(sumo_world, "FIRST_RECORDING", 10**6)
+    whole = make_world(scenario)
+    population = np.random.default_rng(5).uniform(-1, 1, (30, whole.spec.chromosome_length))
+    expected = whole.evaluate(population, key=3)
+    assert {r.ids.shape[0] for r in whole._recordings.values()} == {2001}
+    monkeypatch.setattr(sumo_world, "FIRST_RECORDING", 16)
+    world = make_world(scenario)
+    results = world.evaluate(population, key=3)
+    for column in ("steps", "outcome", "suffered", "hit"):
+        np.testing.assert_array_equal(getattr(results, column), getattr(expected, column))
+    longest = results.steps.max(axis=0)
+    assert 16 < longest.max() < 2000
+    recorded = [world._recordings[seed, None].ids.shape[0] - 1 for seed in world.seeds(3)]
+    assert all(longest[e] <= recorded[e] < max(16, 4 * longest[e]) + 1 for e in range(2))
+    best = int(np.argmax(results.steps[:, 0]))
+    poses, outcome = make_world(scenario).trace(population[best], key=3)
+    assert len(poses) - 1 == results.steps[best, 0] and outcome == results.outcome[best, 0]
+
+
 def test_a_replayed_trace_ends_with_its_recording(tmp_path, root):
     """A replay records ``max_steps`` (50) steps; a trace asked for 400 ends there, as long as
     the life it shows (all genes 0: straight ahead, round the ring's corner into a wall or
