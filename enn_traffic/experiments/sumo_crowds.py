@@ -43,6 +43,7 @@ from __future__ import annotations
 
 import hashlib
 import json
+import os
 from collections.abc import Mapping
 from dataclasses import asdict, dataclass, field, replace
 from pathlib import Path
@@ -69,6 +70,7 @@ from enn_traffic.provenance import rules_version, sources_of
 from enn_traffic.runner import ga_params
 from enn_traffic.sim.sumo_crowd import SumoCrowd
 from enn_traffic.sim.sumo_world import SumoWorld
+from enn_traffic.traffic.fresh import fresh, fresh_map
 from enn_traffic.worlds import make_world
 
 # The situations whose rates are reported: fresh in CROWD_TEST, past those that two designs
@@ -125,8 +127,15 @@ def learn_together(world: SumoWorld, winner: np.ndarray, evolved: np.ndarray, si
                    learning: SumoLearning, key: int = SITUATION_KEY):
     """The learning arm of one situation: each window's run while the learners learn, the run
     of the window after it (each learner its evolved controller) and the learning.
-    ``winner`` (G,) and ``evolved`` (N, G) in the source layout."""
-    count = world.scenario.traffic.learners
+    ``winner`` (G,) and ``evolved`` (N, G) in the source layout. SUMO runs in a fresh process
+    (:mod:`enn_traffic.traffic.fresh`)."""
+    return fresh(_learning_arm, world.scenario, winner, evolved, situation, learning, key)
+
+
+def _learning_arm(scenario, winner, evolved, situation, learning, key):
+    """:func:`learn_together` in the process it runs in."""
+    world = make_world(scenario)
+    count = scenario.traffic.learners
     online = _learning(world, evolved, situation, learning)
     with SumoCrowd(world, world.seeds(key + situation)[0]) as crowd:
         learnt = [crowd.run(learning.window_seconds, np.tile(winner, (count, 1)), online)
@@ -135,9 +144,17 @@ def learn_together(world: SumoWorld, winner: np.ndarray, evolved: np.ndarray, si
     return learnt, after, online
 
 
+def _driving_arm(scenario, seed: int, genes: np.ndarray, window_seconds: float, windows: int):
+    """An arm whose drivers keep their controllers: a run per window, SUMO in this process."""
+    world = make_world(scenario)
+    with SumoCrowd(world, seed) as crowd:
+        return [crowd.run(window_seconds, genes) for _ in range(windows)]
+
+
 def situation_result(world: SumoWorld, winner: np.ndarray, evolved: np.ndarray, situation: int,
                      learning: SumoLearning, key: int = SITUATION_KEY) -> SituationResult:
-    """One situation's every arm, from its SUMO seed alone. ``winner`` (G,) and ``evolved``
+    """One situation's every arm, from its SUMO seed alone, each arm's SUMO in a fresh process
+    of its own (the three at once, on up to three cores). ``winner`` (G,) and ``evolved``
     (N, G) in the source layout; the controllers after learning in the source layout."""
     scenario = world.scenario
     count, windows = scenario.traffic.learners, learning.windows
@@ -145,11 +162,14 @@ def situation_result(world: SumoWorld, winner: np.ndarray, evolved: np.ndarray, 
     rng = np.random.default_rng([scenario.traffic.seed, key, situation])
     drivers = world.spec.in_source_layout(
         rng.uniform(-1, 1, (count, world.spec.chromosome_length)))
-    arms = {}
-    for arm, genes in (("initial", drivers), ("winner", np.tile(winner, (count, 1)))):
-        with SumoCrowd(world, seed) as crowd:
-            arms[arm] = [crowd.run(learning.window_seconds, genes) for _ in range(windows + 1)]
-    learnt, after, online = learn_together(world, winner, evolved, situation, learning, key)
+    initial, winning, learning_arm = fresh_map(_arm, [
+        (_driving_arm, scenario, seed, drivers, learning.window_seconds, windows + 1),
+        (_driving_arm, scenario, seed, np.tile(winner, (count, 1)), learning.window_seconds,
+         windows + 1),
+        (_learning_arm, scenario, winner, evolved, situation, learning, key)],
+        workers=min(3, os.cpu_count() or 1))
+    arms = {"initial": initial, "winner": winning}
+    learnt, after, online = learning_arm
     measured = {"initial": arms["initial"][0], "winner": arms["winner"][0],
                 "initial_after": arms["initial"][-1], "winner_after": arms["winner"][-1],
                 "population": after}
@@ -163,6 +183,11 @@ def situation_result(world: SumoWorld, winner: np.ndarray, evolved: np.ndarray, 
                    for w in range(windows)]
     return SituationResult(rates, window_rows, online.learner_rows(),
                            online.evolved_controllers(), ())
+
+
+def _arm(function, *args):
+    """One arm of :func:`situation_result` (``fresh_map`` calls it with the arm's function)."""
+    return function(*args)
 
 
 def crowd_world(family: Family, strategy: int) -> SumoWorld:

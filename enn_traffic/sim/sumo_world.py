@@ -17,6 +17,7 @@ and differ by their own seed from the learner's start on (:func:`shared_warmup`)
 from __future__ import annotations
 
 import functools
+import os
 from collections import OrderedDict
 from pathlib import Path
 from typing import NamedTuple
@@ -42,6 +43,7 @@ from enn_traffic.sim.rules import Physics
 from enn_traffic.sim.sumo_situations import WARMUP_STREAM, shared_warmup, situation_seed
 from enn_traffic.sim.world import CAPPED, SituationResults
 from enn_traffic.traffic import sumo
+from enn_traffic.traffic.fresh import fresh_map
 
 
 class ClosedLoopLife(NamedTuple):
@@ -90,6 +92,8 @@ RECORDINGS_KEPT = 24  # a test world holds 10 test and 10 validation situations
 # Replay records SUMO as far as the lives reach: this many steps first, then this many times
 # longer while a life outlives the recording (SumoWorld.replay).
 FIRST_RECORDING, RECORDING_GROWTH = 256, 4
+# Closed-loop situations run in this many fresh processes at once (SumoWorld.evaluate).
+CLOSED_LOOP_WORKERS = max(1, min(4, os.cpu_count() or 1))
 
 
 
@@ -206,11 +210,19 @@ class SumoWorld(LearnerWorld):
         genes = self.spec.in_source_layout(population)
         closed = self.scenario.traffic.mode == "closed-loop"
         runs, vehicles, at_start, safety, hit_vehicle = [], [], [], [], []
-        for seed, start, warmup in zip(self.seeds(key), self.situation_starts(key),
-                                       self.warmups(key), strict=True):
+        situations = list(zip(self.seeds(key), self.situation_starts(key), self.warmups(key),
+                              strict=True))
+        if closed:  # in fresh processes, a share of the situations each
+            shares = [situations[i::CLOSED_LOOP_WORKERS] for i in range(CLOSED_LOOP_WORKERS)]
+            done = fresh_map(closed_loop_lives, [(self.scenario, genes, share)
+                                                 for share in shares if share],
+                             workers=CLOSED_LOOP_WORKERS)
+            closed_lives = [None] * len(situations)
+            for i, lives in enumerate(done):
+                closed_lives[i::CLOSED_LOOP_WORKERS] = lives
+        for index, (seed, start, warmup) in enumerate(situations):
             if closed:
-                lives = [self.closed_loop(row, seed, start=start, warmup=warmup)
-                         for row in genes]
+                lives = closed_lives[index]
                 runs.append([np.array([life[i] for life in lives], dtype=np.int64)
                              for i in range(6)])
                 at_start.append(np.array([life.at_start for life in lives]))
@@ -330,6 +342,19 @@ class SumoWorld(LearnerWorld):
             body = corners[before, int(np.flatnonzero(ids[before] == hit)[0])].copy()
         return TracedLife(np.concatenate([learner[:, None, :], traffic], axis=1), int(outcome),
                           int(hit), hit_vehicle, body)
+
+
+def closed_loop_lives(scenario: Scenario, genes: np.ndarray,
+                      situations: list[tuple[int, np.ndarray, int | None]]
+                      ) -> list[list[ClosedLoopLife]]:
+    """Every chromosome's closed-loop life (source-layout ``genes``) in each situation (SUMO
+    seed, start, shared warm-up), one SUMO start after another in this process: what
+    :meth:`SumoWorld.evaluate` runs in a fresh process (:mod:`enn_traffic.traffic.fresh`).
+    Starts of one scenario in a row give what each gives in a process of its own; a start of
+    another scenario before them would not (docs/sumo.md, "One SUMO start, one process")."""
+    world = SumoWorld(scenario)
+    return [[world.closed_loop(row, seed, start=start, warmup=warmup) for row in genes]
+            for seed, start, warmup in situations]
 
 
 class LiveTraffic:

@@ -202,3 +202,31 @@ def test_a_learner_at_the_cap_drives_on_with_its_next_chromosome(world):
     assert run.collisions.tolist() == [0, 0]
     assert [(g.generation, g.tried, g.lives) for g in learners] == [(1, 2, 0), (1, 2, 0)]
     np.testing.assert_allclose(pose[:, 0], [45.0, 45.0], atol=0.1)
+
+
+@pytest.mark.full
+def test_a_crowds_conflicts_are_the_same_whatever_ran_before_in_the_process():
+    """The stop-and-go crowd (the SUMO family's strategy 3), 8 random drivers over two 50 s
+    spans, each SUMO start in a fresh process: the same SSM conflicts and collisions before
+    and after a city closed-loop life ran SUMO in this process. Run in this process instead,
+    the same spans count other conflicts (libsumo keeps state from one start to the next:
+    docs/sumo.md, "One SUMO start, one process")."""
+    from enn_traffic.experiments.protocol import CITY, SUMO
+    from enn_traffic.experiments.sumo_crowds import _driving_arm, crowd_world
+    from enn_traffic.traffic.fresh import fresh
+
+    world = crowd_world(SUMO, 3)
+    genes = np.random.default_rng(0).uniform(-1, 1, (world.scenario.traffic.learners,
+                                                     world.spec.chromosome_length))
+    spans = (world.scenario, world.seeds(keys.CROWD_TEST.start)[0], genes, 50.0, 2)
+
+    def counted(runs):
+        return [(run.ttc_conflicts, run.collisions.tolist()) for run in runs]
+
+    before = counted(fresh(_driving_arm, *spans))
+    city = make_world(CITY.scenario(1).with_overrides(
+        traffic={"mode": "closed-loop"}, episode={"max_steps": 200}))
+    city.closed_loop(np.zeros(city.spec.chromosome_length), city.seeds(5)[0])
+    assert counted(fresh(_driving_arm, *spans)) == before
+    here = counted(_driving_arm(*spans))
+    assert [c for c, _ in here] != [c for c, _ in before]

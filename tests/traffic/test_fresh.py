@@ -1,0 +1,31 @@
+"""Calls in a process of their own (enn_traffic/traffic/fresh.py; docs/sumo.md, "One SUMO
+start, one process")."""
+
+import math
+import os
+import subprocess
+import sys
+
+import pytest
+
+from enn_traffic.errors import InputError
+from enn_traffic.shipped import shipped_scenario
+from enn_traffic.traffic.fresh import fresh, fresh_map
+
+
+def test_a_call_runs_in_a_new_process_and_its_error_is_raised_here():
+    assert fresh(os.getpid) != os.getpid()
+    assert fresh_map(math.hypot, [(3, 4), (5, 12), (8, 15)], workers=2) == [5.0, 13.0, 17.0]
+    with pytest.raises(InputError, match="no_such_scenario"):
+        fresh(shipped_scenario, "no_such_scenario")
+
+
+def test_a_script_without_a_main_guard_may_call_it(tmp_path):
+    """multiprocessing's spawn would run the script again in the child; this does not."""
+    script = tmp_path / "script.py"
+    script.write_text("import math\nfrom enn_traffic.traffic.fresh import fresh\n"
+                      "print(fresh(math.hypot, 6, 8))\n")
+    done = subprocess.run([sys.executable, str(script)], capture_output=True, text=True,
+                          timeout=120)
+    assert done.returncode == 0, done.stderr
+    assert done.stdout.strip() == "10.0"
