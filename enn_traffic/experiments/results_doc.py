@@ -336,9 +336,34 @@ def family_tables34(paper: Path, family: Family) -> str:
     return "\n".join(lines)
 
 
+def closed_loop(paper: Path, family: Family) -> str:
+    """Each strategy's Table 1 controller replayed and in closed loop on the same test
+    situations (``closed_loop.csv``), every closed-loop SUMO start in a fresh process."""
+    table = pd.read_csv(paper / family.folder / "closed_loop.csv")
+    means = table.groupby("strategy")[["replay_steps", "closed_loop_steps"]].mean()
+    pairs = ", ".join(f"{row.replay_steps:.0f} vs {row.closed_loop_steps:.0f} "
+                      f"(`{family.name(strategy)}`)" for strategy, row in means.iterrows())
+    same = int((table["replay_steps"] == table["closed_loop_steps"]).sum())
+    gap = (table["closed_loop_steps"] - table["replay_steps"]).abs().idxmax()
+    widest = table.loc[gap]
+    situations = table.groupby("strategy").size().iloc[0]
+    return (f"**Replay against closed loop.** Each strategy's Table 1 controller (trained on "
+            f"replayed traffic) on the same {situations} test situations, mean steps driven "
+            f"with the traffic replayed against in closed loop (SUMO's drivers react to it; "
+            f"the learner enters at its own speed from each situation's saved warm-up): "
+            f"{pairs}. {same} of {len(table)} situations give the same lifetime both ways; the "
+            f"widest gap is {widest.replay_steps} against {widest.closed_loop_steps} steps "
+            f"(strategy {widest.strategy}). Every closed-loop SUMO start runs in a fresh "
+            f"process ([sumo.md](sumo.md#one-sumo-start-one-process)): the same lifetimes "
+            f"whatever ran before ([`{family.folder}/closed_loop.csv`]"
+            f"(../results/paper/{family.folder}/closed_loop.csv)).\n")
+
+
 SECTIONS: dict[str, Callable[[Path], str]] = {
     "tables34": tables34, "sumo_tables34": lambda paper: family_tables34(paper, SUMO),
-    "city_tables34": lambda paper: family_tables34(paper, CITY)}
+    "city_tables34": lambda paper: family_tables34(paper, CITY),
+    "sumo_closed_loop": lambda paper: closed_loop(paper, SUMO),
+    "city_closed_loop": lambda paper: closed_loop(paper, CITY)}
 
 
 def markers(name: str) -> tuple[str, str]:

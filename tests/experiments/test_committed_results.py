@@ -179,10 +179,12 @@ def test_the_committed_table2_controller_drives_its_last_row(family, strategies,
 
 
 @pytest.mark.parametrize("family, strategy", [full(SUMO, 3, id="sumo"),
+                                              full(SUMO, 2, id="sumo crossing flows"),
                                               pytest.param(CITY, 2, id="city")])
 def test_a_committed_controller_drives_its_closed_loop_rows(family, strategy, root):
     """A strategy's committed Table 1 controller on its test situations, traffic replayed and
-    in closed loop: every episode's two lifetimes in the committed ``closed_loop.csv``."""
+    in closed loop (each SUMO start in a fresh process: the crossing flows' closed loop
+    depends on it): every episode's two lifetimes in the committed ``closed_loop.csv``."""
     from enn_traffic.deploy import EVALUATION_KEY
     from enn_traffic.worlds import make_world
 
