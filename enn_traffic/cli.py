@@ -268,13 +268,18 @@ def _cmd_lanes(args) -> int:
     from enn_traffic.shipped import scenario_path
 
     net, routes, additional, shortest = sumo_sources(scenario_path(args.source))
+    # ties of demand are ranked by length, then by the lane's name
     table = lane_table(net, routes, additional, shortest)
     learner = table[table["learner_may_start"]]
     cars = table["allows_cars"]
+    source = scenario_path(args.source)
+    rule = (f"start_offset + body + {ANYWHERE_AHEAD_M:g} m ahead, as start_lane = \"auto\" "
+            "asks" + ("; a .sumocfg is read with start_offset = 10 m and a 4.3 m body: run "
+                      "lanes on your scenario file for its own" if source.suffix == ".sumocfg"
+                      else ""))
     print(f"{net.name}: {len(table):,} lanes; {int(cars.sum()):,} allow passenger cars, of "
           f"which {len(learner):,} are {shortest:g} m long or longer (a learner may start "
-          f"there: start_offset + body + {ANYWHERE_AHEAD_M:g} m ahead, as start_lane = \"auto\" "
-          f"asks); {int((~cars).sum()):,} do not allow cars")
+          f"there: {rule}); {int((~cars).sum()):,} do not allow cars")
     if (~cars).any():
         kinds = table[~cars]["allowed"].replace("", "no vehicle").value_counts()
         print("  not for cars: " + ", ".join(f"{count:,} {kind}" for kind, count

@@ -16,24 +16,42 @@ from __future__ import annotations
 
 import os
 import pickle
+import signal
 import subprocess
 import sys
 from collections.abc import Callable, Sequence
 from concurrent.futures import ThreadPoolExecutor
+from pathlib import Path
 
 
 class FreshProcessError(RuntimeError):
     """The fresh process ended without a result (killed, or it could not start)."""
 
 
+# The child imports the same copy of the package as the caller, whatever its sys.path.
+_PACKAGE_ROOT = str(Path(__file__).resolve().parents[2])
+
+
+def _ends_with_parent() -> None:
+    """In the child, before it runs: end it when the caller's process ends (Linux), so that
+    no fresh process outlives a killed caller."""
+    if sys.platform.startswith("linux"):
+        import ctypes
+
+        ctypes.CDLL(None).prctl(1, signal.SIGTERM)  # PR_SET_PDEATHSIG
+
+
 def _run(function: Callable, args: tuple):
     """``function(*args)`` in a new process; its exception, if any, raised here."""
     job = pickle.dumps((function, tuple(args)), protocol=pickle.HIGHEST_PROTOCOL)
+    path = os.environ.get("PYTHONPATH")
+    env = {**os.environ, "PYTHONPATH": os.pathsep.join(filter(None, [_PACKAGE_ROOT, path]))}
     done = subprocess.run([sys.executable, "-m", __name__], input=job, stdout=subprocess.PIPE,
-                          check=False)
+                          check=False, env=env, preexec_fn=_ends_with_parent)
     if done.returncode != 0 or not done.stdout:
         raise FreshProcessError(f"{getattr(function, '__qualname__', function)} ended with "
-                                f"exit status {done.returncode} in its own process")
+                                f"exit status {done.returncode} in its own process (its "
+                                "messages, if any, are above)")
     failed, value = pickle.loads(done.stdout)
     if failed:
         raise value
@@ -66,7 +84,15 @@ def _serve() -> None:
         result = (False, function(*args))
     except BaseException as exc:  # handed to the caller, who raises it
         result = (True, exc)
-    answer.write(pickle.dumps(result, protocol=pickle.HIGHEST_PROTOCOL))
+    try:
+        data = pickle.dumps(result, protocol=pickle.HIGHEST_PROTOCOL)
+    except Exception:  # an exception that does not pickle (libsumo's): its type and message
+        from enn_traffic.traffic.fresh import FreshProcessError as Error  # not __main__'s
+
+        exc = result[1] if result[0] else None
+        data = pickle.dumps((True, Error(
+            f"{type(exc).__name__}: {exc}" if exc else "the result does not pickle")))
+    answer.write(data)
     answer.close()
 
 

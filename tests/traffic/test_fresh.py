@@ -29,3 +29,23 @@ def test_a_script_without_a_main_guard_may_call_it(tmp_path):
                           timeout=120)
     assert done.returncode == 0, done.stderr
     assert done.stdout.strip() == "10.0"
+
+
+class _Unpicklable(Exception):
+    def __reduce__(self):
+        raise TypeError("cannot pickle this exception")
+
+
+def _raise_unpicklable():
+    raise _Unpicklable("Vehicle 'enn_learner' is not known")
+
+
+def test_an_error_that_does_not_pickle_keeps_its_type_and_message(monkeypatch):
+    """libsumo's exceptions do not pickle: the caller still reads what went wrong."""
+    from pathlib import Path
+
+    from enn_traffic.traffic.fresh import FreshProcessError
+
+    monkeypatch.setenv("PYTHONPATH", str(Path(__file__).parent))
+    with pytest.raises(FreshProcessError, match="_Unpicklable: Vehicle 'enn_learner' is not"):
+        fresh(_raise_unpicklable)
