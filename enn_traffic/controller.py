@@ -12,7 +12,7 @@ import numpy as np
 from enn_traffic.errors import InputError
 from enn_traffic.io import write_atomic
 from enn_traffic.neural import NetworkSpec
-from enn_traffic.scenario import Scenario
+from enn_traffic.scenario import RingConfig, Scenario
 
 
 @dataclass(frozen=True)
@@ -29,7 +29,7 @@ class Controller:
     # The spin rule of its training (paper §5.3); None in files written before it was kept.
     spin_window: int | None = None
     spin_variance: float | None = None
-    # The sensor's further rings (beams, span_deg, range, centre_deg each; [sensor] rings).
+    # The sensor's further rings, each its RingConfig's fields in order ([sensor] rings).
     rings: tuple[tuple[float, float, float, float], ...] = ()
 
     @classmethod
@@ -48,8 +48,7 @@ class Controller:
             generation=int(generation),
             spin_window=scenario.episode.spin_window,
             spin_variance=scenario.episode.spin_variance,
-            rings=tuple((ring.beams, ring.span_deg, ring.range, ring.centre_deg)
-                        for ring in scenario.sensor.rings),
+            rings=tuple(tuple(ring.model_dump().values()) for ring in scenario.sensor.rings),
         )
 
     def save(self, path: str | Path) -> None:
@@ -137,7 +136,7 @@ class Controller:
                 "steering_gain_deg": self.steering_gain_deg,
             },
             sensor={"span_deg": self.span_deg, "range": self.range,
-                    "rings": [dict(zip(("beams", "span_deg", "range", "centre_deg"), ring,
-                                       strict=True)) for ring in self.rings]},
+                    "rings": [dict(zip(RingConfig.model_fields, ring, strict=True))
+                              for ring in self.rings]},
             **spin,
         )

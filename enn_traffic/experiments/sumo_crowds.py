@@ -70,7 +70,7 @@ from enn_traffic.provenance import rules_version, sources_of
 from enn_traffic.runner import ga_params
 from enn_traffic.sim.sumo_crowd import SumoCrowd
 from enn_traffic.sim.sumo_world import SumoWorld
-from enn_traffic.traffic.fresh import fresh, fresh_map
+from enn_traffic.traffic.fresh import fresh, fresh_calls
 from enn_traffic.worlds import make_world
 
 # The situations whose rates are reported: fresh in CROWD_TEST, past those that two designs
@@ -162,7 +162,7 @@ def situation_result(world: SumoWorld, winner: np.ndarray, evolved: np.ndarray, 
     rng = np.random.default_rng([scenario.traffic.seed, key, situation])
     drivers = world.spec.in_source_layout(
         rng.uniform(-1, 1, (count, world.spec.chromosome_length)))
-    initial, winning, learning_arm = fresh_map(_arm, [
+    initial, winning, learning_arm = fresh_calls([
         (_driving_arm, scenario, seed, drivers, learning.window_seconds, windows + 1),
         (_driving_arm, scenario, seed, np.tile(winner, (count, 1)), learning.window_seconds,
          windows + 1),
@@ -183,11 +183,6 @@ def situation_result(world: SumoWorld, winner: np.ndarray, evolved: np.ndarray, 
                    for w in range(windows)]
     return SituationResult(rates, window_rows, online.learner_rows(),
                            online.evolved_controllers(), ())
-
-
-def _arm(function, *args):
-    """One arm of :func:`situation_result` (``fresh_map`` calls it with the arm's function)."""
-    return function(*args)
 
 
 def crowd_world(family: Family, strategy: int) -> SumoWorld:

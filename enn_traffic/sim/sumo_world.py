@@ -96,8 +96,6 @@ FIRST_RECORDING, RECORDING_GROWTH = 256, 4
 CLOSED_LOOP_WORKERS = max(1, min(4, os.cpu_count() or 1))
 
 
-
-
 class SumoWorld(LearnerWorld):
     """A scenario whose traffic is SUMO's: evaluate populations, trace one episode."""
 

@@ -58,14 +58,20 @@ def _run(function: Callable, args: tuple):
     return value
 
 
-def fresh_map(function: Callable, calls: Sequence[tuple], workers: int = 1) -> list:
-    """``function(*args)`` for each ``args`` of ``calls``, each in a new process (at most
-    ``workers`` at once); the results in order. ``function`` must be importable by name (a
-    module-level function of the package) and its arguments must pickle."""
+def fresh_calls(calls: Sequence[tuple], workers: int = 1) -> list:
+    """Each call ``(function, *args)`` of ``calls`` in a new process (at most ``workers`` at
+    once); the results in order. A ``function`` must be importable by name (a module-level
+    function of the package) and its arguments must pickle."""
     if workers <= 1 or len(calls) <= 1:
-        return [_run(function, args) for args in calls]
+        return [_run(call[0], call[1:]) for call in calls]
     with ThreadPoolExecutor(max_workers=min(workers, len(calls))) as pool:
-        return list(pool.map(lambda args: _run(function, args), calls))
+        return list(pool.map(lambda call: _run(call[0], call[1:]), calls))
+
+
+def fresh_map(function: Callable, calls: Sequence[tuple], workers: int = 1) -> list:
+    """``function(*args)`` for each ``args`` of ``calls``, each in a new process
+    (:func:`fresh_calls`)."""
+    return fresh_calls([(function, *args) for args in calls], workers)
 
 
 def fresh(function: Callable, *args):
