@@ -37,7 +37,7 @@ from enn_traffic.evolution.backends import Evaluator, LocalEvaluator, ProcessEva
 from enn_traffic.roads import load_track
 from enn_traffic.runner import ga_params
 from enn_traffic.shipped import shipped_scenario
-from enn_traffic.sim.reference import reference_episode, reference_wall_grid
+from enn_traffic.sim.reference import reference_life, reference_wall_grid
 from enn_traffic.sim.sensors import WallGrid
 from enn_traffic.sim.sumo_crowd import SumoCrowd
 from enn_traffic.sim.world import World
@@ -87,7 +87,7 @@ def navigation_bench(generations: int = 30, reference_seconds: float = 10.0) -> 
     steps, seconds, checked = 0, 0.0, []
     for chromosome in pool:
         started = time.perf_counter()
-        checked.append(reference_episode(world, chromosome))
+        checked.append(reference_life(world, chromosome))
         seconds += time.perf_counter() - started
         steps += checked[-1][0]
         if seconds > reference_seconds:
@@ -159,7 +159,7 @@ def sumo_bench(generations: int = 10, closed_loop_steps: int = 10_000) -> pd.Dat
     """SUMO strategy 1 (steady ring traffic): replay mode over the generations of a GA run,
     recording included; then the run's best controller in closed loop, one process, over
     episodes of new traffic until ``closed_loop_steps`` learner steps (SUMO's start and
-    warm-up of each episode, timed apart, not counted)."""
+    warm-up of each situation, timed apart, not counted)."""
     world, params, rng, population = _workload("sumo_strategy1")
     threads = numba.get_num_threads()
     # generation 0's traffic was recorded above

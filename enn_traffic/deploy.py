@@ -45,7 +45,7 @@ MAX_LABELLED = 9  # vehicles drawn with a legend entry each
 
 def evaluate_controller(controller: Controller, scenario: Scenario, episodes: int = 1
                         ) -> pd.DataFrame:
-    """One row per traffic strategy and episode: lifetime in steps and seconds, distance, how
+    """One row per traffic strategy and situation: lifetime in steps and seconds, distance, how
     it ended and, for a collision, what it ran into (a wall, or a vehicle: its SUMO id and
     type, or an arena vehicle's index and strategy), and the collisions the controller
     suffered without causing them.
@@ -192,12 +192,12 @@ def evaluation_scenario(controller: Controller, scenario: Scenario, episodes: in
 
 
 def controller_trace(
-    controller: Controller, scenario: Scenario, max_steps: int | None = None, episode: int = 0
+    controller: Controller, scenario: Scenario, max_steps: int | None = None, situation: int = 0
 ) -> tuple[World, np.ndarray, int]:
-    """The world, every vehicle's poses (n, V, 3) in one episode, and the learner's outcome."""
-    world = make_world(evaluation_scenario(controller, scenario, episode + 1))
+    """The world, every vehicle's poses (n, V, 3) in one life, and the learner's outcome."""
+    world = make_world(evaluation_scenario(controller, scenario, situation + 1))
     poses, outcome = world.trace(
-        controller.chromosome, EVALUATION_KEY, episode, max_steps=max_steps
+        controller.chromosome, EVALUATION_KEY, situation, max_steps=max_steps
     )
     return world, poses, outcome
 

@@ -1,7 +1,7 @@
 """Many arena or navigation worlds stepped by one compiled call, the learner of each driven
 by an action from outside (:mod:`enn_traffic.envs.rangefinder`).
 
-A world here is the GA's world (:func:`enn_traffic.sim.arena.run_episode`) with its learner's
+A world here is the GA's world (:func:`enn_traffic.sim.arena.run_life`) with its learner's
 steering given instead of computed: the same situations (:meth:`ArenaWorld.situations`), the
 same :func:`~enn_traffic.sim.arena.start_world`, :func:`~enn_traffic.sim.arena.settle` and
 :func:`~enn_traffic.sim.rules.drive_all`, in the same order, so that a network's outputs fed
@@ -24,7 +24,7 @@ from numba import njit, prange
 
 from enn_traffic.kinds import ACTION
 from enn_traffic.sim.arena import ArenaWorld, settle, start_world
-from enn_traffic.sim.rules import drive_all, sense
+from enn_traffic.sim.rules import Vehicles, Work, drive_all, sense
 from enn_traffic.sim.world import RUNNING, SPUN
 
 
@@ -40,18 +40,18 @@ class Situations(NamedTuple):
     @classmethod
     def of_keys(cls, world: ArenaWorld, keys) -> Situations:
         """Every situation of the traffic ``keys``, in order (each key's strategies and
-        episodes, as :meth:`ArenaWorld.situations` gives them), the learner an ``ACTION``."""
-        episodes = [episode for key in keys for episode in world.situations(int(key))]
-        kinds = np.stack([e.kinds for e in episodes]).astype(np.int64)
+        situations, as :meth:`ArenaWorld.situations` gives them), the learner an ``ACTION``."""
+        chosen = [situation for key in keys for situation in world.situations(int(key))]
+        kinds = np.stack([e.kinds for e in chosen]).astype(np.int64)
         kinds[:, 0] = ACTION
-        return cls(np.stack([e.start for e in episodes]), kinds,
-                   np.ascontiguousarray(np.stack([e.traffic_genes for e in episodes])),
-                   np.array([e.seed for e in episodes], dtype=np.uint64))
+        return cls(np.stack([e.start for e in chosen]), kinds,
+                   np.ascontiguousarray(np.stack([e.traffic_genes for e in chosen])),
+                   np.array([e.seed for e in chosen], dtype=np.uint64))
 
 
 class Worlds(NamedTuple):
     """The state of N worlds of V vehicles with B beams: the GA's per-world arrays
-    (:func:`~enn_traffic.sim.arena.run_episode`) with a leading world axis, each world's
+    (:func:`~enn_traffic.sim.arena.run_life`) with a leading world axis, each world's
     situation, the learner's observation and what the last step gave."""
 
     kinds: np.ndarray  # (N, V)
@@ -98,34 +98,70 @@ class Worlds(NamedTuple):
 
 
 @njit(cache=True, inline="always")
-def observe(i, pose, corners, centres, physics, beams, walls, cell_start,
-            cell_walls, all_walls, out):
-    """The learner of world ``i`` senses walls and the other bodies into ``out``."""
-    sense(0, pose[i], physics, beams, walls, cell_start, cell_walls, all_walls,
-          pose.shape[1] > 1, corners[i], centres[i], 0, out)
+def world_vehicles(worlds, i):
+    """World ``i``'s vehicles (:class:`~enn_traffic.sim.rules.Vehicles`), views into
+    ``worlds``: a record of records cannot enter a compiled parallel loop, so
+    :class:`Worlds` stays flat."""
+    return Vehicles(worlds.pose[i], worlds.corners[i], worlds.centres[i], worlds.previous[i],
+                    worlds.previous_centres[i], worlds.fresh[i], worlds.memory[i])
 
 
 @njit(cache=True, inline="always")
+def world_work(worlds, i):
+    """World ``i``'s work arrays (:class:`~enn_traffic.sim.rules.Work`), views into
+    ``worlds``."""
+    return Work(worlds.readings[i], worlds.activation[i], worlds.scratch[i], worlds.steering[i])
+
+
+@njit(cache=True, inline="always")
+def observe(vehicles, physics, geometry, out):
+    """The learner (vehicle 0) senses walls and the other bodies into ``out``."""
+    beams, walls, cell_start, cell_walls, all_walls, _ = geometry
+    sense(0, vehicles.pose, physics, beams, walls, cell_start, cell_walls, all_walls,
+          vehicles.pose.shape[0] > 1, vehicles.corners, vehicles.centres, 0, out)
+
+
+@njit(cache=True)
 def begin(i, m, pool, worlds, physics, geometry, max_steps):
     """World ``i`` of ``worlds`` (:class:`Worlds`) starts situation ``m`` of ``pool``
-    (:class:`Situations`): step 0's rules, then the learner's first observation."""
-    walls, cell_start = geometry.walls, geometry.cell_start
-    cell_walls, all_walls = geometry.cell_walls, geometry.all_walls
-    kinds, pose, corners, centres = worlds.kinds, worlds.pose, worlds.corners, worlds.centres
-    previous, previous_centres = worlds.previous, worlds.previous_centres
-    fresh, memory, rng, tally = worlds.fresh, worlds.memory, worlds.rng, worlds.tally
-    kinds[i] = pool.kinds[m]
+    (:class:`Situations`): step 0's rules, then the learner's first observation. (Called,
+    not inlined, in the parallel loops: numba's parallel passes, given the inlined body of a
+    world, compiled writes that were lost, or not, by the order the kernels compiled in.)"""
+    vehicles = world_vehicles(worlds, i)
+    worlds.kinds[i] = pool.kinds[m]
     worlds.drivers[i] = pool.genes[m]
     worlds.situation[i] = m
     worlds.steps[i] = 0
-    start_world(pool.start[m], kinds[i], pose[i], corners[i], centres[i], previous[i],
-                previous_centres[i], fresh[i], memory[i], rng[i], pool.seed[m], physics,
-                tally[i])
-    settle(0, kinds[i], pose[i], corners[i], centres[i], previous[i], previous_centres[i],
-           fresh[i], memory[i], rng[i], worlds.recent[i], physics, walls, cell_start,
-           cell_walls, all_walls, max_steps, tally[i])
-    observe(i, pose, corners, centres, physics, geometry.beams, walls, cell_start,
-            cell_walls, all_walls, worlds.observation[i])
+    start_world(pool.start[m], worlds.kinds[i], vehicles, worlds.rng[i], pool.seed[m], physics,
+                worlds.tally[i])
+    settle(0, worlds.kinds[i], vehicles, worlds.rng[i], worlds.recent[i], physics, geometry,
+           max_steps, worlds.tally[i])
+    observe(vehicles, physics, geometry, worlds.observation[i])
+
+
+@njit(cache=True)
+def step_world(i, action, autoreset, pool, worlds, layer_sizes, physics, geometry, max_steps):
+    """World ``i`` steps with its learner's ``action`` (:func:`step_worlds`)."""
+    vehicles, work = world_vehicles(worlds, i), world_work(worlds, i)
+    steps, outcome = worlds.steps, worlds.outcome
+    work.steering[0] = physics.gain * (action[1] - action[0])
+    drive_all(worlds.kinds[i], worlds.drivers[i], layer_sizes, physics, geometry, vehicles,
+              worlds.rng[i], work)
+    steps[i] += 1
+    outcome[i] = settle(steps[i], worlds.kinds[i], vehicles, worlds.rng[i], worlds.recent[i],
+                        physics, geometry, max_steps, worlds.tally[i])
+    observe(vehicles, physics, geometry, worlds.observation[i])
+    worlds.reward[i] = 1.0
+    if outcome[i] == RUNNING:
+        return
+    if outcome[i] == SPUN:
+        worlds.reward[i] = 1.0 - steps[i]
+    worlds.life[i] = steps[i]
+    worlds.final_observation[i] = worlds.observation[i]
+    worlds.final_tally[i] = worlds.tally[i]
+    if autoreset:
+        begin(i, (worlds.situation[i] + worlds.pose.shape[0]) % pool.seed.shape[0], pool, worlds,
+              physics, geometry, max_steps)
 
 
 @njit(cache=True, parallel=True)
@@ -144,38 +180,9 @@ def step_worlds(actions, autoreset, pool, worlds, layer_sizes, physics, geometry
     takes back the life's steps, so that a life's return is the paper's fitness (§5, §5.3). A
     world whose life ended keeps its learner's last readings in ``final_observation`` and,
     with ``autoreset``, starts its next situation of ``pool``."""
-    beams, walls, cell_start = geometry.beams, geometry.walls, geometry.cell_start
-    cell_walls, all_walls = geometry.cell_walls, geometry.all_walls
-    kinds, pose, corners, centres = worlds.kinds, worlds.pose, worlds.corners, worlds.centres
-    previous, previous_centres = worlds.previous, worlds.previous_centres
-    fresh, memory, rng, tally = worlds.fresh, worlds.memory, worlds.rng, worlds.tally
-    steps, steering, outcome = worlds.steps, worlds.steering, worlds.outcome
-    observation, reward = worlds.observation, worlds.reward
-    count, size = pose.shape[0], pool.seed.shape[0]
-    for i in prange(count):
-        steering[i, 0] = physics.gain * (actions[i, 1] - actions[i, 0])
-        drive_all(kinds[i], worlds.drivers[i], layer_sizes, physics, beams, walls,
-                  cell_start, cell_walls, all_walls, pose[i], corners[i], centres[i],
-                  previous[i], previous_centres[i], fresh[i], memory[i], rng[i],
-                  worlds.readings[i], worlds.activation[i], worlds.scratch[i], steering[i])
-        steps[i] += 1
-        outcome[i] = settle(steps[i], kinds[i], pose[i], corners[i], centres[i], previous[i],
-                            previous_centres[i], fresh[i], memory[i], rng[i],
-                            worlds.recent[i], physics, walls, cell_start, cell_walls,
-                            all_walls, max_steps, tally[i])
-        observe(i, pose, corners, centres, physics, beams, walls, cell_start,
-                cell_walls, all_walls, observation[i])
-        reward[i] = 1.0
-        if outcome[i] == RUNNING:
-            continue
-        if outcome[i] == SPUN:
-            reward[i] = 1.0 - steps[i]
-        worlds.life[i] = steps[i]
-        worlds.final_observation[i] = observation[i]
-        worlds.final_tally[i] = tally[i]
-        if autoreset:
-            begin(i, (worlds.situation[i] + count) % size, pool, worlds, physics, geometry,
-                  max_steps)
+    for i in prange(worlds.pose.shape[0]):
+        step_world(i, actions[i], autoreset, pool, worlds, layer_sizes, physics, geometry,
+                   max_steps)
 
 
 # The same two kernels, run on one thread: a parallel call's start costs more than a single

@@ -12,7 +12,7 @@ A learner responsible for a collision, or spinning in place, is terminated and l
 arena (its body with it: PettingZoo's agents are not revived); a scripted vehicle responsible
 for a collision respawns at a free spot, as in the crowd. All agents are truncated at the
 scenario's ``episode.max_steps``. At reset, a vehicle whose start pose is taken (the blame
-rule at step 0) respawns before the episode begins.
+rule at step 0) respawns before the agents' first step.
 """
 
 from __future__ import annotations
@@ -33,13 +33,13 @@ from enn_traffic.sim.world import OUTCOMES, SPUN
 
 
 @njit(cache=True)
-def observe(learners, pose, corners, centres, physics, geometry, out) -> None:
+def observe(learners, vehicles, physics, geometry, out) -> None:
     """The first ``learners`` vehicles sense walls and the other bodies into ``out`` (L, B)."""
-    beams, walls, cell_start = geometry.beams, geometry.walls, geometry.cell_start
-    cell_walls, all_walls = geometry.cell_walls, geometry.all_walls
+    pose = vehicles.pose
+    beams, walls, cell_start, cell_walls, all_walls, _ = geometry
     for v in range(learners):
         sense(v, pose, physics, beams, walls, cell_start, cell_walls, all_walls,
-              pose.shape[0] > 1, corners, centres, v, out[v])
+              pose.shape[0] > 1, vehicles.corners, vehicles.centres, v, out[v])
 
 
 class ArenaCrowdEnv(ParallelEnv):
@@ -79,24 +79,19 @@ class ArenaCrowdEnv(ParallelEnv):
         world = self.world
         key = options.get("key")
         key = int(self._rng.integers(TRAINING_KEYS) if key is None else key)
-        episodes = world.situations(key)
+        situations = world.situations(key)
         situation = options.get("situation")
-        situation = int(self._rng.integers(len(episodes)) if situation is None else situation)
-        if not 0 <= situation < len(episodes):
-            raise ValueError(f"situation {situation}: key {key} has {len(episodes)}")
-        episode = episodes[situation]
-        kinds = np.asarray(episode.kinds, dtype=np.int64).copy()
+        situation = int(self._rng.integers(len(situations)) if situation is None else situation)
+        if not 0 <= situation < len(situations):
+            raise ValueError(f"situation {situation}: key {key} has {len(situations)}")
+        chosen = situations[situation]
+        kinds = np.asarray(chosen.kinds, dtype=np.int64).copy()
         kinds[: self.learners] = ACTION
-        self.crowd = crowd = Crowd(world, episode.start, kinds, int(episode.seed))
-        self.genes = np.ascontiguousarray(episode.traffic_genes, dtype=np.float64)
-        self.spin_checked = kinds == ACTION
-        walls, cell_start = crowd.geometry.walls, crowd.geometry.cell_start
-        cell_walls, all_walls = crowd.geometry.cell_walls, crowd.geometry.all_walls
-        crowd_events(crowd.pose, crowd.corners, crowd.centres, crowd.previous,
-                     crowd.previous_centres, crowd.fresh, self.spin_checked, crowd.life,
-                     crowd.recent, crowd.physics, walls, cell_start, cell_walls, all_walls,
-                     crowd.events)
-        for v in np.flatnonzero(crowd.events != ALIVE):
+        self.crowd = crowd = Crowd(world, chosen.start, kinds, int(chosen.seed))
+        self.genes = np.ascontiguousarray(chosen.traffic_genes, dtype=np.float64)
+        crowd.lives.spin_checked[:] = kinds == ACTION
+        crowd_events(crowd.vehicles, crowd.lives, crowd.physics, crowd.geometry)
+        for v in np.flatnonzero(crowd.lives.events != ALIVE):
             crowd.respawn(v)
         self.agents = self.possible_agents[:]
         self.steps = 0
@@ -109,22 +104,19 @@ class ArenaCrowdEnv(ParallelEnv):
         """The live learners' readings (L, B): rows 0..L-1 of the crowd are the learners."""
         crowd = self.crowd
         out = np.empty((len(self.agents), len(crowd.geometry.beams)))
-        observe(len(self.agents), crowd.pose, crowd.corners, crowd.centres, crowd.physics,
-                crowd.geometry, out)
+        observe(len(self.agents), crowd.vehicles, crowd.physics, crowd.geometry, out)
         return out
 
     def step(self, actions: dict):
         crowd, gain = self.crowd, self.world.physics.gain
-        steering = crowd.steering
+        steering = crowd.work.steering
         for row, agent in enumerate(self.agents):
             if agent not in actions:
                 raise KeyError(f"no action for {agent}")
             action = np.asarray(actions[agent], dtype=np.float64)
             steering[row] = gain * (action[1] - action[0])
         args = (crowd.kinds, self.genes, self.world.layer_sizes, crowd.physics, crowd.geometry,
-                crowd.pose, crowd.corners, crowd.centres, crowd.previous, crowd.previous_centres,
-                crowd.fresh, self.spin_checked, crowd.life, crowd.recent, crowd.memory, crowd.rng,
-                *crowd._work, crowd.events)
+                crowd.vehicles, crowd.lives, crowd.rng, crowd.work)
         if self._step is None:
             self._step = compiled(step_once, *args)
         self._step(*args)
@@ -133,7 +125,8 @@ class ArenaCrowdEnv(ParallelEnv):
         terminated = dict.fromkeys(self.agents, False)
         capped = self.steps >= self.max_steps
         infos = {agent: {} for agent in self.agents}
-        ended = np.flatnonzero(crowd.events != ALIVE)
+        lives = crowd.lives
+        ended = np.flatnonzero(lives.events != ALIVE)
         if len(ended) == 0:
             observations = dict(zip(self.agents, self._observe(), strict=True))
         else:
@@ -141,7 +134,7 @@ class ArenaCrowdEnv(ParallelEnv):
             final = {self.agents[v]: row for v, row in enumerate(self._observe())
                      if v in leaving}
             for v in leaving:
-                agent, outcome, life = self.agents[v], int(crowd.events[v]), int(crowd.life[v])
+                agent, outcome, life = self.agents[v], int(lives.events[v]), int(lives.life[v])
                 terminated[agent] = True
                 if outcome == SPUN:
                     rewards[agent] = 1.0 - life
@@ -152,14 +145,13 @@ class ArenaCrowdEnv(ParallelEnv):
             if leaving:  # a learner leaves the arena, its body with it
                 crowd.remove(leaving)
                 self.genes = np.delete(self.genes, leaving, axis=0)
-                self.spin_checked = np.delete(self.spin_checked, leaving)
                 self.agents = [a for v, a in enumerate(self.agents) if v not in leaving]
             observations = dict(zip(self.agents, self._observe(), strict=True)) | final
         truncated = {agent: capped and not done for agent, done in terminated.items()}
         if capped:
             for v, agent in enumerate(self.agents):
-                infos[agent] = {"steps": int(crowd.life[v]), "outcome": "capped",
-                                "fitness": float(crowd.life[v])}
+                life = int(crowd.lives.life[v])  # the lives after any learner left
+                infos[agent] = {"steps": life, "outcome": "capped", "fitness": float(life)}
             self.agents = []
         return observations, rewards, terminated, truncated, infos
 

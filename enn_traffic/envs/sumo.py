@@ -52,7 +52,7 @@ class ReplayTraffic:
         self._use(world.recording(seed, warmup, recordings.FIRST_RECORDING))
         self.state = learner_state(start, self.physics, len(world.geometry.beams),
                                    world.layer_sizes, self.ids.shape[1])
-        clear_start(self.state.centre, self.ids[0], self.centres[0], self.state.gone,
+        clear_start(self.state.learner.centres, self.ids[0], self.centres[0], self.state.gone,
                     self.physics.clearance)
         self.t = self.before = self.now = 0
 
@@ -115,8 +115,8 @@ class SumoEnv(gym.Env):
             self.traffic = ReplayTraffic(world, sumo_seed, warmup, start)
         self.outcome = self._sensed()
         if self.outcome != RUNNING:  # a life that ends where it starts sensed nothing
-            self.traffic.state.readings[:] = world.geometry.beams[:, RANGE]
-        return self.traffic.state.readings.copy(), {"key": key, "situation": situation}
+            self.traffic.state.work.readings[:] = world.geometry.beams[:, RANGE]
+        return self.traffic.state.work.readings.copy(), {"key": key, "situation": situation}
 
     def _sensed(self) -> int:
         """The learner's outcome at this step, or ``RUNNING`` and its readings."""
@@ -132,7 +132,7 @@ class SumoEnv(gym.Env):
         traffic = self.traffic
         if self.outcome == RUNNING:  # else the life ended where it started
             action = np.asarray(action, dtype=np.float64)
-            traffic.state.steering[0] = self.world.physics.gain * (action[1] - action[0])
+            traffic.state.work.steering[0] = self.world.physics.gain * (action[1] - action[0])
             if self._move is None:
                 self._move = compiled(move_once, traffic.physics, traffic.state)
             self._move(traffic.physics, traffic.state)
@@ -140,14 +140,14 @@ class SumoEnv(gym.Env):
             self.outcome = self._sensed()
         outcome, steps, state = self.outcome, traffic.t, traffic.state
         if outcome == RUNNING:
-            return state.readings.copy(), 1.0, False, False, {}
+            return state.work.readings.copy(), 1.0, False, False, {}
         hit = int(state.hit[0])
         info = {"steps": steps, "outcome": OUTCOMES[outcome],
                 "fitness": 0.0 if outcome == SPUN else float(steps),
                 "suffered": int(state.suffered[0]), "hit": hit,
                 "hit_vehicle": traffic.vehicle(hit)}
         reward = 1.0 - steps if outcome == SPUN else 1.0
-        return (state.readings.copy(), reward, outcome != CAPPED, outcome == CAPPED, info)
+        return (state.work.readings.copy(), reward, outcome != CAPPED, outcome == CAPPED, info)
 
     def render(self):
         if self.render_mode != "rgb_array" or self.traffic is None:
@@ -155,10 +155,10 @@ class SumoEnv(gym.Env):
 
         traffic, state = self.traffic, self.traffic.state
         present = traffic.ids[traffic.now] >= 0
-        corners = np.concatenate([state.body, traffic.corners[traffic.now][present]])
+        corners = np.concatenate([state.learner.corners, traffic.corners[traffic.now][present]])
         reach = 2.0 * self.world.physics.max_range  # a network can be a city: show the learner's
-        return picture(self.world, corners, state.pose, state.readings[None],
-                       around=(*state.pose[0, :2], reach))
+        return picture(self.world, corners, state.learner.pose, state.work.readings[None],
+                       around=(*state.learner.pose[0, :2], reach))
 
     def close(self):
         if self.traffic is not None:
@@ -220,7 +220,7 @@ class SumoCrowdEnv(ParallelEnv):
         self.crowd = crowd = SumoCrowd(world, world.seeds(key)[situation])
         crowd.start()
         if crowd.detect():  # a learner whose entry is taken enters again
-            for k in np.flatnonzero(crowd.lives.events != ALIVE):
+            for k in np.flatnonzero(crowd.lives.learners.events != ALIVE):
                 crowd.reenter(k)
         self.agents = self.possible_agents[:]
         self.steps = 0
@@ -232,8 +232,8 @@ class SumoCrowdEnv(ParallelEnv):
         """Every learner still on the network senses (K, B)."""
         crowd, lives = self.crowd, self.crowd.lives
         out = np.zeros((len(self.possible_agents), len(self.world.geometry.beams)))
-        args = (lives.active, crowd.physics, self.world.geometry, *crowd.slots, crowd.now,
-                lives.pose, lives.body, lives.centre, lives.gone, lives.visible, out)
+        args = (crowd.physics, self.world.geometry, crowd.slots, crowd.now, lives.vehicles,
+                lives.learners, out)
         if self._observe is None:
             self._observe = compiled(observe, *args)
         self._observe(*args)
@@ -245,9 +245,8 @@ class SumoCrowdEnv(ParallelEnv):
             if agent not in actions:
                 raise KeyError(f"no action for {agent}")
             action = np.asarray(actions[agent], dtype=np.float64)
-            lives.steering[int(agent.rpartition("_")[2])] = gain * (action[1] - action[0])
-        args = (lives.steering, crowd.physics, lives.pose, lives.body, lives.centre,
-                lives.body_before, lives.centre_before, lives.fresh, lives.life)
+            lives.work.steering[int(agent.rpartition("_")[2])] = gain * (action[1] - action[0])
+        args = (lives.work.steering, crowd.physics, lives.vehicles, lives.learners)
         if self._move is None:
             self._move = compiled(move_learners, *args)
         self._move(*args)
@@ -259,7 +258,7 @@ class SumoCrowdEnv(ParallelEnv):
         observations, rewards, terminated, truncated, infos = {}, {}, {}, {}, {}
         for agent in self.agents:
             k = int(agent.rpartition("_")[2])
-            outcome, life = int(lives.events[k]), int(lives.life[k])
+            outcome, life = int(lives.learners.events[k]), int(lives.learners.life[k])
             observations[agent], rewards[agent] = readings[k], 1.0
             terminated[agent], truncated[agent] = outcome != ALIVE, capped and outcome == ALIVE
             infos[agent] = {}

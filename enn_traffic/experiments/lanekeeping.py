@@ -135,7 +135,7 @@ def lane_keeping(study: Study) -> list[str]:
 
 
 def road_world(training: str, road: str, noise: float) -> LaneKeepingWorld:
-    """The world a ``training``'s controller is measured in: one episode on the fixed road
+    """The world a ``training``'s controller is measured in: one life on the fixed road
     ``road`` of ``ROADS`` (highway-env's road with the changes it names), its camera's noise
     ``noise`` m."""
     one_road = shipped_scenario(TRAININGS[0]).lane_keeping.model_dump(include=set(ROAD_KEYS))

@@ -72,8 +72,8 @@ def untrained_run(world: ArenaWorld, situation: int, at_start: bool, learns: boo
     """One span of 8 untrained network drivers in one situation: fixed random networks, or
     learners from random populations of the scenario's size (``learns``)."""
     sc = world.scenario
-    episode = world.situations(key + situation)[0]
-    crowd = Crowd(world, episode.start, np.full(world.vehicles, NETWORK), int(episode.seed),
+    chosen = world.situations(key + situation)[0]
+    crowd = Crowd(world, chosen.start, np.full(world.vehicles, NETWORK), int(chosen.seed),
                   respawn_at_start=at_start)
     rng = np.random.default_rng([sc.seed, key, situation])
     populations = [world.spec.in_source_layout(ga.initial_population(

@@ -105,10 +105,10 @@ def situation_crowd(world: ArenaWorld, situation: int, kinds=None, key: int = SI
            ) -> tuple[Crowd, np.ndarray]:
     """The arena of one traffic situation: 8 start poses; ``kinds`` default to the strategy's
     own drivers; and the drivers' random genes (random-network strategy)."""
-    episode = world.situations(key + situation)[0]
+    chosen = world.situations(key + situation)[0]
     strategy = STRATEGIES[world.scenario.traffic.strategy_list[0]]
     kinds = np.full(world.vehicles, strategy) if kinds is None else kinds
-    return Crowd(world, episode.start, kinds, int(episode.seed)), episode.traffic_genes.copy()
+    return Crowd(world, chosen.start, kinds, int(chosen.seed)), chosen.traffic_genes.copy()
 
 
 def _broadcast(world: ArenaWorld, genes: np.ndarray, situation: int, key: int = SITUATION_KEY,

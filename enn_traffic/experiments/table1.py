@@ -20,7 +20,7 @@ from enn_traffic.report.figures import fig12_figure, specialist_paths
 def _draw_specialists(study: Study, family: Family, controllers: dict[int, np.ndarray], path: Path,
                       steps: int = 400) -> None:
     """Table 1 as paths: each strategy's chosen controller among each strategy's traffic, the
-    first test episode."""
+    first test situation."""
     traces, walls = {}, {}
     for deployed in family.strategies:
         world = strategy_world(study, family, deployed)

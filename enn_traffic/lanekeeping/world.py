@@ -59,16 +59,16 @@ class LaneKeepingWorld:
         road = "drawn" if self.config.draw is not None else self.config.road
         return [f"{road} road"] * self.config.episodes
 
-    def _rng(self, key: int, episode: int) -> np.random.Generator:
-        return np.random.default_rng([self.config.seed, key, episode])
+    def _rng(self, key: int, situation: int) -> np.random.Generator:
+        return np.random.default_rng([self.config.seed, key, situation])
 
-    def road_of(self, key: int, episode: int) -> LaneKeepingConfig:
-        """The road of situation (``key``, ``episode``): the scenario's, or with
-        ``[lane_keeping.draw]`` one drawn from (seed, key, episode) alone."""
+    def road_of(self, key: int, situation: int) -> LaneKeepingConfig:
+        """The road of situation (``key``, ``situation``): the scenario's, or with
+        ``[lane_keeping.draw]`` one drawn from (seed, key, situation) alone."""
         draw = self.config.draw
         if draw is None:
             return self.config
-        rng = np.random.default_rng([self.config.seed, key, episode, ROAD_STREAM])
+        rng = np.random.default_rng([self.config.seed, key, situation, ROAD_STREAM])
         values = {"road": draw.roads[rng.integers(len(draw.roads))],
                   "amplitude": rng.uniform(*draw.amplitude), "period": rng.uniform(*draw.period),
                   "radius": rng.uniform(*draw.radius)}
@@ -84,7 +84,7 @@ class LaneKeepingWorld:
             self._envs[shape] = make_env(road)
         return self._envs[shape]
 
-    def episode(self, genes: np.ndarray, rng: np.random.Generator, max_steps: int,
+    def life(self, genes: np.ndarray, rng: np.random.Generator, max_steps: int,
                 trace: list | None = None, road: LaneKeepingConfig | None = None
                 ) -> tuple[int, int, float]:
         """One life on ``road`` (the scenario's by default): (steps kept in the lane, outcome,
@@ -113,7 +113,7 @@ class LaneKeepingWorld:
             steps += 1
 
     def evaluate(self, population: np.ndarray, key: int = 0) -> SituationResults:
-        """Fitness of every chromosome: steps kept in the lane, averaged over episodes."""
+        """Fitness of every chromosome: steps kept in the lane, averaged over situations."""
         genes = self.spec.in_source_layout(population)
         episodes = self.config.episodes
         steps = np.zeros((len(genes), episodes), dtype=np.int64)
@@ -121,23 +121,23 @@ class LaneKeepingWorld:
         roads = [self.road_of(key, e) for e in range(episodes)]
         for p, row in enumerate(genes):
             for e, road in enumerate(roads):
-                steps[p, e], outcome[p, e], _ = self.episode(
+                steps[p, e], outcome[p, e], _ = self.life(
                     row, self._rng(key, e), self.scenario.episode.max_steps, road=road)
         return SituationResults.of_lives(steps, outcome)
 
     def offsets(self, chromosome: np.ndarray, key: int = 0) -> list[tuple[int, int, float]]:
-        """Per episode: (steps, outcome, mean |lateral offset|) of one chromosome."""
+        """Per situation: (steps, outcome, mean |lateral offset|) of one chromosome."""
         genes = self.spec.in_source_layout(chromosome)[0]
-        return [self.episode(genes, self._rng(key, e), self.scenario.episode.max_steps,
+        return [self.life(genes, self._rng(key, e), self.scenario.episode.max_steps,
                              road=self.road_of(key, e))
                 for e in range(self.config.episodes)]
 
-    def trace(self, chromosome: np.ndarray, key: int = 0, episode: int = 0,
+    def trace(self, chromosome: np.ndarray, key: int = 0, situation: int = 0,
               max_steps: int | None = None) -> tuple[np.ndarray, int]:
-        """The vehicle's poses (n, 1, 3) in one episode and the outcome code."""
+        """The vehicle's poses (n, 1, 3) in one life and the outcome code."""
         poses: list = []
         limit = self.scenario.episode.max_steps if max_steps is None else max_steps
         genes = self.spec.in_source_layout(chromosome)[0]
-        _, outcome, _ = self.episode(genes, self._rng(key, episode), limit, poses,
-                                     road=self.road_of(key, episode))
+        _, outcome, _ = self.life(genes, self._rng(key, situation), limit, poses,
+                                     road=self.road_of(key, situation))
         return np.array(poses)[:, None, :], int(outcome)

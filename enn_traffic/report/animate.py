@@ -1,4 +1,4 @@
-"""A GIF of one episode: the track, the learner's path so far, and every vehicle's body."""
+"""A GIF of one life: the track, the learner's path so far, and every vehicle's body."""
 
 from __future__ import annotations
 

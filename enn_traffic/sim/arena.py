@@ -33,6 +33,7 @@ from enn_traffic.roads.network import anywhere_poses, lane_start_poses
 from enn_traffic.scenario import Scenario
 from enn_traffic.sim.rules import (
     NO_HIT,
+    Work,
     build_constants,
     drive_all,
     life_columns,
@@ -40,6 +41,7 @@ from enn_traffic.sim.rules import (
     respawn,
     responsible,
     spun,
+    vehicles_at,
     within_range,
 )
 from enn_traffic.sim.sensors import WallGrid
@@ -55,12 +57,15 @@ SUFFERED, NEAR_STEPS, NEAR_MAX, HIT = range(4)
 
 
 @njit(cache=True, inline="always")
-def settle(steps, kinds, pose, corners, centres, previous, previous_centres, fresh, memory, rng,
-           recent, physics, walls, cell_start, cell_walls, all_walls, max_steps, tally) -> int:
+def settle(steps, kinds, vehicles, rng, recent, physics, geometry, max_steps, tally) -> int:
     """Steps 1–2 of the arena's step, after ``steps`` moves: the blame rule (the learner,
     vehicle 0, ends its life; a responsible uncontrolled vehicle respawns), then the learner's
     spin test and step cap, and the traffic it meets. Returns the learner's outcome, or
     ``RUNNING``; ``tally`` (``SUFFERED``, ``NEAR_STEPS``, ``NEAR_MAX``, ``HIT``) is updated."""
+    pose, corners, centres = vehicles.pose, vehicles.corners, vehicles.centres
+    previous, previous_centres, fresh = (vehicles.previous, vehicles.previous_centres,
+                                         vehicles.fresh)
+    _, walls, cell_start, cell_walls, all_walls, _ = geometry
     hit = responsible(0, pose, corners, centres, previous, previous_centres, fresh, 0, physics,
                       walls, cell_start, cell_walls, all_walls)
     if hit != NO_HIT:
@@ -72,8 +77,7 @@ def settle(steps, kinds, pose, corners, centres, previous, previous_centres, fre
         if hit == 0:
             tally[SUFFERED] += 1
         if hit != NO_HIT:
-            respawn(v, kinds[v], physics, walls, cell_start, cell_walls, all_walls, pose,
-                    corners, centres, previous, previous_centres, fresh, memory, rng)
+            respawn(v, kinds[v], physics, geometry, vehicles, rng)
     if spun(recent, steps, pose[0, 0], pose[0, 1], physics.spin_variance):
         return SPUN
     if steps >= max_steps:
@@ -86,26 +90,26 @@ def settle(steps, kinds, pose, corners, centres, previous, previous_centres, fre
 
 
 @njit(cache=True, inline="always")
-def start_world(start, kinds, pose, corners, centres, previous, previous_centres, fresh, memory,
-                rng, seed, physics, tally) -> None:
+def start_world(start, kinds, vehicles, rng, seed, physics, tally) -> None:
     """Every vehicle at its ``start`` pose with a fresh life, the world's generator at
     ``seed`` and the tally at zero (nothing hit)."""
     rng[0] = seed
-    fresh[:] = False
+    vehicles.fresh[:] = False
     for v in range(start.shape[0]):
-        reset_memory(kinds[v], physics, rng, memory[v])
-        place(v, start[v, 0], start[v, 1], start[v, 2], physics, pose, corners, centres)
-    previous[:] = corners
-    previous_centres[:] = centres
+        reset_memory(kinds[v], physics, rng, vehicles.memory[v])
+        place(v, start[v, 0], start[v, 1], start[v, 2], physics, vehicles.pose,
+              vehicles.corners, vehicles.centres)
+    vehicles.previous[:] = vehicles.corners
+    vehicles.previous_centres[:] = vehicles.centres
     tally[:] = 0
     tally[HIT] = NO_HIT
 
 
 @njit(cache=True)
-def run_episode(genes, layer_sizes, start, kinds, traffic_genes, physics, geometry, seed, max_steps,
-                trace):
+def run_life(genes, layer_sizes, start, kinds, traffic_genes, physics, geometry, seed, max_steps,
+             trace):
     """Drive one chromosome (source layout) as vehicle 0 among ``start.shape[0] - 1``
-    uncontrolled vehicles (``kinds``; ``traffic_genes`` drive the network ones).
+    uncontrolled vehicles (``kinds``; ``traffic_genes`` drive the network ones) for one life.
 
     Returns (steps moved, outcome, collisions suffered, vehicle-steps within the learner's
     sensor range, most vehicles within it at once, what the learner hit: ``NO_HIT``,
@@ -113,37 +117,25 @@ def run_episode(genes, layer_sizes, start, kinds, traffic_genes, physics, geomet
     0..n-1 when n > 0.
     """
     count = start.shape[0]
-    pose = np.empty((count, 3))
-    corners = np.empty((count, 4, 2))
-    centres = np.empty((count, 2))
-    previous, previous_centres = np.empty((count, 4, 2)), np.empty((count, 2))
-    fresh = np.zeros(count, dtype=np.bool_)  # respawned: no earlier body to blame against
-    memory = np.zeros((count, 2))
-    steering = np.zeros(count)
+    vehicles = vehicles_at(count)
     drivers = traffic_genes.copy()
     drivers[0] = genes
     rng = np.empty(1, dtype=np.uint64)
     tally = np.empty(4, dtype=np.int64)
-    beams, walls, cell_start = geometry.beams, geometry.walls, geometry.cell_start
-    cell_walls, all_walls = geometry.cell_walls, geometry.all_walls
-    readings = np.empty(beams.shape[0])
     activation, scratch = network_buffers(layer_sizes)
+    work = Work(np.empty(geometry.beams.shape[0]), activation, scratch, np.zeros(count))
     recent = np.empty((physics.spin_window, 2))
-    start_world(start, kinds, pose, corners, centres, previous, previous_centres, fresh, memory,
-                rng, seed, physics, tally)
+    start_world(start, kinds, vehicles, rng, seed, physics, tally)
     steps = 0
     while True:
         if steps < trace.shape[0]:
-            trace[steps] = pose
-        outcome = settle(steps, kinds, pose, corners, centres, previous, previous_centres, fresh,
-                         memory, rng, recent, physics, walls, cell_start, cell_walls, all_walls,
-                         max_steps, tally)
+            trace[steps] = vehicles.pose
+        outcome = settle(steps, kinds, vehicles, rng, recent, physics, geometry, max_steps,
+                         tally)
         if outcome != RUNNING:
             return steps, outcome, tally[SUFFERED], tally[NEAR_STEPS], tally[NEAR_MAX], tally[HIT]
         # 3. sense and decide, 4. move
-        drive_all(kinds, drivers, layer_sizes, physics, beams, walls, cell_start,
-                  cell_walls, all_walls, pose, corners, centres, previous, previous_centres,
-                  fresh, memory, rng, readings, activation, scratch, steering)
+        drive_all(kinds, drivers, layer_sizes, physics, geometry, vehicles, rng, work)
         steps += 1
 
 
@@ -157,7 +149,7 @@ def run_population(population, layer_sizes, start, kinds, traffic_genes, physics
     steps, outcome, suffered, near_steps, near_max, hit = life_columns(size)
     no_trace = np.empty((0, start.shape[0], 3))
     for p in prange(size):
-        steps[p], outcome[p], suffered[p], near_steps[p], near_max[p], hit[p] = run_episode(
+        steps[p], outcome[p], suffered[p], near_steps[p], near_max[p], hit[p] = run_life(
             population[p], layer_sizes, start, kinds, traffic_genes, physics, geometry, seed,
             max_steps, no_trace)
     return steps, outcome, suffered, near_steps, near_max, hit
@@ -209,12 +201,12 @@ class LearnerWorld:
         )
         self.max_steps = episode.max_steps
 
-    def start_of(self, key: int, strategy: int, episode: int) -> tuple[float, float, float]:
-        """The learner's start in the situation (traffic key, strategy, episode): the one
+    def start_of(self, key: int, strategy: int, index: int) -> tuple[float, float, float]:
+        """The learner's start in the situation (traffic key, strategy, index): the one
         start, or one drawn from the scenario's list of start lanes or edges."""
         if len(self.starts) == 1:
             return self.starts[0]
-        sequence = [self.scenario.traffic.seed, key, strategy, episode, START_STREAM]
+        sequence = [self.scenario.traffic.seed, key, strategy, index, START_STREAM]
         return self.starts[np.random.default_rng(sequence).integers(len(self.starts))]
 
     def traffic_key(self, key: int) -> int:
@@ -239,8 +231,8 @@ class ArenaWorld(LearnerWorld):
         self.vehicles = 1 + len(self.traffic_starts)
 
     def situations(self, key: int) -> list[Situation]:
-        """The traffic situations of a traffic key: one per (strategy, episode), drawn from
-        (traffic seed, key, strategy, episode) alone. The learner (vehicle 0) is a network
+        """The traffic situations of a traffic key: one per (strategy, index), drawn from
+        (traffic seed, key, strategy, index) alone. The learner (vehicle 0) is a network
         driver."""
         traffic = self.scenario.traffic
         key = self.traffic_key(key)
@@ -271,20 +263,22 @@ class ArenaWorld(LearnerWorld):
         genes = self.spec.in_source_layout(population)
         runs = []
         with numba.parallel_chunksize(1):
-            for episode in self.situations(key):
+            for situation in self.situations(key):
                 runs.append(run_population(
-                    genes, self.layer_sizes, episode.start, episode.kinds, episode.traffic_genes,
-                    self.physics, self.geometry, episode.seed, self.max_steps))  # fmt: skip
+                    genes, self.layer_sizes, situation.start, situation.kinds,
+                    situation.traffic_genes, self.physics, self.geometry, situation.seed,
+                    self.max_steps))
         return SituationResults.of_situations(runs, self.vehicles,
                                             [self.vehicles - 1] * len(runs))
 
-    def trace(self, chromosome: np.ndarray, key: int = 0, episode: int = 0,
+    def trace(self, chromosome: np.ndarray, key: int = 0, situation: int = 0,
               max_steps: int | None = None) -> tuple[np.ndarray, int]:
-        """Poses (n, V, 3) of every vehicle in one episode, and the learner's outcome code."""
+        """Poses (n, V, 3) of every vehicle in one life (situation ``situation`` of traffic
+        key ``key``), and the learner's outcome code."""
         limit = self.max_steps if max_steps is None else max_steps
-        chosen = self.situations(key)[episode]
+        chosen = self.situations(key)[situation]
         trace = np.full((limit + 1, self.vehicles, 3), np.nan)
-        steps, outcome, *_ = run_episode(
+        steps, outcome, *_ = run_life(
             self.spec.in_source_layout(chromosome)[0], self.layer_sizes, chosen.start,
             chosen.kinds, chosen.traffic_genes, self.physics, self.geometry, chosen.seed, limit,
             trace)

@@ -25,7 +25,7 @@ from __future__ import annotations
 
 import copy
 from dataclasses import dataclass
-from typing import Protocol
+from typing import NamedTuple, Protocol
 
 import numpy as np
 from numba import njit
@@ -33,7 +33,17 @@ from numba import njit
 from enn_traffic.kinds import NETWORK
 from enn_traffic.neural import network_buffers
 from enn_traffic.sim.arena import ArenaWorld
-from enn_traffic.sim.rules import NO_HIT, drive_all, place, respawn, responsible, spun
+from enn_traffic.sim.rules import (
+    NO_HIT,
+    Work,
+    drive_all,
+    enter,
+    place,
+    respawn,
+    responsible,
+    spun,
+    vehicles_at,
+)
 from enn_traffic.sim.strategies import reset_memory
 from enn_traffic.sim.world import COLLIDED, SPUN
 
@@ -66,11 +76,24 @@ class Learning(Protocol):
         ...
 
 
+class Lives(NamedTuple):
+    """The crowd's vehicles' lives, one row each (V): whether the spin test applies, steps
+    lived, the last positions for the spin test, and what the last step ended (``ALIVE``,
+    ``COLLIDED`` or ``SPUN``)."""
+
+    spin_checked: np.ndarray  # (V,) bool
+    life: np.ndarray  # (V,)
+    recent: np.ndarray  # (V, spin_window, 2)
+    events: np.ndarray  # (V,)
+
+
 @njit(cache=True, inline="always")
-def crowd_events(pose, corners, centres, previous, previous_centres, fresh, spin_checked, life,
-                 recent, physics, walls, cell_start, cell_walls, all_walls, events) -> bool:
-    """Fill ``events`` (V,): ``COLLIDED`` for a responsible collision, ``SPUN`` for a
+def crowd_events(vehicles, lives, physics, geometry) -> bool:
+    """Fill ``lives.events``: ``COLLIDED`` for a responsible collision, ``SPUN`` for a
     ``spin_checked`` vehicle spinning in place, else ``ALIVE``. Did any life end?"""
+    pose, corners, centres, previous, previous_centres, fresh, _ = vehicles
+    spin_checked, life, recent, events = lives
+    _, walls, cell_start, cell_walls, all_walls, _ = geometry
     ended = False
     for v in range(pose.shape[0]):
         events[v] = ALIVE
@@ -85,19 +108,14 @@ def crowd_events(pose, corners, centres, previous, previous_centres, fresh, spin
 
 
 @njit(cache=True, inline="always")
-def step(kinds, genes, layer_sizes, physics, geometry, pose, corners, centres, previous,
-         previous_centres, fresh, spin_checked, life, recent, memory, rng, readings, activation,
-         scratch, steering, events) -> bool:
+def step(kinds, genes, layer_sizes, physics, geometry, vehicles, lives, rng, work) -> bool:
     """One step of the crowd: every vehicle senses, decides (an ``ACTION`` vehicle keeps the
-    ``steering[v]`` it was given) and moves, then :func:`crowd_events`. Did any life end?"""
-    beams, walls, cell_start = geometry.beams, geometry.walls, geometry.cell_start
-    cell_walls, all_walls = geometry.cell_walls, geometry.all_walls
-    drive_all(kinds, genes, layer_sizes, physics, beams, walls, cell_start,
-              cell_walls, all_walls, pose, corners, centres, previous, previous_centres, fresh,
-              memory, rng, readings, activation, scratch, steering)
+    ``work.steering[v]`` it was given) and moves, then :func:`crowd_events`. Did any life
+    end?"""
+    drive_all(kinds, genes, layer_sizes, physics, geometry, vehicles, rng, work)
+    life = lives.life
     life += 1
-    return crowd_events(pose, corners, centres, previous, previous_centres, fresh, spin_checked,
-                        life, recent, physics, walls, cell_start, cell_walls, all_walls, events)
+    return crowd_events(vehicles, lives, physics, geometry)
 
 
 # The step alone, for a caller that steps from Python (the PettingZoo crowd, enn_traffic.envs).
@@ -105,27 +123,20 @@ step_once = njit(cache=True)(step.py_func)
 
 
 @njit(cache=True)
-def advance(t, last, drive_first, kinds, genes, layer_sizes, physics, geometry, pose, corners,
-            centres, previous, previous_centres, fresh, spin_checked, life, recent, memory, rng,
-            readings, activation, scratch, steering, events, trace) -> int:
+def advance(t, last, drive_first, kinds, genes, layer_sizes, physics, geometry, vehicles, lives,
+            rng, work, trace) -> int:
     """Run the steps from ``t`` (driving first when ``drive_first``: the lives that ended at
     ``t`` have been dealt with) until a life ends or step ``last`` is reached: each step,
     :func:`step` (without ``drive_first``, only :func:`crowd_events` at ``t``) and record the poses
     in ``trace``. Returns the step it stopped at."""
-    walls, cell_start, cell_walls = geometry.walls, geometry.cell_start, geometry.cell_walls
-    all_walls = geometry.all_walls
     while True:
         if drive_first:
-            ended = step(kinds, genes, layer_sizes, physics, geometry, pose, corners, centres,
-                         previous, previous_centres, fresh, spin_checked, life, recent, memory,
-                         rng, readings, activation, scratch, steering, events)
+            ended = step(kinds, genes, layer_sizes, physics, geometry, vehicles, lives, rng, work)
             t += 1
         else:
-            ended = crowd_events(pose, corners, centres, previous, previous_centres, fresh,
-                                 spin_checked, life, recent, physics, walls, cell_start,
-                                 cell_walls, all_walls, events)
+            ended = crowd_events(vehicles, lives, physics, geometry)
         drive_first = True
-        trace[t] = pose
+        trace[t] = vehicles.pose
         if ended or t == last:
             return t
 
@@ -169,61 +180,54 @@ class Crowd:
         self.kinds = np.asarray(kinds, dtype=np.int64)
         count = len(self.kinds)
         self.physics = p = world.physics
-        self.pose = np.empty((count, 3))
-        self.corners = np.empty((count, 4, 2))
-        self.centres = np.empty((count, 2))
-        self.memory = np.zeros((count, 2))
         self.rng = np.full(1, np.uint64(seed), dtype=np.uint64)
+        self.vehicles = vehicles = vehicles_at(count)
         for v in range(count):
-            place(v, *starts[v], p, self.pose, self.corners, self.centres)
-            reset_memory(self.kinds[v], p, self.rng, self.memory[v])
-        self.previous, self.previous_centres = self.corners.copy(), self.centres.copy()
-        self.fresh = np.zeros(count, dtype=np.bool_)
-        self.life = np.zeros(count, dtype=np.int64)
-        self.recent = np.zeros((count, p.spin_window, 2))
-        self.events = np.empty(count, dtype=np.int64)
+            place(v, *starts[v], p, vehicles.pose, vehicles.corners, vehicles.centres)
+            reset_memory(self.kinds[v], p, self.rng, vehicles.memory[v])
+        vehicles.previous[:], vehicles.previous_centres[:] = vehicles.corners, vehicles.centres
+        self.lives = Lives(np.zeros(count, dtype=np.bool_), np.zeros(count, dtype=np.int64),
+                           np.zeros((count, p.spin_window, 2)), np.empty(count, dtype=np.int64))
         self.geometry = world.geometry
-        self._work = (np.empty(len(self.geometry.beams)), *network_buffers(world.layer_sizes),
-                      np.zeros(count))
+        self.work = Work(np.empty(len(self.geometry.beams)), *network_buffers(world.layer_sizes),
+                         np.zeros(count))
 
     @property
-    def steering(self) -> np.ndarray:
-        """(V,) each vehicle's steering: an ``ACTION`` vehicle's is set before a step."""
-        return self._work[3]
+    def pose(self) -> np.ndarray:
+        """(V, 3) every vehicle's pose."""
+        return self.vehicles.pose
+
+    @property
+    def corners(self) -> np.ndarray:
+        """(V, 4, 2) every vehicle's body."""
+        return self.vehicles.corners
 
     def respawn(self, v: int) -> None:
         """Vehicle ``v`` starts a new life at a free spot
         (:func:`~enn_traffic.sim.rules.respawn`), or at its start pose."""
-        self.life[v] = 0
+        self.lives.life[v] = 0
         if self.respawn_at_start:
-            place(v, *self.starts[v], self.physics, self.pose, self.corners, self.centres)
-            self.previous[v], self.previous_centres[v] = self.corners[v], self.centres[v]
-            self.fresh[v] = True
-            reset_memory(self.kinds[v], self.physics, self.rng, self.memory[v])
-            return
-        walls, cell_start = self.geometry.walls, self.geometry.cell_start
-        cell_walls, all_walls = self.geometry.cell_walls, self.geometry.all_walls
-        respawn(v, self.kinds[v], self.physics, walls, cell_start, cell_walls, all_walls,
-                self.pose, self.corners, self.centres, self.previous, self.previous_centres,
-                self.fresh, self.memory, self.rng)
+            enter(v, *self.starts[v], self.kinds[v], self.physics, self.vehicles, self.rng)
+        else:
+            respawn(v, self.kinds[v], self.physics, self.geometry, self.vehicles, self.rng)
 
     def fork(self) -> Crowd:
         """A crowd in this one's state (poses, lives, memories, random generator) that goes on
         apart from it; the world is shared."""
         twin = copy.copy(self)
-        for name, value in vars(self).items():
-            if isinstance(value, np.ndarray):
-                setattr(twin, name, value.copy())
-        twin._work = tuple(buffer.copy() for buffer in self._work)
+        twin.kinds, twin.rng = self.kinds.copy(), self.rng.copy()
+        twin.vehicles, twin.lives, twin.work = (
+            type(record)(*(array.copy() for array in record))
+            for record in (self.vehicles, self.lives, self.work))
         return twin
 
     def remove(self, vehicles) -> None:
         """The ``vehicles`` leave the arena; the others keep their order."""
-        for name in ("kinds", "pose", "corners", "centres", "memory", "previous",
-                     "previous_centres", "fresh", "life", "recent", "events"):
-            setattr(self, name, np.delete(getattr(self, name), vehicles, axis=0))
-        readings, activation, scratch, steering = self._work
-        self._work = (readings, activation, scratch, np.delete(steering, vehicles))
+        def without(record):
+            return type(record)(*(np.delete(array, vehicles, axis=0) for array in record))
+        self.kinds = np.delete(self.kinds, vehicles)
+        self.vehicles, self.lives = without(self.vehicles), without(self.lives)
+        self.work = self.work._replace(steering=np.delete(self.work.steering, vehicles))
 
     def run(self, seconds: float, genes: np.ndarray, learning: Learning | None = None,
             check_spins: bool = False) -> CrowdRun:
@@ -233,40 +237,39 @@ class Crowd:
         its cap. Learning vehicles, and with ``check_spins`` every network vehicle, lose their
         life when they spin in place."""
         count = len(self.kinds)
+        lives = self.lives
         learns = [learning is not None and learning.learns(v) for v in range(count)]
-        spin_checked = np.array(learns) | (check_spins & (self.kinds == NETWORK))
-        unseen_from = self.life.copy()  # steps of a life going on that an earlier run showed
+        lives.spin_checked[:] = np.array(learns) | (check_spins & (self.kinds == NETWORK))
+        unseen_from = lives.life.copy()  # steps of a life going on that an earlier run showed
         for v in np.flatnonzero(learns):
             genes[v] = learning.current(v)
         steps = round(seconds / self.world.scenario.vehicle.dt)
         collisions, spins = np.zeros(count, dtype=np.int64), np.zeros(count, dtype=np.int64)
         trace = np.empty((steps + 1, count, 3))
-        p, geometry = self.physics, self.geometry
         t, drive_first = 0, False
         learners = np.flatnonzero(learns)
         cap = learning.life_cap if learning is not None and len(learners) else 0
         while True:
             # stop too when the oldest learning life reaches the cap
-            last = steps if not cap else min(steps, t + cap - int(self.life[learners].max()))
-            t = advance(t, last, drive_first, self.kinds, genes, self.world.layer_sizes, p,
-                        geometry, self.pose, self.corners, self.centres, self.previous,
-                        self.previous_centres, self.fresh, spin_checked, self.life, self.recent,
-                        self.memory, self.rng, *self._work, self.events, trace)
-            for v in np.flatnonzero(self.events != ALIVE):
-                spun = bool(self.events[v] == SPUN)
+            last = steps if not cap else min(steps, t + cap - int(lives.life[learners].max()))
+            t = advance(t, last, drive_first, self.kinds, genes, self.world.layer_sizes,
+                        self.physics, self.geometry, self.vehicles, lives, self.rng, self.work,
+                        trace)
+            for v in np.flatnonzero(lives.events != ALIVE):
+                spun = bool(lives.events[v] == SPUN)
                 spins[v] += spun
                 collisions[v] += not spun
                 if learns[v]:
-                    genes[v] = learning.life_ended(v, int(self.life[v]),
-                                                   int(self.life[v] - unseen_from[v]), spun)
+                    genes[v] = learning.life_ended(v, int(lives.life[v]),
+                                                   int(lives.life[v] - unseen_from[v]), spun)
                 unseen_from[v] = 0
                 self.respawn(v)
-            for v in learners[self.life[learners] >= cap] if cap else ():
-                genes[v] = learning.life_capped(v, int(self.life[v] - unseen_from[v]))
-                unseen_from[v] = self.life[v] = 0
+            for v in learners[lives.life[learners] >= cap] if cap else ():
+                genes[v] = learning.life_capped(v, int(lives.life[v] - unseen_from[v]))
+                unseen_from[v] = lives.life[v] = 0
             if t == steps:
                 break
             drive_first = True
         for v in np.flatnonzero(learns):  # a life still going counts what it has shown
-            learning.still_driving(v, int(self.life[v] - unseen_from[v]))
+            learning.still_driving(v, int(lives.life[v] - unseen_from[v]))
         return CrowdRun(collisions, spins, steps * self.world.scenario.vehicle.dt, trace)

@@ -1,6 +1,6 @@
-"""A plain per-vehicle Python episode loop: the yardstick for ``bench`` and the oracle for tests.
+"""A plain per-vehicle Python loop of a life: the yardstick for ``bench``, the oracle for tests.
 
-Same rules as :func:`enn_traffic.sim.arena.run_episode`, written as simply as possible: one
+Same rules as :func:`enn_traffic.sim.arena.run_life`, written as simply as possible: one
 vehicle at a time, every wall tested every step, no compilation.
 """
 
@@ -35,7 +35,7 @@ def _inside(px, py, corners):
     return True
 
 
-def reference_episode(world: ArenaWorld, chromosome: np.ndarray) -> tuple[int, int]:
+def reference_life(world: ArenaWorld, chromosome: np.ndarray) -> tuple[int, int]:
     """(steps moved, outcome) of one chromosome, computed the slow, obvious way."""
     scenario = world.scenario
     genes = [float(g) for g in world.spec.in_source_layout(chromosome)[0]]

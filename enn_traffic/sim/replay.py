@@ -31,6 +31,8 @@ from enn_traffic.neural import steering as network_steering
 from enn_traffic.sim.rules import (
     HIT_WALL,
     NO_HIT,
+    Vehicles,
+    Work,
     close,
     left_network,
     life_columns,
@@ -39,6 +41,7 @@ from enn_traffic.sim.rules import (
     responsible,
     sense,
     spun,
+    vehicles_at,
     within_range,
 )
 from enn_traffic.sim.world import CAPPED, COLLIDED, LEFT_NETWORK, RUNNING, SPUN
@@ -98,22 +101,15 @@ def clear_start(centre, ids, centres, gone, clearance) -> None:
 
 
 class LearnerState(NamedTuple):
-    """One episode's arrays for :func:`learner_step`: the learner as a world of one vehicle,
-    what it has met, its work arrays, and one entry per traffic slot."""
+    """One life's arrays for :func:`learner_step`: the learner as a world of one vehicle
+    (never fresh: it does not respawn), its work arrays, what it has met, and one entry per
+    traffic slot."""
 
-    pose: np.ndarray  # (1, 3)
-    body: np.ndarray  # (1, 4, 2)
-    centre: np.ndarray  # (1, 2)
-    body_before: np.ndarray  # the body and centre before the step
-    centre_before: np.ndarray
-    fresh: np.ndarray  # (1,) always False: the learner never respawns
-    steering: np.ndarray  # (1,)
+    learner: Vehicles  # one row
+    work: Work  # its readings, network buffers and steering (1,)
     recent: np.ndarray  # (spin_window, 2) positions for the spin test
     suffered: np.ndarray  # (1,) collisions suffered
     met: np.ndarray  # (2,) vehicle-steps within sensor range, most at once
-    readings: np.ndarray
-    activation: np.ndarray
-    scratch: np.ndarray
     gone: np.ndarray  # (S,) the id a slot held when it left the learner's world, or -1
     visible: np.ndarray  # (S, 2) the centres the learner sees (far off: not seen)
     absent: np.ndarray  # (S,) not in the learner's world before the step
@@ -123,16 +119,17 @@ class LearnerState(NamedTuple):
 @njit(cache=True)
 def learner_state(start, physics, beams, layer_sizes, slots) -> LearnerState:
     """A fresh :class:`LearnerState` at pose ``start`` among ``slots`` traffic slots."""
-    pose = np.empty((1, 3))
-    body = np.empty((1, 4, 2))
-    centre = np.empty((1, 2))
-    place(0, start[0], start[1], start[2], physics, pose, body, centre)
+    learner = vehicles_at(1)
+    place(0, start[0], start[1], start[2], physics, learner.pose, learner.corners,
+          learner.centres)
+    learner.previous[:] = learner.corners
+    learner.previous_centres[:] = learner.centres
     activation, scratch = network_buffers(layer_sizes)
-    return LearnerState(pose, body, centre, body.copy(), centre.copy(), np.zeros(1, np.bool_),
-                        np.zeros(1), np.empty((physics.spin_window, 2)), np.zeros(1, np.int64),
-                        np.zeros(2, np.int64), np.empty(beams), activation, scratch,
-                        np.full(slots, -1, np.int64), np.empty((slots, 2)),
-                        np.empty(slots, np.bool_), np.full(1, NO_HIT, np.int64))
+    return LearnerState(learner, Work(np.empty(beams), activation, scratch, np.zeros(1)),
+                        np.empty((physics.spin_window, 2)), np.zeros(1, np.int64),
+                        np.zeros(2, np.int64), np.full(slots, -1, np.int64),
+                        np.empty((slots, 2)), np.empty(slots, np.bool_),
+                        np.full(1, NO_HIT, np.int64))
 
 
 def with_slots(state: LearnerState, slots: int) -> LearnerState:
@@ -146,47 +143,47 @@ def with_slots(state: LearnerState, slots: int) -> LearnerState:
 @njit(cache=True, inline="always")
 def learner_sense(t, physics, geometry, ids, corners, centres, before, now, max_steps, state):
     """Steps 0–3 of :func:`learner_step`, before the learner decides: the fringe, collisions,
-    spin test and step cap, then the learner senses into ``state.readings``. Returns an
+    spin test and step cap, then the learner senses into ``state.work.readings``. Returns an
     outcome code, or ``RUNNING``."""
-    (pose, body, centre, body_before, centre_before, fresh, steering, recent, suffered, met,
-     readings, activation, scratch, gone, visible, absent, hit) = state
-    beams, walls, cell_start = geometry.beams, geometry.walls, geometry.cell_start
-    cell_walls, all_walls, exits = geometry.cell_walls, geometry.all_walls, geometry.exits
+    learner, gone, met = state.learner, state.gone, state.met
+    beams, walls, cell_start, cell_walls, all_walls, exits = geometry
+    pose, body = learner.pose, learner.corners
     ids_before, corners_before, centres_before = ids[before], corners[before], centres[before]
     ids_now, corners_now, centres_now = ids[now], corners[now], centres[now]
     # 0. the fringe: an exit reached ends the life, whatever else the body touches
     if left_network(body[0], exits):
         return LEFT_NETWORK
     # 1. collisions by the blame rule
-    mark_absent(t, ids_before, gone, absent)
-    found = responsible(0, pose, body, centre, corners_before, centres_before, absent, -1,
-                        physics, walls, cell_start, cell_walls, all_walls)
+    mark_absent(t, ids_before, gone, state.absent)
+    found = responsible(0, pose, body, learner.centres, corners_before, centres_before,
+                        state.absent, -1, physics, walls, cell_start, cell_walls, all_walls)
     if found != NO_HIT:
-        hit[0] = found if found == HIT_WALL else ids_before[found]
+        state.hit[0] = found if found == HIT_WALL else ids_before[found]
         return COLLIDED
     if t > 0:
-        suffered[0] += struck_by_traffic(0, body_before, centre_before, ids_now, corners_now,
-                                         centres_now, gone, 4.0 * physics.radius * physics.radius)
+        state.suffered[0] += struck_by_traffic(0, learner.previous, learner.previous_centres,
+                                               ids_now, corners_now, centres_now, gone,
+                                               4.0 * physics.radius * physics.radius)
     # 2. spin test and step cap
-    if spun(recent, t, pose[0, 0], pose[0, 1], physics.spin_variance):
+    if spun(state.recent, t, pose[0, 0], pose[0, 1], physics.spin_variance):
         return SPUN
     if t >= max_steps:
         return CAPPED
     # 3. sense walls and the visible vehicles
+    visible = state.visible
     visible_centres(ids_now, centres_now, gone, visible)
     within = within_range(pose[0, 0], pose[0, 1], visible, 0, physics.max_range + physics.radius)
     met[0] += within
     met[1] = max(met[1], within)
-    sense(0, pose, physics, beams, walls, cell_start, cell_walls, all_walls, True,
-          corners_now, visible, -1, readings)
+    sense(0, pose, physics, beams, walls, cell_start, cell_walls, all_walls, True, corners_now,
+          visible, -1, state.work.readings)
     return RUNNING
 
 
 @njit(cache=True, inline="always")
 def learner_move(physics, state) -> None:
-    """Step 4 of :func:`learner_step`: the learner moves by ``state.steering``."""
-    move_all(state.steering, physics, state.pose, state.body, state.centre, state.body_before,
-             state.centre_before, state.fresh)
+    """Step 4 of :func:`learner_step`: the learner moves by ``state.work.steering``."""
+    move_all(state.work.steering, physics, state.learner)
 
 
 @njit(cache=True, inline="always")
@@ -200,8 +197,9 @@ def learner_step(t, genes, layer_sizes, physics, geometry, ids, corners, centres
                             state)
     if outcome != RUNNING:
         return outcome
-    state.steering[0] = network_steering(genes, layer_sizes, state.readings, state.activation,
-                                         state.scratch, physics.gain)
+    work = state.work
+    work.steering[0] = network_steering(genes, layer_sizes, work.readings, work.activation,
+                                        work.scratch, physics.gain)
     learner_move(physics, state)
     return RUNNING
 
@@ -220,16 +218,15 @@ def compiled_step(*args):
 
 
 @njit(cache=True)
-def run_replay_episode(genes, layer_sizes, physics, geometry, start, ids, corners, centres,
-                       max_steps, trace):
+def run_replay_life(genes, layer_sizes, physics, geometry, start, ids, corners, centres,
+                    max_steps, trace):
     """Drive one chromosome through a recorded traffic run (``ids`` etc. hold at least
     ``max_steps + 1`` steps). Returns (steps moved, outcome, collisions suffered, vehicle-steps
     within sensor range, most at once, what it hit: ``NO_HIT``, ``HIT_WALL`` or the vehicle's
     id); ``trace`` (n, 3) receives the learner's poses of steps 0..n-1 when n > 0."""
     state = learner_state(start, physics, geometry.beams.shape[0], layer_sizes, ids.shape[1])
-    pose, centre, suffered, met, gone = (state.pose, state.centre, state.suffered, state.met,
-                                         state.gone)
-    clear_start(centre, ids[0], centres[0], gone, physics.clearance)
+    pose, suffered, met = state.learner.pose, state.suffered, state.met
+    clear_start(state.learner.centres, ids[0], centres[0], state.gone, physics.clearance)
     t = 0
     while True:
         if t < trace.shape[0]:
@@ -244,7 +241,7 @@ def run_replay_episode(genes, layer_sizes, physics, geometry, start, ids, corner
 @njit(cache=True, parallel=True)
 def run_replay_population(population, layer_sizes, physics, geometry, start, ids, corners,
                           centres, max_steps):
-    """:func:`run_replay_episode` for every chromosome of ``population`` (P, G), spread over
+    """:func:`run_replay_life` for every chromosome of ``population`` (P, G), spread over
     the cores; per world (steps, outcome, collisions suffered, vehicle-steps within sensor
     range, most at once, what the learner hit)."""
     size = population.shape[0]
@@ -252,6 +249,6 @@ def run_replay_population(population, layer_sizes, physics, geometry, start, ids
     no_trace = np.empty((0, 3))
     for p in prange(size):
         (steps[p], outcome[p], suffered[p], near_steps[p], near_max[p],
-         hit[p]) = run_replay_episode(population[p], layer_sizes, physics, geometry, start, ids,
-                                      corners, centres, max_steps, no_trace)
+         hit[p]) = run_replay_life(population[p], layer_sizes, physics, geometry, start, ids,
+                                   corners, centres, max_steps, no_trace)
     return steps, outcome, suffered, near_steps, near_max, hit

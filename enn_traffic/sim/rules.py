@@ -1,6 +1,6 @@
 """The rules of a step, written once (paper §4–§5.3; docs/design.md, "Units and the step").
 
-Every loop that moves vehicles calls these compiled rules: the arena's episode
+Every loop that moves vehicles calls these compiled rules: the arena's life
 (:mod:`enn_traffic.sim.arena`), the learner among SUMO's traffic in replay and closed loop
 (:mod:`enn_traffic.sim.replay`) and many drivers at once (:mod:`enn_traffic.sim.crowd`). A step
 is:
@@ -94,6 +94,39 @@ times slower (the arrays travel in :class:`Geometry`). It also holds the wall gr
 (:class:`~enn_traffic.sim.sensors.WallGrid`)."""
 
 
+class Vehicles(NamedTuple):
+    """The vehicles of one world, one row each (V): the pose, the body (corners, centre) now
+    and before the step, whether the body is ``fresh`` (just respawned: nothing to blame
+    against) and each one's strategy state for its life. The blame rule, the rangefinder, a
+    move and a respawn read and write them."""
+
+    pose: np.ndarray  # (V, 3) x, y, heading
+    corners: np.ndarray  # (V, 4, 2)
+    centres: np.ndarray  # (V, 2)
+    previous: np.ndarray  # (V, 4, 2) the bodies before the step
+    previous_centres: np.ndarray  # (V, 2)
+    fresh: np.ndarray  # (V,) bool
+    memory: np.ndarray  # (V, 2) the scripted strategies' state (enn_traffic.sim.strategies)
+
+
+@njit(cache=True)
+def vehicles_at(count: int) -> Vehicles:
+    """Room for ``count`` vehicles (poses and bodies to be placed; none fresh)."""
+    return Vehicles(np.empty((count, 3)), np.empty((count, 4, 2)), np.empty((count, 2)),
+                    np.empty((count, 4, 2)), np.empty((count, 2)),
+                    np.zeros(count, dtype=np.bool_), np.zeros((count, 2)))
+
+
+class Work(NamedTuple):
+    """A step's work arrays: one vehicle's readings, the networks' layer buffers
+    (:func:`~enn_traffic.neural.network_buffers`) and every vehicle's steering (V,)."""
+
+    readings: np.ndarray
+    activation: np.ndarray
+    scratch: np.ndarray
+    steering: np.ndarray
+
+
 class Geometry(NamedTuple):
     """The arrays a step needs: the beams, walls, the wall grid's cells and the exits. The
     loops take them out by name once (``walls = geometry.walls``) and hand the rules the arrays
@@ -144,8 +177,8 @@ def close(ax, ay, bx, by, near) -> bool:
 
 
 @njit(cache=True, inline="always")
-def responsible(v, pose, corners, centres, before, before_centres, absent, me, physics, walls,
-                cell_start, cell_walls, all_walls) -> int:
+def responsible(v, pose, corners, centres, before, before_centres, absent, me, physics,
+                walls, cell_start, cell_walls, all_walls) -> int:
     """The blame rule for vehicle ``v`` (``pose``, ``corners`` and ``centres`` hold its body):
     ``HIT_WALL`` if its body touches a wall, else the first vehicle of ``before`` (the bodies
     from before the step; ``absent`` ones and ``me``, its own, skipped) it touches, else
@@ -214,8 +247,8 @@ def _variance(points, axis) -> float:
 
 
 @njit(cache=True, inline="always")
-def sense(v, pose, physics, beams, walls, cell_start, cell_walls, all_walls, bodies,
-          corners, centres, me, readings) -> None:
+def sense(v, pose, physics, beams, walls, cell_start, cell_walls, all_walls, bodies, corners,
+          centres, me, readings) -> None:
     """Rangefinder readings of vehicle ``v`` (paper §3): the nearest wall along each beam and,
     when ``bodies``, the nearest edge of any other body (``corners``, ``centres``; ``me``, its
     own there, skipped)."""
@@ -315,12 +348,14 @@ def decide(v, kind, genes, layer_sizes, readings, physics, beams, memory, rng,
 
 
 @njit(cache=True, inline="always")
-def drive_all(kinds, genes, layer_sizes, physics, beams, walls, cell_start,
-              cell_walls, all_walls, pose, corners, centres, previous, previous_centres, fresh,
-              memory, rng, readings, activation, scratch, steering):
+def drive_all(kinds, genes, layer_sizes, physics, geometry, vehicles, rng, work):
     """Every vehicle senses and decides (``genes[v]`` for a network driver; an ``ACTION``
-    vehicle keeps the ``steering[v]`` it was given), then all move at once: the bodies before
-    the move become ``previous``, and no body is ``fresh`` any more."""
+    vehicle keeps the ``work.steering[v]`` it was given), then all move at once: the bodies
+    before the move become ``previous``, and no body is ``fresh`` any more."""
+    pose, corners, centres, memory = (vehicles.pose, vehicles.corners, vehicles.centres,
+                                      vehicles.memory)
+    readings, activation, scratch, steering = work
+    beams, walls, cell_start, cell_walls, all_walls, _ = geometry
     count = pose.shape[0]
     for v in range(count):
         kind = kinds[v]
@@ -329,17 +364,18 @@ def drive_all(kinds, genes, layer_sizes, physics, beams, walls, cell_start,
         if kind != NONE:
             sense(v, pose, physics, beams, walls, cell_start, cell_walls, all_walls,
                   count > 1 and senses_vehicles(kind, physics), corners, centres, v, readings)
-        steering[v] = decide(v, kind, genes, layer_sizes, readings, physics, beams,
-                             memory, rng, activation, scratch)
-    move_all(steering, physics, pose, corners, centres, previous, previous_centres, fresh)
+        steering[v] = decide(v, kind, genes, layer_sizes, readings, physics, beams, memory, rng,
+                             activation, scratch)
+    move_all(steering, physics, vehicles)
 
 
 @njit(cache=True, inline="always")
-def move_all(steering, physics, pose, corners, centres, previous, previous_centres, fresh):
+def move_all(steering, physics, vehicles):
     """Every vehicle moves one step by the bicycle model (paper §4)."""
-    previous[:] = corners
-    previous_centres[:] = centres
-    fresh[:] = False
+    pose, corners, centres = vehicles.pose, vehicles.corners, vehicles.centres
+    vehicles.previous[:] = corners
+    vehicles.previous_centres[:] = centres
+    vehicles.fresh[:] = False
     for v in range(pose.shape[0]):
         x, y, heading = bicycle_step(pose[v, 0], pose[v, 1], pose[v, 2], steering[v],
                                      physics.distance, physics.wheelbase)
@@ -347,8 +383,7 @@ def move_all(steering, physics, pose, corners, centres, previous, previous_centr
 
 
 @njit(cache=True)
-def respawn(v, kind, physics, walls, cell_start, cell_walls, all_walls, pose, corners, centres,
-            previous, previous_centres, fresh, memory, rng) -> bool:
+def respawn(v, kind, physics, geometry, vehicles, rng) -> bool:
     """Move vehicle ``v`` to a random free pose with a fresh life: on the drivable area,
     touching no wall, at least ``clearance`` from every other vehicle, with no earlier body to
     blame against and its strategy's state reset. False (nothing changed) if no such pose
@@ -358,39 +393,34 @@ def respawn(v, kind, physics, walls, cell_start, cell_walls, all_walls, pose, co
         x = physics.x_min + (physics.x_max - physics.x_min) * next_uniform(rng)
         y = physics.y_min + (physics.y_max - physics.y_min) * next_uniform(rng)
         heading = math.pi * (2.0 * next_uniform(rng) - 1.0)
-        if not inside(x, y, walls):
+        if not inside(x, y, geometry.walls):
             continue
-        if _enter_if_free(v, x, y, heading, kind, physics, walls, cell_start, cell_walls,
-                          all_walls, pose, corners, centres, previous, previous_centres, fresh,
-                          memory, rng, trial):
+        if _enter_if_free(v, x, y, heading, kind, physics, geometry, vehicles, rng, trial):
             return True
     return False
 
 
 @njit(cache=True)
-def respawn_on_lanes(v, kind, spots, physics, walls, cell_start, cell_walls, all_walls, pose,
-                     corners, centres, previous, previous_centres, fresh, memory, rng) -> bool:
+def respawn_on_lanes(v, kind, spots, physics, geometry, vehicles, rng) -> bool:
     """:func:`respawn` at one of ``spots`` (S, 3: x, y, heading along the lanes, facing their
     traffic): a network's roads can fill little of its bounding box."""
     trial = np.empty((4, 2))
     for _ in range(200):
         spot = min(int(next_uniform(rng) * spots.shape[0]), spots.shape[0] - 1)
         x, y, heading = spots[spot, 0], spots[spot, 1], spots[spot, 2]
-        if _enter_if_free(v, x, y, heading, kind, physics, walls, cell_start, cell_walls,
-                          all_walls, pose, corners, centres, previous, previous_centres, fresh,
-                          memory, rng, trial):
+        if _enter_if_free(v, x, y, heading, kind, physics, geometry, vehicles, rng, trial):
             return True
     return False
 
 
 @njit(cache=True)
-def _enter_if_free(v, x, y, heading, kind, physics, walls, cell_start, cell_walls, all_walls,
-                   pose, corners, centres, previous, previous_centres, fresh, memory, rng,
-                   trial) -> bool:
+def _enter_if_free(v, x, y, heading, kind, physics, geometry, vehicles, rng, trial) -> bool:
     """Place vehicle ``v`` at (x, y, heading) with a fresh life if its body there touches no
     wall, its rear is on the area and every other vehicle is ``clearance`` away."""
+    walls, pose = geometry.walls, vehicles.pose
     body_corners(x, y, heading, physics.length, physics.width, trial)
-    candidates = nearby_walls(x, y, physics, cell_start, cell_walls, all_walls)
+    candidates = nearby_walls(x, y, physics, geometry.cell_start, geometry.cell_walls,
+                              geometry.all_walls)
     if box_hits_walls(trial, walls, candidates, candidates.shape[0]):
         return False
     if not inside(trial[2, 0], trial[2, 1], walls):
@@ -398,12 +428,19 @@ def _enter_if_free(v, x, y, heading, kind, physics, walls, cell_start, cell_wall
     for other in range(pose.shape[0]):
         if other != v and math.hypot(x - pose[other, 0], y - pose[other, 1]) < physics.clearance:
             return False
-    place(v, x, y, heading, physics, pose, corners, centres)
-    previous[v] = corners[v]
-    previous_centres[v] = centres[v]
-    fresh[v] = True
-    reset_memory(kind, physics, rng, memory[v])
+    enter(v, x, y, heading, kind, physics, vehicles, rng)
     return True
+
+
+@njit(cache=True, inline="always")
+def enter(v, x, y, heading, kind, physics, vehicles, rng) -> None:
+    """Vehicle ``v`` starts a fresh life at (x, y, heading): no earlier body to blame against,
+    its strategy's state reset."""
+    place(v, x, y, heading, physics, vehicles.pose, vehicles.corners, vehicles.centres)
+    vehicles.previous[v] = vehicles.corners[v]
+    vehicles.previous_centres[v] = vehicles.centres[v]
+    vehicles.fresh[v] = True
+    reset_memory(kind, physics, rng, vehicles.memory[v])
 
 
 @njit(cache=True)

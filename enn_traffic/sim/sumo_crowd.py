@@ -24,6 +24,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import NamedTuple
 
 import numpy as np
 from numba import njit
@@ -35,15 +36,17 @@ from enn_traffic.sim.crowd import ALIVE, CrowdRun, Learning
 from enn_traffic.sim.replay import mark_absent, struck_by_traffic, visible_centres
 from enn_traffic.sim.rules import (
     NO_HIT,
+    Work,
+    enter,
     hits_earlier_body,
     left_network,
     move_all,
-    place,
     respawn_on_lanes,
     responsible,
     sense,
     sense_bodies,
     spun,
+    vehicles_at,
 )
 from enn_traffic.sim.strategies import NETWORK
 from enn_traffic.sim.sumo_world import SumoWorld
@@ -54,93 +57,107 @@ from enn_traffic.traffic.sumo import FAR
 RESPAWN_TRIES = 50  # free spots drawn before a learner re-enters beside SUMO's vehicles anyway
 
 
+class Learners(NamedTuple):
+    """The learners' lives, one row each (K), and their worlds, one entry per SUMO slot (S)."""
+
+    life: np.ndarray  # (K,) steps lived
+    recent: np.ndarray  # (K, spin_window, 2) positions for the spin test
+    spin_checked: np.ndarray  # (K,) bool
+    active: np.ndarray  # (K,) bool; False: left the network for good
+    suffered: np.ndarray  # (K,) collisions SUMO vehicles caused
+    events: np.ndarray  # (K,) ALIVE, or what ended the life at this step
+    gone: np.ndarray  # (K, S) the id a slot held when it left learner k's world, or -1
+    absent: np.ndarray  # (S,) work array: not in a learner's world before the step
+    visible: np.ndarray  # (S, 2) work array: the centres a learner sees
+
+
 @njit(cache=True)
-def learner_events(t, pose, body, centre, body_before, centre_before, fresh, life, recent,
-                   spin_checked, active, physics, geometry, ids, corners, centres, before, now,
-                   gone, absent, suffered, events) -> bool:
-    """Fill ``events`` (K,): ``COLLIDED`` for an ``active`` learner responsible for a
+def learner_events(t, vehicles, learners, physics, geometry, slots, before, now) -> bool:
+    """Fill ``learners.events``: ``COLLIDED`` for an ``active`` learner responsible for a
     collision, ``LEFT_NETWORK`` at an exit, ``SPUN`` for a spin, else ``ALIVE``; count the
     collisions SUMO vehicles cause (``suffered``) and take those vehicles out of the learner's
-    world (``gone[k]``). Did any life end?"""
-    walls, cell_start, cell_walls = geometry.walls, geometry.cell_start, geometry.cell_walls
-    all_walls, exits = geometry.all_walls, geometry.exits
+    world (``gone[k]``). ``slots``: SUMO's (ids, corners, centres), rows ``before`` and
+    ``now``. Did any life end?"""
+    ids, corners, centres = slots
     ids_before, corners_before, centres_before = ids[before], corners[before], centres[before]
     ids_now, corners_now, centres_now = ids[now], corners[now], centres[now]
+    pose, body, centre = vehicles.pose, vehicles.corners, vehicles.centres
+    events, gone = learners.events, learners.gone
+    _, walls, cell_start, cell_walls, all_walls, exits = geometry
     near = 4.0 * physics.radius * physics.radius
     ended = False
     for k in range(pose.shape[0]):
         events[k] = ALIVE
-        if not active[k]:
+        if not learners.active[k]:
             continue
         if left_network(body[k], exits):
             events[k] = LEFT_NETWORK
             ended = True
             continue
-        mark_absent(t, ids_before, gone[k], absent)
-        if (responsible(k, pose, body, centre, corners_before, centres_before, absent, -1,
-                        physics, walls, cell_start, cell_walls, all_walls) != NO_HIT
-                or hits_earlier_body(k, body, centre, body_before, centre_before, fresh, k,
+        mark_absent(t, ids_before, gone[k], learners.absent)
+        if (responsible(k, pose, body, centre, corners_before, centres_before, learners.absent,
+                        -1, physics, walls, cell_start, cell_walls, all_walls) != NO_HIT
+                or hits_earlier_body(k, body, centre, vehicles.previous,
+                                     vehicles.previous_centres, vehicles.fresh, k,
                                      near) != NO_HIT):
             events[k] = COLLIDED
             ended = True
             continue
-        if t > 0 and not fresh[k]:
-            suffered[k] += struck_by_traffic(k, body_before, centre_before, ids_now, corners_now,
-                                             centres_now, gone[k], near)
-        if spin_checked[k] and spun(recent[k], life[k], pose[k, 0], pose[k, 1],
-                                    physics.spin_variance):
+        if t > 0 and not vehicles.fresh[k]:
+            learners.suffered[k] += struck_by_traffic(k, vehicles.previous,
+                                                      vehicles.previous_centres, ids_now,
+                                                      corners_now, centres_now, gone[k], near)
+        if learners.spin_checked[k] and spun(learners.recent[k], learners.life[k], pose[k, 0],
+                                             pose[k, 1], physics.spin_variance):
             events[k] = SPUN
             ended = True
     return ended
 
 
 @njit(cache=True, inline="always")
-def sense_learner(k, physics, geometry, ids_now, corners_now, centres_now, pose, body, centre,
-                  gone, visible, readings) -> None:
+def sense_learner(k, physics, geometry, ids_now, corners_now, centres_now, vehicles, learners,
+                  readings) -> None:
     """Learner ``k`` senses the walls, the SUMO vehicles in its world and the other
     learners into ``readings``."""
-    beams, walls, cell_start = geometry.beams, geometry.walls, geometry.cell_start
-    cell_walls, all_walls = geometry.cell_walls, geometry.all_walls
-    visible_centres(ids_now, centres_now, gone[k], visible)
-    sense(k, pose, physics, beams, walls, cell_start, cell_walls, all_walls,
-          True, corners_now, visible, -1, readings)
-    sense_bodies(k, pose[k, 0], pose[k, 1], math.cos(pose[k, 2]), math.sin(pose[k, 2]),
-                 beams, body, centre,
-                 physics.radius, readings)
+    pose, visible = vehicles.pose, learners.visible
+    beams, walls, cell_start, cell_walls, all_walls, _ = geometry
+    visible_centres(ids_now, centres_now, learners.gone[k], visible)
+    sense(k, pose, physics, beams, walls, cell_start, cell_walls, all_walls, True, corners_now,
+          visible, -1, readings)
+    sense_bodies(k, pose[k, 0], pose[k, 1], math.cos(pose[k, 2]), math.sin(pose[k, 2]), beams,
+                 vehicles.corners, vehicles.centres, physics.radius, readings)
 
 
 @njit(cache=True, inline="always")
-def move(steering, physics, pose, body, centre, body_before, centre_before, fresh, life
-         ) -> None:
+def move(steering, physics, vehicles, learners) -> None:
     """All learners move at once, each by its ``steering``."""
-    move_all(steering, physics, pose, body, centre, body_before, centre_before, fresh)
-    life += 1
+    move_all(steering, physics, vehicles)
+    learners.life[:] += 1
 
 
 @njit(cache=True)
-def drive(genes, layer_sizes, physics, geometry, ids, corners, centres, now, pose, body,
-          centre, body_before, centre_before, fresh, life, gone, visible, readings, activation,
-          scratch, steering) -> None:
+def drive(genes, layer_sizes, physics, geometry, slots, now, vehicles, learners, work) -> None:
     """Every learner senses (:func:`sense_learner`), its network (``genes[k]``) steers, and
     all move at once."""
+    ids, corners, centres = slots
     ids_now, corners_now, centres_now = ids[now], corners[now], centres[now]
-    for k in range(pose.shape[0]):
-        sense_learner(k, physics, geometry, ids_now, corners_now, centres_now, pose, body,
-                      centre, gone, visible, readings)
-        steering[k] = network_steering(genes[k], layer_sizes, readings, activation, scratch,
-                                       physics.gain)
-    move(steering, physics, pose, body, centre, body_before, centre_before, fresh, life)
+    for k in range(vehicles.pose.shape[0]):
+        sense_learner(k, physics, geometry, ids_now, corners_now, centres_now, vehicles,
+                      learners, work.readings)
+        work.steering[k] = network_steering(genes[k], layer_sizes, work.readings,
+                                            work.activation, work.scratch, physics.gain)
+    move(work.steering, physics, vehicles, learners)
 
 
 @njit(cache=True)
-def observe(active, physics, geometry, ids, corners, centres, now, pose, body, centre, gone,
-            visible, out) -> None:
+def observe(physics, geometry, slots, now, vehicles, learners, out) -> None:
     """Every ``active`` learner ``k`` senses into ``out[k]`` (for a caller that steers them
     from outside: the PettingZoo SUMO crowd, :mod:`enn_traffic.envs.sumo`)."""
-    for k in range(pose.shape[0]):
-        if active[k]:
-            sense_learner(k, physics, geometry, ids[now], corners[now], centres[now], pose,
-                          body, centre, gone, visible, out[k])
+    ids, corners, centres = slots
+    for k in range(vehicles.pose.shape[0]):
+        if learners.active[k]:
+            sense_learner(k, physics, geometry, ids[now], corners[now], centres[now], vehicles,
+                          learners, out[k])
 
 
 move_once = njit(cache=True)(move.py_func)
@@ -221,7 +238,7 @@ class SumoCrowd:
     def _move_learners(self) -> None:
         """Place every learner in SUMO for its next step (libsumo moves one vehicle a call)."""
         for vehicle, (x, y, heading), active in zip(self.ids, self.lives.pose.tolist(),
-                                                    self.lives.active, strict=True):
+                                                    self.lives.learners.active, strict=True):
             if active:
                 sumo.move_learner(x, y, heading, vehicle)
 
@@ -241,26 +258,23 @@ class SumoCrowd:
         the learners' per-slot arrays growing with them; bodies larger than their type said
         widen the radius beyond which bodies cannot touch."""
         self.slots, radius = sumo.read_frame(self._simulation, self.now, self.slots)
-        if self.slots[0].shape[1] > self.lives.gone.shape[1]:
+        if self.slots[0].shape[1] > self.lives.learners.gone.shape[1]:
             self.lives.grow(self.slots[0].shape[1])
         if radius > self.physics.radius:
             self.physics = self.physics._replace(radius=radius)
 
     def detect(self) -> bool:
         """The blame rule, exits and spins of the learners at this step (:func:`learner_events`):
-        did a life end? ``lives.events`` says whose. Once a step: a run that begins where
+        did a life end? ``lives.learners.events`` says whose. Once a step: a run that begins where
         the last one ended does not judge that step again (its collisions are counted, the
         lives that ended there re-entered)."""
-        lives, ids, corners, centres = self.lives, *self.slots
+        lives = self.lives
         if self._detected_at == self.t:
-            lives.events[:] = ALIVE
+            lives.learners.events[:] = ALIVE
             return False
         self._detected_at = self.t
-        return learner_events(self.t, lives.pose, lives.body, lives.centre, lives.body_before,
-                              lives.centre_before, lives.fresh, lives.life, lives.recent,
-                              lives.spin_checked, lives.active, self.physics,
-                              self.world.geometry, ids, corners, centres, self.before, self.now,
-                              lives.gone, lives.absent, lives.suffered, lives.events)
+        return learner_events(self.t, lives.vehicles, lives.learners, self.physics,
+                              self.world.geometry, self.slots, self.before, self.now)
 
     def advance(self) -> None:
         """The learners where they moved, SUMO one step on, its vehicles read."""
@@ -272,10 +286,10 @@ class SumoCrowd:
 
     def leave(self, k: int) -> None:
         """Learner ``k`` leaves the network for good: out of SUMO, out of every world."""
-        lives = self.lives
-        lives.active[k] = False
-        lives.pose[k], lives.centre[k], lives.centre_before[k] = FAR, FAR, FAR
-        lives.body[k] = lives.body_before[k] = FAR
+        vehicles = self.lives.vehicles
+        self.lives.learners.active[k] = False
+        vehicles.pose[k], vehicles.centres[k], vehicles.previous_centres[k] = FAR, FAR, FAR
+        vehicles.corners[k] = vehicles.previous[k] = FAR
         sumo.remove_learner(self.ids[k])
 
     def run(self, seconds: float, genes: np.ndarray, learning: Learning | None = None
@@ -286,6 +300,7 @@ class SumoCrowd:
         if self._simulation is None:
             self.start()
         world, count, lives = self.world, self.count, self.lives
+        learners = lives.learners  # its K-row arrays stay when SUMO's slots grow
         genes = np.array(genes, dtype=np.float64)
         learns = np.array([learning is not None and learning.learns(k) for k in range(count)])
         for k in np.flatnonzero(learns):
@@ -294,103 +309,94 @@ class SumoCrowd:
         steps = round(seconds / world.scenario.vehicle.dt)
         outcomes = {COLLIDED: np.zeros(count, np.int64), SPUN: np.zeros(count, np.int64),
                     LEFT_NETWORK: np.zeros(count, np.int64)}
-        suffered = lives.suffered.copy()
-        unseen_from = lives.life.copy()  # steps of a life going on that an earlier run showed
+        suffered = learners.suffered.copy()
+        unseen_from = learners.life.copy()  # steps of a life going on that an earlier run showed
         begin = self._simulation.time()
         trace = np.empty((steps + 1, count, 3))
         for step in range(steps + 1):
             trace[step] = lives.pose
-            ids, corners, centres = self.slots
             if self.detect():
-                for k in np.flatnonzero(lives.events != ALIVE):
-                    outcome = int(lives.events[k])
+                for k in np.flatnonzero(learners.events != ALIVE):
+                    outcome = int(learners.events[k])
                     outcomes[outcome][k] += 1
                     if learns[k]:
-                        genes[k] = learning.life_ended(k, int(lives.life[k]),
-                                                       int(lives.life[k] - unseen_from[k]),
+                        genes[k] = learning.life_ended(k, int(learners.life[k]),
+                                                       int(learners.life[k] - unseen_from[k]),
                                                        outcome == SPUN)
                     unseen_from[k] = 0
                     self.reenter(k)
-            for k in np.flatnonzero(learns & (lives.life >= cap)) if cap else ():
-                genes[k] = learning.life_capped(k, int(lives.life[k] - unseen_from[k]))
-                unseen_from[k] = lives.life[k] = 0
+            for k in np.flatnonzero(learns & (learners.life >= cap)) if cap else ():
+                genes[k] = learning.life_capped(k, int(learners.life[k] - unseen_from[k]))
+                unseen_from[k] = learners.life[k] = 0
             if step == steps:
                 break
-            drive(genes, world.layer_sizes, self.physics, world.geometry, ids, corners,
-                  centres, self.now, lives.pose, lives.body, lives.centre, lives.body_before,
-                  lives.centre_before, lives.fresh, lives.life, lives.gone, lives.visible,
-                  lives.readings, lives.activation, lives.scratch, lives.steering)
+            drive(genes, world.layer_sizes, self.physics, world.geometry, self.slots, self.now,
+                  lives.vehicles, lives.learners, lives.work)
             self.advance()
         for k in np.flatnonzero(learns):  # a life still going counts what it has shown
-            learning.still_driving(k, int(lives.life[k] - unseen_from[k]))
+            learning.still_driving(k, int(learners.life[k] - unseen_from[k]))
         run = SumoCrowdRun(outcomes[COLLIDED], outcomes[SPUN], steps * world.scenario.vehicle.dt,
-                           trace, exits=outcomes[LEFT_NETWORK], suffered=lives.suffered - suffered,
-                           begin=begin)
+                           trace, exits=outcomes[LEFT_NETWORK],
+                           suffered=learners.suffered - suffered, begin=begin)
         self._runs.append(run)
         return run
 
 
 class _Lives:
-    """The learners' arrays: poses and bodies (as a world of K vehicles), each one's life so
-    far, and per SUMO slot the vehicles that left its world."""
+    """The learners' arrays: poses and bodies (:class:`~enn_traffic.sim.rules.Vehicles`, as a
+    world of K vehicles), their lives and worlds (:class:`Learners`), their work arrays and
+    the generator of their re-entries."""
 
     def __init__(self, count: int, physics, beams: int, layer_sizes: np.ndarray, slots: int,
                  seed: int):
-        self.pose = np.full((count, 3), FAR)  # not on the network yet
-        self.body = np.zeros((count, 4, 2))
-        self.centre = np.full((count, 2), FAR)
-        self.body_before, self.centre_before = self.body.copy(), self.centre.copy()
-        self.fresh = np.ones(count, dtype=np.bool_)
-        self.life = np.zeros(count, dtype=np.int64)
-        self.recent = np.zeros((count, physics.spin_window, 2))
-        self.spin_checked = np.ones(count, dtype=np.bool_)
-        self.active = np.ones(count, dtype=np.bool_)  # False: left the network for good
-        self.gone = np.full((count, slots), -1, dtype=np.int64)
-        self.absent = np.empty(slots, dtype=np.bool_)
-        self.visible = np.empty((slots, 2))
-        self.suffered = np.zeros(count, dtype=np.int64)
-        self.events = np.full(count, ALIVE, dtype=np.int64)
-        self.memory = np.zeros((count, 2))
-        self.readings = np.empty(beams)
-        self.activation, self.scratch = network_buffers(layer_sizes)
-        self.steering = np.zeros(count)
+        self.vehicles = vehicles = vehicles_at(count)
+        vehicles.pose[:], vehicles.centres[:] = FAR, FAR  # not on the network yet
+        vehicles.corners[:] = vehicles.previous[:] = 0.0
+        vehicles.previous_centres[:] = FAR
+        vehicles.fresh[:] = True
+        self.learners = Learners(
+            np.zeros(count, dtype=np.int64), np.zeros((count, physics.spin_window, 2)),
+            np.ones(count, dtype=np.bool_), np.ones(count, dtype=np.bool_),
+            np.zeros(count, dtype=np.int64), np.full(count, ALIVE, dtype=np.int64),
+            np.full((count, slots), -1, dtype=np.int64), np.empty(slots, dtype=np.bool_),
+            np.empty((slots, 2)))
+        self.work = Work(np.empty(beams), *network_buffers(layer_sizes), np.zeros(count))
         self.rng = np.full(1, np.uint64(seed), dtype=np.uint64)
+
+    @property
+    def pose(self) -> np.ndarray:
+        """(K, 3) every learner's pose."""
+        return self.vehicles.pose
 
     def grow(self, slots: int) -> None:
         """Room for ``slots`` SUMO slots (the new ones in every learner's world)."""
-        gone = np.full((len(self.gone), slots), -1, dtype=np.int64)
-        gone[:, : self.gone.shape[1]] = self.gone
-        self.gone = gone
-        self.absent = np.empty(slots, dtype=np.bool_)
-        self.visible = np.empty((slots, 2))
+        old = self.learners.gone
+        gone = np.full((len(old), slots), -1, dtype=np.int64)
+        gone[:, : old.shape[1]] = old
+        self.learners = self.learners._replace(gone=gone, absent=np.empty(slots, dtype=np.bool_),
+                                               visible=np.empty((slots, 2)))
 
     def place(self, k: int, pose: np.ndarray, physics) -> None:
         """Learner ``k`` starts a life at ``pose``."""
-        place(k, *pose, physics, self.pose, self.body, self.centre)
-        self.body_before[k], self.centre_before[k] = self.body[k], self.centre[k]
-        self.fresh[k] = True
-        self.life[k] = 0
-        self.gone[k] = -1
+        enter(k, *pose, NETWORK, physics, self.vehicles, self.rng)
+        self.learners.life[k] = 0
+        self.learners.gone[k] = -1
 
     def enter(self, k: int, physics, geometry, spots: np.ndarray, slots: tuple, row: int,
               scenario) -> None:
         """Learner ``k`` starts a life at a free spot: one of ``spots`` along the lanes
         (facing their traffic), touching no wall, ``respawn_clearance`` from every learner
         and, if one is found within :data:`RESPAWN_TRIES` draws, from every SUMO vehicle."""
-        walls, cell_start, cell_walls = geometry.walls, geometry.cell_start, geometry.cell_walls
-        all_walls = geometry.all_walls
         ids, _, centres = slots
         present = ids[row] >= 0
         for _ in range(RESPAWN_TRIES):
-            if not respawn_on_lanes(k, NETWORK, spots, physics, walls, cell_start,
-                                    cell_walls, all_walls, self.pose, self.body, self.centre,
-                                    self.body_before, self.centre_before, self.fresh,
-                                    self.memory, self.rng):
+            if not respawn_on_lanes(k, NETWORK, spots, physics, geometry, self.vehicles,
+                                    self.rng):
                 raise InputError("no free spot for a learner along the lanes in 200 draws "
                                  "(learners packed closer than traffic.respawn_clearance?)",
                                  scenario.source, "track.net")
-            gaps = np.hypot(*(centres[row][present] - self.centre[k]).T)
+            gaps = np.hypot(*(centres[row][present] - self.vehicles.centres[k]).T)
             if not np.any(gaps < physics.clearance):
                 break
-        self.life[k] = 0
-        self.gone[k] = -1
+        self.learners.life[k] = 0
+        self.learners.gone[k] = -1

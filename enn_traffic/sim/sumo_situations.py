@@ -12,24 +12,24 @@ from enn_traffic.scenario import Scenario
 WARMUP_STREAM = 7  # the key of the shared warm-ups' seeds (traffic.warmup_states)
 
 
-def situation_seed(scenario: Scenario, key: int, episode: int) -> int:
-    """The SUMO seed of situation ``episode`` of traffic key ``key`` (as the world draws it:
+def situation_seed(scenario: Scenario, key: int, index: int) -> int:
+    """The SUMO seed of situation ``index`` of traffic key ``key`` (as the world draws it:
     after ``traffic.vary``)."""
-    sequence = np.random.SeedSequence([scenario.traffic.seed, key, 0, episode])
+    sequence = np.random.SeedSequence([scenario.traffic.seed, key, 0, index])
     return int(sequence.generate_state(1)[0] % 2**31)
 
 
-def shared_warmup(scenario: Scenario, key: int, episode: int) -> int | None:
-    """Which of the ``traffic.warmup_states`` shared warm-ups situation ``episode`` of traffic
+def shared_warmup(scenario: Scenario, key: int, index: int) -> int | None:
+    """Which of the ``traffic.warmup_states`` shared warm-ups situation ``index`` of traffic
     key ``key`` loads (None: none are shared). A training generation's situations take them in
-    turn, (generation × episodes + episode) mod N, so that consecutive generations meet every
+    turn, (generation × episodes + index) mod N, so that consecutive generations meet every
     warm-up equally often; a held-out situation, one of a sample, draws one by its seed."""
     shared = scenario.traffic.warmup_states
     if not shared:
         return None
     if keys.is_training(key):
-        return (key * scenario.traffic.episodes + episode) % shared
-    return situation_seed(scenario, key, episode) % shared
+        return (key * scenario.traffic.episodes + index) % shared
+    return situation_seed(scenario, key, index) % shared
 
 
 def warmups_used(scenario: Scenario, key: int) -> str:

@@ -8,7 +8,7 @@ closed-loop mode (docs/sumo.md).
   SUMO's drivers brake and change lanes for it. Sequential and slower: for validation. Each
   situation's warm-up is simulated once and loaded from a SUMO state file by every chromosome.
 
-A traffic situation is a SUMO seed and a start drawn from (traffic seed, generation, episode),
+A traffic situation is a SUMO seed and a start drawn from (traffic seed, generation, index),
 so every chromosome of a generation meets the same traffic, whatever the number of workers.
 With ``traffic.warmup_states = N``, situations share N warm-ups (simulated once, then loaded)
 and differ by their own seed from the learner's start on (:func:`shared_warmup`).
@@ -35,7 +35,7 @@ from enn_traffic.sim.replay import (
     clear_start,
     compiled_step,
     learner_state,
-    run_replay_episode,
+    run_replay_life,
     run_replay_population,
     with_slots,
 )
@@ -97,7 +97,7 @@ CLOSED_LOOP_WORKERS = max(1, min(4, os.cpu_count() or 1))
 
 
 class SumoWorld(LearnerWorld):
-    """A scenario whose traffic is SUMO's: evaluate populations, trace one episode."""
+    """A scenario whose traffic is SUMO's: evaluate populations, trace one life."""
 
     def __init__(self, scenario: Scenario, track: Track | None = None):
         super().__init__(scenario, track)
@@ -276,7 +276,7 @@ class SumoWorld(LearnerWorld):
             step = self._steps[kind]
             while True:
                 if frames is not None:
-                    frames.append((live.state.pose[0].copy(), live.ids[live.now].copy(),
+                    frames.append((live.state.learner.pose[0].copy(), live.ids[live.now].copy(),
                                    live.corners[live.now].copy()))
                 outcome = step(live.t, genes, self.layer_sizes, live.physics, self.geometry,
                                live.ids, live.corners, live.centres, live.before, live.now,
@@ -291,20 +291,20 @@ class SumoWorld(LearnerWorld):
                               int(state.met[1]), hit, live.at_start, conflicts,
                               live.vehicle(hit))
 
-    def trace(self, chromosome: np.ndarray, key: int = 0, episode: int = 0,
+    def trace(self, chromosome: np.ndarray, key: int = 0, situation: int = 0,
               max_steps: int | None = None) -> tuple[np.ndarray, int]:
         """Poses (n, 1 + S, 3) of the learner and of every SUMO vehicle slot (NaN where a
-        slot is empty) in one episode, and the learner's outcome code."""
-        life = self.trace_life(chromosome, key, episode, max_steps)
+        slot is empty) in one life, and the learner's outcome code."""
+        life = self.trace_life(chromosome, key, situation, max_steps)
         return life.poses, life.outcome
 
-    def trace_life(self, chromosome: np.ndarray, key: int = 0, episode: int = 0,
+    def trace_life(self, chromosome: np.ndarray, key: int = 0, situation: int = 0,
                    max_steps: int | None = None) -> TracedLife:
         """:meth:`trace`, with what the learner ran into."""
         limit = self.max_steps if max_steps is None else max_steps
-        seed = self.seeds(key)[episode]
-        start = self.situation_starts(key)[episode]
-        warmup = self.warmups(key)[episode]
+        seed = self.seeds(key)[situation]
+        start = self.situation_starts(key)[situation]
+        warmup = self.warmups(key)[situation]
         genes = self.spec.in_source_layout(chromosome)[0]
         if self.scenario.traffic.mode == "closed-loop":
             frames: list = []
@@ -323,7 +323,7 @@ class SumoWorld(LearnerWorld):
                 record = self.recording(seed, warmup, limit)
             limit = min(limit, record.ids.shape[0] - 1)  # a replay ends with its recording
             learner = np.full((limit + 1, 3), np.nan)
-            steps, outcome, *_, hit = run_replay_episode(
+            steps, outcome, *_, hit = run_replay_life(
                 genes, self.layer_sizes, self._learner_physics(record.radius), self.geometry,
                 start, record.ids, record.corners, record.centres, limit, learner)
             hit_vehicle = named(np.array([hit]), record.names, record.types)[0]
@@ -376,7 +376,7 @@ class LiveTraffic:
                                        world.layer_sizes, self.ids.shape[1])
             self._read()
             self.at_start = int((self.ids[self.now] >= 0).sum())
-            clear_start(self.state.centre, self.ids[self.now], self.centres[self.now],
+            clear_start(self.state.learner.centres, self.ids[self.now], self.centres[self.now],
                         self.state.gone, self.physics.clearance)
             sumo.add_learner(vehicle.length, vehicle.width, vehicle.speed)
             # Vehicles farther than this from the learner's front bumper can neither be seen
@@ -404,7 +404,7 @@ class LiveTraffic:
 
     def advance(self) -> None:
         """The learner where it moved, SUMO one step on, its vehicles read."""
-        sumo.move_learner(*self.state.pose[0])
+        sumo.move_learner(*self.state.learner.pose[0])
         self.simulation.step()
         self.before, self.now = self.now, self.before
         self._read()

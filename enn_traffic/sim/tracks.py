@@ -40,18 +40,18 @@ class TracksWorld:
         return [f"{world.track.name}: {label}" for world in self.worlds
                 for label in world.situation_labels()]
 
-    def world_of(self, episode: int) -> tuple[World, int]:
-        """The world that situation ``episode`` (a column of :meth:`evaluate`) is on, and its
+    def world_of(self, situation: int) -> tuple[World, int]:
+        """The world that situation ``situation`` (a column of :meth:`evaluate`) is on, and its
         number there."""
         for world, count in zip(self.worlds, self._situations, strict=True):
-            if episode < count:
-                return world, episode
-            episode -= count
-        raise IndexError(f"situation {episode} is beyond the scenario's "
+            if situation < count:
+                return world, situation
+            situation -= count
+        raise IndexError(f"situation {situation} is beyond the scenario's "
                          f"{sum(self._situations)}")
 
-    def trace(self, chromosome: np.ndarray, key: int = 0, episode: int = 0,
+    def trace(self, chromosome: np.ndarray, key: int = 0, situation: int = 0,
               max_steps: int | None = None) -> tuple[np.ndarray, int]:
         """Poses (n, V, 3) of one situation, and the learner's outcome code."""
-        world, episode = self.world_of(episode)
-        return world.trace(chromosome, key, episode, max_steps)
+        world, situation = self.world_of(situation)
+        return world.trace(chromosome, key, situation, max_steps)

@@ -60,7 +60,7 @@ class World(Protocol):
         """What each column of the per-situation arrays is (a strategy, a road)."""
         ...
 
-    def trace(self, chromosome: np.ndarray, key: int = 0, episode: int = 0,
+    def trace(self, chromosome: np.ndarray, key: int = 0, situation: int = 0,
               max_steps: int | None = None) -> tuple[np.ndarray, int]:
         """Poses (n, V, 3) of one situation, and the learner's outcome code."""
         ...
@@ -68,11 +68,11 @@ class World(Protocol):
 
 @dataclass(frozen=True)
 class SituationResults:
-    """Per world and episode (P, E): learner steps, outcome (``OUTCOMES``), collisions the
+    """Per world and situation (P, E): learner steps, outcome (``OUTCOMES``), collisions the
     learner suffered, the traffic it met (P, E, 3; columns ``MET_*``) and what it ran into
     (``hit``: ``NO_HIT``, ``HIT_WALL``, or the vehicle: an arena vehicle's index, a SUMO
     vehicle's number in its situation; ``hit_vehicle``: that SUMO vehicle's id and type, where
-    known); fitness (P,) is the mean over episodes of steps, 0 for a spin."""
+    known); fitness (P,) is the mean over situations of steps, 0 for a spin."""
 
     fitness: np.ndarray
     steps: np.ndarray
@@ -126,7 +126,7 @@ class SituationResults:
                         ).astype(np.float64)
 
     def traffic_summary(self) -> dict[str, float]:
-        """Traffic the learners met, over all worlds and episodes: vehicles in the world at
+        """Traffic the learners met, over all worlds and situations: vehicles in the world at
         the start (mean), vehicles within sensor range per learner step (mean; the steps of
         the life and the start) and at most."""
         t = self.traffic
@@ -139,7 +139,7 @@ class SituationResults:
 
     @staticmethod
     def lifetime_fitness(steps: np.ndarray, outcome: np.ndarray) -> np.ndarray:
-        """Fitness of each episode (paper §5, §5.3): steps survived, 0 for a spin."""
+        """Fitness of each life (paper §5, §5.3): steps survived, 0 for a spin."""
         return np.where(outcome == SPUN, 0, steps).astype(np.float64)
 
     @property

@@ -1,6 +1,11 @@
 """The arena and navigation worlds as gymnasium environments: API compliance, seeding, and
 the same trajectories as the GA's worlds for the same actions."""
 
+import os
+import subprocess
+import sys
+from pathlib import Path
+
 import gymnasium as gym
 import numpy as np
 import pytest
@@ -140,3 +145,18 @@ def test_a_scenario_of_several_tracks_drives_the_one_named(root):
 def test_scenarios_an_env_cannot_drive_are_refused(root):
     with pytest.raises(ValueError, match="not an arena or navigation"):
         RangefinderVectorEnv(root / "scenarios/sumo_strategy1.toml")
+
+
+@pytest.mark.full
+def test_the_vector_env_compiled_before_anything_else_steps_as_the_single_env(tmp_path):
+    """The test above alone, in a fresh process with an empty numba cache, so that the vector
+    env's parallel kernels compile first. Compiled in that order with a world's start and step
+    inlined into the parallel loop, the worlds lost writes: no world moved on to its next
+    situation, a new life kept the old one's step count, and every life reported 0 steps."""
+    alone = test_the_vector_env_steps_each_world_as_the_single_env_does.__name__
+    test = f"{Path(__file__).resolve()}::{alone}"
+    done = subprocess.run(
+        [sys.executable, "-m", "pytest", "-q", "-n", "0", "-p", "no:cacheprovider", test],
+        env=os.environ | {"NUMBA_CACHE_DIR": str(tmp_path)}, capture_output=True, text=True,
+        timeout=900)
+    assert done.returncode == 0, done.stdout[-3000:]

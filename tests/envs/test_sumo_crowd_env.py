@@ -42,7 +42,7 @@ def test_every_agent_ends_and_leaves_sumo(env):
         ended |= {agent: infos[agent] for agent in terminated
                   if terminated[agent] or truncated[agent]}
     assert sorted(ended) == env.possible_agents
-    assert not env.crowd.lives.active.any()
+    assert not env.crowd.lives.learners.active.any()
     assert all(info["steps"] >= 1 for info in ended.values())
 
 

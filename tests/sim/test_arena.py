@@ -6,7 +6,7 @@ from enn_traffic.errors import InputError
 from enn_traffic.neural import NetworkSpec
 from enn_traffic.scenario import load_scenario
 from enn_traffic.sim.arena import ArenaWorld
-from enn_traffic.sim.reference import reference_episode
+from enn_traffic.sim.reference import reference_life
 from enn_traffic.sim.rules import spun
 from enn_traffic.sim.world import CAPPED, COLLIDED, SPUN
 
@@ -89,7 +89,7 @@ def test_compiled_episodes_equal_the_plain_reference_loop(sensor, root):
     population = rng.uniform(-1, 1, (40, world.spec.chromosome_length))
     results = world.evaluate(population)
     for p in range(len(population)):
-        expected = reference_episode(world, population[p])
+        expected = reference_life(world, population[p])
         assert (results.steps[p, 0], results.outcome[p, 0]) == expected
     assert len(set(results.steps[:, 0].tolist())) > 5  # the sample is not trivial
 

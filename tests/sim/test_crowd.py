@@ -114,7 +114,7 @@ def test_a_life_at_the_cap_ends_its_chromosome_trial_without_a_respawn(world):
     assert run.collisions[0] == 0 and learner.lives == 0
     assert learner.generation == 1 and learner.tried == 2
     np.testing.assert_array_equal(learner.bred_from[1], [10.0, 10.0])
-    assert arena.life[0] == 5  # 25 steps: two trials of 10, then 5 of the third
+    assert arena.lives.life[0] == 5  # 25 steps: two trials of 10, then 5 of the third
     assert arena.pose[0, 0] == pytest.approx(10.0 + 25.0, abs=0.1)  # never moved back: 1 m a step
     assert learning.learner_rows() == [{"learner": 0, "generations_bred": 1, "lives": 0,
                                         "chromosomes_tried": 2}]

@@ -132,7 +132,8 @@ def test_a_sumo_vehicle_that_drives_into_a_learner_leaves_that_learners_world_on
     responsible (the learner suffers one collision, lives on) and leaves learner 0's world,
     not learner 1's."""
     from enn_traffic.geometry import body_corners
-    from enn_traffic.sim.sumo_crowd import ALIVE, learner_events
+    from enn_traffic.sim.rules import Vehicles
+    from enn_traffic.sim.sumo_crowd import ALIVE, Learners, learner_events
     from enn_traffic.traffic import sumo
 
     length, width = world.scenario.vehicle.length, world.scenario.vehicle.width
@@ -150,17 +151,19 @@ def test_a_sumo_vehicle_that_drives_into_a_learner_leaves_that_learners_world_on
     for row, front in ((0, old_rear - 0.5), (1, old_rear + 1.0)):  # before, now
         ids[row, 0] = 7
         corners[row, 0], centres[row, 0] = body(front, 4.5)
-    gone = np.full((2, 4), -1)
-    suffered, events = np.zeros(2, dtype=np.int64), np.zeros(2, dtype=np.int64)
+    vehicles = Vehicles(pose, np.array([b[0] for b in now_bodies]),
+                        np.array([b[1] for b in now_bodies]),
+                        np.array([b[0] for b in before_bodies]),
+                        np.array([b[1] for b in before_bodies]), np.zeros(2, dtype=np.bool_),
+                        np.zeros((2, 2)))
     physics = world._learner_physics(2.5)
-    ended = learner_events(5, pose, np.array([b[0] for b in now_bodies]),
-                           np.array([b[1] for b in now_bodies]),
-                           np.array([b[0] for b in before_bodies]),
-                           np.array([b[1] for b in before_bodies]), np.zeros(2, dtype=np.bool_),
-                           np.full(2, 5), np.zeros((2, physics.spin_window, 2)),
-                           np.zeros(2, dtype=np.bool_), np.ones(2, dtype=np.bool_), physics,
-                           world.geometry, ids, corners, centres, 0, 1, gone,
-                           np.empty(4, dtype=np.bool_), suffered, events)
+    learners = Learners(np.full(2, 5), np.zeros((2, physics.spin_window, 2)),
+                        np.zeros(2, dtype=np.bool_), np.ones(2, dtype=np.bool_),
+                        np.zeros(2, dtype=np.int64), np.zeros(2, dtype=np.int64),
+                        np.full((2, 4), -1), np.empty(4, dtype=np.bool_), np.empty((4, 2)))
+    ended = learner_events(5, vehicles, learners, physics, world.geometry,
+                           (ids, corners, centres), 0, 1)
+    events, suffered, gone = learners.events, learners.suffered, learners.gone
     assert not ended and events.tolist() == [ALIVE, ALIVE]
     assert suffered.tolist() == [1, 0]
     assert gone[:, 0].tolist() == [7, -1]

@@ -57,7 +57,7 @@ def test_fitness_is_the_mean_over_the_tracks(tmp_path, root):
 
 def test_a_trace_is_of_its_own_track(tmp_path, root):
     world = make_world(scenario(tmp_path, root))
-    poses, outcome = world.trace(np.zeros(world.spec.chromosome_length), episode=1)
+    poses, outcome = world.trace(np.zeros(world.spec.chromosome_length), situation=1)
     assert len(poses) == 61 and outcome == COLLIDED
     assert poses[0, 0, 0] == 40.0 and poses[-1, 0, 0] == 100.0
     assert world.world_of(2)[0].track.name == "track_narrow"
