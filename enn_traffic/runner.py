@@ -9,7 +9,9 @@ evaluation is deterministic.
 
 from __future__ import annotations
 
+import contextlib
 import hashlib
+import os
 import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
@@ -26,11 +28,16 @@ from enn_traffic.evolution import ga
 from enn_traffic.evolution.backends import Evaluator, make_evaluator
 from enn_traffic.io import write_atomic, write_csv, write_text
 from enn_traffic.neural import NetworkSpec
+from enn_traffic.progress import slow_step
 from enn_traffic.provenance import rules_version, sources_of
 from enn_traffic.report.plots import learning_curve
 from enn_traffic.roads.sumocfg import read_sumocfg
 from enn_traffic.scenario import Scenario
 
+# What a first generation's wait may be: numba compiling the kernels, once per install or edit.
+FIRST_WAIT = (" (on a first run after an install or an edit of the kernels, numba compiles "
+              "them first, a minute or two; they are kept in "
+              f"{os.environ.get('NUMBA_CACHE_DIR', 'the numba cache')})")
 CHECKPOINT = "checkpoint.npz"
 OUTPUTS = "outputs.npz"  # what a run leaves for others to read: RunOutputs
 
@@ -225,7 +232,10 @@ def evolve(
         while state.generation < total and not state.extra.get("target_reached", False):
             started = time.perf_counter()
             generation, best_before = state.generation, state.best_fitness
-            state, evaluated, results = next(run)
+            first = len(rows) == len(done)  # this process's first: the kernels may compile
+            with slow_step(f"generation {generation} of {scenario.name}{FIRST_WAIT}") \
+                    if first else contextlib.nullcontext():
+                state, evaluated, results = next(run)
             fitness = results.fitness
             if state.best_fitness > best_before:
                 Controller.from_scenario(

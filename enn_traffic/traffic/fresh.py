@@ -41,18 +41,29 @@ def _ends_with_parent() -> None:
         ctypes.CDLL(None).prctl(1, signal.SIGTERM)  # PR_SET_PDEATHSIG
 
 
-def _run(function: Callable, args: tuple):
-    """``function(*args)`` in a new process; its exception, if any, raised here."""
+def _run(function: Callable, args: tuple, running: set | None = None):
+    """``function(*args)`` in a new process; its exception, if any, raised here. The process
+    is in ``running`` while it runs, so that the caller can end it."""
     job = pickle.dumps((function, tuple(args)), protocol=pickle.HIGHEST_PROTOCOL)
     path = os.environ.get("PYTHONPATH")
     env = {**os.environ, "PYTHONPATH": os.pathsep.join(filter(None, [_PACKAGE_ROOT, path]))}
-    done = subprocess.run([sys.executable, "-m", __name__], input=job, stdout=subprocess.PIPE,
-                          check=False, env=env, preexec_fn=_ends_with_parent)
-    if done.returncode != 0 or not done.stdout:
+    running = set() if running is None else running
+    with subprocess.Popen([sys.executable, "-m", __name__], stdin=subprocess.PIPE,
+                          stdout=subprocess.PIPE, env=env,
+                          preexec_fn=_ends_with_parent) as process:
+        running.add(process)
+        try:
+            output, _ = process.communicate(job)
+        except BaseException:  # Ctrl-C too: the process ends with the wait for it
+            process.kill()
+            raise
+        finally:
+            running.discard(process)
+    if process.returncode != 0 or not output:
         raise FreshProcessError(f"{getattr(function, '__qualname__', function)} ended with "
-                                f"exit status {done.returncode} in its own process (its "
+                                f"exit status {process.returncode} in its own process (its "
                                 "messages, if any, are above)")
-    failed, value = pickle.loads(done.stdout)
+    failed, value = pickle.loads(output)
     if failed:
         raise value
     return value
@@ -61,11 +72,20 @@ def _run(function: Callable, args: tuple):
 def fresh_calls(calls: Sequence[tuple], workers: int = 1) -> list:
     """Each call ``(function, *args)`` of ``calls`` in a new process (at most ``workers`` at
     once); the results in order. A ``function`` must be importable by name (a module-level
-    function of the package) and its arguments must pickle."""
+    function of the package) and its arguments must pickle. Interrupted (Ctrl-C, ``kill
+    -INT``), every process still running ends at once."""
     if workers <= 1 or len(calls) <= 1:
         return [_run(call[0], call[1:]) for call in calls]
-    with ThreadPoolExecutor(max_workers=min(workers, len(calls))) as pool:
-        return list(pool.map(lambda call: _run(call[0], call[1:]), calls))
+    running: set[subprocess.Popen] = set()
+    pool = ThreadPoolExecutor(max_workers=min(workers, len(calls)))
+    try:
+        return list(pool.map(lambda call: _run(call[0], call[1:], running), calls))
+    except BaseException:
+        for process in list(running):  # their threads then return, and the pool closes
+            process.kill()
+        raise
+    finally:
+        pool.shutdown(wait=True, cancel_futures=True)
 
 
 def fresh_map(function: Callable, calls: Sequence[tuple], workers: int = 1) -> list:

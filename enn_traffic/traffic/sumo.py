@@ -388,6 +388,9 @@ class Simulation:
             return dict.fromkeys(read, b"")
         self._open = False
         Simulation.running = None
+        self._ended_at = float("nan")
+        with contextlib.suppress(Exception):
+            self._ended_at = libsumo.simulation.getTime()
         with contextlib.suppress(Exception), self.console():  # not started, or closed
             libsumo.close()
         contents = {name: (self.folder / name).read_bytes() if (self.folder / name).is_file()
@@ -405,10 +408,11 @@ class Simulation:
         if target is None:
             return
         console = self.folder / CONSOLE_LOG
-        if console.is_file() and console.stat().st_size:
-            target.mkdir(parents=True, exist_ok=True)
-            with open(target / RUN_LOG, "ab") as log:
-                log.write(f"== SUMO, seed {self.seed}\n".encode() + console.read_bytes())
+        printed = console.read_bytes() if console.is_file() else b""
+        target.mkdir(parents=True, exist_ok=True)
+        with open(target / RUN_LOG, "ab") as log:  # a block for every start, printed or not
+            log.write(f"== SUMO, seed {self.seed}, ended at {self._ended_at:g} s\n".encode()
+                      + (printed or b"(SUMO printed nothing)\n"))
         outputs = [file for file in self.folder.iterdir() if file.name not in OWN_FILES]
         if outputs and self.scenario.traffic.sumo_outputs == "keep":
             (target / "outputs").mkdir(parents=True, exist_ok=True)

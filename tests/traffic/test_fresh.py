@@ -3,8 +3,10 @@ start, one process")."""
 
 import math
 import os
+import signal
 import subprocess
 import sys
+import time
 
 import pytest
 
@@ -49,3 +51,21 @@ def test_an_error_that_does_not_pickle_keeps_its_type_and_message(monkeypatch):
     monkeypatch.setenv("PYTHONPATH", str(Path(__file__).parent))
     with pytest.raises(FreshProcessError, match="_Unpicklable: Vehicle 'enn_learner' is not"):
         fresh(_raise_unpicklable)
+
+
+def test_an_interrupted_caller_ends_its_fresh_processes_at_once(tmp_path):
+    """``kill -INT`` sent to the caller alone (not its process group) while two fresh
+    processes sleep for a minute: it ends within seconds, not when they would have."""
+    script = tmp_path / "script.py"
+    script.write_text("import sys, time\nfrom enn_traffic.traffic.fresh import fresh_calls\n"
+                      "print('started', flush=True)\n"
+                      "fresh_calls([(time.sleep, 60)] * 2, workers=2)\n")
+    caller = subprocess.Popen([sys.executable, str(script)], stdout=subprocess.PIPE,
+                              stderr=subprocess.DEVNULL, text=True)
+    assert caller.stdout.readline().strip() == "started"
+    time.sleep(4)  # the two fresh processes are asleep
+    interrupted = time.perf_counter()
+    caller.send_signal(signal.SIGINT)
+    caller.wait(timeout=50)
+    assert time.perf_counter() - interrupted < 15
+    assert caller.returncode != 0

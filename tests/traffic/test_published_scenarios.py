@@ -83,6 +83,8 @@ def test_the_shipped_street_is_run_evaluated_and_drawn_without_being_written(roo
     assert main(["run", "street_mixed", "--out", str(run), "--generations", "1",
                  "--population", "10", "--quiet"]) == 0
     assert 'start_lane = "ec_2"' in (run / "scenario.toml").read_text()
+    log = (run / "sumo" / "sumo.log").read_text()  # a block per start, though SUMO said nothing
+    assert log.count("== SUMO, seed") >= 1 and "(SUMO printed nothing)" in log
     assert main(["evaluate", str(run / "best.npz"), str(root / "scenarios" / "street_mixed.toml"),
                  "--mode", "closed-loop", "--out", str(tmp_path / "eval.csv"), "--quiet"]) == 0
     assert main(["render", str(run / "best.npz"), "street_mixed",
