@@ -98,7 +98,7 @@ def build_parser() -> argparse.ArgumentParser:
     render.add_argument("--out", type=Path, required=True, metavar="FILE.png|FILE.gif")
     render.add_argument("--max-steps", type=_positive, default=5000,
                         help="draw at most this many steps (default 5000)")
-    render.add_argument("--quiet", action="store_true", help="no messages")
+    render.add_argument("--quiet", action="store_true", help="no progress bar or messages")
     render.add_argument("--verbose", action="store_true",
                         help="show SUMO's console instead of logging it (to FILE_sumo/ beside "
                              "--out)")
@@ -255,7 +255,7 @@ def _cmd_render(args) -> int:
     controller = Controller.load(args.controller)
     scenario = load_scenario(scenario_path(args.scenario)).with_sumo_output(
         _sumo_folder(args.out), args.verbose)
-    info = render(controller, scenario, args.out, args.max_steps)
+    info = render(controller, scenario, args.out, args.max_steps, progress=not args.quiet)
     print(f"{info['steps']} steps ({info['outcome']}); written {info['file']}")
     return 0
 

@@ -21,6 +21,7 @@ from enn_traffic.controller import Controller
 from enn_traffic.errors import InputError
 from enn_traffic.evolution.backends import connect_ray
 from enn_traffic.io import write_csv
+from enn_traffic.progress import slow_step
 from enn_traffic.report.animate import animate_run
 from enn_traffic.report.plots import heat_map, learner_among_traffic, trajectories
 from enn_traffic.scenario import Scenario
@@ -59,7 +60,12 @@ def evaluate_controller(controller: Controller, scenario: Scenario, episodes: in
                           for index in range(len(scenario.track))], ignore_index=True)
     world = make_world(evaluation_scenario(controller, scenario, episodes))
     vehicle = scenario.vehicle
-    results = world.evaluate(controller.chromosome[None, :], EVALUATION_KEY)
+    lives = len(world.situation_labels())
+    with slow_step(f"{lives} {'life' if lives == 1 else 'lives'} on {scenario.name}'s test "
+                   "traffic (SUMO starts and warms up; on a first run numba compiles the "
+                   "kernels)" if scenario.traffic.is_sumo else
+                   f"{lives} {'life' if lives == 1 else 'lives'} on {scenario.name}"):
+        results = world.evaluate(controller.chromosome[None, :], EVALUATION_KEY)
     steps, outcome = results.steps[0], results.outcome[0]
     fitness = SituationResults.lifetime_fitness(steps, outcome)
     traffic = results.traffic[0]
@@ -203,9 +209,11 @@ def controller_trace(
 
 
 def render(
-    controller: Controller, scenario: Scenario, out: str | Path, max_steps: int | None = None
+    controller: Controller, scenario: Scenario, out: str | Path, max_steps: int | None = None,
+    progress: bool = True,
 ) -> dict:
-    """Draw the controller's path on the track (PNG) or animate it (GIF)."""
+    """Draw the controller's path on the track (PNG) or animate it (GIF, its frames with a
+    progress bar)."""
     out = Path(out)
     if scenario.traffic.is_sumo and not isinstance(scenario.track, list) \
             and out.suffix.lower() != ".gif":
@@ -214,7 +222,7 @@ def render(
     steps = len(poses) - 1
     title = f"{scenario.name}: {steps} steps, {OUTCOMES[outcome]}"
     if out.suffix.lower() == ".gif":
-        animate_run(world, poses, out, title)
+        animate_run(world, poses, out, title, progress=progress)
     else:
         paths = [poses[:, v] for v in range(poses.shape[1])]
         labels, colors = ["learner"] + [f"vehicle {v}" for v in range(1, len(paths))], None

@@ -96,3 +96,22 @@ def test_a_controller_is_measured_by_the_spin_rule_it_was_evolved_under(root, tm
     np.savez(tmp_path / "older.npz", **older)
     kept = Controller.load(tmp_path / "older.npz").fit(track).episode
     assert (kept.spin_window, kept.spin_variance) == (49, 64.0)
+
+
+def test_a_gif_shows_a_small_track_whole_and_follows_the_learner_on_a_large_map():
+    """The view (report.plots.square_view) of a path inside a 100 m arena covers the arena;
+    of a path on a 2 km map, it holds the path and its margin, a small part of the map."""
+    from enn_traffic.report.animate import FOLLOW_M
+    from enn_traffic.report.plots import square_view
+
+    def box(size):  # the four walls of a square of side ``size``
+        return np.array([[0, 0, size, 0], [size, 0, size, size], [size, size, 0, size],
+                         [0, size, 0, 0]], dtype=float)
+
+    path = np.array([[40.0, 40.0], [60.0, 45.0], [np.nan, np.nan]])
+    low, high = square_view(path, FOLLOW_M / 2, box(100.0))
+    assert (low <= 0).all() and (high >= 100).all() and high[0] - low[0] <= FOLLOW_M
+    low, high = square_view(path + 900.0, FOLLOW_M / 2, box(2000.0))
+    assert high[0] - low[0] > FOLLOW_M  # wider than the view: the GIF follows the learner
+    assert (low <= 940 - FOLLOW_M / 2).all() and (high >= 945 + FOLLOW_M / 2).all()
+    assert high[0] - low[0] < 200

@@ -53,6 +53,7 @@ import pandas as pd
 from tqdm import tqdm
 
 from enn_traffic import keys
+from enn_traffic.controller import Controller
 from enn_traffic.evolution.online import OnlineLearning, VehicleGA
 from enn_traffic.experiments.choosing import final_population, specialists
 from enn_traffic.experiments.common import save_arrays, save_controller
@@ -243,6 +244,23 @@ def crowd_inputs(study: Study, family: Family
     return inputs
 
 
+def saved_crowd_inputs(out: Path, family: Family
+                       ) -> dict[int, tuple[SumoWorld, np.ndarray, np.ndarray]]:
+    """:func:`crowd_inputs` read back from what it and the Table 1 run saved under
+    ``out/controllers/`` (the winners, the evolved populations): the crowds measured again
+    without their GA runs."""
+    folder = out / "controllers" / family.folder
+    inputs = {}
+    for strategy in family.strategies:
+        world = crowd_world(family, strategy)
+        winner = Controller.load(folder / "table1" / f"strategy{strategy}.npz").chromosome
+        with np.load(folder / "table4" / f"strategy{strategy}_evolved.npz") as saved:
+            evolved = saved["population"]
+        source = world.spec.in_source_layout(np.vstack([winner, evolved]))
+        inputs[strategy] = world, source[0], source[1:]
+    return inputs
+
+
 def _settings(learning: SumoLearning) -> dict:
     """What a kept situation was measured with: ``learning``, the simulation's rules and the
     sources outside them that measure a situation."""
@@ -269,11 +287,14 @@ def validation(folder: Path, inputs: dict[int, tuple[SumoWorld, np.ndarray, np.n
     return table
 
 
-def measure(study: Study, family: Family, learning: SumoLearning) -> Measured:
+def measure(study: Study, family: Family, learning: SumoLearning,
+            inputs: dict[int, tuple[SumoWorld, np.ndarray, np.ndarray]] | None = None
+            ) -> Measured:
     """Every strategy's situations, their learning windows and learners, written under the
-    family's folder (the module's list)."""
+    family's folder (the module's list); ``inputs`` (:func:`saved_crowd_inputs`) instead of
+    the study's runs."""
     folder = study.out / family.folder
-    inputs = crowd_inputs(study, family)
+    inputs = inputs or crowd_inputs(study, family)
     validation(folder, inputs, learning)
     settings = _settings(learning)
     settings["key"] = SITUATION_KEY

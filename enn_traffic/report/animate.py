@@ -1,4 +1,9 @@
-"""A GIF of one life: the track, the learner's path so far, and every vehicle's body."""
+"""A GIF of one life: the roads around the learner, its path so far, and every vehicle's body.
+
+A track that fits in :data:`FOLLOW_M` metres is shown whole and still. On a larger map (a
+city) the view is :data:`FOLLOW_M` metres wide and follows the learner, so that it and the
+vehicles near it can be seen; only the walls and bodies near the view are drawn.
+"""
 
 from __future__ import annotations
 
@@ -10,35 +15,69 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 from matplotlib.animation import FuncAnimation, PillowWriter  # noqa: E402
-from matplotlib.patches import Polygon  # noqa: E402
+from matplotlib.collections import LineCollection, PolyCollection  # noqa: E402
+from tqdm import tqdm  # noqa: E402
 
 from enn_traffic.geometry import body_polygon  # noqa: E402
+from enn_traffic.report.plots import segments_within, square_view  # noqa: E402
+
+FRAMES = 150  # at most, spread evenly over the life
+FPS = 15
+FOLLOW_M = 150.0  # a larger map is shown this wide around the learner
 
 
 def animate_run(world, poses: np.ndarray, out: str | Path, title: str = "",
-                frames: int = 150) -> None:
-    """``poses`` (n, V, 3): vehicle 0 is the learner (red), the others grey."""
+                frames: int = FRAMES, progress: bool = True) -> None:
+    """``poses`` (n, V, 3): vehicle 0 is the learner (red), the others grey (NaN: not on the
+    network at that step)."""
     vehicle = world.scenario.vehicle
+    path = poses[:, 0, :2]
+    low, high = square_view(path, FOLLOW_M / 2, world.track.walls)
+    follow = high[0] - low[0] > FOLLOW_M + 1e-9
     figure, axes = plt.subplots(figsize=(5, 5))
-    for x1, y1, x2, y2 in world.track.walls:
-        axes.plot([x1, x2], [y1, y2], color="black", lw=0.8)
+    near = square_view(path, FOLLOW_M, None) if follow else (low, high)
+    axes.add_collection(LineCollection(segments_within(world.track.walls, *near),
+                                       colors="black", linewidths=0.8))
     axes.set_aspect("equal")
+    if follow:
+        axes.set_xticks([])
+        axes.set_yticks([])
+        title += f" (view {FOLLOW_M:g} m wide, following the learner)"
+    else:
+        axes.set_xlim(low[0], high[0])
+        axes.set_ylim(low[1], high[1])
     axes.set_title(title, fontsize=9)
-    (line,) = axes.plot([], [], color="C0", lw=1)
-    bodies = [Polygon(np.zeros((4, 2)), closed=True, color="C3" if v == 0 else "0.5")
-              for v in range(poses.shape[1])]
-    for body in bodies:
-        axes.add_patch(body)
+    (line,) = axes.plot([], [], color="C0", lw=1.2, zorder=3)
+    traffic = PolyCollection([], facecolors="0.45", edgecolors="0.25", linewidths=0.4,
+                             zorder=2)
+    learner = PolyCollection([], facecolors="C3", edgecolors="black", linewidths=0.6,
+                             zorder=4)
+    axes.add_collection(traffic)
+    axes.add_collection(learner)
     indices = np.unique(np.linspace(0, len(poses) - 1, min(frames, len(poses))).astype(int))
+    reach = np.hypot(vehicle.length, vehicle.width)
 
     def draw(k):
         i = indices[k]
-        line.set_data(poses[: i + 1, 0, 0], poses[: i + 1, 0, 1])
-        for v, body in enumerate(bodies):
-            body.set_xy(body_polygon(*poses[i, v], vehicle.length, vehicle.width))
-        return (line, *bodies)
+        view_low, view_high = low, high
+        if follow:
+            view_low, view_high = path[i] - FOLLOW_M / 2, path[i] + FOLLOW_M / 2
+            axes.set_xlim(view_low[0], view_high[0])
+            axes.set_ylim(view_low[1], view_high[1])
+        line.set_data(path[: i + 1, 0], path[: i + 1, 1])
+        learner.set_verts([body_polygon(*poses[i, 0], vehicle.length, vehicle.width)])
+        others = poses[i, 1:]
+        shown = others[~np.isnan(others[:, 0])
+                       & (others[:, :2] >= view_low - reach).all(1)
+                       & (others[:, :2] <= view_high + reach).all(1)]
+        traffic.set_verts([body_polygon(*pose, vehicle.length, vehicle.width)
+                           for pose in shown])
+        return line, traffic, learner
 
-    animation = FuncAnimation(figure, draw, frames=len(indices), blit=True)
+    animation = FuncAnimation(figure, draw, frames=len(indices), blit=not follow)
     Path(out).parent.mkdir(parents=True, exist_ok=True)
-    animation.save(str(out), writer=PillowWriter(fps=15))
+    with tqdm(total=len(indices), desc=f"{Path(out).name}: frames", unit="frame",
+              disable=not progress, leave=False) as bar:
+        animation.save(str(out), writer=PillowWriter(fps=FPS),
+                       progress_callback=lambda *_: bar.update(1))
     plt.close(figure)

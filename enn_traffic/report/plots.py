@@ -131,6 +131,29 @@ def trajectories(
     save_figure(figure, path)
 
 
+def square_view(path: np.ndarray, margin: float, walls: np.ndarray | None = None
+                ) -> tuple[np.ndarray, np.ndarray]:
+    """The corners (low, high) of a square view of ``path`` (n, 2; NaN rows skipped) and
+    ``margin`` metres around it, cut to the walls' bounding box when ``walls`` are given (a
+    small track is shown whole, a city around the path)."""
+    low = np.nanmin(path, axis=0) - margin
+    high = np.nanmax(path, axis=0) + margin
+    if walls is not None and len(walls):
+        points = walls.reshape(-1, 2)
+        low, high = np.maximum(low, points.min(0) - 1.0), np.minimum(high, points.max(0) + 1.0)
+    centre, half = (low + high) / 2, max(*(high - low), 2 * margin) / 2
+    return centre - half, centre + half  # square, so the picture has no bands
+
+
+def segments_within(segments: np.ndarray, low: np.ndarray, high: np.ndarray) -> np.ndarray:
+    """The segments (S, 4: x1, y1, x2, y2) whose bounding boxes meet the view (low, high), as
+    (s, 2, 2) for a ``LineCollection``."""
+    xs, ys = segments[:, [0, 2]], segments[:, [1, 3]]
+    keep = ((xs.max(1) >= low[0]) & (xs.min(1) <= high[0])
+            & (ys.max(1) >= low[1]) & (ys.min(1) <= high[1]))
+    return segments[keep].reshape(-1, 2, 2)
+
+
 def learner_among_traffic(walls: np.ndarray, exits: np.ndarray, poses: np.ndarray,
                           path: str | Path, title: str, end_label: str,
                           hit_body: np.ndarray | None = None, margin: float = 50.0) -> None:
@@ -143,21 +166,12 @@ def learner_among_traffic(walls: np.ndarray, exits: np.ndarray, poses: np.ndarra
     from matplotlib.patches import Polygon as Patch
 
     learner = poses[:, 0, :2]
-    low = np.nanmin(learner, axis=0) - margin
-    high = np.nanmax(learner, axis=0) + margin
-    centre, half = (low + high) / 2, max(*(high - low), 2 * margin) / 2
-    low, high = centre - half, centre + half  # a square view, so the picture has no bands
-
-    def within(segments: np.ndarray) -> np.ndarray:
-        xs, ys = segments[:, [0, 2]], segments[:, [1, 3]]
-        keep = ((xs.max(1) >= low[0]) & (xs.min(1) <= high[0])
-                & (ys.max(1) >= low[1]) & (ys.min(1) <= high[1]))
-        return segments[keep].reshape(-1, 2, 2)
-
+    low, high = square_view(learner, margin)
     figure, axes = plt.subplots(figsize=(7.2, 7.2))
-    axes.add_collection(LineCollection(within(walls), colors="black", linewidths=0.8,
-                                       label="walls (edge of the road surface)", zorder=2))
-    exits_here = within(exits.reshape(-1, 4))
+    axes.add_collection(LineCollection(segments_within(walls, low, high), colors="black",
+                                       linewidths=0.8, label="walls (edge of the road surface)",
+                                       zorder=2))
+    exits_here = segments_within(exits.reshape(-1, 4), low, high)
     if len(exits_here):
         axes.add_collection(LineCollection(exits_here, colors="C2", linewidths=2.0,
                                            label="exits (the network's fringe)", zorder=2))
