@@ -6,7 +6,9 @@ Bad input ends with one message naming the file and key, and exit status 2; neve
 from __future__ import annotations
 
 import argparse
+import signal
 import sys
+import threading
 import time
 from pathlib import Path
 
@@ -375,9 +377,18 @@ COMMANDS = {"run": _cmd_run, "evaluate": _cmd_evaluate, "render": _cmd_render,
             "bench": _cmd_bench}
 
 
+# What an interrupted command leaves (the others leave nothing finished).
+INTERRUPTED = {"run": "; finished generations are checkpointed (continue with --resume)",
+               "reproduce": "; finished runs and experiments are kept: the same command "
+                            "continues"}
+
+
 def main(argv: list[str] | None = None) -> int:
     from enn_traffic.progress import show_messages
 
+    if threading.current_thread() is threading.main_thread():
+        # a job started with & by a script inherits SIGINT ignored: kill -INT must stop it
+        signal.signal(signal.SIGINT, signal.default_int_handler)
     args = build_parser().parse_args(argv)
     show_messages(quiet=getattr(args, "quiet", False))
     started = time.perf_counter()
@@ -389,10 +400,22 @@ def main(argv: list[str] | None = None) -> int:
     except BrokenPipeError:  # output piped into a reader that stopped early (e.g. head)
         sys.stderr.close()
         return 0
-    except KeyboardInterrupt:
-        print(f"\nenn-traffic: interrupted after {time.perf_counter() - started:.0f} s; "
-              "finished generations are checkpointed (continue with --resume)", file=sys.stderr)
+    except (KeyboardInterrupt, SystemError) as exc:
+        if not _interrupted(exc):
+            raise
+        print(f"\nenn-traffic: interrupted after {time.perf_counter() - started:.0f} s"
+              f"{INTERRUPTED.get(args.command, '')}", file=sys.stderr)
         return 130
+
+
+def _interrupted(exc: BaseException | None) -> bool:
+    """Is ``exc`` Ctrl-C? (One that lands inside a compiled kernel comes out of numba as a
+    SystemError caused by it.)"""
+    while exc is not None:
+        if isinstance(exc, KeyboardInterrupt):
+            return True
+        exc = exc.__cause__ or exc.__context__
+    return False
 
 
 if __name__ == "__main__":

@@ -263,3 +263,21 @@ def test_bad_scenarios_from_the_command_line_exit_2_without_traceback(tmp_path, 
         result = _run("run", path, "--out", tmp_path / name)
         assert result.returncode == 2, name
         assert f"{section}.{key}" in result.stderr and "Traceback" not in result.stderr, name
+
+
+def test_a_run_started_with_sigint_ignored_still_stops_on_kill_int(tmp_path, root):
+    """A script's background job (``enn-traffic run ... &``) inherits SIGINT ignored:
+    ``kill -INT`` stops it anyway, with exit status 130 and the run's own message."""
+    command = [sys.executable, "-m", "enn_traffic", "run", root / "scenarios" /
+               "arena_strategy1.toml", "--out", tmp_path / "run", "--population", 40,
+               "--generations", 100000, "--quiet"]
+    process = subprocess.Popen(list(map(str, command)), stdout=subprocess.DEVNULL,
+                               stderr=subprocess.PIPE, text=True,
+                               preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_IGN))
+    deadline = time.monotonic() + 120
+    while _generation_done(tmp_path / "run") < 1:
+        assert time.monotonic() < deadline and process.poll() is None, "it never got going"
+        time.sleep(0.05)
+    process.send_signal(signal.SIGINT)
+    assert process.wait(timeout=30) == 130
+    assert "continue with --resume" in process.stderr.read()

@@ -240,10 +240,9 @@ def test_committed_sumo_crowd_files_drive_their_first_situation(family, strategy
     the committed files (the Table 1 controller as winner, the evolved population): every
     learner's ``table4_learners.csv`` row (generations bred, lives, chromosomes tried), the
     collision rates of the committed ``crowd_situations.csv`` row while learning and after
-    it, and each learner's committed controller after learning. (The initial drivers' and
-    the winner's arms, driven the same way, are left to the reproduction: 2 of the 3 arms'
-    SUMO time. Not the SSM conflict rates: the same window counts other conflicts in another
-    process, docs/results.md, "Among SUMO traffic".)"""
+    it, the SSM conflict rate after it (SUMO in a fresh process, as measured), and each
+    learner's committed controller after learning. (The initial drivers' and the winner's
+    arms, driven the same way, are left to the reproduction: 2 of the 3 arms' SUMO time.)"""
     from enn_traffic.experiments.sumo_crowds import SUMO_LEARNING, crowd_world, learn_together
 
     paper = root / "results" / "paper"
@@ -261,7 +260,8 @@ def test_committed_sumo_crowd_files_drive_their_first_situation(family, strategy
     learnt, after, online = learn_together(world, source[0], source[1:], 0, SUMO_LEARNING)
     row = first("crowd_situations.csv").iloc[0]
     rates = {"learning": float(np.mean([run.collision_rate for run in learnt])),
-             "population": after.collision_rate}
+             "population": after.collision_rate,
+             "population_conflicts": after.conflict_rate}
     # the CSV keeps 6 significant digits
     assert rates == pytest.approx(row[list(rates)].to_dict(), rel=5e-6, abs=1e-12)
     learners = first("table4_learners.csv").drop(columns=["strategy", "situation"])
