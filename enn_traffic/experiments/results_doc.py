@@ -306,8 +306,9 @@ def family_tables34(paper: Path, family: Family) -> str:
               f"{above['initial_after']} of {len(table4)} (paired intervals apart); against the "
               f"winner driving on, below in {below['winner_after']} and above in "
               f"{above['winner_after']} (the paper's Table 4 is below its Table 3 in 4 of 4). "
-              "A live SUMO cannot be forked, so the arena's re-ranked arm is not run here. The "
-              "SSM conflict columns of the CSVs are not reproducible yet (below).", "",
+              "A live SUMO cannot be forked, so the arena's re-ranked arm is not run here. "
+              "Each arm's SUMO runs in a fresh process, so the SSM conflict columns of the "
+              "CSVs do not depend on what ran before (below).", "",
               "Per learner (`table4_learners.csv`) and the learning curve "
               "(`table4_learning.csv`), its first and last windows:", "",
               *_LEARNERS_HEADER]

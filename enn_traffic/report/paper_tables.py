@@ -89,8 +89,8 @@ def paper_tables(out: Path) -> list[str]:
 def _sumo_rates(path: Path, title: str, paper, before: str, after: str) -> list[str]:
     table = pd.read_csv(path)
     lines = [f"### {title}: collisions per second, paper (its count) / here (per "
-             "learner, 90% interval over situations); SSM conflicts per learner-hour (not "
-             "reproducible yet: they depend on what ran before in the process)", "",
+             "learner, 90% interval over situations); SSM conflicts per learner-hour (each "
+             "arm's SUMO in a fresh process)", "",
              "| strategy | initial | after | conflicts, initial -> after |", "|---|---|---|---|"]
 
     def cell(row, span: str, value: float) -> str:
@@ -111,7 +111,7 @@ def _sumo_table4(path: Path, title: str) -> list[str]:
     name = "population_minus_initial_after"
     lines = [f"### {title}: collisions per second, paper (its count) / here (per learner); "
              "the paired difference with its 90% interval over situations; SSM conflicts per "
-             "learner-hour (not reproducible yet)", "",
+             "learner-hour (each arm's SUMO in a fresh process)", "",
              "| strategy | initial | after | after − initial | conflicts, initial -> after |",
              "|---|---|---|---|---|"]
     for i, row in table.iterrows():
