@@ -34,10 +34,14 @@ from enn_traffic.report.plots import learning_curve
 from enn_traffic.roads.sumocfg import read_sumocfg
 from enn_traffic.scenario import Scenario
 
-# What a first generation's wait may be: numba compiling the kernels, once per install or edit.
-FIRST_WAIT = (" (on a first run after an install or an edit of the kernels, numba compiles "
-              "them first, a minute or two; they are kept in "
-              f"{os.environ.get('NUMBA_CACHE_DIR', 'the numba cache')})")
+# What a first generation may wait for when numba's cache folder has no kernels yet.
+COMPILING = " (numba compiles the kernels first, once per install or edit: a minute or two)"
+
+
+def _kernels_cached() -> bool:
+    """Has this version of the kernels been compiled into numba's cache folder before?"""
+    folder = os.environ.get("NUMBA_CACHE_DIR")
+    return folder is not None and any(Path(folder).rglob("*.nbi"))
 CHECKPOINT = "checkpoint.npz"
 OUTPUTS = "outputs.npz"  # what a run leaves for others to read: RunOutputs
 
@@ -233,7 +237,8 @@ def evolve(
             started = time.perf_counter()
             generation, best_before = state.generation, state.best_fitness
             first = len(rows) == len(done)  # this process's first: the kernels may compile
-            with slow_step(f"generation {generation} of {scenario.name}{FIRST_WAIT}") \
+            with slow_step(f"generation {generation} of {scenario.name}"
+                           f"{'' if _kernels_cached() else COMPILING}") \
                     if first else contextlib.nullcontext():
                 state, evaluated, results = next(run)
             fitness = results.fitness

@@ -24,7 +24,7 @@ from numba import njit, prange
 
 from enn_traffic.kinds import ACTION
 from enn_traffic.sim.arena import ArenaWorld, settle, start_world
-from enn_traffic.sim.rules import Vehicles, Work, drive_all, sense
+from enn_traffic.sim.rules import Vehicles, Work, drive_all, sense, wall_arrays
 from enn_traffic.sim.world import RUNNING, SPUN
 
 
@@ -116,7 +116,8 @@ def world_work(worlds, i):
 @njit(cache=True, inline="always")
 def observe(vehicles, physics, geometry, out):
     """The learner (vehicle 0) senses walls and the other bodies into ``out``."""
-    beams, walls, cell_start, cell_walls, all_walls, _ = geometry
+    beams = geometry.beams
+    walls, cell_start, cell_walls, all_walls = wall_arrays(geometry)
     sense(0, vehicles.pose, physics, beams, walls, cell_start, cell_walls, all_walls,
           vehicles.pose.shape[0] > 1, vehicles.corners, vehicles.centres, 0, out)
 

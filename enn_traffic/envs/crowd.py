@@ -28,7 +28,7 @@ from enn_traffic.envs.rangefinder import TRAINING_KEYS, picture, rangefinder_wor
 from enn_traffic.kinds import ACTION
 from enn_traffic.scenario import Scenario
 from enn_traffic.sim.crowd import ALIVE, Crowd, crowd_events, step_once
-from enn_traffic.sim.rules import sense
+from enn_traffic.sim.rules import sense, wall_arrays
 from enn_traffic.sim.world import OUTCOMES, SPUN
 
 
@@ -36,7 +36,8 @@ from enn_traffic.sim.world import OUTCOMES, SPUN
 def observe(learners, vehicles, physics, geometry, out) -> None:
     """The first ``learners`` vehicles sense walls and the other bodies into ``out`` (L, B)."""
     pose = vehicles.pose
-    beams, walls, cell_start, cell_walls, all_walls, _ = geometry
+    beams = geometry.beams
+    walls, cell_start, cell_walls, all_walls = wall_arrays(geometry)
     for v in range(learners):
         sense(v, pose, physics, beams, walls, cell_start, cell_walls, all_walls,
               pose.shape[0] > 1, vehicles.corners, vehicles.centres, v, out[v])

@@ -42,6 +42,7 @@ from enn_traffic.sim.rules import (
     responsible,
     spun,
     vehicles_at,
+    wall_arrays,
     within_range,
 )
 from enn_traffic.sim.sensors import WallGrid
@@ -65,7 +66,7 @@ def settle(steps, kinds, vehicles, rng, recent, physics, geometry, max_steps, ta
     pose, corners, centres = vehicles.pose, vehicles.corners, vehicles.centres
     previous, previous_centres, fresh = (vehicles.previous, vehicles.previous_centres,
                                          vehicles.fresh)
-    _, walls, cell_start, cell_walls, all_walls, _ = geometry
+    walls, cell_start, cell_walls, all_walls = wall_arrays(geometry)
     hit = responsible(0, pose, corners, centres, previous, previous_centres, fresh, 0, physics,
                       walls, cell_start, cell_walls, all_walls)
     if hit != NO_HIT:

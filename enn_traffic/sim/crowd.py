@@ -43,6 +43,7 @@ from enn_traffic.sim.rules import (
     responsible,
     spun,
     vehicles_at,
+    wall_arrays,
 )
 from enn_traffic.sim.strategies import reset_memory
 from enn_traffic.sim.world import COLLIDED, SPUN
@@ -91,9 +92,11 @@ class Lives(NamedTuple):
 def crowd_events(vehicles, lives, physics, geometry) -> bool:
     """Fill ``lives.events``: ``COLLIDED`` for a responsible collision, ``SPUN`` for a
     ``spin_checked`` vehicle spinning in place, else ``ALIVE``. Did any life end?"""
-    pose, corners, centres, previous, previous_centres, fresh, _ = vehicles
-    spin_checked, life, recent, events = lives
-    _, walls, cell_start, cell_walls, all_walls, _ = geometry
+    pose, corners, centres = vehicles.pose, vehicles.corners, vehicles.centres
+    previous, previous_centres, fresh = (vehicles.previous, vehicles.previous_centres,
+                                         vehicles.fresh)
+    spin_checked, life, recent, events = lives.spin_checked, lives.life, lives.recent, lives.events
+    walls, cell_start, cell_walls, all_walls = wall_arrays(geometry)
     ended = False
     for v in range(pose.shape[0]):
         events[v] = ALIVE

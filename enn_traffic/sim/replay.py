@@ -42,6 +42,7 @@ from enn_traffic.sim.rules import (
     sense,
     spun,
     vehicles_at,
+    wall_arrays,
     within_range,
 )
 from enn_traffic.sim.world import CAPPED, COLLIDED, LEFT_NETWORK, RUNNING, SPUN
@@ -146,7 +147,8 @@ def learner_sense(t, physics, geometry, ids, corners, centres, before, now, max_
     spin test and step cap, then the learner senses into ``state.work.readings``. Returns an
     outcome code, or ``RUNNING``."""
     learner, gone, met = state.learner, state.gone, state.met
-    beams, walls, cell_start, cell_walls, all_walls, exits = geometry
+    beams, exits = geometry.beams, geometry.exits
+    walls, cell_start, cell_walls, all_walls = wall_arrays(geometry)
     pose, body = learner.pose, learner.corners
     ids_before, corners_before, centres_before = ids[before], corners[before], centres[before]
     ids_now, corners_now, centres_now = ids[now], corners[now], centres[now]

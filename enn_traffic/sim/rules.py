@@ -140,6 +140,13 @@ class Geometry(NamedTuple):
     exits: np.ndarray  # (X, 4) segments that end a life as "left network"
 
 
+@njit(cache=True, inline="always")
+def wall_arrays(geometry):
+    """The walls and the wall grid's arrays of ``geometry``, by name: what the per-vehicle
+    rules (:func:`responsible`, :func:`sense`) take."""
+    return geometry.walls, geometry.cell_start, geometry.cell_walls, geometry.all_walls
+
+
 def build_constants(grid: WallGrid, bounds, beams: list[tuple[float, float]],
                     exits: np.ndarray, strategy: dict, **numbers) -> tuple[Physics, Geometry]:
     """The :class:`Physics` and :class:`Geometry` of a world, from its wall grid, the drivable
@@ -354,8 +361,10 @@ def drive_all(kinds, genes, layer_sizes, physics, geometry, vehicles, rng, work)
     before the move become ``previous``, and no body is ``fresh`` any more."""
     pose, corners, centres, memory = (vehicles.pose, vehicles.corners, vehicles.centres,
                                       vehicles.memory)
-    readings, activation, scratch, steering = work
-    beams, walls, cell_start, cell_walls, all_walls, _ = geometry
+    readings, activation, scratch, steering = (work.readings, work.activation, work.scratch,
+                                               work.steering)
+    beams = geometry.beams
+    walls, cell_start, cell_walls, all_walls = wall_arrays(geometry)
     count = pose.shape[0]
     for v in range(count):
         kind = kinds[v]

@@ -47,6 +47,7 @@ from enn_traffic.sim.rules import (
     sense_bodies,
     spun,
     vehicles_at,
+    wall_arrays,
 )
 from enn_traffic.sim.strategies import NETWORK
 from enn_traffic.sim.sumo_world import SumoWorld
@@ -83,7 +84,8 @@ def learner_events(t, vehicles, learners, physics, geometry, slots, before, now)
     ids_now, corners_now, centres_now = ids[now], corners[now], centres[now]
     pose, body, centre = vehicles.pose, vehicles.corners, vehicles.centres
     events, gone = learners.events, learners.gone
-    _, walls, cell_start, cell_walls, all_walls, exits = geometry
+    exits = geometry.exits
+    walls, cell_start, cell_walls, all_walls = wall_arrays(geometry)
     near = 4.0 * physics.radius * physics.radius
     ended = False
     for k in range(pose.shape[0]):
@@ -120,7 +122,8 @@ def sense_learner(k, physics, geometry, ids_now, corners_now, centres_now, vehic
     """Learner ``k`` senses the walls, the SUMO vehicles in its world and the other
     learners into ``readings``."""
     pose, visible = vehicles.pose, learners.visible
-    beams, walls, cell_start, cell_walls, all_walls, _ = geometry
+    beams = geometry.beams
+    walls, cell_start, cell_walls, all_walls = wall_arrays(geometry)
     visible_centres(ids_now, centres_now, learners.gone[k], visible)
     sense(k, pose, physics, beams, walls, cell_start, cell_walls, all_walls, True, corners_now,
           visible, -1, readings)

@@ -178,23 +178,25 @@ class SumoWorld(LearnerWorld):
         self._recordings.move_to_end((seed, warmup))
         return self._recordings[seed, warmup]
 
-    def replay(self, genes: np.ndarray, seed: int, start: np.ndarray, warmup: int | None
-               ) -> tuple[tuple[np.ndarray, ...], sumo.Recording]:
+    def replay(self, genes: np.ndarray, seed: int, start: np.ndarray, warmup: int | None,
+               cap: int | None = None) -> tuple[tuple[np.ndarray, ...], sumo.Recording]:
         """Every chromosome (source-layout genes) through the recorded traffic of ``seed``:
         the life columns of :func:`run_replay_population` and the recording. SUMO is recorded
         only as far as the lives reach (docs/sumo.md, "Replay"): first
         :data:`FIRST_RECORDING` steps, then :data:`RECORDING_GROWTH` times longer while a life
-        outlives the recording, up to the step cap; a life's result is the same as on a
-        recording of the whole cap, which it never reads past its end."""
-        steps = min(self.max_steps, FIRST_RECORDING)
+        outlives the recording, up to the step cap (``cap``, at most the scenario's); a
+        life's result is the same as on a recording of the whole cap, which it never reads
+        past its end."""
+        cap = self.max_steps if cap is None else min(cap, self.max_steps)
+        steps = min(cap, FIRST_RECORDING)
         while True:
             record = self.recording(seed, warmup, steps)
-            steps = min(record.ids.shape[0] - 1, self.max_steps)
+            steps = min(record.ids.shape[0] - 1, cap)
             with numba.parallel_chunksize(1):
                 runs = run_replay_population(
                     genes, self.layer_sizes, self._learner_physics(record.radius), self.geometry,
                     start, record.ids, record.corners, record.centres, steps)
-            if steps >= self.max_steps or not (runs[1] == CAPPED).any():
+            if steps >= cap or not (runs[1] == CAPPED).any():
                 return runs, record
             steps *= RECORDING_GROWTH
 
@@ -317,10 +319,8 @@ class SumoWorld(LearnerWorld):
             for t, (_, frame_ids, frame_corners) in enumerate(frames):
                 ids[t, : len(frame_ids)], corners[t, : len(frame_ids)] = frame_ids, frame_corners
         else:
-            if limit >= self.max_steps:  # record only as far as this life reaches
-                record = self.replay(genes[None], seed, start, warmup)[1]
-            else:
-                record = self.recording(seed, warmup, limit)
+            record = self.replay(genes[None], seed, start, warmup, limit)[1]  # as far as
+            # this life reaches
             limit = min(limit, record.ids.shape[0] - 1)  # a replay ends with its recording
             learner = np.full((limit + 1, 3), np.nan)
             steps, outcome, *_, hit = run_replay_life(
