@@ -2,7 +2,9 @@
 
 A step wrapped in :func:`slow_step` says what it is doing once it has taken a second, and how
 long it took when it ends; quick steps say nothing. Messages go to the ``enn_traffic`` logger,
-which the command line prints to standard error (``--quiet`` silences it).
+which the command line prints to standard error (``--quiet`` silences it); a program that
+configured no logging at all (a script, a notebook using the environments) gets them on
+standard error too.
 """
 
 from __future__ import annotations
@@ -29,7 +31,7 @@ def slow_step(what: str, after_s: float = SLOW_S) -> Iterator[None]:
 
     def say() -> None:
         said.set()
-        log.info("%s ...", what)
+        _tell(f"{what} ...")
 
     timer = threading.Timer(after_s, say)
     timer.daemon = True
@@ -39,7 +41,16 @@ def slow_step(what: str, after_s: float = SLOW_S) -> Iterator[None]:
     finally:
         timer.cancel()
         if said.is_set():
-            log.info("%s: done in %.1f s", what, time.perf_counter() - started)
+            _tell(f"{what}: done in {time.perf_counter() - started:.1f} s")
+
+
+def _tell(message: str) -> None:
+    """``message`` to the ``enn_traffic`` logger, or to standard error when no logging is
+    configured anywhere (Python would drop an INFO message then)."""
+    if log.handlers or logging.getLogger().handlers:
+        log.info(message)
+    else:
+        print(f"enn-traffic: {message}", file=sys.stderr, flush=True)
 
 
 class _AboveBars(logging.Handler):

@@ -170,3 +170,18 @@ def test_a_registered_column_is_written_to_generations_csv(small, tmp_path):
         del generations.COLUMNS["lives"]
     assert list(table.columns)[-1] == "lives"
     assert (table["lives"] == small.ga.population_size * small.traffic.episodes).all()
+
+
+def test_a_slow_step_speaks_on_stderr_where_no_logging_is_configured():
+    """A script or notebook that configured no logging (the environments' users) still hears
+    of a long wait, such as the first compile of an environment's kernels."""
+    import subprocess
+    import sys
+
+    code = ("import time\nfrom enn_traffic.progress import slow_step\n"
+            "with slow_step('compiling something', after_s=0.05):\n    time.sleep(0.3)\n")
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                          timeout=60)
+    assert done.returncode == 0, done.stderr
+    assert "enn-traffic: compiling something ..." in done.stderr
+    assert "compiling something: done in" in done.stderr

@@ -23,6 +23,7 @@ import numpy as np
 from numba import njit, prange
 
 from enn_traffic.kinds import ACTION
+from enn_traffic.progress import slow_step
 from enn_traffic.sim.arena import ArenaWorld, settle, start_world
 from enn_traffic.sim.rules import Vehicles, Work, drive_all, sense, wall_arrays
 from enn_traffic.sim.world import RUNNING, SPUN
@@ -196,7 +197,9 @@ def compiled(function, *args):
     """``function`` compiled for the types of ``args``, called directly: through numba's
     dispatcher a call that takes :class:`~enn_traffic.sim.rules.Physics` (a NamedTuple of
     more than 10 fields) is typed on its slow path every time (numba issue 6144)."""
-    return function.compile(tuple(numba.typeof(value) for value in args))
+    with slow_step("compiling the environment's kernels (once per install or edit of the "
+                   "kernels; kept in numba's cache folder)"):
+        return function.compile(tuple(numba.typeof(value) for value in args))
 
 
 class Batch:
