@@ -61,10 +61,10 @@ def evaluate_controller(controller: Controller, scenario: Scenario, episodes: in
     world = make_world(evaluation_scenario(controller, scenario, episodes))
     vehicle = scenario.vehicle
     lives = len(world.situation_labels())
+    waits = (" (SUMO starts and warms up; on a first run numba compiles the kernels)"
+             if scenario.traffic.is_sumo else "")
     with slow_step(f"{lives} {'life' if lives == 1 else 'lives'} on {scenario.name}'s test "
-                   "traffic (SUMO starts and warms up; on a first run numba compiles the "
-                   "kernels)" if scenario.traffic.is_sumo else
-                   f"{lives} {'life' if lives == 1 else 'lives'} on {scenario.name}"):
+                   f"traffic{waits}"):
         results = world.evaluate(controller.chromosome[None, :], EVALUATION_KEY)
     steps, outcome = results.steps[0], results.outcome[0]
     fitness = SituationResults.lifetime_fitness(steps, outcome)
