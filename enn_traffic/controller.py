@@ -136,7 +136,7 @@ class Controller:
                 "steering_gain_deg": self.steering_gain_deg,
             },
             sensor={"span_deg": self.span_deg, "range": self.range,
-                    "rings": [dict(zip(RingConfig.model_fields, ring, strict=True))
-                              for ring in self.rings]},
+                    "rings": [{**dict(zip(RingConfig.model_fields, ring, strict=True)),
+                               "beams": int(ring[0])} for ring in self.rings]},
             **spin,
         )

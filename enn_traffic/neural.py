@@ -79,14 +79,20 @@ class NetworkSpec:
         population = np.atleast_2d(np.asarray(population, dtype=np.float64))
         return np.ascontiguousarray(population[:, np.argsort(self.source_order())])
 
+    def holds(self, smaller: NetworkSpec) -> bool:
+        """Can :meth:`embed` put ``smaller``'s chromosomes in this network (as many layers,
+        the same inputs and outputs, no hidden layer smaller)?"""
+        sizes, small = self.layer_sizes, smaller.layer_sizes
+        return len(sizes) == len(small) and sizes[::len(sizes) - 1] == small[::len(small) - 1] \
+            and all(s <= b for s, b in zip(small, sizes, strict=True))
+
     def embed(self, population: np.ndarray, smaller: NetworkSpec) -> np.ndarray:
         """Chromosomes (P, g) of the ``smaller`` network (its layout) as chromosomes of this
         one in the source layout, computing the same outputs: each extra hidden neuron gets
         zero weights in and out. Needs as many layers, none smaller."""
-        sizes, small = self.layer_sizes, smaller.layer_sizes
-        if len(sizes) != len(small) or any(s > b for s, b in zip(small, sizes, strict=True)) \
-                or (sizes[0], sizes[-1]) != (small[0], small[-1]):
-            raise ValueError(f"a network {small} does not fit in {sizes}")
+        if not self.holds(smaller):
+            raise ValueError(f"a network {smaller.layer_sizes} does not fit in "
+                             f"{self.layer_sizes}")
         blocks = []
         for big, weights in zip(self.layer_shapes, smaller.weights(population), strict=True):
             padded = np.zeros((len(weights), *big))

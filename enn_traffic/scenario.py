@@ -15,29 +15,41 @@ import tomllib
 from pathlib import Path
 from typing import Annotated, Any, Literal
 
+import numpy as np
 import tomli_w
 from pydantic import (
     BaseModel,
     ConfigDict,
     Discriminator,
     Field,
+    Strict,
     Tag,
     ValidationError,
+    field_validator,
     model_serializer,
     model_validator,
 )
 
 from enn_traffic.errors import InputError
 from enn_traffic.kinds import STRATEGIES, SUMO
+from enn_traffic.neural import NetworkSpec
 from enn_traffic.roads.lanes import auto_lane
 from enn_traffic.roads.network import least_start_length
 from enn_traffic.roads.sumocfg import SumoConfig, read_sumocfg
 
 PositiveFloat = Annotated[float, Field(gt=0, allow_inf_nan=False)]
+MAX_POPULATION_GENES = 50_000_000  # 0.4 GB a copy of the population; the GA holds a few
+Finite = Annotated[float, Field(allow_inf_nan=False)]
+# TOML has no tuples and no paths: these two take a list and a string (their items stay strict)
+XY = Annotated[tuple[Finite, Finite], Strict(False)]
+FilePath = Annotated[Path, Strict(False)]
 
 
 class _Section(BaseModel):
-    model_config = ConfigDict(extra="forbid", frozen=True)
+    """Strict: a string or a boolean is never taken for a number (``beams = "19"`` is an
+    error, not 19), nor a float for an integer."""
+
+    model_config = ConfigDict(extra="forbid", frozen=True, strict=True)
 
 
 class TrackConfig(_Section):
@@ -45,12 +57,12 @@ class TrackConfig(_Section):
     ``start_edge`` may list several, and ``start_anywhere`` takes every lane; each traffic
     situation then draws one."""
 
-    net: Path | None = Field(
+    net: FilePath | None = Field(
         None, description="SUMO `.net.xml`; the drivable area is the union of its lane and "
         "junction shapes, its boundary the walls (holes under 0.2 m wide excepted); may be left "
         "out when `traffic.sumocfg` names one. Any path may be `pkg:PACKAGE/path` (a file inside "
         "an installed Python package)")
-    start_xy: tuple[float, float] | None = Field(
+    start_xy: XY | None = Field(
         None, description="start position of the front-bumper point; give one of `start_xy`, "
         "`start_lane`, `start_edge`")
     start_heading_deg: float = Field(
@@ -70,7 +82,8 @@ class TrackConfig(_Section):
         "vehicle's body has 1 m to the walls and 10 m free ahead (instead of `start_xy`, "
         "`start_lane`, `start_edge`)")
     start_offset: float = Field(
-        10.0, ge=0, allow_inf_nan=False, description="distance of a lane or edge start from the "
+        10.0, ge=0, le=100_000, allow_inf_nan=False,
+        description="distance of a lane or edge start from the "
         "lane's beginning (m)")
     surface: Literal["passenger", "all"] = Field(
         "passenger", description="the road surface, whose edges are walls: `passenger` (the lanes "
@@ -113,12 +126,27 @@ class VehicleConfig(_Section):
     """Kinematic bicycle, constant speed (paper §4; docs/design.md, "The authors' code" 2)."""
 
     length: PositiveFloat = Field(
-        4.3, description="body length (m); the pose is the middle of the front bumper")
-    width: PositiveFloat = Field(1.7, description="body width (m)")
-    wheelbase: PositiveFloat = Field(2.6, description="wheelbase of the bicycle model (m)")
-    speed: PositiveFloat = Field(10.0, description="constant speed (m/s)")
-    dt: PositiveFloat = Field(
-        0.1, description="time step (s); with the default speed one step is 1 m")
+        4.3, le=30, description="body length (m, at most 30: a truck with its trailer); the "
+        "pose is the middle of the front bumper")
+    width: PositiveFloat = Field(1.7, le=5, description="body width (m, at most 5)")
+    wheelbase: PositiveFloat = Field(
+        2.6, le=30, description="wheelbase of the bicycle model (m, at most the body's length)")
+    speed: PositiveFloat = Field(10.0, le=100, description="constant speed (m/s, at most 100)")
+    dt: float = Field(
+        0.1, ge=0.001, le=1, allow_inf_nan=False, description="time step (s, 0.001 to 1); with "
+        "the default speed one step is 1 m. A step may not carry the vehicle farther than its "
+        "own length (`speed` × `dt` ≤ `length`), so that it cannot jump a wall")
+
+    @model_validator(mode="after")
+    def _physical(self) -> VehicleConfig:
+        if self.wheelbase > self.length:
+            raise ValueError(f"wheelbase ({self.wheelbase:g} m) must not exceed length "
+                             f"({self.length:g} m)")
+        if self.speed * self.dt > self.length:
+            raise ValueError(f"speed × dt = {self.speed * self.dt:g} m a step, farther than the "
+                             f"body's length ({self.length:g} m): the vehicle could jump a wall; "
+                             "lower speed or dt")
+        return self
 
 
 class RingConfig(_Section):
@@ -127,7 +155,7 @@ class RingConfig(_Section):
 
     beams: int = Field(ge=1, le=361, description="beams of the ring")
     span_deg: float = Field(gt=0, le=360, allow_inf_nan=False, description="horizontal span")
-    range: PositiveFloat = Field(description="beam length (m)")
+    range: PositiveFloat = Field(le=1000, description="beam length (m, at most 1000)")
     centre_deg: float = Field(
         0.0, ge=-180, le=180, allow_inf_nan=False, description="direction of the ring's middle, "
         "relative to the heading: 0 ahead, 180 behind, positive to the left")
@@ -143,7 +171,8 @@ class SensorConfig(_Section):
     span_deg: float = Field(
         180.0, gt=0, le=360, allow_inf_nan=False, description="horizontal span of the beams")
     range: PositiveFloat = Field(
-        25.0, description="beam length (m); a beam that hits nothing reads the range")
+        25.0, le=1000, description="beam length (m, at most 1000); a beam that hits nothing "
+        "reads the range")
     rings: list[RingConfig] = Field(
         [], max_length=8, description="further rings of beams (`[[sensor.rings]]`: `beams`, "
         "`span_deg`, `range`, `centre_deg`), say a short fan behind; the network reads the "
@@ -181,8 +210,9 @@ class NetworkConfig(_Section):
     """Fully connected sigmoid network; 2 outputs (right, left steering force)."""
 
     hidden: list[Annotated[int, Field(ge=1, le=1024)]] = Field(
-        [3], description="hidden layer sizes; inputs = beams, outputs = 2 (right, left force), "
-        "sigmoid everywhere")
+        [3], max_length=16, description="hidden layer sizes (up to 16 layers of up to 1024; [] = "
+        "inputs straight to outputs); inputs = beams, outputs = 2 (right, left force), sigmoid "
+        "everywhere")
     steering_gain_deg: float = Field(
         90.0, gt=0, le=180, allow_inf_nan=False, description="steering = gain × (left − right)")
     layout: Literal["source", "target"] = Field(
@@ -207,7 +237,8 @@ class GAConfig(_Section):
     mutation_probability: float = Field(
         0.1, ge=0, le=1, description="per gene; a mutated gene is replaced by U[−init_range, "
         "init_range]")
-    init_range: PositiveFloat = Field(1.0, description="initial genes U[−init_range, init_range]")
+    init_range: PositiveFloat = Field(
+        1.0, le=1000, description="initial genes U[−init_range, init_range] (at most 1000)")
     elite_count: int = Field(
         0, ge=0, description="best chromosomes copied unchanged (0 = children replace parents, as "
         "in the paper)")
@@ -229,7 +260,8 @@ class EpisodeConfig(_Section):
 
     max_steps: int = Field(20_000, ge=1, le=10_000_000, description="step cap of one life")
     spin_window: int = Field(
-        49, ge=2, description="a vehicle whose last `spin_window` positions have variance ≤ "
+        49, ge=2, le=100_000,
+        description="a vehicle whose last `spin_window` positions have variance ≤ "
         "`spin_variance` m² on both axes is spinning in place: fitness 0 (paper §5.3)")
     spin_variance: float = Field(
         64.0, ge=0, allow_inf_nan=False, description="see `spin_window` (m²)")
@@ -253,25 +285,29 @@ class DriversConfig(_Section):
         None, ge=0, le=1, description="driver imperfection `sigma` of the Krauss-family models "
         "(SUMO's default 0.5): random dawdling, 0 = perfect driving")
     tau_s: PositiveFloat | None = Field(
-        None, description="desired time headway `tau` (s; SUMO's default 1)")
-    accel: PositiveFloat | None = Field(None, description="acceleration ability (m/s²)")
-    decel: PositiveFloat | None = Field(None, description="comfortable deceleration (m/s²)")
+        None, le=100, description="desired time headway `tau` (s, at most 100; SUMO's default 1)")
+    accel: PositiveFloat | None = Field(
+        None, le=50, description="acceleration ability (m/s², at most 50)")
+    decel: PositiveFloat | None = Field(
+        None, le=50, description="comfortable deceleration (m/s², at most 50)")
     speed_factor: PositiveFloat | None = Field(
-        None, description="mean factor on the lanes' speed limits that drivers aim at")
+        None, le=10, description="mean factor on the lanes' speed limits that drivers aim at "
+        "(at most 10)")
     lc_speed_gain: float | None = Field(
-        None, ge=0, description="lane-change eagerness for speed (`lcSpeedGain`, default 1); "
-        "set on each vehicle as it departs")
+        None, ge=0, le=100, allow_inf_nan=False, description="lane-change eagerness for speed "
+        "(`lcSpeedGain`, default 1, at most 100); set on each vehicle as it departs")
     lc_cooperative: float | None = Field(
         None, ge=0, le=1, description="willingness to change lanes to let others in "
         "(`lcCooperative`, default 1)")
     lc_assertive: PositiveFloat | None = Field(
-        None, description="acceptance of small gaps when changing lanes (`lcAssertive`, "
-        "default 1)")
+        None, le=100, description="acceptance of small gaps when changing lanes (`lcAssertive`, "
+        "default 1, at most 100)")
     lc_keep_right: float | None = Field(
-        None, ge=0, description="eagerness to keep to the right lane (`lcKeepRight`, default 1)")
+        None, ge=0, le=100, allow_inf_nan=False, description="eagerness to keep to the right "
+        "lane (`lcKeepRight`, default 1, at most 100)")
     demand_scale: PositiveFloat | None = Field(
-        None, description="demand scaled by this factor (SUMO's `--scale`): 2 = twice the "
-        "vehicles")
+        None, le=100, description="demand scaled by this factor (SUMO's `--scale`, at most "
+        "100): 2 = twice the vehicles")
 
     def lane_change(self) -> dict[str, str]:
         """The lane-change parameters set, as SUMO's vehicle parameters
@@ -292,14 +328,16 @@ class TrafficConfig(_Section):
         "random_network", description="how the uncontrolled vehicles drive: `random_network`, "
         "`straight`, `circling`, `wander` (below) or `sumo`; a list = fitness averaged over those "
         "strategies")
-    starts_xy: list[tuple[float, float]] = Field(
-        [], description="one uncontrolled vehicle per `[x, y]` start; none = the learner drives "
-        "alone")
-    start_heading_deg: tuple[float, float] = Field(
+    starts_xy: list[XY] = Field(
+        [], max_length=1000, description="one uncontrolled vehicle per `[x, y]` start (at most "
+        "1000, each at least the vehicle's length from every other and from the learner's "
+        "`start_xy`); none = the learner drives alone")
+    start_heading_deg: XY = Field(
         (-90.0, 90.0), description="their start headings are drawn from this range")
     seed: int = Field(1000, ge=0, description="traffic seed")
     network_hidden: list[Annotated[int, Field(ge=1, le=1024)]] = Field(
-        [3], description="`random_network`: hidden layer sizes of the traffic's random networks "
+        [3], max_length=16,
+        description="`random_network`: hidden layer sizes of the traffic's random networks "
         "(the paper's 19-3-2 traffic), whatever the learner's; the learner needs as many hidden "
         "layers, each at least as large")
     vary: Literal["generation", "fixed"] = Field(
@@ -309,7 +347,8 @@ class TrafficConfig(_Section):
         1, ge=1, le=1000, description="traffic situations per chromosome and strategy; fitness is "
         "the mean")
     turn_distance: float = Field(
-        10.0, ge=0, allow_inf_nan=False, description="`straight`, `circling`, `wander`: turn when "
+        10.0, ge=0, le=1000, allow_inf_nan=False,
+        description="`straight`, `circling`, `wander`: turn when "
         "a wall is nearer than this (m) within ±`turn_cone_deg` ahead, until that cone is clear; "
         "0 = never turn")
     turn_steering_deg: float = Field(
@@ -323,10 +362,11 @@ class TrafficConfig(_Section):
     wander_decay: float = Field(0.95, ge=0, le=1, description="`wander`: the decay of that process")
     wander_max_deg: float = Field(
         45.0, gt=0, le=90, allow_inf_nan=False, description="`wander`: the largest steering angle")
-    circle_radius: tuple[PositiveFloat, PositiveFloat] = Field(
+    circle_radius: Annotated[tuple[PositiveFloat, PositiveFloat], Strict(False)] = Field(
         (10.0, 30.0), description="`circling`: range of the circle radii (m), one drawn per life")
     respawn_clearance: float = Field(
-        10.0, ge=0, allow_inf_nan=False, description="an uncontrolled vehicle that causes a "
+        10.0, ge=0, le=1000, allow_inf_nan=False,
+        description="an uncontrolled vehicle that causes a "
         "collision respawns at a random free spot at least this far (m) from every other vehicle; "
         "with SUMO traffic, vehicles this near the learner's start leave its world before the "
         "first step")
@@ -336,10 +376,10 @@ class TrafficConfig(_Section):
     sees_vehicles: bool = Field(
         False, description="`straight`, `circling`, `wander`: also turn away from vehicles, not "
         "only walls, in the cone ahead")
-    routes: list[Path] = Field(
+    routes: list[FilePath] = Field(
         [], description="`strategy = \"sumo\"`: SUMO route files (routes, flows, vehicle types) "
         "run on the track's network")
-    sumocfg: Path | None = Field(
+    sumocfg: FilePath | None = Field(
         None, description="`strategy = \"sumo\"`: alternatively (or as well: `routes` are added to "
         "its route files) a SUMO `.sumocfg`, run as SUMO runs it — its begin and end, route and "
         "additional files; `[track] net`, when given, replaces its `net-file`")
@@ -351,7 +391,8 @@ class TrafficConfig(_Section):
         "without the learner; every chromosome meets the recording) or `closed-loop` (the learner "
         "is in SUMO every step and drivers react; slower)")
     begin_s: float | None = Field(
-        None, ge=0, allow_inf_nan=False, description="SUMO time at which traffic begins: the "
+        None, ge=0, le=10_000_000, allow_inf_nan=False, description="SUMO time at which traffic "
+        "begins (s): the "
         "`.sumocfg`'s begin by default (0 without one)")
     warmup_s: float = Field(
         60.0, ge=0, le=86_400, allow_inf_nan=False, description="SUMO time simulated after the "
@@ -407,7 +448,7 @@ class TrafficConfig(_Section):
         return [self.strategy] if isinstance(self.strategy, str) else list(self.strategy)
 
 
-Range = tuple[PositiveFloat, PositiveFloat]
+Range = Annotated[tuple[PositiveFloat, PositiveFloat], Strict(False)]
 
 
 class RoadDraw(_Section):
@@ -438,21 +479,25 @@ class LaneKeepingConfig(_Section):
     road: Literal["sine", "circle"] = Field(
         "sine", description="`sine` (highway-env's lane-keeping road shape) or `circle`")
     amplitude: float = Field(
-        5.0, ge=0, allow_inf_nan=False, description="sine road: amplitude of the centre line (m)")
-    period: PositiveFloat = Field(100.0, description="sine road: period of the centre line (m)")
-    length: PositiveFloat = Field(1000.0, description="sine road: length (m)")
-    radius: PositiveFloat = Field(60.0, description="circle road: radius of the centre line (m)")
+        5.0, ge=0, le=1000, allow_inf_nan=False,
+        description="sine road: amplitude of the centre line (m)")
+    period: PositiveFloat = Field(
+        100.0, le=100_000, description="sine road: period of the centre line (m)")
+    length: PositiveFloat = Field(1000.0, le=100_000, description="sine road: length (m)")
+    radius: PositiveFloat = Field(
+        60.0, le=100_000, description="circle road: radius of the centre line (m)")
     mirrored: bool = Field(
         False, description="the road mirrored: its bends turn the other way (a circle driven "
         "anticlockwise)")
     lane_width: PositiveFloat = Field(
-        4.0, description="lane width (m); the life ends when the vehicle's centre leaves the lane")
-    lookahead_m: list[PositiveFloat] = Field(
-        [5.0, 10.0, 15.0, 20.0], min_length=1, description="the camera's look-ahead distances "
-        "along the lane; the network gets both markings' lateral offsets (vehicle frame) at each: "
-        "2 inputs per distance")
+        4.0, le=20,
+        description="lane width (m); the life ends when the vehicle's centre leaves the lane")
+    lookahead_m: list[Annotated[float, Field(gt=0, le=1000, allow_inf_nan=False)]] = Field(
+        [5.0, 10.0, 15.0, 20.0], min_length=1, max_length=32, description="the camera's "
+        "look-ahead distances along the lane (up to 32, each at most 1000 m); the network gets "
+        "both markings' lateral offsets (vehicle frame) at each: 2 inputs per distance")
     noise_m: float = Field(
-        0.0, ge=0, allow_inf_nan=False, description="Gaussian noise on the offsets (m)")
+        0.0, ge=0, le=100, allow_inf_nan=False, description="Gaussian noise on the offsets (m)")
     episodes: int = Field(1, ge=1, le=1000, description="episodes per chromosome")
     seed: int = Field(0, ge=0, description="noise and road-drawing seed")
     draw: RoadDraw | None = Field(
@@ -467,8 +512,8 @@ class Scenario(_Section):
     a highway-env ``[lane_keeping]`` road."""
 
     name: str = Field(
-        min_length=1, pattern=r"^[A-Za-z0-9_.-]+$", description="run name (letters, digits, "
-        "`_.-`); the default output folder")
+        min_length=1, max_length=100, pattern=r"^[A-Za-z0-9_.-]+$", description="run name "
+        "(letters, digits, `_.-`; not `.` or `..`); the default output folder")
     description: str = Field("", description="free text")
     seed: int = Field(
         0, ge=0, description="seed of the run's random generator; same seed, same run")
@@ -483,11 +528,18 @@ class Scenario(_Section):
     ga: GAConfig = GAConfig()
     episode: EpisodeConfig = EpisodeConfig()
     traffic: TrafficConfig = TrafficConfig()
-    source: Path | None = Field(None, exclude=True)
+    source: FilePath | None = Field(None, exclude=True)
     # Set by the command that runs the scenario, not by its file: where SUMO's console log and
     # kept outputs go (none: nowhere), and whether SUMO's console is shown instead.
-    sumo_folder: Path | None = Field(None, exclude=True)
+    sumo_folder: FilePath | None = Field(None, exclude=True)
     sumo_console: bool = Field(False, exclude=True)
+
+    @field_validator("name")
+    @classmethod
+    def _not_a_folder_step(cls, name: str) -> str:
+        if set(name) == {"."}:
+            raise ValueError(f"{name!r} names a folder step, not a run: use letters or digits")
+        return name
 
     @model_validator(mode="after")
     def _one_task(self) -> Scenario:
@@ -519,6 +571,37 @@ class Scenario(_Section):
             raise ValueError(f"traffic.network_hidden: random-network traffic {traffic} runs "
                              f"inside the learner's network {hidden}, which needs as many "
                              "hidden layers, each at least as large")
+        return self
+
+    @model_validator(mode="after")
+    def _fits_memory(self) -> Scenario:
+        genes = NetworkSpec(self.layer_sizes).chromosome_length
+        if self.ga.population_size * genes > MAX_POPULATION_GENES:
+            raise ValueError(
+                f"ga.population_size: {self.ga.population_size:,} chromosomes of {genes:,} genes "
+                f"(network {list(self.layer_sizes)}) are {self.ga.population_size * genes:,} "
+                f"genes, more than the {MAX_POPULATION_GENES:,} ("
+                f"{MAX_POPULATION_GENES * 8 / 2**30:.1f} GiB) a population may hold; use a "
+                "smaller network or population")
+        return self
+
+    @model_validator(mode="after")
+    def _apart(self) -> Scenario:
+        """Vehicles start where vehicles fit: no two starts nearer than a body's length."""
+        starts = list(self.traffic.starts_xy)
+        names = [f"traffic.starts_xy[{i}]" for i in range(len(starts))]
+        if isinstance(self.track, TrackConfig) and self.track.start_xy is not None:
+            starts, names = [self.track.start_xy, *starts], ["track.start_xy", *names]
+        if len(starts) < 2:
+            return self
+        xy = np.asarray(starts)
+        gaps = np.hypot(*(xy[:, None, :] - xy[None, :, :]).transpose(2, 0, 1))
+        gaps[np.triu_indices(len(xy))] = np.inf
+        near, far = np.unravel_index(np.argmin(gaps), gaps.shape)
+        if gaps[near, far] < self.vehicle.length:
+            raise ValueError(f"{names[near]}: {gaps[near, far]:g} m from {names[far]}; vehicles "
+                             f"start at least the vehicle's length ({self.vehicle.length:g} m) "
+                             "apart")
         return self
 
     @model_validator(mode="after")
@@ -654,7 +737,7 @@ def _key_of(error: dict) -> tuple[str, str]:
     key = key.removeprefix(".")
     message = error["msg"].removeprefix("Value error, ")
     prefix, _, rest = message.partition(": ")
-    if not key and rest and re.fullmatch(r"[a-z_]+(\.[a-z_]+)*", prefix):
+    if not key and rest and re.fullmatch(r"[a-z_]+(\[\d+\])?(\.[a-z_]+(\[\d+\])?)*", prefix):
         return prefix, rest
     return key or "(top level)", message
 
@@ -736,6 +819,8 @@ def _resolve(path: Path, section, key: str) -> None:
             return str((path.parent / value).resolve())
         except (ValueError, OSError) as exc:  # a NUL character, a name the system refuses
             raise InputError(f"not a usable path: {exc}", path, where) from None
+        except RuntimeError:  # pathlib's word for a loop of symbolic links
+            raise InputError(f"{value} is a loop of symbolic links", path, where) from None
 
     value = section.get(key)
     if isinstance(value, list):
@@ -837,14 +922,20 @@ def _with_sumocfg(scenario: Scenario, path: Path) -> Scenario:
 
 
 @functools.lru_cache(maxsize=16)
-def _config(path: Path) -> SumoConfig:
+def _config(path: Path, *stamp: int) -> SumoConfig:
     return read_sumocfg(path)
 
 
 def sumo_config(scenario: Scenario) -> SumoConfig | None:
-    """The scenario's ``.sumocfg`` as read (None without one)."""
+    """The scenario's ``.sumocfg`` as read (None without one), read again once edited."""
     sumocfg = scenario.traffic.sumocfg
-    return None if sumocfg is None else _config(sumocfg)
+    if sumocfg is None:
+        return None
+    try:
+        stat = sumocfg.stat()
+    except OSError:
+        return read_sumocfg(sumocfg)  # the error says what is wrong
+    return _config(sumocfg, stat.st_ino, stat.st_size, stat.st_mtime_ns, stat.st_ctime_ns)
 
 
 def begin_time(scenario: Scenario) -> float:

@@ -1,3 +1,4 @@
+import numpy as np
 import pytest
 
 from enn_traffic.errors import InputError
@@ -154,3 +155,25 @@ def test_traffic_keys_of_a_single_track_belong_in_traffic(tmp_path, net):
     with pytest.raises(InputError) as info:
         load_text(tmp_path, GOOD.format(net=net) + "[track.traffic]\nseed = 3\n")
     assert info.value.key == "track.traffic" and "[traffic]" in info.value.message
+
+
+@pytest.mark.parametrize("hidden", [[], [2], [8, 8], [5, 4, 3]])
+@pytest.mark.parametrize("base", ["navigation_narrow", "arena_strategy2"])
+def test_every_network_shape_the_schema_accepts_runs(root, base, hidden):
+    """``hidden = [8, 8]`` crashed every run of navigation_narrow: the arena put its (unused)
+    random-network traffic, 19-3-2, inside the learner's network, where it does not fit. On
+    arena_strategy2 (straight-driving traffic) the same shapes run among traffic."""
+    from enn_traffic.worlds import make_world
+
+    scenario = load_scenario(root / "scenarios" / f"{base}.toml").with_overrides(
+        network={"hidden": hidden}, episode={"max_steps": 200})
+    world = make_world(scenario)
+    population = np.random.default_rng(0).uniform(-1, 1, (6, world.spec.chromosome_length))
+    fitness = world.evaluate(population).fitness
+    assert fitness.shape == (6,) and (fitness > 0).any()
+
+
+def test_random_network_traffic_that_does_not_fit_is_refused(root):
+    with pytest.raises(InputError, match="traffic.network_hidden"):
+        load_scenario(root / "scenarios" / "arena_strategy1.toml").with_overrides(
+            network={"hidden": [2]})

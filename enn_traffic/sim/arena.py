@@ -249,7 +249,11 @@ class ArenaWorld(LearnerWorld):
                 kinds = np.array([NETWORK] + [kind] * len(self.traffic_starts))
                 genes = rng.uniform(-1, 1, size=(self.vehicles,
                                                  self.traffic_spec.chromosome_length))
-                result.append(Situation(start, kinds, self.spec.embed(genes, self.traffic_spec),
+                if self.spec.holds(self.traffic_spec):
+                    genes = self.spec.embed(genes, self.traffic_spec)
+                else:  # no random-network traffic (the scenario's check): the genes go unused
+                    genes = np.zeros((self.vehicles, self.spec.chromosome_length))
+                result.append(Situation(start, kinds, genes,
                                       np.uint64(sequence.generate_state(1, np.uint64)[0])))
         return result
 
