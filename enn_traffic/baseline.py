@@ -19,6 +19,7 @@ from __future__ import annotations
 import copy
 import time
 from collections.abc import Iterator
+from functools import partial
 from pathlib import Path
 
 import numpy as np
@@ -28,6 +29,7 @@ from enn_traffic.deploy import EVALUATION_KEY
 from enn_traffic.envs.rangefinder import RangefinderVectorEnv, rangefinder_world
 from enn_traffic.errors import InputError
 from enn_traffic.evolution import ga
+from enn_traffic.io import write_atomic
 from enn_traffic.report.plots import save_figure
 from enn_traffic.runner import ga_params
 from enn_traffic.scenario import Scenario
@@ -186,8 +188,8 @@ def compare(scenario: Scenario, budget: int, seeds: list[int], out: Path,
         for seed in seeds:
             curve = (ga_curve if method == "GA" else ppo_curve)(scenario, budget, seed)
             table = pd.concat([table, curve.assign(scenario=scenario.name)], ignore_index=True)
-            table.to_csv(out / "baseline.csv", index=False)
-    summary(table).to_csv(out / "baseline_summary.csv", index=False)
+            write_atomic(out / "baseline.csv", partial(table.to_csv, index=False))
+    write_atomic(out / "baseline_summary.csv", partial(summary(table).to_csv, index=False))
     plot(table, out / "baseline.png")
     return table
 

@@ -6,6 +6,7 @@ Bad input ends with one message naming the file and key, and exit status 2; neve
 from __future__ import annotations
 
 import argparse
+import errno
 import signal
 import sys
 import threading
@@ -160,6 +161,7 @@ def _sumo_folder(out: Path | None) -> Path | None:
 
 def _cmd_run(args) -> int:
     from enn_traffic.evolution.backends import make_evaluator
+    from enn_traffic.io import check_output_folder, check_unlocked
     from enn_traffic.progress import slow_step
     from enn_traffic.runner import check_folder, evolve
     from enn_traffic.scenario import load_scenario
@@ -176,13 +178,15 @@ def _cmd_run(args) -> int:
         **({"seed": args.seed} if args.seed is not None else {}),
     )
     out = args.out or Path("results") / scenario.name
-    check_folder(scenario, out, resume=args.resume, force=args.force)  # before any world
+    check_output_folder(out)  # before any world, nothing written yet
+    check_unlocked(out)
+    check_folder(scenario, out, resume=args.resume, force=args.force)
     scenario = scenario.with_sumo_output(out / "sumo", console=args.verbose)
     with slow_step(f"preparing the worlds of {scenario.name}"):
         evaluator = make_evaluator(scenario, args.executor, args.address)
     try:
         table = evolve(scenario, out, evaluator, resume=args.resume, force=args.force,
-                       progress=not args.quiet)
+                       progress=not args.quiet)  # holds the folder's lock
     finally:
         evaluator.close()
     last = table.iloc[-1]
@@ -207,10 +211,12 @@ def _labels(paths: list[Path]) -> list[str]:
 def _cmd_evaluate(args) -> int:
     from enn_traffic.controller import Controller
     from enn_traffic.deploy import evaluate_batch, fitness_matrix, write_batch
-    from enn_traffic.io import write_csv
+    from enn_traffic.io import check_output_file, write_csv
     from enn_traffic.scenario import load_scenario
     from enn_traffic.shipped import scenario_path
 
+    if args.out:
+        check_output_file(args.out, suffixes=(".csv",))
     controller_paths = [p for p in args.paths if p.suffix == ".npz"]
     scenario_paths = [p for p in args.paths if p.suffix == ".toml"]
     for path in args.paths:
@@ -249,11 +255,11 @@ def _cmd_evaluate(args) -> int:
 def _cmd_render(args) -> int:
     from enn_traffic.controller import Controller
     from enn_traffic.deploy import render
+    from enn_traffic.io import check_output_file
     from enn_traffic.scenario import load_scenario
     from enn_traffic.shipped import scenario_path
 
-    if args.out.suffix.lower() not in (".png", ".gif", ".svg", ".pdf"):
-        raise InputError("the output must end in .png, .gif, .svg or .pdf", args.out, "--out")
+    check_output_file(args.out, suffixes=(".png", ".gif", ".svg", ".pdf"))
     controller = Controller.load(args.controller)
     scenario = load_scenario(scenario_path(args.scenario)).with_sumo_output(
         _sumo_folder(args.out), args.verbose)
@@ -263,12 +269,16 @@ def _cmd_render(args) -> int:
 
 
 def _cmd_lanes(args) -> int:
-    from enn_traffic.io import write_csv
+    from enn_traffic.io import check_output_file, write_csv
     from enn_traffic.roads.lanes import lane_table
     from enn_traffic.roads.network import ANYWHERE_AHEAD_M
     from enn_traffic.scenario import sumo_sources
     from enn_traffic.shipped import scenario_path
 
+    if args.out:
+        check_output_file(args.out, suffixes=(".csv",))
+    if args.plot:
+        check_output_file(args.plot, "--plot", suffixes=(".png", ".svg", ".pdf"))
     net, routes, additional, shortest = sumo_sources(scenario_path(args.source))
     # ties of demand are ranked by length, then by the lane's name
     table = lane_table(net, routes, additional, shortest)
@@ -322,8 +332,10 @@ def _plot_lanes(net: Path, top, out: Path) -> None:
 
 
 def _cmd_reproduce(args) -> int:
+    from enn_traffic.io import check_output_folder
     from enn_traffic.reproduce import reproduce
 
+    check_output_folder(args.out)
     names = [n.strip() for n in args.only.split(",") if n.strip()] if args.only else None
     reproduce(args.out, quick=args.quick, only=names, progress=not args.quiet,
               executor=args.executor, address=args.address)
@@ -332,6 +344,7 @@ def _cmd_reproduce(args) -> int:
 
 def _cmd_baseline(args) -> int:
     from enn_traffic import baseline
+    from enn_traffic.io import check_output_folder
     from enn_traffic.scenario import load_scenario
     from enn_traffic.shipped import scenario_path
 
@@ -340,6 +353,7 @@ def _cmd_baseline(args) -> int:
     if not methods or set(methods) - {"GA", "PPO"}:
         raise InputError(f"--methods {args.methods!r}: expected GA, PPO or GA,PPO")
     out = args.out or Path("results/baseline") / scenario.name
+    check_output_folder(out)
     table = baseline.compare(scenario, args.budget, list(range(1, args.seeds + 1)), out,
                              methods)
     print(baseline.summary(table).to_string(index=False))
@@ -350,8 +364,10 @@ def _cmd_bench(args) -> int:
     import numpy as np
 
     from enn_traffic.bench import run_bench
-    from enn_traffic.io import write_csv
+    from enn_traffic.io import check_output_file, write_csv
 
+    if args.out:
+        check_output_file(args.out, suffixes=(".csv",))
     table = run_bench(quick=args.quick)
     shown = table.copy()
     for column in ("vehicle_steps_per_s", "learner_steps_per_s"):
@@ -394,18 +410,29 @@ def main(argv: list[str] | None = None) -> int:
     started = time.perf_counter()
     try:
         return COMMANDS[args.command](args)
-    except InputError as exc:
-        print(f"enn-traffic: error: {exc}", file=sys.stderr)
+    except InputError as exc:  # one line, whatever SUMO's message spans
+        print(f"enn-traffic: error: {' '.join(str(exc).split())}", file=sys.stderr)
         return 2
     except BrokenPipeError:  # output piped into a reader that stopped early (e.g. head)
         sys.stderr.close()
         return 0
+    except OSError as exc:  # a file that could not be read or written: a full disk, a lost mount
+        if exc.errno not in _FILE_TROUBLE:
+            raise
+        where = f"{exc.filename}: " if exc.filename else ""
+        print(f"enn-traffic: error: {where}{exc.strerror or exc}", file=sys.stderr)
+        return 2
     except (KeyboardInterrupt, SystemError) as exc:
         if not _interrupted(exc):
             raise
         print(f"\nenn-traffic: interrupted after {time.perf_counter() - started:.0f} s"
               f"{INTERRUPTED.get(args.command, '')}", file=sys.stderr)
         return 130
+
+
+_FILE_TROUBLE = {errno.ENOSPC, errno.EDQUOT, errno.EROFS, errno.EACCES, errno.EPERM,
+                 errno.EFBIG, errno.EIO, errno.ENOENT, errno.ENOTDIR, errno.EISDIR, errno.ELOOP,
+                 errno.ENAMETOOLONG}
 
 
 def _interrupted(exc: BaseException | None) -> bool:

@@ -26,12 +26,12 @@ from enn_traffic.controller import Controller
 from enn_traffic.errors import InputError
 from enn_traffic.evolution import ga
 from enn_traffic.evolution.backends import Evaluator, make_evaluator
-from enn_traffic.io import write_atomic, write_csv, write_text
+from enn_traffic.io import folder_lock, write_atomic, write_csv, write_text
 from enn_traffic.neural import NetworkSpec
 from enn_traffic.progress import slow_step
 from enn_traffic.provenance import rules_version, sources_of
 from enn_traffic.report.plots import learning_curve
-from enn_traffic.roads.sumocfg import read_sumocfg
+from enn_traffic.roads.sumocfg import read_sumocfg, with_includes
 from enn_traffic.scenario import Scenario
 
 # What a first generation may wait for when numba's cache folder has no kernels yet.
@@ -112,7 +112,8 @@ def fingerprint(scenario: Scenario, others: Sequence[Scenario] = (),
 
 def input_files(scenario: Scenario) -> list[Path]:
     """The files a scenario reads: its tracks' networks, SUMO's route files, and a
-    ``.sumocfg`` with every file it names; with several tracks, each track's own."""
+    ``.sumocfg`` with every file it names, and every file they ``<include>``; with several
+    tracks, each track's own."""
     parts = ([scenario.on_track(i) for i in range(len(scenario.tracks))]
              if isinstance(scenario.track, list) else [scenario])
     files = []
@@ -123,7 +124,7 @@ def input_files(scenario: Scenario) -> list[Path]:
         if traffic.sumocfg is not None:
             config = read_sumocfg(traffic.sumocfg)
             files += [traffic.sumocfg, *config.route_files, *config.additional_files]
-    return files
+    return with_includes(files)
 
 
 def _fresh_state(scenario: Scenario, key: str, population: np.ndarray | None = None
@@ -170,6 +171,37 @@ def check_folder(scenario: Scenario, out: str | Path, resume: bool = False,
         _open_state(scenario, out, resume, force, None, fingerprint(scenario))
 
 
+def restore_outputs(scenario: Scenario, out: Path, state: ga.GAState,
+                    done: pd.DataFrame) -> None:
+    """Write again, from the checkpoint, each output of a continued run that is missing or
+    differs from it: ``scenario.toml``, ``best.npz``, ``outputs.npz``, the learning curve
+    (a crash between two writes, or a file deleted since)."""
+    if not (out / "scenario.toml").is_file():
+        write_text(out / "scenario.toml", scenario.to_toml())
+    if state.best_chromosome is not None:
+        try:
+            kept = Controller.load(out / "best.npz")
+            same = np.array_equal(kept.chromosome, state.best_chromosome)
+        except InputError:
+            same = False
+        if not same:
+            generation = int(done["generation"][done["best_fitness"].idxmax()])
+            Controller.from_scenario(scenario, state.best_chromosome, state.best_fitness,
+                                     generation).save(out / "best.npz")
+    outputs = RunOutputs.of(state, scenario)
+    try:
+        kept = RunOutputs.load(out)
+        same = (np.array_equal(kept.champions, outputs.champions)
+                and np.array_equal(kept.population, outputs.population)
+                and kept.stopped == outputs.stopped)
+    except InputError:
+        same = False
+    if not same:
+        outputs.save(out)
+    if not (out / "learning_curve.png").is_file():
+        learning_curve(done, out / "learning_curve.png", title=scenario.name)
+
+
 def _finished_rows(table_path: Path, generation: int) -> pd.DataFrame:
     """The rows of the generations a checkpoint says are done, as written; a damaged table is
     an error, never silently shortened."""
@@ -209,21 +241,26 @@ def evolve(
     share as it shares ``scenario`` and the initial population.
     """
     out = Path(out)
-    out.mkdir(parents=True, exist_ok=True)
+    with folder_lock(out):
+        return _evolve(scenario, out, evaluator, resume, force, progress, initial_population,
+                       stop, others)
+
+
+def _evolve(scenario: Scenario, out: Path, evaluator: Evaluator | None, resume: bool,
+            force: bool, progress: bool, initial_population: np.ndarray | None,
+            stop: Callable[[np.ndarray, np.ndarray], bool] | None,
+            others: Sequence[Scenario]) -> pd.DataFrame:
+    """:func:`evolve`, its folder locked."""
     deciders = [d for d in (evaluator, stop) if d is not None]
     key = fingerprint(scenario, others, initial_population, deciders)
     state = _open_state(scenario, out, resume, force, initial_population, key)
     table_path = out / "generations.csv"
     done = _finished_rows(table_path, state.generation)
     total = scenario.ga.generations
+    if state.generation > 0:
+        restore_outputs(scenario, out, state, done)
     if state.generation >= total or state.extra.get("target_reached", False):
-        if not (out / "learning_curve.png").exists():
-            learning_curve(done, out / "learning_curve.png", title=scenario.name)
-        outputs = RunOutputs.of(state, scenario)
-        # a run from before runs wrote them, or stopped before they said so
-        if not (out / OUTPUTS).exists() or RunOutputs.load(out).stopped != outputs.stopped:
-            outputs.save(out)
-        return done  # nothing to compute, nothing rewritten
+        return done  # nothing to compute
     rows = done.to_dict("records")
     write_text(out / "scenario.toml", scenario.to_toml())
     params = ga_params(scenario)

@@ -7,6 +7,7 @@ vehicles near it can be seen; only the walls and bodies near the view are drawn.
 
 from __future__ import annotations
 
+import os
 from pathlib import Path
 
 import matplotlib
@@ -18,6 +19,7 @@ from matplotlib.animation import FuncAnimation, PillowWriter  # noqa: E402
 from matplotlib.collections import LineCollection, PolyCollection  # noqa: E402
 from tqdm import tqdm  # noqa: E402
 
+from enn_traffic.errors import InputError  # noqa: E402
 from enn_traffic.geometry import body_polygon  # noqa: E402
 from enn_traffic.report.plots import segments_within, square_view  # noqa: E402
 
@@ -75,9 +77,17 @@ def animate_run(world, poses: np.ndarray, out: str | Path, title: str = "",
         return line, traffic, learner
 
     animation = FuncAnimation(figure, draw, frames=len(indices), blit=not follow)
-    Path(out).parent.mkdir(parents=True, exist_ok=True)
-    with tqdm(total=len(indices), desc=f"{Path(out).name}: frames", unit="frame",
-              disable=not progress, leave=False) as bar:
-        animation.save(str(out), writer=PillowWriter(fps=FPS),
-                       progress_callback=lambda *_: bar.update(1))
-    plt.close(figure)
+    out = Path(out)
+    partial = out.with_name(f".{out.stem}.tmp{out.suffix}")  # whole or not at all, as write_atomic
+    try:
+        out.parent.mkdir(parents=True, exist_ok=True)
+        with tqdm(total=len(indices), desc=f"{out.name}: frames", unit="frame",
+                  disable=not progress, leave=False) as bar:
+            animation.save(str(partial), writer=PillowWriter(fps=FPS),
+                           progress_callback=lambda *_: bar.update(1))
+        os.replace(partial, out)
+    except OSError as exc:
+        partial.unlink(missing_ok=True)
+        raise InputError(f"cannot write: {exc.strerror or exc}", out) from None
+    finally:
+        plt.close(figure)
