@@ -11,6 +11,7 @@ built every time.
 
 from __future__ import annotations
 
+import functools
 import hashlib
 import os
 import tempfile
@@ -35,6 +36,20 @@ def file_digest(path: Path) -> str:
         for block in iter(lambda: handle.read(1 << 20), b""):
             digest.update(block)
     return digest.hexdigest()
+
+
+def content_digest(path: str | Path) -> str:
+    """SHA-256 of a file's bytes, computed once per process while the file stays unchanged:
+    the same inode, size, modification and status-change times (a status-change time cannot
+    be set back by hand, as a modification time can)."""
+    path = Path(path).resolve()
+    stat = path.stat()
+    return _digest(path, stat.st_ino, stat.st_size, stat.st_mtime_ns, stat.st_ctime_ns)
+
+
+@functools.lru_cache(maxsize=256)
+def _digest(path: Path, *stamp: int) -> str:
+    return file_digest(path)
 
 
 def key_of(*parts: object) -> str:

@@ -207,11 +207,12 @@ def read_net(path: Path) -> sumolib.net.Net:
     if not path.is_file():
         raise InputError("network file not found", path)
     stat = path.stat()
-    return _read_net(path.resolve(), stat.st_size, stat.st_mtime_ns)
+    return _read_net(path.resolve(), stat.st_ino, stat.st_size, stat.st_mtime_ns,
+                     stat.st_ctime_ns)
 
 
 @functools.lru_cache(maxsize=2)
-def _read_net(path: Path, size: int, modified: int) -> sumolib.net.Net:
+def _read_net(path: Path, *stamp: int) -> sumolib.net.Net:
     try:
         return sumolib.net.readNet(str(path), withInternal=True)
     except ElementTree.ParseError as exc:

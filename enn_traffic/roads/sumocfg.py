@@ -65,6 +65,34 @@ def sumo_options() -> dict[str, SumoOption]:
     return options
 
 
+# Options a configuration may not set, and why (docs/sumo.md, "Your own SUMO scenario").
+# (Its output-prefix is harmless: the learner's own replaces it, sumo.output_prefix.)
+REFUSED = {
+    "remote-port": "opens a TraCI port and waits for a client",
+    "num-clients": "waits for further TraCI clients",
+    "save-configuration": "makes SUMO write a configuration file instead of simulating",
+    "save-template": "makes SUMO write a template instead of simulating",
+    "save-schema": "makes SUMO write a schema instead of simulating",
+    "configuration-file": "reads a further configuration",
+    "help": "makes SUMO print its help and end",
+    "version": "makes SUMO print its version and end",
+    "print-options": "makes SUMO print its options",
+    "output-suffix": "moves every file SUMO writes into another folder",
+    "save-state.suffix": "moves the states SUMO saves into another folder",
+}
+_OFF = {"", "0", "false", "off", "no"}
+
+
+def _harmless(name: str, value: str) -> bool:
+    """Is a refused option set to a value that changes nothing?"""
+    value = value.strip().lower()
+    if name == "num-clients":
+        return value in ("", "1")
+    if name.endswith("suffix"):
+        return "/" not in value and "\\" not in value  # a suffix of the file name alone
+    return value in _OFF
+
+
 @dataclass(frozen=True)
 class SumoConfig:
     """What a ``.sumocfg`` names: absolute paths, and times in seconds (None: not set);
@@ -122,6 +150,11 @@ def read_sumocfg(path: Path) -> SumoConfig:
     known = sumo_options()
     canonical = {known[name].name if name in known else name: value
                  for name, value in settings.items()}
+    for name, value in canonical.items():
+        if name in REFUSED and not _harmless(name, value):
+            raise InputError(f"{name} = {value!r} {REFUSED[name]}; remove it (the learner "
+                             "runs SUMO in its own process, as its only client, and decides "
+                             "where SUMO writes)", path, name)
     files: dict[str, tuple[Path, ...]] = {}
     missing = []
     for option in FILE_OPTIONS:
@@ -170,3 +203,26 @@ def departure_span(route_files: list[Path] | tuple[Path, ...]) -> tuple[float, f
         except (ElementTree.ParseError, OSError):
             continue
     return (min(departures), max(departures)) if departures else None
+
+
+_INCLUDE = re.compile(rb"<include\s[^>]*?href\s*=\s*[\"']([^\"']+)[\"']")
+
+
+def with_includes(files: list[Path] | tuple[Path, ...]) -> list[Path]:
+    """``files`` and every file their ``<include href="..."/>`` elements name (relative to the
+    including file), at any depth, each once: every file SUMO reads for them."""
+    found: list[Path] = []
+    pending = [Path(file) for file in files]
+    while pending:
+        file = pending.pop(0)
+        if file in found:
+            continue
+        found.append(file)
+        try:
+            data = file.read_bytes()
+        except OSError:
+            continue
+        if b"<include" in data:
+            pending += [(file.parent / href.decode(errors="replace")).resolve()
+                        for href in _INCLUDE.findall(data)]
+    return found

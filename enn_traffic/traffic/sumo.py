@@ -45,10 +45,11 @@ import libsumo
 import numpy as np
 from numba import njit
 
+from enn_traffic.cache import cache_folder, content_digest
 from enn_traffic.errors import InputError
 from enn_traffic.geometry import body_corners
 from enn_traffic.progress import slow_step
-from enn_traffic.roads.sumocfg import departure_span
+from enn_traffic.roads.sumocfg import departure_span, with_includes
 from enn_traffic.scenario import (
     Scenario,
     begin_time,
@@ -446,27 +447,25 @@ STATE_VERSION = 3  # raised when the code that simulates and saves a warm-up cha
 
 
 def _inputs_key(scenario: Scenario) -> list[str]:
-    """What a warm-up depends on: the SUMO command's files (path, size, modification time,
-    the ``.sumocfg``'s own files too), begin, warm-up and step length, and SUMO's version."""
+    """What a warm-up depends on: the SHA-256 of every file SUMO reads (network, route and
+    additional files, the ``.sumocfg``, and every file they ``<include>``), begin, warm-up and
+    step length, and SUMO's version."""
     config = sumo_config(scenario)
     files = [scenario.track.net, *route_files(scenario)]
     if config is not None:
         files += [config.path, *config.additional_files]
-    stamps = []
-    for file in files:
-        stat = Path(file).stat()
-        stamps.append(f"{Path(file).resolve()}:{stat.st_size}:{stat.st_mtime_ns}")
-    return [*stamps, repr(begin_time(scenario)), repr(scenario.traffic.warmup_s),
+    digests = [f"{file}:{content_digest(file)}" for file in with_includes(files)]
+    return [*digests, repr(begin_time(scenario)), repr(scenario.traffic.warmup_s),
             scenario.traffic.drivers.model_dump_json(), str(STATE_VERSION),
             repr(scenario.vehicle.dt), libsumo.getVersion()[1]]
 
 
 def state_folder() -> Path:
-    """Where saved warm-ups are kept: ``$ENN_TRAFFIC_SUMO_STATES``, else
-    ``<temp dir>/enn-traffic-sumo-states`` (read at every call, so that worker processes,
-    which inherit the environment, use the same folder)."""
+    """Where saved warm-ups are kept: ``$ENN_TRAFFIC_SUMO_STATES``, else ``sumo-states/`` in
+    the user's own cache folder (:func:`~enn_traffic.cache.cache_folder`; read at every call,
+    so that worker processes, which inherit the environment, use the same folder)."""
     folder = os.environ.get(STATE_FOLDER_VARIABLE)
-    return Path(folder) if folder else Path(tempfile.gettempdir()) / "enn-traffic-sumo-states"
+    return Path(folder) if folder else cache_folder() / "sumo-states"
 
 
 def warm_state(scenario: Scenario, seed: int, keep_rng: bool) -> Path:
@@ -559,6 +558,10 @@ def first_traffic(scenario: Scenario, seed: int, state: Path | None, steps: int)
     raise no_traffic_error(scenario, steps)
 
 
+RECORDED_BYTES = 8 + 8 * 8 + 2 * 8  # a vehicle's slot, its corners and its centre, a step
+MAX_RECORDING_BYTES = 4 * 2**30
+
+
 def slot_arrays(steps: int, slots: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Empty slot arrays: ids (steps, slots) all -1, corners, and centres far out of range."""
     return (np.full((steps, slots), -1, dtype=np.int64), np.zeros((steps, slots, 4, 2)),
@@ -597,6 +600,13 @@ def record(scenario: Scenario, seed: int, steps: int, state: Path | None = None,
         simulation.close()
     if not empty and not any(len(rows) for rows in frames):
         raise no_traffic_error(scenario, steps)
+    size = (steps + 1) * simulation.slots_used * RECORDED_BYTES
+    if size > MAX_RECORDING_BYTES:
+        raise InputError(f"a replayed situation of {steps + 1:,} steps among "
+                         f"{simulation.slots_used:,} SUMO vehicles would take {size / 2**30:.1f} "
+                         f"GiB (at most {MAX_RECORDING_BYTES / 2**30:.0f}); lower "
+                         'episode.max_steps, or use traffic.mode = "closed-loop"',
+                         scenario.source, "episode.max_steps")
     ids, corners, centres = slot_arrays(steps + 1, simulation.slots_used)
     radius = max((fill_frame(rows, ids[t], corners[t], centres[t])
                   for t, rows in enumerate(frames)), default=0.0)
