@@ -9,6 +9,7 @@ building its own world once. Results do not depend on the backend or the number 
 
 from __future__ import annotations
 
+import logging
 import multiprocessing
 import os
 from concurrent.futures import ProcessPoolExecutor
@@ -18,8 +19,10 @@ from typing import Protocol
 import numpy as np
 
 from enn_traffic.errors import InputError
+from enn_traffic.progress import log
 from enn_traffic.scenario import Scenario
 from enn_traffic.sim.world import SituationResults, World
+from enn_traffic.traffic.fresh import end_with_parent
 from enn_traffic.worlds import make_world
 
 
@@ -55,6 +58,7 @@ def _single_threaded_world(scenario: Scenario) -> World:
 
 def _init_worker(scenario: Scenario) -> None:
     global _worker_world
+    end_with_parent()
     _worker_world = _single_threaded_world(scenario)
 
 
@@ -118,6 +122,8 @@ def connect_ray(address: str | None = None):
     except ImportError:
         raise InputError("the Ray executor needs Ray: pip install -e .[ray]",
                          key="--executor") from None
+    if not log.isEnabledFor(logging.INFO):  # --quiet: Ray's start-up notes too
+        logging.getLogger("ray").setLevel(logging.ERROR)
     if address and ":" in address and "://" not in address:
         _check_reachable(address)
     if not ray.is_initialized():

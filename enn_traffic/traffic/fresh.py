@@ -32,13 +32,16 @@ class FreshProcessError(RuntimeError):
 _PACKAGE_ROOT = str(Path(__file__).resolve().parents[2])
 
 
-def _ends_with_parent() -> None:
-    """In the child, before it runs: end it when the caller's process ends (Linux), so that
-    no fresh process outlives a killed caller."""
+def end_with_parent() -> None:
+    """In a child process, before it runs: end it when the process that started it ends
+    (Linux), so that no fresh process or pool worker outlives a killed caller."""
     if sys.platform.startswith("linux"):
         import ctypes
 
+        parent = os.getppid()
         ctypes.CDLL(None).prctl(1, signal.SIGTERM)  # PR_SET_PDEATHSIG
+        if os.getppid() != parent:  # the caller ended before the line above
+            os._exit(1)
 
 
 def _run(function: Callable, args: tuple, running: set | None = None):
@@ -50,7 +53,7 @@ def _run(function: Callable, args: tuple, running: set | None = None):
     running = set() if running is None else running
     with subprocess.Popen([sys.executable, "-m", __name__], stdin=subprocess.PIPE,
                           stdout=subprocess.PIPE, env=env,
-                          preexec_fn=_ends_with_parent) as process:
+                          preexec_fn=end_with_parent) as process:
         running.add(process)
         try:
             output, _ = process.communicate(job)
