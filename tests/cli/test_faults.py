@@ -4,6 +4,7 @@ outputs were damaged (docs/design.md, "Reliability")."""
 
 from __future__ import annotations
 
+import contextlib
 import os
 import resource
 import signal
@@ -52,10 +53,8 @@ def _children(pid: int) -> set[int]:
     """The processes ``pid`` started (Linux)."""
     found = set()
     for task in Path(f"/proc/{pid}/task").glob("*"):
-        try:
+        with contextlib.suppress(OSError):
             found |= {int(p) for p in (task / "children").read_text().split()}
-        except OSError:
-            pass
     return found
 
 
