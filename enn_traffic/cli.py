@@ -19,22 +19,32 @@ from enn_traffic.errors import InputError
 EPILOG = "Scenario files are described in docs/scenarios.md."
 
 
-def _int_at_least(minimum: int):
-    """An argparse type: an integer no smaller than ``minimum``."""
+def _int_in(minimum: int, maximum: int | None = None):
+    """An argparse type: an integer from ``minimum`` to ``maximum`` (no upper bound: None)."""
 
     def parse(text: str) -> int:
         try:
             value = int(text)
         except ValueError:
             value = None
-        if value is None or value < minimum:
-            raise argparse.ArgumentTypeError(f"expected an integer >= {minimum}, got {text!r}")
+        if value is None or value < minimum or (maximum is not None and value > maximum):
+            bounds = f">= {minimum}" if maximum is None else f"from {minimum} to {maximum:,}"
+            raise argparse.ArgumentTypeError(f"expected an integer {bounds}, got {text!r}")
         return value
 
     return parse
 
 
-_positive, _non_negative = _int_at_least(1), _int_at_least(0)
+def _path(text: str) -> Path:
+    """An argparse type: a path, never empty (an empty one would be the current folder)."""
+    if not text.strip():
+        raise argparse.ArgumentTypeError("expected a path, got an empty one")
+    return Path(text)
+
+
+_positive, _non_negative = _int_in(1), _int_in(0)
+# the schema's own bounds (ga.generations, ga.population_size, traffic.episodes, max_steps)
+_generations, _steps, _episodes = _int_in(1, 100_000), _int_in(1, 10_000_000), _int_in(1, 1000)
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -51,19 +61,20 @@ def build_parser() -> argparse.ArgumentParser:
                               description="Evolve a controller; writes scenario.toml, "
                               "generations.csv, best.npz, learning_curve.png, outputs.npz and "
                               "a checkpoint.")
-    run.add_argument("scenario", type=Path, metavar="SCENARIO.toml",
+    run.add_argument("scenario", type=_path, metavar="SCENARIO.toml",
                      help="a scenario file, or a shipped scenario's name (navigation_narrow)")
-    run.add_argument("--out", type=Path, help="run folder (default: results/<scenario name>)")
+    run.add_argument("--out", type=_path, help="run folder (default: results/<scenario name>)")
     run.add_argument("--seed", type=_non_negative, help="override the scenario's seed")
-    run.add_argument("--generations", type=_positive, help="override ga.generations")
-    run.add_argument("--population", type=_positive, help="override ga.population_size")
+    run.add_argument("--generations", type=_generations, help="override ga.generations")
+    run.add_argument("--population", type=_generations, help="override ga.population_size")
     run.add_argument("--executor", choices=["local", "process", "ray"], default="local",
                      help="where fitness is evaluated (default: local, in-process)")
     run.add_argument("--address", help="Ray cluster address (with --executor ray)")
-    run.add_argument("--resume", action="store_true",
-                     help="continue the run in the folder from its checkpoint")
-    run.add_argument("--force", action="store_true",
-                     help="start over even if the folder holds another run")
+    again = run.add_mutually_exclusive_group()
+    again.add_argument("--resume", action="store_true",
+                       help="continue the run in the folder from its checkpoint")
+    again.add_argument("--force", action="store_true",
+                       help="start over even if the folder holds another run")
     run.add_argument("--quiet", action="store_true", help="no progress bar or messages")
     run.add_argument("--verbose", action="store_true",
                      help="show SUMO's console instead of logging it to OUT/sumo/sumo.log")
@@ -74,12 +85,12 @@ def build_parser() -> argparse.ArgumentParser:
         "pair prints its lifetimes; several print the controller x scenario matrix of mean "
         "fitness. --out FILE.csv writes every situation (tidy) and, for several pairs, "
         "FILE_matrix.csv and FILE_matrix.png (heat map).")
-    evaluate.add_argument("paths", type=Path, nargs="+", metavar="FILE",
+    evaluate.add_argument("paths", type=_path, nargs="+", metavar="FILE",
                           help="controllers (.npz) and scenarios (.toml): one or more of each, "
                                "in any order")
-    evaluate.add_argument("--episodes", type=_positive, default=1,
+    evaluate.add_argument("--episodes", type=_episodes, default=1,
                           help="traffic situations per pair (default 1)")
-    evaluate.add_argument("--out", type=Path, metavar="FILE.csv", help="write the lifetimes")
+    evaluate.add_argument("--out", type=_path, metavar="FILE.csv", help="write the lifetimes")
     evaluate.add_argument("--mode", choices=["replay", "closed-loop"],
                           help="SUMO traffic: replayed, or reacting to the controller "
                                "(default: the scenario's traffic.mode)")
@@ -96,10 +107,10 @@ def build_parser() -> argparse.ArgumentParser:
 
     render = commands.add_parser("render", help="draw a controller's path (PNG) or animate it "
                                  "(GIF)", epilog=EPILOG)
-    render.add_argument("controller", type=Path, metavar="CONTROLLER.npz")
-    render.add_argument("scenario", type=Path, metavar="SCENARIO.toml")
-    render.add_argument("--out", type=Path, required=True, metavar="FILE.png|FILE.gif")
-    render.add_argument("--max-steps", type=_positive, default=5000,
+    render.add_argument("controller", type=_path, metavar="CONTROLLER.npz")
+    render.add_argument("scenario", type=_path, metavar="SCENARIO.toml")
+    render.add_argument("--out", type=_path, required=True, metavar="FILE.png|FILE.gif")
+    render.add_argument("--max-steps", type=_steps, default=5000,
                         help="draw at most this many steps (default 5000)")
     render.add_argument("--quiet", action="store_true", help="no progress bar or messages")
     render.add_argument("--verbose", action="store_true",
@@ -108,7 +119,7 @@ def build_parser() -> argparse.ArgumentParser:
 
     reproduce = commands.add_parser("reproduce", help="run the paper's experiments",
                                     epilog=EPILOG)
-    reproduce.add_argument("--out", type=Path, default=Path("results/paper"))
+    reproduce.add_argument("--out", type=_path, default=Path("results/paper"))
     reproduce.add_argument("--quick", action="store_true",
                            help="small populations and few generations (minutes)")
     reproduce.add_argument("--only", help="comma-separated experiment names (default: all)")
@@ -125,11 +136,11 @@ def build_parser() -> argparse.ArgumentParser:
         "cars (where a learner may start: [track] start_lane), ranked by the vehicles its route "
         "files send over them, with their lengths and allowed vehicle classes; and count the "
         "lanes cars may not use.")
-    lanes.add_argument("source", type=Path, metavar="SCENARIO.toml|FILE.sumocfg",
+    lanes.add_argument("source", type=_path, metavar="SCENARIO.toml|FILE.sumocfg",
                        help="a scenario, or a SUMO configuration (its network and routes)")
     lanes.add_argument("--top", type=_positive, default=20, help="lanes listed (default 20)")
-    lanes.add_argument("--out", type=Path, metavar="FILE.csv", help="write every lane")
-    lanes.add_argument("--plot", type=Path, metavar="FILE.png",
+    lanes.add_argument("--out", type=_path, metavar="FILE.csv", help="write every lane")
+    lanes.add_argument("--plot", type=_path, metavar="FILE.png",
                        help="draw the road surface for cars against every lane as road, with "
                             "the top start lanes numbered")
 
@@ -139,17 +150,17 @@ def build_parser() -> argparse.ArgumentParser:
         "learner-steps, several seeds each, and score their controllers along the way on the "
         "test situations that evaluate reads. Writes OUT/baseline.csv, baseline_summary.csv "
         "and baseline.png. PPO needs the rl extra (pip install -e .[rl]).")
-    baseline.add_argument("scenario", type=Path, metavar="SCENARIO.toml",
+    baseline.add_argument("scenario", type=_path, metavar="SCENARIO.toml",
                           help="an arena or navigation scenario, or a shipped one's name")
-    baseline.add_argument("--budget", type=_positive, default=1_000_000,
+    baseline.add_argument("--budget", type=_int_in(1, 10**10), default=1_000_000,
                           help="learner-steps per run (default 1,000,000)")
-    baseline.add_argument("--seeds", type=_positive, default=3, help="runs per method")
+    baseline.add_argument("--seeds", type=_int_in(1, 100), default=3, help="runs per method")
     baseline.add_argument("--methods", default="GA,PPO", help="GA, PPO or both (default)")
-    baseline.add_argument("--out", type=Path, help="folder (default: results/baseline/NAME)")
+    baseline.add_argument("--out", type=_path, help="folder (default: results/baseline/NAME)")
 
     bench = commands.add_parser("bench", help="throughput table (vehicle-steps per second)")
     bench.add_argument("--quick", action="store_true", help="shorter timing runs")
-    bench.add_argument("--out", type=Path, metavar="FILE.csv", help="also write the table")
+    bench.add_argument("--out", type=_path, metavar="FILE.csv", help="also write the table")
     return parser
 
 
@@ -210,15 +221,19 @@ def _labels(paths: list[Path]) -> list[str]:
 
 def _cmd_evaluate(args) -> int:
     from enn_traffic.controller import Controller
-    from enn_traffic.deploy import evaluate_batch, fitness_matrix, write_batch
-    from enn_traffic.io import check_output_file, write_csv
+    from enn_traffic.deploy import evaluate_batch, fitness_matrix, matrix_files, write_batch
+    from enn_traffic.io import check_output_file, check_output_folder, write_csv
     from enn_traffic.scenario import load_scenario
     from enn_traffic.shipped import scenario_path
 
-    if args.out:
-        check_output_file(args.out, suffixes=(".csv",))
     controller_paths = [p for p in args.paths if p.suffix == ".npz"]
     scenario_paths = [p for p in args.paths if p.suffix == ".toml"]
+    if args.out:  # every file it will write, before any work
+        check_output_file(args.out, suffixes=(".csv",))
+        if len(controller_paths) * len(scenario_paths) > 1:
+            for written in matrix_files(args.out):
+                check_output_file(written)
+        check_output_folder(_sumo_folder(args.out))
     for path in args.paths:
         if path.suffix not in (".npz", ".toml"):
             raise InputError("expected controllers (.npz) and scenarios (.toml)", path)
@@ -255,11 +270,12 @@ def _cmd_evaluate(args) -> int:
 def _cmd_render(args) -> int:
     from enn_traffic.controller import Controller
     from enn_traffic.deploy import render
-    from enn_traffic.io import check_output_file
+    from enn_traffic.io import check_output_file, check_output_folder
     from enn_traffic.scenario import load_scenario
     from enn_traffic.shipped import scenario_path
 
     check_output_file(args.out, suffixes=(".png", ".gif", ".svg", ".pdf"))
+    check_output_folder(_sumo_folder(args.out))
     controller = Controller.load(args.controller)
     scenario = load_scenario(scenario_path(args.scenario)).with_sumo_output(
         _sumo_folder(args.out), args.verbose)
@@ -336,7 +352,11 @@ def _cmd_reproduce(args) -> int:
     from enn_traffic.reproduce import reproduce
 
     check_output_folder(args.out)
-    names = [n.strip() for n in args.only.split(",") if n.strip()] if args.only else None
+    names = None
+    if args.only is not None:
+        names = [n.strip() for n in args.only.split(",") if n.strip()]
+        if not names:
+            raise InputError(f"names no experiment: {args.only!r}", key="--only")
     reproduce(args.out, quick=args.quick, only=names, progress=not args.quiet,
               executor=args.executor, address=args.address)
     return 0
@@ -402,11 +422,30 @@ INTERRUPTED = {"run": "; finished generations are checkpointed (continue with --
 def main(argv: list[str] | None = None) -> int:
     from enn_traffic.progress import show_messages
 
-    if threading.current_thread() is threading.main_thread():
-        # a job started with & by a script inherits SIGINT ignored: kill -INT must stop it
-        signal.signal(signal.SIGINT, signal.default_int_handler)
     args = build_parser().parse_args(argv)
     show_messages(quiet=getattr(args, "quiet", False))
+    handlers = {}
+    if threading.current_thread() is threading.main_thread():
+        # a job started with & by a script inherits SIGINT ignored: kill -INT must stop it;
+        # SIGTERM (kill, a batch system's time limit) stops a command as Ctrl-C does
+        handlers = {signal.SIGINT: signal.signal(signal.SIGINT, signal.default_int_handler),
+                    signal.SIGTERM: signal.signal(signal.SIGTERM, _terminate)}
+    try:
+        return _run_command(args)
+    finally:
+        for number, handler in handlers.items():
+            signal.signal(number, handler)
+
+
+class Terminated(KeyboardInterrupt):
+    """SIGTERM, met as Ctrl-C is: the command stops where it is and says so."""
+
+
+def _terminate(number, frame) -> None:
+    raise Terminated
+
+
+def _run_command(args) -> int:
     started = time.perf_counter()
     try:
         return COMMANDS[args.command](args)
@@ -423,11 +462,13 @@ def main(argv: list[str] | None = None) -> int:
         print(f"enn-traffic: error: {where}{exc.strerror or exc}", file=sys.stderr)
         return 2
     except (KeyboardInterrupt, SystemError) as exc:
-        if not _interrupted(exc):
+        cause = _interrupted(exc)
+        if cause is None:
             raise
-        print(f"\nenn-traffic: interrupted after {time.perf_counter() - started:.0f} s"
+        stopped = "terminated" if isinstance(cause, Terminated) else "interrupted"
+        print(f"\nenn-traffic: {stopped} after {time.perf_counter() - started:.0f} s"
               f"{INTERRUPTED.get(args.command, '')}", file=sys.stderr)
-        return 130
+        return 143 if isinstance(cause, Terminated) else 130
 
 
 _FILE_TROUBLE = {errno.ENOSPC, errno.EDQUOT, errno.EROFS, errno.EACCES, errno.EPERM,
@@ -435,14 +476,14 @@ _FILE_TROUBLE = {errno.ENOSPC, errno.EDQUOT, errno.EROFS, errno.EACCES, errno.EP
                  errno.ENAMETOOLONG}
 
 
-def _interrupted(exc: BaseException | None) -> bool:
-    """Is ``exc`` Ctrl-C? (One that lands inside a compiled kernel comes out of numba as a
-    SystemError caused by it.)"""
+def _interrupted(exc: BaseException | None) -> KeyboardInterrupt | None:
+    """The Ctrl-C (or SIGTERM) behind ``exc``, if any. (One that lands inside a compiled
+    kernel comes out of numba as a SystemError caused by it.)"""
     while exc is not None:
         if isinstance(exc, KeyboardInterrupt):
-            return True
+            return exc
         exc = exc.__cause__ or exc.__context__
-    return False
+    return None
 
 
 if __name__ == "__main__":

@@ -4,6 +4,7 @@ and the spin rule it was evolved under."""
 from __future__ import annotations
 
 import io
+import math
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -107,6 +108,12 @@ class Controller:
             )
         if not np.all(np.isfinite(controller.chromosome)):
             raise InputError("chromosome holds NaN or inf", path, "chromosome")
+        for name in ("steering_gain_deg", "span_deg", "range", "spin_variance"):
+            value = getattr(controller, name)
+            if value is not None and not math.isfinite(value):
+                raise InputError("holds NaN or inf", path, name)
+        if not all(math.isfinite(x) for ring in controller.rings for x in ring):
+            raise InputError("holds NaN or inf", path, "rings")
         return controller
 
     def fit(self, scenario: Scenario, path: str | Path | None = None) -> Scenario:

@@ -180,16 +180,23 @@ def fitness_matrix(table: pd.DataFrame) -> pd.DataFrame:
     return matrix
 
 
-def write_batch(table: pd.DataFrame, out: Path) -> list[Path]:
-    """``out`` (the tidy table), ``<out>_matrix.csv`` and ``<out>_matrix.png`` (heat map)."""
-    matrix = fitness_matrix(table)
+def matrix_files(out: Path) -> tuple[Path, Path]:
+    """Where :func:`write_batch` puts the matrix of ``out``: ``<out>_matrix.csv`` and
+    ``<out>_matrix.png`` (heat map)."""
     stem = out.with_name(out.stem + "_matrix")
+    return stem.with_suffix(".csv"), stem.with_suffix(".png")
+
+
+def write_batch(table: pd.DataFrame, out: Path) -> list[Path]:
+    """``out`` (the tidy table) and the matrix files (:func:`matrix_files`)."""
+    matrix = fitness_matrix(table)
+    table_file, picture = matrix_files(out)
     write_csv(out, table)
-    write_csv(stem.with_suffix(".csv"), matrix.reset_index())
+    write_csv(table_file, matrix.reset_index())
     situations = int(table.groupby(["controller", "scenario"]).size().max())
-    heat_map(matrix, stem.with_suffix(".png"), f"mean fitness over {situations} situation(s)",
+    heat_map(matrix, picture, f"mean fitness over {situations} situation(s)",
              "mean fitness [steps]")
-    return [out, stem.with_suffix(".csv"), stem.with_suffix(".png")]
+    return [out, table_file, picture]
 
 
 def evaluation_scenario(controller: Controller, scenario: Scenario, episodes: int) -> Scenario:

@@ -34,6 +34,10 @@ def write_atomic(path: str | Path, write: Callable[[IO], None], binary: bool = F
         with contextlib.suppress(OSError):
             tmp.unlink()
         raise InputError(f"cannot write: {exc.strerror or exc}", path) from None
+    except BaseException:  # Ctrl-C, SIGTERM: no temporary file left behind either
+        with contextlib.suppress(OSError):
+            tmp.unlink()
+        raise
 
 
 def write_text(path: str | Path, text: str) -> None:

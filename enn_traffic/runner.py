@@ -13,6 +13,7 @@ import contextlib
 import hashlib
 import os
 import time
+import tomllib
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -157,9 +158,35 @@ def _open_state(scenario: Scenario, out: Path, resume: bool, force: bool,
         if made_by != rules_version():
             raise InputError(f"the folder holds a run made by other rules ({made_by}; these "
                              f"are {rules_version()}); use another --out or --force", out)
-        raise InputError(
-            "the folder holds a run of different settings; use another --out or --force", out)
+        raise InputError(f"the folder holds a run of different {_differences(scenario, out)}; "
+                         "use another --out or --force", out)
     return state
+
+
+def _differences(scenario: Scenario, out: Path) -> str:
+    """What differs between ``scenario`` and the run in ``out``: the keys whose values differ
+    from its ``scenario.toml`` (a few), else its input files or the code that decides it."""
+    def flat(table: dict, prefix: str = "") -> dict:
+        items = {}
+        for key, value in table.items():
+            if isinstance(value, dict):
+                items.update(flat(value, f"{prefix}{key}."))
+            else:
+                items[f"{prefix}{key}"] = value
+        return items
+
+    try:
+        kept = flat(tomllib.loads((out / "scenario.toml").read_text()))
+    except (OSError, tomllib.TOMLDecodeError, UnicodeDecodeError):
+        return "settings"
+    ours = flat(tomllib.loads(scenario.to_toml()))
+    keys = sorted(k for k in kept.keys() | ours.keys()
+                  if kept.get(k) != ours.get(k) and k != "ga.generations")
+    if not keys:
+        return ("settings (its scenario keys match: the input files, the starting population, "
+                "the other worlds or the evaluator's code differ)")
+    listed = ", ".join(keys[:5]) + (f" and {len(keys) - 5} more" if len(keys) > 5 else "")
+    return f"settings ({listed})"
 
 
 def check_folder(scenario: Scenario, out: str | Path, resume: bool = False,
@@ -174,10 +201,14 @@ def check_folder(scenario: Scenario, out: str | Path, resume: bool = False,
 def restore_outputs(scenario: Scenario, out: Path, state: ga.GAState,
                     done: pd.DataFrame) -> None:
     """Write again, from the checkpoint, each output of a continued run that is missing or
-    differs from it: ``scenario.toml``, ``best.npz``, ``outputs.npz``, the learning curve
-    (a crash between two writes, or a file deleted since)."""
-    if not (out / "scenario.toml").is_file():
-        write_text(out / "scenario.toml", scenario.to_toml())
+    differs from it: ``scenario.toml`` (with the generations the folder holds, when more than
+    asked for), ``best.npz``, ``outputs.npz``, the learning curve (a crash between two
+    writes, or a file deleted or edited since)."""
+    generations = max(scenario.ga.generations, state.generation)  # as many as the folder holds
+    settings = scenario.with_overrides(ga={"generations": generations}).to_toml()
+    kept = out / "scenario.toml"
+    if not kept.is_file() or kept.read_text(errors="replace") != settings:
+        write_text(kept, settings)
     if state.best_chromosome is not None:
         try:
             kept = Controller.load(out / "best.npz")

@@ -38,6 +38,9 @@ from enn_traffic.roads.network import least_start_length
 from enn_traffic.roads.sumocfg import SumoConfig, read_sumocfg
 
 PositiveFloat = Annotated[float, Field(gt=0, allow_inf_nan=False)]
+Heading = Annotated[float, Field(ge=-360, le=360)]
+Radius = Annotated[float, Field(gt=0, le=10_000)]
+Length = Annotated[float, Field(gt=0, le=100_000)]
 MAX_POPULATION_GENES = 50_000_000  # 0.4 GB a copy of the population; the GA holds a few
 Finite = Annotated[float, Field(allow_inf_nan=False)]
 # TOML has no tuples and no paths: these two take a list and a string (their items stay strict)
@@ -49,7 +52,7 @@ class _Section(BaseModel):
     """Strict: a string or a boolean is never taken for a number (``beams = "19"`` is an
     error, not 19), nor a float for an integer."""
 
-    model_config = ConfigDict(extra="forbid", frozen=True, strict=True)
+    model_config = ConfigDict(extra="forbid", frozen=True, strict=True, allow_inf_nan=False)
 
 
 class TrackConfig(_Section):
@@ -66,8 +69,8 @@ class TrackConfig(_Section):
         None, description="start position of the front-bumper point; give one of `start_xy`, "
         "`start_lane`, `start_edge`")
     start_heading_deg: float = Field(
-        0.0, allow_inf_nan=False, description="start heading with `start_xy` (0 = +x, "
-        "counter-clockwise)")
+        0.0, ge=-360, le=360, description="start heading with `start_xy` (0 = +x, "
+        "counter-clockwise; -360 to 360)")
     start_lane: str | list[str] | None = Field(
         None, description="start on this lane's centre line, `start_offset` m from its beginning, "
         "facing along it; the lane must allow passenger cars. A list: each traffic situation "
@@ -126,12 +129,14 @@ class VehicleConfig(_Section):
     """Kinematic bicycle, constant speed (paper §4; docs/design.md, "The authors' code" 2)."""
 
     length: PositiveFloat = Field(
-        4.3, le=30, description="body length (m, at most 30: a truck with its trailer); the "
-        "pose is the middle of the front bumper")
-    width: PositiveFloat = Field(1.7, le=5, description="body width (m, at most 5)")
+        4.3, ge=0.5, le=30, description="body length (m, 0.5 to 30: a truck with its trailer); "
+        "the pose is the middle of the front bumper")
+    width: PositiveFloat = Field(1.7, ge=0.3, le=5, description="body width (m, 0.3 to 5)")
     wheelbase: PositiveFloat = Field(
-        2.6, le=30, description="wheelbase of the bicycle model (m, at most the body's length)")
-    speed: PositiveFloat = Field(10.0, le=100, description="constant speed (m/s, at most 100)")
+        2.6, ge=0.2, le=30, description="wheelbase of the bicycle model (m, from 0.2 to the "
+        "body's length)")
+    speed: PositiveFloat = Field(10.0, ge=0.1, le=100, description="constant speed (m/s, 0.1 to "
+                                 "100)")
     dt: float = Field(
         0.1, ge=0.001, le=1, allow_inf_nan=False, description="time step (s, 0.001 to 1); with "
         "the default speed one step is 1 m. A step may not carry the vehicle farther than its "
@@ -324,7 +329,7 @@ class TrafficConfig(_Section):
     driving by ``strategy`` (a list: the fitness averages over the strategies, §5.4.1), or
     SUMO traffic from ``routes`` / ``sumocfg`` (strategy ``"sumo"``, docs/sumo.md)."""
 
-    strategy: Strategy | list[Strategy] = Field(
+    strategy: Strategy | Annotated[list[Strategy], Field(min_length=1)] = Field(
         "random_network", description="how the uncontrolled vehicles drive: `random_network`, "
         "`straight`, `circling`, `wander` (below) or `sumo`; a list = fitness averaged over those "
         "strategies")
@@ -332,7 +337,7 @@ class TrafficConfig(_Section):
         [], max_length=1000, description="one uncontrolled vehicle per `[x, y]` start (at most "
         "1000, each at least the vehicle's length from every other and from the learner's "
         "`start_xy`); none = the learner drives alone")
-    start_heading_deg: XY = Field(
+    start_heading_deg: Annotated[tuple[Heading, Heading], Strict(False)] = Field(
         (-90.0, 90.0), description="their start headings are drawn from this range")
     seed: int = Field(1000, ge=0, description="traffic seed")
     network_hidden: list[Annotated[int, Field(ge=1, le=1024)]] = Field(
@@ -362,7 +367,7 @@ class TrafficConfig(_Section):
     wander_decay: float = Field(0.95, ge=0, le=1, description="`wander`: the decay of that process")
     wander_max_deg: float = Field(
         45.0, gt=0, le=90, allow_inf_nan=False, description="`wander`: the largest steering angle")
-    circle_radius: Annotated[tuple[PositiveFloat, PositiveFloat], Strict(False)] = Field(
+    circle_radius: Annotated[tuple[Radius, Radius], Strict(False)] = Field(
         (10.0, 30.0), description="`circling`: range of the circle radii (m), one drawn per life")
     respawn_clearance: float = Field(
         10.0, ge=0, le=1000, allow_inf_nan=False,
@@ -448,7 +453,7 @@ class TrafficConfig(_Section):
         return [self.strategy] if isinstance(self.strategy, str) else list(self.strategy)
 
 
-Range = Annotated[tuple[PositiveFloat, PositiveFloat], Strict(False)]
+Range = Annotated[tuple[Length, Length], Strict(False)]
 
 
 class RoadDraw(_Section):
@@ -481,16 +486,18 @@ class LaneKeepingConfig(_Section):
     amplitude: float = Field(
         5.0, ge=0, le=1000, allow_inf_nan=False,
         description="sine road: amplitude of the centre line (m)")
-    period: PositiveFloat = Field(
-        100.0, le=100_000, description="sine road: period of the centre line (m)")
-    length: PositiveFloat = Field(1000.0, le=100_000, description="sine road: length (m)")
-    radius: PositiveFloat = Field(
-        60.0, le=100_000, description="circle road: radius of the centre line (m)")
+    period: float = Field(
+        100.0, ge=10, le=100_000, description="sine road: period of the centre line (m, 10 to "
+        "100,000)")
+    length: float = Field(1000.0, ge=10, le=100_000, description="sine road: length (m)")
+    radius: float = Field(
+        60.0, ge=5, le=100_000, description="circle road: radius of the centre line (m, 5 to "
+        "100,000)")
     mirrored: bool = Field(
         False, description="the road mirrored: its bends turn the other way (a circle driven "
         "anticlockwise)")
-    lane_width: PositiveFloat = Field(
-        4.0, le=20,
+    lane_width: float = Field(
+        4.0, ge=1, le=20,
         description="lane width (m); the life ends when the vehicle's centre leaves the lane")
     lookahead_m: list[Annotated[float, Field(gt=0, le=1000, allow_inf_nan=False)]] = Field(
         [5.0, 10.0, 15.0, 20.0], min_length=1, max_length=32, description="the camera's "
@@ -571,6 +578,20 @@ class Scenario(_Section):
             raise ValueError(f"traffic.network_hidden: random-network traffic {traffic} runs "
                              f"inside the learner's network {hidden}, which needs as many "
                              "hidden layers, each at least as large")
+        return self
+
+    @model_validator(mode="after")
+    def _spin_rule_spares_driving(self) -> Scenario:
+        """Paper §5.3's spin rule judges positions a window of steps apart: a vehicle driving
+        straight (diagonally, the worst case) must not count as spinning."""
+        step, window = self.vehicle.speed * self.vehicle.dt, self.episode.spin_window
+        variance = step**2 * (window**2 - 1) / 24  # evenly spaced on a diagonal, per axis
+        if self.lane_keeping is None and variance <= self.episode.spin_variance:
+            raise ValueError(
+                f"episode.spin_window: a vehicle driving straight covers {step * window:g} m "
+                f"in {window} steps, so its positions may vary by only {variance:g} m² an "
+                f"axis, not more than spin_variance ({self.episode.spin_variance:g} m²): every "
+                "life could count as a spin; raise spin_window or lower spin_variance")
         return self
 
     @model_validator(mode="after")
@@ -798,6 +819,8 @@ def package_file(reference: str) -> Path:
         spec = None
     if spec is None or not spec.submodule_search_locations:
         raise ValueError(f"no installed Python package {name!r} for {reference!r}")
+    if ".." in Path(inner).parts or Path(inner).is_absolute():
+        raise ValueError(f"{reference!r} leaves the package {name!r}")
     return Path(list(spec.submodule_search_locations)[0]) / inner
 
 

@@ -56,9 +56,9 @@ def _single_threaded_world(scenario: Scenario) -> World:
     return make_world(scenario)
 
 
-def _init_worker(scenario: Scenario) -> None:
+def _init_worker(scenario: Scenario, parent: int) -> None:
     global _worker_world
-    end_with_parent()
+    end_with_parent(parent)
     _worker_world = _single_threaded_world(scenario)
 
 
@@ -80,7 +80,7 @@ class ProcessEvaluator:
             self.workers,
             mp_context=multiprocessing.get_context("spawn"),
             initializer=_init_worker,
-            initargs=(scenario,),
+            initargs=(scenario, os.getpid()),
         )
 
     def evaluate(self, population: np.ndarray, key: int = 0) -> SituationResults:

@@ -14,6 +14,7 @@ multiprocessing's spawn, it never re-runs the caller's ``__main__``, so a script
 
 from __future__ import annotations
 
+import functools
 import os
 import pickle
 import signal
@@ -32,16 +33,16 @@ class FreshProcessError(RuntimeError):
 _PACKAGE_ROOT = str(Path(__file__).resolve().parents[2])
 
 
-def end_with_parent() -> None:
-    """In a child process, before it runs: end it when the process that started it ends
-    (Linux), so that no fresh process or pool worker outlives a killed caller."""
+def end_with_parent(parent: int) -> None:
+    """In a child process of ``parent`` (its process id), before it runs: end it when the
+    parent ends (Linux), so that no fresh process or pool worker outlives a killed caller.
+    A parent already gone (killed while the child started) ends the child at once."""
     if sys.platform.startswith("linux"):
         import ctypes
 
-        parent = os.getppid()
         ctypes.CDLL(None).prctl(1, signal.SIGTERM)  # PR_SET_PDEATHSIG
-        if os.getppid() != parent:  # the caller ended before the line above
-            os._exit(1)
+    if os.getppid() != parent:
+        os._exit(1)
 
 
 def _run(function: Callable, args: tuple, running: set | None = None):
@@ -53,7 +54,7 @@ def _run(function: Callable, args: tuple, running: set | None = None):
     running = set() if running is None else running
     with subprocess.Popen([sys.executable, "-m", __name__], stdin=subprocess.PIPE,
                           stdout=subprocess.PIPE, env=env,
-                          preexec_fn=end_with_parent) as process:
+                          preexec_fn=functools.partial(end_with_parent, os.getpid())) as process:
         running.add(process)
         try:
             output, _ = process.communicate(job)

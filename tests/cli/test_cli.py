@@ -125,7 +125,7 @@ def test_evaluate_on_another_traffic_seed(small_run, root, tmp_path):
         (("run", "no/such.toml"), "scenario file not found"),
         (("evaluate", "no.npz", "scenarios/navigation_narrow.toml"), "controller file not found"),
         (("reproduce", "--only", "fig99"), "unknown experiment"),
-        (("run", "scenarios/navigation_narrow.toml", "--population", "-3"), "integer >= 1"),
+        (("run", "scenarios/navigation_narrow.toml", "--population", "-3"), "integer from 1 to"),
         (("run", "scenarios/navigation_narrow.toml", "--executor", "ray", "--address",
           "127.0.0.1:9"), "cannot reach Ray"),
         (("reproduce", "--only", "fig7", "--executor", "ray", "--address", "127.0.0.1:9",

@@ -16,6 +16,7 @@ import tomllib
 import typing
 from pathlib import Path
 
+import numpy as np
 import pytest
 import tomli_w
 from pydantic import BaseModel
@@ -197,6 +198,9 @@ SCENARIO_CASES = {
     "a step longer than the body": ("vehicle", "dt", 1.0, "vehicle"),
     "a wheelbase longer than the body": ("vehicle", "wheelbase", 5.0, "vehicle"),
     "no such strategy": ("traffic", "strategy", "teleport", "traffic.strategy"),
+    "no strategy at all": ("traffic", "strategy", [], "traffic.strategy"),
+    "a step too short for the spin rule": ("vehicle", "dt", 0.001, "episode.spin_window"),
+    "a file outside its package": ("track", "net", "pkg:enn_traffic/../../../etc/hosts", "net"),
     "an unknown key": ("ga", "colour", 3, "ga.colour"),
 }
 
@@ -259,12 +263,16 @@ def test_every_kind_of_bad_scenario_file_is_refused(capsys, tmp_path, monkeypatc
              None)
 
 
-@pytest.mark.parametrize("kind", PATH_KINDS + ["a truncated controller", "a wrong suffix"])
+@pytest.mark.parametrize("kind", PATH_KINDS + ["a truncated controller", "a wrong suffix",
+                                  "a NaN range"])
 def test_every_kind_of_bad_controller_file_is_refused(capsys, tmp_path, monkeypatch, kind):
     monkeypatch.chdir(tmp_path)
     paths = _path_kinds(tmp_path, ".npz")
-    paths["a truncated controller"] = tmp_path / "checkpoint.npz"
+    paths["a truncated controller"] = tmp_path / "truncated.npz"
     paths["a truncated controller"].write_bytes(Path(BEST).read_bytes()[:100])  # cut short
+    paths["a NaN range"] = tmp_path / "nan_range.npz"
+    with np.load(BEST) as saved:
+        np.savez(paths["a NaN range"], **{**dict(saved), "range": np.float64("nan")})
     paths["a wrong suffix"] = tmp_path / "controller.pkl"
     paths["a wrong suffix"].write_text("x")
     controller = paths[kind]
@@ -317,6 +325,40 @@ FOLDER_COMMANDS = {
 }
 
 
+def test_evaluate_checks_its_matrix_files_before_any_work(capsys, tmp_path, monkeypatch):
+    """Several pairs write FILE_matrix.csv and .png beside FILE.csv: a folder in the way was
+    found only after the whole evaluation."""
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "m_matrix.csv").mkdir()
+    wide = str(SCENARIOS / "navigation_wide.toml")
+    _refused(capsys, tmp_path, ["evaluate", BEST, NARROW, wide, "--out", tmp_path / "m.csv"],
+             tmp_path / "m_matrix.csv", None)
+
+
+COMMAND_LINES = {
+    "--only of no experiment": ["reproduce", "--only", ",", "--out", "x"],
+    "--only empty": ["reproduce", "--only", "", "--out", "x"],
+    "--resume with --force": ["run", NARROW, "--resume", "--force"],
+    "an empty --out": ["run", NARROW, "--out", ""],
+    "--max-steps beyond the cap": ["render", BEST, NARROW, "--max-steps", "99999999999",
+                                   "--out", "r.gif"],
+    "--episodes beyond the cap": ["evaluate", BEST, NARROW, "--episodes", "1001"],
+    "--population beyond the schema": ["run", NARROW, "--population", "100001"],
+}
+
+
+@pytest.mark.parametrize("case", list(COMMAND_LINES))
+def test_a_bad_command_line_exits_2_before_any_work(capsys, tmp_path, monkeypatch, case):
+    monkeypatch.chdir(tmp_path)
+    try:
+        status = cli.main(COMMAND_LINES[case])
+    except SystemExit as exit:  # argparse's own refusal: its usage and one error line
+        status = exit.code
+    error = capsys.readouterr().err.strip().splitlines()[-1]
+    assert status == 2 and "error:" in error, error
+    assert not list(tmp_path.iterdir()), "something was written"
+
+
 @pytest.mark.parametrize("kind", ["a device", "an existing file", "under a file",
                                   "unwritable", "a symlink loop"])
 @pytest.mark.parametrize("command", list(FOLDER_COMMANDS))
@@ -356,7 +398,7 @@ def test_sumocfg_options_that_open_ports_or_move_files_are_refused(capsys, tmp_p
 def test_the_corpus_holds_at_least_200_cases():
     """The issue's measure: count every parametrised case above."""
     count = (len(KEY_CASES) + len(SCENARIO_CASES) + len(PATH_KINDS) * len(FILE_KEYS)
-             + len(PATH_KINDS) + 2 + len(PATH_KINDS) + 2
+             + len(PATH_KINDS) + 2 + len(PATH_KINDS) + 3
              + len(OUTPUT_KINDS) * len(FILE_COMMANDS) + 5 * len(FOLDER_COMMANDS)
-             + len(SUMOCFG_OPTIONS))
+             + len(SUMOCFG_OPTIONS) + 1 + len(COMMAND_LINES))
     assert count >= 200, count

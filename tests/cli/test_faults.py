@@ -98,17 +98,35 @@ def test_ctrl_c_ends_every_executor_with_one_line_130_and_the_checkpoint(tmp_pat
         assert resumed.returncode == 0, resumed.stderr
 
 
-def test_workers_end_with_a_killed_parent(tmp_path):
+@pytest.mark.parametrize("when", ["while the pool starts", "mid-run"])
+def test_workers_end_with_a_killed_parent(tmp_path, when):
     """kill -9 of a run of the process executor: its pool workers end within seconds (they
-    lived on for over a minute before)."""
+    lived on for over a minute before; killed while they started, for ever)."""
     out = tmp_path / "run"
     process = _start(out, *LONG, "--executor", "process")
-    _wait_for_generation(process, out)
+    if when == "mid-run":
+        _wait_for_generation(process, out)
+    deadline = time.monotonic() + 120
+    while not _children(process.pid):
+        assert time.monotonic() < deadline and process.poll() is None, "no worker started"
+        time.sleep(0.01)
     workers = _children(process.pid)
-    assert workers
     process.kill()
     process.wait()
     assert _gone(workers, 15), "pool workers outlived their parent"
+
+
+def test_sigterm_stops_a_run_as_ctrl_c_does(tmp_path):
+    """SIGTERM (kill, a batch system's time limit): exit 143, one line, the checkpoint kept
+    and no temporary file (it ended with no message and a .tmp file left)."""
+    out = tmp_path / "run"
+    process = _start(out, *LONG)
+    _wait_for_generation(process, out, 2)
+    process.terminate()
+    assert process.wait(timeout=60) == 143
+    message = process.stderr.read().strip().splitlines()
+    assert len(message) == 1 and "terminated" in message[0], message
+    assert (out / "checkpoint.npz").is_file() and not list(out.glob(".*.tmp"))
 
 
 def test_a_full_disk_is_reported_with_the_path_and_nothing_half_written(tmp_path):
@@ -155,6 +173,8 @@ def test_resume_of_a_finished_run_restores_every_output(tmp_path, root):
     assert subprocess.run(args, capture_output=True).returncode == 0
     best = Controller.load(out / "best.npz")
     outputs = RunOutputs.load(out)
+    settings = (out / "scenario.toml").read_text()
+    (out / "scenario.toml").write_text(settings.replace("population_size = 20", "junk = ["))
     (out / "best.npz").unlink()
     (out / "learning_curve.png").unlink()
     RunOutputs(outputs.champions[:-1], outputs.population[:1], outputs.elite_count).save(out)
@@ -166,6 +186,7 @@ def test_resume_of_a_finished_run_restores_every_output(tmp_path, root):
     assert np.array_equal(again.champions, outputs.champions)
     assert np.array_equal(again.population, outputs.population)
     assert (out / "learning_curve.png").is_file()
+    assert (out / "scenario.toml").read_text() == settings
 
 
 INCLUDED = '<additional>\n    <vType id="slow" maxSpeed="{speed}"/>\n</additional>\n'
