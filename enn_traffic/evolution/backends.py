@@ -9,9 +9,12 @@ building its own world once. Results do not depend on the backend or the number 
 
 from __future__ import annotations
 
+import contextlib
 import logging
 import multiprocessing
 import os
+import signal
+import threading
 from concurrent.futures import ProcessPoolExecutor
 from dataclasses import replace
 from typing import Protocol
@@ -59,7 +62,28 @@ def _single_threaded_world(scenario: Scenario) -> World:
 def _init_worker(scenario: Scenario, parent: int) -> None:
     global _worker_world
     end_with_parent(parent)
+    # Ctrl-C reaches the terminal's whole process group: the parent says it, a worker leaves
+    signal.signal(signal.SIGINT, _leave)
     _worker_world = _single_threaded_world(scenario)
+
+
+def _leave(number, frame) -> None:
+    os._exit(130)
+
+
+@contextlib.contextmanager
+def _deaf_to_ctrl_c():
+    """SIGINT ignored while workers are started, so that they start ignoring it (Python
+    keeps an inherited SIG_IGN) until :func:`_init_worker` sets their own handler: a Ctrl-C
+    while a worker imports would print its traceback."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    previous = signal.signal(signal.SIGINT, signal.SIG_IGN)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGINT, previous)
 
 
 def _evaluate_chunk(chunk: np.ndarray, key: int) -> SituationResults:
@@ -85,8 +109,9 @@ class ProcessEvaluator:
 
     def evaluate(self, population: np.ndarray, key: int = 0) -> SituationResults:
         chunks = np.array_split(population, min(self.workers * 4, len(population)))
-        parts = list(self.pool.map(_evaluate_chunk, chunks, [key] * len(chunks)))
-        return SituationResults.concatenate(parts)
+        with _deaf_to_ctrl_c():  # the pool starts its workers as chunks are submitted
+            futures = [self.pool.submit(_evaluate_chunk, chunk, key) for chunk in chunks]
+        return SituationResults.concatenate([future.result() for future in futures])
 
     def close(self) -> None:
         self.pool.shutdown()

@@ -116,6 +116,23 @@ def test_workers_end_with_a_killed_parent(tmp_path, when):
     assert _gone(workers, 15), "pool workers outlived their parent"
 
 
+def test_ctrl_c_while_the_pool_starts_is_one_line_too(tmp_path):
+    """Ctrl-C as the workers import (a worker printed its own traceback then)."""
+    out = tmp_path / "run"
+    process = _start(out, *LONG, "--executor", "process", start_new_session=True)
+    deadline = time.monotonic() + 120
+    while not _children(process.pid):
+        assert time.monotonic() < deadline and process.poll() is None, "no worker started"
+        time.sleep(0.01)
+    workers = _children(process.pid)
+    time.sleep(0.3)  # the workers are importing the package
+    os.killpg(process.pid, signal.SIGINT)
+    assert process.wait(timeout=60) == 130
+    message = process.stderr.read().strip().splitlines()
+    assert len(message) == 1 and "interrupted" in message[0], message
+    assert _gone(workers, 30), "a worker outlived the run"
+
+
 def test_sigterm_stops_a_run_as_ctrl_c_does(tmp_path):
     """SIGTERM (kill, a batch system's time limit): exit 143, one line, the checkpoint kept
     and no temporary file (it ended with no message and a .tmp file left)."""
