@@ -92,7 +92,7 @@ def sb3_vec_env(env: RangefinderVectorEnv):
             return observation.astype(np.float32)
 
         def step_async(self, actions):
-            self._actions = np.clip(actions, 0.0, 1.0)
+            self._actions = actions  # the environment clips them to its box
 
         def step_wait(self):
             observation, reward, terminated, truncated, info = env.step(self._actions)
@@ -172,7 +172,7 @@ def policy_test_fitness(model, obs_rms, scenario: Scenario) -> float:
     while np.isnan(fitness).any():
         scaled = np.clip((observation - obs_rms.mean) / np.sqrt(obs_rms.var + 1e-8), -10, 10)
         action, _ = model.predict(scaled.astype(np.float32), deterministic=True)
-        observation, _, terminated, truncated, info = env.step(np.clip(action, 0.0, 1.0))
+        observation, _, terminated, truncated, info = env.step(action)
         for i in np.flatnonzero((terminated | truncated) & np.isnan(fitness)):
             fitness[i] = info["final_info"]["fitness"][i]
     return float(fitness.mean())

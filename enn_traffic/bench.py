@@ -135,7 +135,7 @@ def env_bench(steps: int = 200, sync_seconds: float = 5.0) -> pd.DataFrame:
                         (256, "sync")):
         env = gym.make_vec(name, num_envs=count, vectorization_mode=mode)
         env.reset(seed=0)
-        actions = rng.random((8, count, 2))
+        actions = rng.uniform(-1, 1, (8, count, 2)).astype(np.float32)
         env.step(actions[0])  # compile outside the timing
         done, seconds = 0, 0.0
         while done < steps and (mode != "sync" or seconds < sync_seconds):

@@ -4,15 +4,18 @@
 shipped arena, navigation and SUMO training scenario (``enn_traffic/NavigationNarrow-v0``,
 ``enn_traffic/ArenaStrategy1-v0``, ``enn_traffic/SumoStrategy1-v0``,
 ``enn_traffic/CityCologne3-v0``, ...) and ``enn_traffic/Scenario-v0``, which takes
-``scenario=PATH`` (a user's own SUMO scenario too) and, for a scenario of several tracks,
-``track=i``. The arena and navigation ids vectorise in
-one compiled call::
+``scenario=PATH`` (a user's own SUMO scenario too, or a shipped scenario's name) and, for a
+scenario of several tracks, ``track=i``. Gymnasium 1.x has no plugin entry points: without
+the import, ``gymnasium.make("enn_traffic.envs:enn_traffic/NavigationNarrow-v0")`` imports
+the module itself. Each id's ``max_episode_steps`` is its scenario's ``episode.max_steps``.
+The arena and navigation ids vectorise in one compiled call::
 
     gymnasium.make_vec("enn_traffic/NavigationNarrow-v0", num_envs=4096,
                        vectorization_mode="vector_entry_point")
 
-``parallel_env(scenario, learners)`` gives the PettingZoo environment of several learners
-at once.
+Every vector environment resets a world whose life ended in the same step
+(``AutoresetMode.SAME_STEP``). ``parallel_env(scenario, learners)`` gives the PettingZoo
+environment of several learners at once, ``env(...)`` the same as an AEC environment.
 
 The held-out tracks (``test_*``, ``unseen_*``) and lane keeping are not registered: the first
 are for ``enn-traffic evaluate``, the second is highway-env's own environment.
@@ -20,14 +23,16 @@ are for ``enn-traffic evaluate``, the second is highway-env's own environment.
 
 from __future__ import annotations
 
+import tomllib
 from pathlib import Path
 
 import gymnasium as gym
 from gymnasium.envs.registration import register, registry
+from gymnasium.vector import AutoresetMode
 
 from enn_traffic.kinds import Registry
-from enn_traffic.scenario import Scenario, load_scenario
-from enn_traffic.shipped import SCENARIOS
+from enn_traffic.scenario import EpisodeConfig, Scenario, load_scenario
+from enn_traffic.shipped import SCENARIOS, scenario_path
 
 NAMESPACE = "enn_traffic"
 # The shipped scenarios an id is registered for: the arena, navigation and SUMO training
@@ -45,7 +50,8 @@ def env_id(name: str) -> str:
 
 def _scenario(scenario: str | Path | Scenario, track: int | None) -> Scenario:
     """The scenario (a file or loaded) on one track: ``track`` of a scenario of several."""
-    loaded = scenario if isinstance(scenario, Scenario) else load_scenario(scenario)
+    loaded = (scenario if isinstance(scenario, Scenario)
+              else load_scenario(scenario_path(scenario)))
     return loaded.single_track(track)
 
 
@@ -74,45 +80,73 @@ def _table_entry(table: Registry, scenario: Scenario):
 
 
 def make_env(scenario: str | Path | Scenario, render_mode: str | None = None,
-             track: int | None = None) -> gym.Env:
+             track: int | None = None, observation_dtype: str = "float32") -> gym.Env:
     """The environment of an arena or navigation scenario
     (:class:`~enn_traffic.envs.rangefinder.RangefinderEnv`) or of a SUMO scenario
     (:class:`~enn_traffic.envs.sumo.SumoEnv`); ``track`` picks one of a scenario of several
-    (``navigation_mixed``)."""
+    (``navigation_mixed``); ``observation_dtype="float64"``: the readings unrounded, to
+    replay the GA's lives exactly (float32 moved a saved controller's life by two steps of
+    1,371, docs/envs.md)."""
     scenario = _scenario(scenario, track)
-    return _table_entry(ENVS, scenario)(scenario, render_mode=render_mode)
+    return _table_entry(ENVS, scenario)(scenario, render_mode=render_mode,
+                                        observation_dtype=observation_dtype)
 
 
 def make_vector_env(scenario: str | Path | Scenario, num_envs: int = 1, situations: int = 64,
-                    render_mode: str | None = None, track: int | None = None
+                    render_mode: str | None = None, track: int | None = None,
+                    max_episode_steps: int | None = None, observation_dtype: str = "float32"
                     ) -> gym.vector.VectorEnv:
     """``num_envs`` arena or navigation worlds stepped in one compiled call
     (:class:`~enn_traffic.envs.rangefinder.RangefinderVectorEnv`); for a SUMO scenario,
     gymnasium's ``SyncVectorEnv`` of replays or ``AsyncVectorEnv`` of closed loops (libsumo
-    runs one SUMO per process). ``track`` as in :func:`make_env`."""
+    runs one SUMO per process). ``track`` as in :func:`make_env`; ``max_episode_steps`` (as
+    ``gymnasium.make_vec`` passes it) is the worlds' step cap."""
     scenario = _scenario(scenario, track)
-    return _table_entry(VECTOR_ENVS, scenario)(scenario, num_envs, situations, render_mode)
+    if max_episode_steps is not None and max_episode_steps != scenario.episode.max_steps:
+        scenario = scenario.with_overrides(episode={"max_steps": int(max_episode_steps)})
+    return _table_entry(VECTOR_ENVS, scenario)(scenario, num_envs, situations, render_mode,
+                                               observation_dtype)
 
 
 def sumo_vector_env(scenario: Scenario, num_envs: int, situations: int,
-                    render_mode: str | None) -> gym.vector.VectorEnv:
+                    render_mode: str | None, observation_dtype: str = "float32"
+                    ) -> gym.vector.VectorEnv:
     """SUMO scenarios' vector environment: gymnasium's ``SyncVectorEnv`` of replays, or
     ``AsyncVectorEnv`` of closed loops (libsumo runs one SUMO per process); ``situations`` is
     the arena's pool and unused here."""
     vector = (gym.vector.AsyncVectorEnv if scenario.traffic.mode == "closed-loop"
               else gym.vector.SyncVectorEnv)
-    return vector([lambda: make_env(scenario, render_mode)] * num_envs)
+    return vector([lambda: make_env(scenario, render_mode, None, observation_dtype)] * num_envs,
+                  autoreset_mode=AutoresetMode.SAME_STEP)
 
 
 def parallel_env(scenario: str | Path | Scenario, learners: int | None = None,
-                 render_mode: str | None = None, track: int | None = None):
+                 render_mode: str | None = None, track: int | None = None,
+                 observation_dtype: str = "float32"):
     """A PettingZoo ``ParallelEnv`` of several learners at once, one agent per learning
     vehicle: the arena crowd of paper §5.5
     (:class:`~enn_traffic.envs.crowd.ArenaCrowdEnv`), or for a SUMO scenario the learners
     among its live traffic (:class:`~enn_traffic.envs.sumo.SumoCrowdEnv`; no rendering).
     ``track`` as in :func:`make_env`."""
     scenario = _scenario(scenario, track)
-    return _table_entry(PARALLEL_ENVS, scenario)(scenario, learners, render_mode)
+    return _table_entry(PARALLEL_ENVS, scenario)(scenario, learners, render_mode,
+                                                 observation_dtype)
+
+
+def env(scenario: str | Path | Scenario, learners: int | None = None,
+        render_mode: str | None = None, track: int | None = None,
+        observation_dtype: str = "float32"):
+    """:func:`parallel_env` as a PettingZoo AEC environment (agents act in turn)."""
+    from pettingzoo.utils.conversions import parallel_to_aec
+
+    return parallel_to_aec(parallel_env(scenario, learners, render_mode, track,
+                                        observation_dtype))
+
+
+def _max_steps(path: Path) -> int:
+    """A shipped scenario's step cap, read from its file alone (registering loads nothing)."""
+    episode = tomllib.loads(path.read_text()).get("episode", {})
+    return int(episode.get("max_steps", EpisodeConfig.model_fields["max_steps"].default))
 
 
 def register_envs() -> None:
@@ -123,8 +157,9 @@ def register_envs() -> None:
                     "vector_entry_point": f"{__name__}:make_vector_env"}
     register(f"{NAMESPACE}/Scenario-v0", **entry_points)
     for name in REGISTERED:
-        register(env_id(name), **entry_points,
-                 kwargs={"scenario": str(SCENARIOS / f"{name}.toml")})
+        path = SCENARIOS / f"{name}.toml"
+        register(env_id(name), **entry_points, max_episode_steps=_max_steps(path),
+                 kwargs={"scenario": str(path)})
 
 
 register_envs()

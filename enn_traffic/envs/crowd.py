@@ -24,7 +24,15 @@ from numba import njit
 from pettingzoo import ParallelEnv
 
 from enn_traffic.envs.batch import compiled
-from enn_traffic.envs.rangefinder import TRAINING_KEYS, picture, rangefinder_world, spaces_of
+from enn_traffic.envs.rangefinder import (
+    TRAINING_KEYS,
+    checked_actions,
+    forces,
+    observation_of,
+    picture,
+    rangefinder_world,
+    spaces_of,
+)
 from enn_traffic.kinds import ACTION
 from enn_traffic.scenario import Scenario
 from enn_traffic.sim.crowd import ALIVE, Crowd, crowd_events, step_once
@@ -52,7 +60,7 @@ class ArenaCrowdEnv(ParallelEnv):
                 "render_fps": 10}
 
     def __init__(self, scenario: str | Path | Scenario, learners: int | None = None,
-                 render_mode: str | None = None):
+                 render_mode: str | None = None, observation_dtype: str = "float32"):
         self.world = world = rangefinder_world(scenario)
         learners = world.vehicles if learners is None else int(learners)
         if not 1 <= learners <= world.vehicles:
@@ -61,7 +69,7 @@ class ArenaCrowdEnv(ParallelEnv):
         self.learners = learners
         self.possible_agents = [f"vehicle_{v}" for v in range(learners)]
         self.agents: list[str] = []
-        self._observation_space, self._action_space = spaces_of(world)
+        self._observation_space, self._action_space = spaces_of(world, observation_dtype)
         self.render_mode = render_mode
         self.max_steps = world.max_steps
         self._rng = np.random.default_rng()
@@ -96,26 +104,24 @@ class ArenaCrowdEnv(ParallelEnv):
             crowd.respawn(v)
         self.agents = self.possible_agents[:]
         self.steps = 0
-        readings = self._observe()
-        observations = dict(zip(self.agents, readings, strict=True))
-        return observations, {agent: {"key": key, "situation": situation}
-                              for agent in self.agents}
+        self.started = {"key": key, "situation": situation}
+        return (dict(zip(self.agents, self._observe(), strict=True)),
+                {agent: dict(self.started) for agent in self.agents})
 
     def _observe(self) -> np.ndarray:
         """The live learners' readings (L, B): rows 0..L-1 of the crowd are the learners."""
         crowd = self.crowd
         out = np.empty((len(self.agents), len(crowd.geometry.beams)))
         observe(len(self.agents), crowd.vehicles, crowd.physics, crowd.geometry, out)
-        return out
+        return observation_of(out, self._observation_space)
 
     def step(self, actions: dict):
         crowd, gain = self.crowd, self.world.physics.gain
         steering = crowd.work.steering
+        actions = checked_actions(actions, self.agents)
         for row, agent in enumerate(self.agents):
-            if agent not in actions:
-                raise KeyError(f"no action for {agent}")
-            action = np.asarray(actions[agent], dtype=np.float64)
-            steering[row] = gain * (action[1] - action[0])
+            force = forces(actions[agent])
+            steering[row] = gain * (force[1] - force[0])
         args = (crowd.kinds, self.genes, self.world.layer_sizes, crowd.physics, crowd.geometry,
                 crowd.vehicles, crowd.lives, crowd.rng, crowd.work)
         if self._step is None:
@@ -140,7 +146,8 @@ class ArenaCrowdEnv(ParallelEnv):
                 if outcome == SPUN:
                     rewards[agent] = 1.0 - life
                 infos[agent] = {"steps": life, "outcome": OUTCOMES[outcome],
-                                "fitness": 0.0 if outcome == SPUN else float(life)}
+                                "fitness": 0.0 if outcome == SPUN else float(life),
+                                **self.started}
             for v in ended[len(leaving):]:  # a scripted vehicle respawns
                 crowd.respawn(v)
             if leaving:  # a learner leaves the arena, its body with it
@@ -152,7 +159,8 @@ class ArenaCrowdEnv(ParallelEnv):
         if capped:
             for v, agent in enumerate(self.agents):
                 life = int(crowd.lives.life[v])  # the lives after any learner left
-                infos[agent] = {"steps": life, "outcome": "capped", "fitness": float(life)}
+                infos[agent] = {"steps": life, "outcome": "capped", "fitness": float(life),
+                                **self.started}
             self.agents = []
         return observations, rewards, terminated, truncated, infos
 

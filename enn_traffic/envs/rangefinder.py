@@ -1,12 +1,15 @@
 """The arena and the navigation tracks as gymnasium environments (docs/envs.md).
 
-Observation: the learner's beam readings, right to left (m, ``float64``: the numbers its
-network would read); action: the paper's two network outputs in [0, 1], steering =
-gain · (``action[1]`` − ``action[0]``) (§3); reward: 1 per step lived, and a spin in place
-takes the life's steps back, so that an episode's return is the paper's fitness (§5, §5.3).
-``terminated``: a collision or a spin; ``truncated``: the step cap. ``info`` holds the life's
-``steps``, its ``outcome`` (:data:`~enn_traffic.sim.world.OUTCOMES`), ``fitness``, the
-collisions it ``suffered`` and what it ``hit``.
+Observation: the learner's beam readings, right to left (m, ``float32``, each from 0 to its
+beam's range: the numbers its network would read); action: a symmetric ``float32``
+``Box(-1, 1, (2,))``, the paper's two network outputs in [0, 1] rescaled (§3): forces
+``(action + 1) / 2``, steering = gain · (force 1 − force 0) (:func:`forces`); reward: 1 per
+step lived, and a spin in place takes the life's steps back, so that an episode's return is
+the paper's fitness (§5, §5.3). ``terminated``: a collision or a spin; ``truncated``: the
+step cap. ``reset``'s info holds the situation's ``key`` and ``situation``; a life's last
+step's info adds its ``steps``, ``outcome`` (a name of
+:data:`~enn_traffic.sim.world.OUTCOMES`), ``fitness``, the collisions it ``suffered`` and
+what it ``hit`` (:data:`END_KEYS`), the same keys single and vectorised.
 
 A situation is the GA's (:meth:`ArenaWorld.situations`): ``reset(options={"key": k,
 "situation": e})`` starts situation ``e`` of traffic key ``k``; without them, a training key
@@ -45,15 +48,62 @@ def rangefinder_world(scenario: str | Path | Scenario) -> ArenaWorld:
     return ArenaWorld(scenario)
 
 
-def spaces_of(world: ArenaWorld) -> tuple[spaces.Box, spaces.Box]:
-    """The observation (beam readings) and action (two outputs) spaces of a world."""
-    ranges = world.geometry.beams[:, RANGE]  # each beam reads 0 to its own range
-    observation = spaces.Box(np.zeros_like(ranges), ranges.copy(), ranges.shape, np.float64)
-    return observation, spaces.Box(0.0, 1.0, (2,), np.float64)
+OBSERVATION_DTYPES = ("float32", "float64")
+
+
+def spaces_of(world: ArenaWorld, observation_dtype: str = "float32"
+              ) -> tuple[spaces.Box, spaces.Box]:
+    """The observation (beam readings, each from 0 to its beam's range, ``float32`` or, to
+    replay the GA's lives exactly, ``float64``) and action (``float32`` ``Box(-1, 1, (2,))``:
+    :func:`forces`) spaces of a world."""
+    if observation_dtype not in OBSERVATION_DTYPES:
+        raise ValueError(f"observation_dtype {observation_dtype!r}: expected one of "
+                         f"{', '.join(OBSERVATION_DTYPES)}")
+    ranges = world.geometry.beams[:, RANGE].astype(observation_dtype)
+    observation = spaces.Box(np.zeros_like(ranges), ranges, ranges.shape, observation_dtype)
+    return observation, spaces.Box(-1.0, 1.0, (2,), np.float32)
+
+
+def forces(action) -> np.ndarray:
+    """The paper's two network outputs in [0, 1] (§3) of actions in [-1, 1] (..., 2):
+    ``(action + 1) / 2``, an action outside the box clipped to it. A network's outputs ``o``
+    are the action ``2 o − 1``."""
+    return (np.clip(np.asarray(action, dtype=np.float64), -1.0, 1.0) + 1.0) / 2.0
+
+
+def action_of(outputs) -> np.ndarray:
+    """A network's two outputs in [0, 1] (..., 2) as an action in [-1, 1]: ``2 outputs − 1``
+    (the inverse of :func:`forces`), to drive a saved controller through the
+    environments."""
+    return 2.0 * np.asarray(outputs, dtype=np.float64) - 1.0
+
+
+def observation_of(readings: np.ndarray, space: spaces.Box) -> np.ndarray:
+    """Beam readings as the observation ``space`` holds them (a copy of its dtype)."""
+    return readings.astype(space.dtype)
+
+
+def checked_actions(actions: dict, agents: list[str]) -> dict:
+    """A PettingZoo step's actions: one for every live agent, none for another (an action
+    for an agent whose life ended, or for no agent, is an error, not ignored)."""
+    missing = [agent for agent in agents if agent not in actions]
+    if missing:
+        raise KeyError(f"no action for {', '.join(missing)}")
+    extra = [agent for agent in actions if agent not in agents]
+    if extra:
+        raise KeyError(f"an action for {', '.join(map(str, extra))}, which is not a live "
+                       f"agent (live: {', '.join(agents) or 'none'})")
+    return actions
+
+
+# The outcome names by code; RUNNING (-1) reads the last, "" (a life going on)
+OUTCOME_NAMES = np.array([OUTCOMES[code] for code in range(len(OUTCOMES))] + [""], dtype=object)
+END_KEYS = ("steps", "outcome", "fitness", "suffered", "hit")  # a life's last info
 
 
 def outcome_info(outcome: int, steps: int, tally: np.ndarray) -> dict:
-    """What a life's end tells: its steps, outcome, fitness, collisions suffered and hit."""
+    """What a life's end tells (:data:`END_KEYS`): its steps, outcome, fitness, collisions
+    suffered and hit."""
     return {"steps": int(steps), "outcome": OUTCOMES[int(outcome)],
             "fitness": 0.0 if outcome == SPUN else float(steps),
             "suffered": int(tally[SUFFERED]), "hit": int(tally[HIT])}
@@ -64,9 +114,10 @@ class RangefinderEnv(gym.Env):
 
     metadata = {"render_modes": ["rgb_array"], "render_fps": 10}
 
-    def __init__(self, scenario: str | Path | Scenario, render_mode: str | None = None):
+    def __init__(self, scenario: str | Path | Scenario, render_mode: str | None = None,
+                 observation_dtype: str = "float32"):
         self.world = rangefinder_world(scenario)
-        self.observation_space, self.action_space = spaces_of(self.world)
+        self.observation_space, self.action_space = spaces_of(self.world, observation_dtype)
         self.render_mode = render_mode
         self.batch = Batch(self.world, 1)
 
@@ -82,14 +133,17 @@ class RangefinderEnv(gym.Env):
         if not 0 <= situation < len(pool.seed):
             raise ValueError(f"situation {situation}: key {key} has {len(pool.seed)}")
         self.batch.begin(pool, situation)
-        return self.batch.worlds.observation[0].copy(), {"key": key, "situation": situation}
+        self.started = {"key": key, "situation": situation}
+        observation = observation_of(self.batch.worlds.observation[0], self.observation_space)
+        return observation, dict(self.started)
 
     def step(self, action):
-        self.batch.step(np.asarray(action, dtype=np.float64).reshape(1, 2), autoreset=False)
+        self.batch.step(forces(action).reshape(1, 2), autoreset=False)
         w = self.batch.worlds
         outcome = int(w.outcome[0])
-        info = {} if outcome == RUNNING else outcome_info(outcome, w.life[0], w.tally[0])
-        return (w.observation[0].copy(), float(w.reward[0]),
+        info = ({} if outcome == RUNNING else
+                outcome_info(outcome, w.life[0], w.tally[0]) | self.started)
+        return (observation_of(w.observation[0], self.observation_space), float(w.reward[0]),
                 outcome not in (RUNNING, CAPPED), outcome == CAPPED, info)
 
     def render(self):
@@ -109,12 +163,14 @@ class RangefinderVectorEnv(VectorEnv):
     metadata = {"render_modes": ["rgb_array"], "autoreset_mode": AutoresetMode.SAME_STEP}
 
     def __init__(self, scenario: str | Path | Scenario, num_envs: int = 1,
-                 situations: int = 64, render_mode: str | None = None):
+                 situations: int = 64, render_mode: str | None = None,
+                 observation_dtype: str = "float32"):
         self.world = rangefinder_world(scenario)
         self.num_envs = num_envs
         self.situations = situations
         self.render_mode = render_mode
-        self.single_observation_space, self.single_action_space = spaces_of(self.world)
+        self.single_observation_space, self.single_action_space = spaces_of(
+            self.world, observation_dtype)
         self.observation_space = batch_space(self.single_observation_space, num_envs)
         self.action_space = batch_space(self.single_action_space, num_envs)
         self.batch = Batch(self.world, num_envs)
@@ -125,21 +181,33 @@ class RangefinderVectorEnv(VectorEnv):
         if chosen is None:
             chosen = self.np_random.integers(TRAINING_KEYS, size=self.situations)
         self.batch.begin(Situations.of_keys(self.world, chosen))
-        return self.batch.worlds.observation.copy(), {}
+        per_key = len(self.batch.pool.seed) // len(chosen)
+        self.pool_keys = np.repeat(np.asarray(chosen, dtype=np.int64), per_key)
+        self.pool_situations = np.tile(np.arange(per_key), len(chosen))
+        w, every = self.batch.worlds, np.ones(self.num_envs, dtype=bool)
+        return observation_of(w.observation, self.single_observation_space), {
+            "key": self.pool_keys[w.situation], "_key": every,
+            "situation": self.pool_situations[w.situation], "_situation": every}
 
     def step(self, actions):
-        self.batch.step(actions, autoreset=True)
-        w = self.batch.worlds
+        w, space = self.batch.worlds, self.single_observation_space
+        situation = w.situation.copy()  # the lives going on, before any autoreset
+        self.batch.step(forces(actions), autoreset=True)
         ended = w.outcome != RUNNING
         terminated = ended & (w.outcome != CAPPED)
         infos = {}
         if ended.any():
-            infos = {"final_obs": w.final_observation.copy(), "_final_obs": ended,
-                     "final_info": {"steps": w.life.copy(), "outcome": w.outcome.copy(),
-                                    "fitness": np.where(w.outcome == SPUN, 0, w.life),
-                                    "_steps": ended, "_outcome": ended, "_fitness": ended},
-                     "_final_info": ended}
-        return (w.observation.copy(), w.reward.copy(), terminated, ended & ~terminated, infos)
+            final = {"steps": w.life.copy(), "outcome": OUTCOME_NAMES[w.outcome],
+                     "fitness": np.where(w.outcome == SPUN, 0.0, w.life.astype(np.float64)),
+                     "suffered": w.final_tally[:, SUFFERED].copy(),
+                     "hit": w.final_tally[:, HIT].copy(),
+                     "key": self.pool_keys[situation],
+                     "situation": self.pool_situations[situation]}
+            final |= {f"_{name}": ended for name in END_KEYS + ("key", "situation")}
+            infos = {"final_obs": observation_of(w.final_observation, space),
+                     "_final_obs": ended, "final_info": final, "_final_info": ended}
+        return (observation_of(w.observation, space), w.reward.astype(np.float32), terminated,
+                ended & ~terminated, infos)
 
     def render(self):
         if self.render_mode == "rgb_array":

@@ -21,7 +21,14 @@ import numpy as np
 from pettingzoo import ParallelEnv
 
 from enn_traffic.envs.batch import compiled
-from enn_traffic.envs.rangefinder import TRAINING_KEYS, picture, spaces_of
+from enn_traffic.envs.rangefinder import (
+    TRAINING_KEYS,
+    checked_actions,
+    forces,
+    observation_of,
+    picture,
+    spaces_of,
+)
 from enn_traffic.scenario import Scenario, load_scenario
 from enn_traffic.sim import sumo_world as recordings
 from enn_traffic.sim.crowd import ALIVE
@@ -87,9 +94,10 @@ class SumoEnv(gym.Env):
 
     metadata = {"render_modes": ["rgb_array"], "render_fps": 10}
 
-    def __init__(self, scenario: str | Path | Scenario, render_mode: str | None = None):
+    def __init__(self, scenario: str | Path | Scenario, render_mode: str | None = None,
+                 observation_dtype: str = "float32"):
         self.world = sumo_world(scenario)
-        self.observation_space, self.action_space = spaces_of(self.world)
+        self.observation_space, self.action_space = spaces_of(self.world, observation_dtype)
         self.render_mode = render_mode
         self.traffic: LiveTraffic | ReplayTraffic | None = None
         self._sense = self._move = None
@@ -116,7 +124,9 @@ class SumoEnv(gym.Env):
         self.outcome = self._sensed()
         if self.outcome != RUNNING:  # a life that ends where it starts sensed nothing
             self.traffic.state.work.readings[:] = world.geometry.beams[:, RANGE]
-        return self.traffic.state.work.readings.copy(), {"key": key, "situation": situation}
+        self.started = {"key": key, "situation": situation}
+        readings = observation_of(self.traffic.state.work.readings, self.observation_space)
+        return readings, dict(self.started)
 
     def _sensed(self) -> int:
         """The learner's outcome at this step, or ``RUNNING`` and its readings."""
@@ -131,23 +141,24 @@ class SumoEnv(gym.Env):
     def step(self, action):
         traffic = self.traffic
         if self.outcome == RUNNING:  # else the life ended where it started
-            action = np.asarray(action, dtype=np.float64)
-            traffic.state.work.steering[0] = self.world.physics.gain * (action[1] - action[0])
+            force = forces(action)
+            traffic.state.work.steering[0] = self.world.physics.gain * (force[1] - force[0])
             if self._move is None:
                 self._move = compiled(move_once, traffic.physics, traffic.state)
             self._move(traffic.physics, traffic.state)
             traffic.advance()
             self.outcome = self._sensed()
         outcome, steps, state = self.outcome, traffic.t, traffic.state
+        readings = observation_of(state.work.readings, self.observation_space)
         if outcome == RUNNING:
-            return state.work.readings.copy(), 1.0, False, False, {}
+            return readings, 1.0, False, False, {}
         hit = int(state.hit[0])
         info = {"steps": steps, "outcome": OUTCOMES[outcome],
                 "fitness": 0.0 if outcome == SPUN else float(steps),
                 "suffered": int(state.suffered[0]), "hit": hit,
-                "hit_vehicle": traffic.vehicle(hit)}
+                "hit_vehicle": traffic.vehicle(hit), **self.started}
         reward = 1.0 - steps if outcome == SPUN else 1.0
-        return (state.work.readings.copy(), reward, outcome != CAPPED, outcome == CAPPED, info)
+        return readings, reward, outcome != CAPPED, outcome == CAPPED, info
 
     def render(self):
         if self.render_mode != "rgb_array" or self.traffic is None:
@@ -179,7 +190,7 @@ class SumoCrowdEnv(ParallelEnv):
     metadata = {"name": "enn_traffic_sumo_crowd_v0", "render_modes": []}
 
     def __init__(self, scenario: str | Path | Scenario, learners: int | None = None,
-                 render_mode: str | None = None):
+                 render_mode: str | None = None, observation_dtype: str = "float32"):
         world = sumo_world(scenario)
         if render_mode is not None:
             raise ValueError(f"{world.scenario.name}: the SUMO crowd does not render")
@@ -193,7 +204,7 @@ class SumoCrowdEnv(ParallelEnv):
         self.possible_agents = [f"vehicle_{k}"
                                 for k in range(world.scenario.traffic.learners)]
         self.agents: list[str] = []
-        self._observation_space, self._action_space = spaces_of(world)
+        self._observation_space, self._action_space = spaces_of(world, observation_dtype)
         self.render_mode = None
         self.crowd: SumoCrowd | None = None
         self._rng = np.random.default_rng()
@@ -225,8 +236,10 @@ class SumoCrowdEnv(ParallelEnv):
         self.agents = self.possible_agents[:]
         self.steps = 0
         readings = self._readings()
-        return ({agent: readings[k] for k, agent in enumerate(self.agents)},
-                {agent: {"key": key, "situation": situation} for agent in self.agents})
+        self.started = {"key": key, "situation": situation}
+        space = self._observation_space
+        return ({agent: observation_of(readings[k], space) for k, agent in enumerate(self.agents)},
+                {agent: dict(self.started) for agent in self.agents})
 
     def _readings(self) -> np.ndarray:
         """Every learner still on the network senses (K, B)."""
@@ -241,11 +254,9 @@ class SumoCrowdEnv(ParallelEnv):
 
     def step(self, actions: dict):
         crowd, lives, gain = self.crowd, self.crowd.lives, self.world.physics.gain
-        for agent in self.agents:
-            if agent not in actions:
-                raise KeyError(f"no action for {agent}")
-            action = np.asarray(actions[agent], dtype=np.float64)
-            lives.work.steering[int(agent.rpartition("_")[2])] = gain * (action[1] - action[0])
+        for agent, action in checked_actions(actions, self.agents).items():
+            force = forces(action)
+            lives.work.steering[int(agent.rpartition("_")[2])] = gain * (force[1] - force[0])
         args = (lives.work.steering, crowd.physics, lives.vehicles, lives.learners)
         if self._move is None:
             self._move = compiled(move_learners, *args)
@@ -259,18 +270,20 @@ class SumoCrowdEnv(ParallelEnv):
         for agent in self.agents:
             k = int(agent.rpartition("_")[2])
             outcome, life = int(lives.learners.events[k]), int(lives.learners.life[k])
-            observations[agent], rewards[agent] = readings[k], 1.0
+            observations[agent] = observation_of(readings[k], self._observation_space)
+            rewards[agent] = 1.0
             terminated[agent], truncated[agent] = outcome != ALIVE, capped and outcome == ALIVE
             infos[agent] = {}
             if outcome != ALIVE:
                 if outcome == SPUN:
                     rewards[agent] = 1.0 - life
                 infos[agent] = {"steps": life, "outcome": OUTCOMES[outcome],
-                                "fitness": 0.0 if outcome == SPUN else float(life)}
+                                "fitness": 0.0 if outcome == SPUN else float(life),
+                                **self.started}
                 crowd.leave(k)
             elif capped:
                 infos[agent] = {"steps": life, "outcome": OUTCOMES[CAPPED],
-                                "fitness": float(life)}
+                                "fitness": float(life), **self.started}
         self.agents = [] if capped else [a for a in self.agents if not terminated[a]]
         return observations, rewards, terminated, truncated, infos
 

@@ -8,6 +8,7 @@ from pettingzoo.test import parallel_api_test
 
 from enn_traffic import keys
 from enn_traffic.envs.crowd import ArenaCrowdEnv
+from enn_traffic.envs.rangefinder import action_of
 from enn_traffic.shipped import shipped_scenario
 from enn_traffic.sim.crowd import Crowd
 from enn_traffic.sim.strategies import NETWORK
@@ -53,7 +54,7 @@ def test_learners_driven_by_actions_move_as_the_crowds_networks_do(name):
     respawns it) every vehicle follows the crowd's trajectory, and that life ends at the
     same step, the same way."""
     learners = 4
-    env = ArenaCrowdEnv(shipped_scenario(name), learners=learners)
+    env = ArenaCrowdEnv(shipped_scenario(name), learners=learners, observation_dtype="float64")
     world, key, situation = env.world, keys.VALIDATION.start + 2, 1
     chromosome = np.random.default_rng(7).uniform(-1, 1, world.spec.chromosome_length)
     episode = world.situations(key)[situation]
@@ -68,7 +69,7 @@ def test_learners_driven_by_actions_move_as_the_crowds_networks_do(name):
     observations, _ = env.reset(options={"key": key, "situation": situation})
     for t in range(1, life + 1):
         np.testing.assert_array_equal(env.crowd.pose, run.trace[t - 1])
-        actions = {agent: world.spec.forward(chromosome, observation)[0]
+        actions = {agent: action_of(world.spec.forward(chromosome, observation)[0])
                    for agent, observation in observations.items()}
         observations, rewards, terminated, _, infos = env.step(actions)
         ended = [agent for agent, done in terminated.items() if done]

@@ -14,7 +14,7 @@ from gymnasium.utils.env_checker import check_env
 from enn_traffic import keys
 from enn_traffic.controller import Controller
 from enn_traffic.envs import REGISTERED, env_id, make_env
-from enn_traffic.envs.rangefinder import RangefinderEnv, RangefinderVectorEnv
+from enn_traffic.envs.rangefinder import RangefinderEnv, RangefinderVectorEnv, action_of
 from enn_traffic.scenario import load_scenario
 from enn_traffic.shipped import shipped_scenario
 from enn_traffic.sim.arena import ArenaWorld
@@ -49,10 +49,12 @@ def test_every_registered_id_passes_the_checker(name):
 def test_a_saved_controller_lives_as_long_in_the_env_as_in_the_gas_world(root):
     controller = Controller.load(root / "results/paper/controllers/generalization/"
                                         "navigation_narrow_seed1.npz")
-    env = RangefinderEnv(controller.fit(shipped_scenario("navigation_narrow")))
+    env = RangefinderEnv(controller.fit(shipped_scenario("navigation_narrow")),
+                         observation_dtype="float64")  # the GA's readings, unrounded
     world = env.world
     expected = world.evaluate(controller.chromosome[None], keys.TEST.start)
-    steps, outcome, total = drive(env, lambda o: world.spec.forward(controller.chromosome, o)[0],
+    steps, outcome, total = drive(env, lambda o: action_of(world.spec.forward(
+        controller.chromosome, o)[0]),
                                   {"key": keys.TEST.start, "situation": 0})
     assert expected.steps[0, 0] > 1000  # a long life: it reaches the track's far end
     assert steps == expected.steps[0, 0]
@@ -60,14 +62,15 @@ def test_a_saved_controller_lives_as_long_in_the_env_as_in_the_gas_world(root):
 
 
 def test_random_controllers_among_traffic_live_as_long_in_the_env():
-    env = RangefinderEnv(shipped_scenario("arena_strategy1"))
+    env = RangefinderEnv(shipped_scenario("arena_strategy1"), observation_dtype="float64")
     world = env.world
     population = np.random.default_rng(3).uniform(-1, 1, (3, world.spec.chromosome_length))
     key = keys.VALIDATION.start
     expected = world.evaluate(population, key)
     for p, chromosome in enumerate(population):
         for situation in range(expected.steps.shape[1]):
-            steps, _, total = drive(env, lambda o, c=chromosome: world.spec.forward(c, o)[0],
+            steps, _, total = drive(env, lambda o, c=chromosome: action_of(
+                world.spec.forward(c, o)[0]),
                                     {"key": key, "situation": situation})
             assert steps == expected.steps[p, situation]
             assert total == (0 if expected.outcome[p, situation] == 2 else steps)
@@ -81,7 +84,7 @@ def test_the_vector_env_steps_each_world_as_the_single_env_does():
     key = keys.VALIDATION.start
     observations, _ = vector.reset(options={"keys": [key]})
     single = RangefinderEnv(scenario)
-    actions = np.random.default_rng(0).random((40, 4, 2))
+    actions = np.random.default_rng(0).uniform(-1, 1, (40, 4, 2)).astype(np.float32)
     ended_at = {}
     for situation in range(4):
         observation, _ = single.reset(options={"key": key, "situation": situation})

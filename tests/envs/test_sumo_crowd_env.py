@@ -8,6 +8,7 @@ from pettingzoo.test import parallel_api_test
 
 from enn_traffic import keys
 from enn_traffic.envs import parallel_env
+from enn_traffic.envs.rangefinder import action_of
 from enn_traffic.envs.sumo import SumoCrowdEnv
 from enn_traffic.shipped import shipped_scenario
 from enn_traffic.sim.sumo_crowd import SumoCrowd
@@ -15,7 +16,8 @@ from enn_traffic.sim.sumo_crowd import SumoCrowd
 
 @pytest.fixture
 def env():
-    env = SumoCrowdEnv(shipped_scenario("sumo_strategy1"), learners=3)
+    env = SumoCrowdEnv(shipped_scenario("sumo_strategy1"), learners=3,
+                       observation_dtype="float64")  # the crowd's readings, unrounded
     yield env
     env.close()
 
@@ -82,7 +84,7 @@ def test_learners_driven_by_actions_move_as_the_crowds_networks_do(env):
     observations, _ = env.reset(options={"key": key, "situation": situation})
     for t in range(1, life + 1):
         np.testing.assert_array_equal(env.crowd.lives.pose, run.trace[t - 1])
-        actions = {agent: world.spec.forward(chromosome, observation)[0]
+        actions = {agent: action_of(world.spec.forward(chromosome, observation)[0])
                    for agent, observation in observations.items()}
         observations, _, terminated, _, infos = env.step(actions)
         ended = [agent for agent, done in terminated.items() if done]

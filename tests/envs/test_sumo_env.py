@@ -5,6 +5,7 @@ import pytest
 
 from enn_traffic import keys
 from enn_traffic.controller import Controller
+from enn_traffic.envs.rangefinder import action_of
 from enn_traffic.envs.sumo import SumoEnv
 from enn_traffic.shipped import shipped_scenario
 from enn_traffic.sim.world import OUTCOMES
@@ -16,14 +17,14 @@ def test_a_saved_controller_lives_as_long_in_the_env_as_in_the_sumo_world(root, 
     scenario = controller.fit(shipped_scenario("sumo_strategy1"))
     scenario = scenario.model_copy(update={
         "traffic": scenario.traffic.model_copy(update={"mode": mode})})
-    env = SumoEnv(scenario)
+    env = SumoEnv(scenario, observation_dtype="float64")  # the GA's readings, unrounded
     world, key = env.world, keys.VALIDATION.start
     expected = world.evaluate(controller.chromosome[None], key)
     for situation in range(expected.steps.shape[1]):
         observation, _ = env.reset(options={"key": key, "situation": situation})
         total = 0.0
         while True:
-            action = world.spec.forward(controller.chromosome, observation)[0]
+            action = action_of(world.spec.forward(controller.chromosome, observation)[0])
             observation, reward, terminated, truncated, info = env.step(action)
             total += reward
             if terminated or truncated:

@@ -1,0 +1,100 @@
+"""The environments keep the field's conventions (issue 52): float32 spaces, a symmetric
+action box, ids found without an import, the same info single and vectorised, one autoreset
+mode, an AEC environment beside the parallel one, and no action for an agent that is gone."""
+
+import json
+import subprocess
+import sys
+
+import gymnasium as gym
+import numpy as np
+import pytest
+from gymnasium.vector import AutoresetMode
+from pettingzoo.test import api_test
+
+from enn_traffic import keys
+from enn_traffic.envs import env, env_id, make_vector_env, parallel_env
+from enn_traffic.envs.rangefinder import END_KEYS, RangefinderEnv, forces
+from enn_traffic.shipped import shipped_scenario
+
+
+@pytest.mark.parametrize("name", ["navigation_narrow", "arena_strategy1"])
+def test_spaces_are_float32_and_the_action_box_symmetric(name):
+    made = gym.make(env_id(name))
+    assert made.observation_space.dtype == np.float32
+    assert made.action_space == gym.spaces.Box(-1.0, 1.0, (2,), np.float32)
+    observation, _ = made.reset(seed=0)
+    assert observation.dtype == np.float32 and made.observation_space.contains(observation)
+    spec = json.loads(made.spec.to_json())
+    assert spec["max_episode_steps"] == shipped_scenario(name).episode.max_steps
+
+
+def test_an_action_is_the_papers_outputs_rescaled():
+    """forces = (action + 1) / 2, clipped to the box: -1 is no force, 1 full force."""
+    np.testing.assert_array_equal(forces([-1.0, 1.0]), [0.0, 1.0])
+    np.testing.assert_array_equal(forces([0.0, 0.5]), [0.5, 0.75])
+    np.testing.assert_array_equal(forces([-7.0, 3.0]), [0.0, 1.0])
+
+
+def test_every_id_is_found_by_naming_the_module_without_an_import():
+    """gymnasium 1.x has no plugin entry points: "module:id" imports the module itself."""
+    code = ("import gymnasium as gym; "
+            "e = gym.make('enn_traffic.envs:enn_traffic/NavigationNarrow-v0'); "
+            "print(e.spec.max_episode_steps, len(gym.registry))")
+    result = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
+    assert result.returncode == 0, result.stderr
+    assert result.stdout.split()[0] == "20000"
+
+
+def test_scenario_v0_takes_a_shipped_name_as_the_command_line_does():
+    made = gym.make("enn_traffic/Scenario-v0", scenario="arena_strategy2")
+    assert made.unwrapped.world.scenario.name == "arena_strategy2"
+
+
+def test_the_vector_env_tells_what_the_single_env_tells():
+    """The same keys and outcome names at a life's end, and the situation at reset."""
+    scenario = shipped_scenario("arena_strategy1")
+    key = keys.VALIDATION.start
+    vector = make_vector_env(scenario, num_envs=4)
+    assert vector.metadata["autoreset_mode"] == AutoresetMode.SAME_STEP
+    _, reset_info = vector.reset(options={"keys": [key]})
+    assert list(reset_info["key"]) == [key] * 4 and list(reset_info["situation"]) == [0, 1, 2, 3]
+    actions = np.random.default_rng(0).uniform(-1, 1, (60, 4, 2)).astype(np.float32)
+    ended = None
+    for action in actions:
+        *_, info = vector.step(action)
+        if "final_info" in info:
+            ended = int(np.flatnonzero(info["_final_info"])[0])
+            final = {name: info["final_info"][name][ended] for name in info["final_info"]
+                     if not name.startswith("_")}
+            break
+    assert ended is not None, "random actions end a life within 60 steps"
+    single = RangefinderEnv(scenario)
+    single.reset(options={"key": key, "situation": ended})
+    for action in actions[:, ended]:
+        *_, terminated, truncated, info = single.step(action)
+        if terminated or truncated:
+            break
+    assert set(info) == set(final) == {*END_KEYS, "key", "situation"}
+    assert isinstance(final["outcome"], str)
+    assert {name: final[name] for name in info} == info
+
+
+def test_sumo_vector_envs_reset_in_the_same_step_too():
+    vector = make_vector_env(shipped_scenario("sumo_strategy1"), num_envs=2)
+    assert vector.metadata["autoreset_mode"] == AutoresetMode.SAME_STEP
+    vector.close()
+
+
+def test_the_aec_env_passes_pettingzoos_api_test():
+    api_test(env(shipped_scenario("arena_strategy1"), learners=4), num_cycles=300)
+
+
+def test_an_action_for_an_agent_that_is_gone_is_an_error():
+    crowd = parallel_env(shipped_scenario("arena_strategy1"), learners=3)
+    crowd.reset(seed=1)
+    actions = {agent: crowd.action_space(agent).sample() for agent in crowd.agents}
+    with pytest.raises(KeyError, match="not a live agent"):
+        crowd.step({**actions, "vehicle_9": np.zeros(2, np.float32)})
+    with pytest.raises(KeyError, match="no action for vehicle_2"):
+        crowd.step({agent: actions[agent] for agent in ("vehicle_0", "vehicle_1")})
