@@ -98,9 +98,10 @@ def _holder(folder: Path) -> str:
     try:
         inode = folder.stat().st_ino
         for line in Path("/proc/locks").read_text().splitlines():
-            fields = line.split()
-            if "FLOCK" in fields and fields[5].rsplit(":", 1)[-1] == str(inode):
-                return f"process {fields[4]}"
+            fields = line.split()  # "1: FLOCK ADVISORY WRITE <pid> <dev>:<inode> 0 EOF"
+            at = fields.index("FLOCK") if "FLOCK" in fields else -1
+            if at >= 0 and "->" not in fields and fields[at + 4].endswith(f":{inode}"):
+                return f"process {fields[at + 3]}"
     except (OSError, IndexError):
         pass
     return "another process"

@@ -219,10 +219,19 @@ def with_includes(files: list[Path] | tuple[Path, ...]) -> list[Path]:
             continue
         found.append(file)
         try:
-            data = file.read_bytes()
+            stat = file.stat()
         except OSError:
             continue
-        if b"<include" in data:
-            pending += [(file.parent / href.decode(errors="replace")).resolve()
-                        for href in _INCLUDE.findall(data)]
+        pending += _included(file, stat.st_ino, stat.st_size, stat.st_mtime_ns, stat.st_ctime_ns)
     return found
+
+
+@functools.lru_cache(maxsize=256)
+def _included(file: Path, *stamp: int) -> list[Path]:
+    """The files ``file``'s ``<include>`` elements name, read once while it is unchanged."""
+    try:
+        data = file.read_bytes()
+    except OSError:
+        return []
+    return [(file.parent / href.decode(errors="replace")).resolve()
+            for href in _INCLUDE.findall(data)] if b"<include" in data else []
