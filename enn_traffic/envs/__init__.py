@@ -79,7 +79,7 @@ def _table_entry(table: Registry, scenario: Scenario):
         raise ValueError(f"{scenario.name}: {exc.args[0]}") from None
 
 
-def make_env(scenario: str | Path | Scenario, render_mode: str | None = None,
+def make_env(scenario: str | Path | Scenario | None = None, render_mode: str | None = None,
              track: int | None = None, observation_dtype: str = "float32") -> gym.Env:
     """The environment of an arena or navigation scenario
     (:class:`~enn_traffic.envs.rangefinder.RangefinderEnv`) or of a SUMO scenario
@@ -87,6 +87,9 @@ def make_env(scenario: str | Path | Scenario, render_mode: str | None = None,
     (``navigation_mixed``); ``observation_dtype="float64"``: the readings unrounded, to
     replay the GA's lives exactly (float32 moved a saved controller's life by two steps of
     1,371, docs/envs.md)."""
+    if scenario is None:
+        raise ValueError(f"{NAMESPACE}/Scenario-v0 needs scenario=PATH (a scenario file) or a "
+                         "shipped scenario's name")
     scenario = _scenario(scenario, track)
     return _table_entry(ENVS, scenario)(scenario, render_mode=render_mode,
                                         observation_dtype=observation_dtype)

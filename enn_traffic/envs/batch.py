@@ -215,6 +215,10 @@ class Batch:
         self.pool: Situations | None = None
         self._begin = self._step = None
 
+    def __getstate__(self) -> dict:
+        """Picklable: the compiled kernels are compiled again where it is unpickled."""
+        return {**self.__dict__, "_begin": None, "_step": None}
+
     def begin(self, pool: Situations, first: int = 0) -> None:
         """Every world starts a situation of ``pool``: world ``i`` the ``(first + i)``-th."""
         if pool.genes.shape[2] != self.worlds.drivers.shape[2]:

@@ -24,6 +24,7 @@ from pathlib import Path
 import gymnasium as gym
 import numpy as np
 from gymnasium import spaces
+from gymnasium.error import ResetNeeded
 from gymnasium.vector import AutoresetMode, VectorEnv
 from gymnasium.vector.utils import batch_space
 
@@ -64,11 +65,17 @@ def spaces_of(world: ArenaWorld, observation_dtype: str = "float32"
     return observation, spaces.Box(-1.0, 1.0, (2,), np.float32)
 
 
-def forces(action) -> np.ndarray:
-    """The paper's two network outputs in [0, 1] (§3) of actions in [-1, 1] (..., 2):
+def forces(action, shape: tuple[int, ...] = (2,)) -> np.ndarray:
+    """The paper's two network outputs in [0, 1] (§3) of actions in [-1, 1] of ``shape``:
     ``(action + 1) / 2``, an action outside the box clipped to it. A network's outputs ``o``
-    are the action ``2 o − 1``."""
-    return (np.clip(np.asarray(action, dtype=np.float64), -1.0, 1.0) + 1.0) / 2.0
+    are the action ``2 o − 1``. An action of another shape, or holding NaN or inf (a diverged
+    policy), is a ValueError: clipped, it would drive on as a plausible one."""
+    action = np.asarray(action, dtype=np.float64)
+    if action.shape != shape:
+        raise ValueError(f"an action of shape {action.shape}; expected {shape}")
+    if not np.isfinite(action).all():
+        raise ValueError(f"an action holds NaN or inf: {action.tolist()}")
+    return (np.clip(action, -1.0, 1.0) + 1.0) / 2.0
 
 
 def action_of(outputs) -> np.ndarray:
@@ -138,6 +145,8 @@ class RangefinderEnv(gym.Env):
         return observation, dict(self.started)
 
     def step(self, action):
+        if self.batch.pool is None or self.batch.worlds.outcome[0] != RUNNING:
+            raise ResetNeeded("the life has ended (or not begun): call reset()")
         self.batch.step(forces(action).reshape(1, 2), autoreset=False)
         w = self.batch.worlds
         outcome = int(w.outcome[0])
@@ -180,6 +189,8 @@ class RangefinderVectorEnv(VectorEnv):
         chosen = (options or {}).get("keys")
         if chosen is None:
             chosen = self.np_random.integers(TRAINING_KEYS, size=self.situations)
+        if len(chosen) == 0:
+            raise ValueError('reset(options={"keys": [...]}) names no traffic key')
         self.batch.begin(Situations.of_keys(self.world, chosen))
         per_key = len(self.batch.pool.seed) // len(chosen)
         self.pool_keys = np.repeat(np.asarray(chosen, dtype=np.int64), per_key)
@@ -191,8 +202,10 @@ class RangefinderVectorEnv(VectorEnv):
 
     def step(self, actions):
         w, space = self.batch.worlds, self.single_observation_space
+        if self.batch.pool is None:
+            raise ResetNeeded("call reset() before step()")
         situation = w.situation.copy()  # the lives going on, before any autoreset
-        self.batch.step(forces(actions), autoreset=True)
+        self.batch.step(forces(actions, (self.num_envs, 2)), autoreset=True)
         ended = w.outcome != RUNNING
         terminated = ended & (w.outcome != CAPPED)
         infos = {}

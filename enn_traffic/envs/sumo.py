@@ -18,6 +18,7 @@ from pathlib import Path
 
 import gymnasium as gym
 import numpy as np
+from gymnasium.error import ResetNeeded
 from pettingzoo import ParallelEnv
 
 from enn_traffic.envs.batch import compiled
@@ -140,6 +141,8 @@ class SumoEnv(gym.Env):
 
     def step(self, action):
         traffic = self.traffic
+        if traffic is None:
+            raise ResetNeeded("call reset() before step()")
         if self.outcome == RUNNING:  # else the life ended where it started
             force = forces(action)
             traffic.state.work.steering[0] = self.world.physics.gain * (force[1] - force[0])

@@ -98,3 +98,42 @@ def test_an_action_for_an_agent_that_is_gone_is_an_error():
         crowd.step({**actions, "vehicle_9": np.zeros(2, np.float32)})
     with pytest.raises(KeyError, match="no action for vehicle_2"):
         crowd.step({agent: actions[agent] for agent in ("vehicle_0", "vehicle_1")})
+
+
+def test_a_nan_or_misshaped_action_is_an_error_not_a_silent_drive():
+    """A NaN action left the pose NaN for good while every beam read its range; a vector
+    action of the wrong shape read memory past its end."""
+    single = gym.make(env_id("arena_strategy1")).unwrapped
+    single.reset(seed=0)
+    with pytest.raises(ValueError, match="NaN"):
+        single.step(np.array([np.nan, 0.0], np.float32))
+    with pytest.raises(ValueError, match="shape"):
+        single.step(np.zeros(3, np.float32))
+    vector = make_vector_env(shipped_scenario("arena_strategy1"), num_envs=4)
+    with pytest.raises(gym.error.ResetNeeded):
+        vector.step(np.zeros((4, 2), np.float32))
+    vector.reset(seed=0)
+    for shape in [(2, 2), (4,), (8, 2), (4, 3)]:
+        with pytest.raises(ValueError, match="shape"):
+            vector.step(np.zeros(shape, np.float32))
+
+
+def test_a_step_after_the_life_ended_asks_for_a_reset():
+    """It went on returning terminated with rewards of -299, -300, ... after a spin."""
+    made = RangefinderEnv(shipped_scenario("navigation_wide"))
+    made.reset(seed=0)
+    terminated = truncated = False
+    while not (terminated or truncated):
+        _, _, terminated, truncated, _ = made.step(np.array([1.0, -1.0], np.float32))
+    with pytest.raises(gym.error.ResetNeeded):
+        made.step(np.zeros(2, np.float32))
+
+
+def test_an_env_pickles_after_reset():
+    import pickle
+
+    made = gym.make(env_id("arena_strategy1")).unwrapped
+    made.reset(seed=3)
+    again = pickle.loads(pickle.dumps(made))
+    action = np.array([0.2, -0.4], np.float32)
+    np.testing.assert_array_equal(made.step(action)[0], again.step(action)[0])
