@@ -199,6 +199,29 @@ def _key(scenario: Scenario) -> str:
     return "traffic.sumocfg" if scenario.traffic.sumocfg is not None else "traffic.routes"
 
 
+MISSING_FOLDER = ("(an output the scenario names in a sub-folder that does not exist beside "
+                  "the file naming it: SUMO reaches enn-traffic's output folder through that "
+                  "sub-folder, so it must exist, or the output be named without a folder)")
+
+
+def _sumo_errors(folder: Path) -> str:
+    """What SUMO said went wrong in a start's ``folder``: its error log, else the errors it
+    printed (an output it cannot open is printed, not logged), on one line, with the climb
+    of :func:`output_prefix` shortened and the usual cause of a missing folder named."""
+    lines = []
+    for name, only_errors in ((ERROR_LOG, False), (CONSOLE_LOG, True)):
+        log = folder / name
+        text = log.read_text(errors="replace") if log.is_file() else ""
+        lines = [line.strip() for line in text.splitlines()
+                 if line.strip() and (not only_errors or line.startswith("Error"))]
+        if lines:
+            break
+    detail = re.sub(r"(\.\./){3,}", ".../", "; ".join(dict.fromkeys(lines)))
+    if "Could not build output file" in detail:
+        detail += " " + MISSING_FOLDER
+    return detail
+
+
 class Simulation:
     """One libsumo run of a scenario's traffic: start, step, and the bodies of its vehicles in
     stable slots (a vehicle keeps its slot while it is on the network)."""
@@ -271,11 +294,10 @@ class Simulation:
         return _console_into(self.folder / CONSOLE_LOG)
 
     def _fail(self, what: str, exc: Exception | None = None) -> None:
-        errors = self.folder / ERROR_LOG
-        detail = errors.read_text(errors="replace").strip() if errors.is_file() else ""
+        detail = _sumo_errors(self.folder)
         self.close()
-        detail = detail.replace("\n", "; ") or str(exc or "")
-        raise InputError(f"{what}: {detail}", self.scenario.source, _key(self.scenario))
+        raise InputError(f"{what}: {detail or exc or ''}", self.scenario.source,
+                         _key(self.scenario))
 
     def step(self, count: int = 1) -> None:
         try:

@@ -54,6 +54,24 @@ def test_traffic_that_never_reaches_the_network_is_refused(tmp_path, road_net, c
         make_world(scenario).evaluate(np.zeros((1, 19 * 3 + 3 + 3 * 2 + 2)))
 
 
+def test_an_output_in_a_missing_sub_folder_is_named_with_its_cause(tmp_path, road_net, capsys):
+    """A detector writing to ``out/loops.xml`` where ``out/`` does not exist: SUMO prints
+    the error rather than logging it, and the message said only "Process Error"."""
+    path = road_scenario(tmp_path, road_net)
+    (tmp_path / "loops.add.xml").write_text(
+        '<additional><inductionLoop id="loop" lane="we_0" pos="50" period="60" '
+        'file="out/loops.xml"/></additional>')
+    config = tmp_path / "road.sumocfg"
+    config.write_text(config.read_text().replace(
+        "</input>", '<additional-files value="loops.add.xml"/></input>'))
+    code = main(["run", str(path), "--out", str(tmp_path / "run"), "--quiet",
+                 "--generations", "1", "--population", "10"])
+    message = capsys.readouterr().err
+    assert code == 2 and "Could not build output file" in message, message
+    assert "sub-folder that does not exist" in message and "../../.." not in message
+    assert not (tmp_path / "out").exists()  # the scenario's folder is never written
+
+
 @pytest.mark.parametrize("mode", ["replay", "closed-loop"])
 def test_reaching_the_fringe_is_leaving_the_network(tmp_path, road_net, mode):
     """A straight driver from x = 20 on the eastbound lane reaches the road's east end (x = 200)
