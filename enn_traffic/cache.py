@@ -38,13 +38,19 @@ def file_digest(path: Path) -> str:
     return digest.hexdigest()
 
 
+def file_stamp(path: str | Path) -> tuple[int, int, int, int]:
+    """What changes whenever a file's bytes do: its inode, size, modification and
+    status-change times (a status-change time cannot be set back by hand, as a modification
+    time can). A key for what is read once per process while the file stays unchanged."""
+    stat = Path(path).stat()
+    return stat.st_ino, stat.st_size, stat.st_mtime_ns, stat.st_ctime_ns
+
+
 def content_digest(path: str | Path) -> str:
-    """SHA-256 of a file's bytes, computed once per process while the file stays unchanged:
-    the same inode, size, modification and status-change times (a status-change time cannot
-    be set back by hand, as a modification time can)."""
+    """SHA-256 of a file's bytes, computed once per process while the file stays unchanged
+    (:func:`file_stamp`)."""
     path = Path(path).resolve()
-    stat = path.stat()
-    return _digest(path, stat.st_ino, stat.st_size, stat.st_mtime_ns, stat.st_ctime_ns)
+    return _digest(path, *file_stamp(path))
 
 
 @functools.lru_cache(maxsize=256)

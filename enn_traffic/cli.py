@@ -43,8 +43,9 @@ def _path(text: str) -> Path:
 
 
 _positive, _non_negative = _int_in(1), _int_in(0)
-# the schema's own bounds (ga.generations, ga.population_size, traffic.episodes, max_steps)
-_generations, _steps, _episodes = _int_in(1, 100_000), _int_in(1, 10_000_000), _int_in(1, 1000)
+# The schema's own bounds, written again so that --help need not import it (a test compares):
+# ga.generations and ga.population_size, episode.max_steps, traffic.episodes
+_count, _steps, _episodes = _int_in(1, 100_000), _int_in(1, 10_000_000), _int_in(1, 1000)
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -65,8 +66,8 @@ def build_parser() -> argparse.ArgumentParser:
                      help="a scenario file, or a shipped scenario's name (navigation_narrow)")
     run.add_argument("--out", type=_path, help="run folder (default: results/<scenario name>)")
     run.add_argument("--seed", type=_non_negative, help="override the scenario's seed")
-    run.add_argument("--generations", type=_generations, help="override ga.generations")
-    run.add_argument("--population", type=_generations, help="override ga.population_size")
+    run.add_argument("--generations", type=_count, help="override ga.generations")
+    run.add_argument("--population", type=_count, help="override ga.population_size")
     run.add_argument("--executor", choices=["local", "process", "ray"], default="local",
                      help="where fitness is evaluated (default: local, in-process)")
     run.add_argument("--address", help="Ray cluster address (with --executor ray)")

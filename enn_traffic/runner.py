@@ -206,13 +206,13 @@ def restore_outputs(scenario: Scenario, out: Path, state: ga.GAState,
     writes, or a file deleted or edited since)."""
     generations = max(scenario.ga.generations, state.generation)  # as many as the folder holds
     settings = scenario.with_overrides(ga={"generations": generations}).to_toml()
-    kept = out / "scenario.toml"
-    if not kept.is_file() or kept.read_text(errors="replace") != settings:
-        write_text(kept, settings)
+    written = out / "scenario.toml"
+    if not written.is_file() or written.read_text(errors="replace") != settings:
+        write_text(written, settings)
     if state.best_chromosome is not None:
         try:
-            kept = Controller.load(out / "best.npz")
-            same = np.array_equal(kept.chromosome, state.best_chromosome)
+            best = Controller.load(out / "best.npz")
+            same = np.array_equal(best.chromosome, state.best_chromosome)
         except InputError:
             same = False
         if not same:
@@ -221,10 +221,10 @@ def restore_outputs(scenario: Scenario, out: Path, state: ga.GAState,
                                      generation).save(out / "best.npz")
     outputs = RunOutputs.of(state, scenario)
     try:
-        kept = RunOutputs.load(out)
-        same = (np.array_equal(kept.champions, outputs.champions)
-                and np.array_equal(kept.population, outputs.population)
-                and kept.stopped == outputs.stopped)
+        saved = RunOutputs.load(out)
+        same = (np.array_equal(saved.champions, outputs.champions)
+                and np.array_equal(saved.population, outputs.population)
+                and saved.stopped == outputs.stopped)
     except InputError:
         same = False
     if not same:

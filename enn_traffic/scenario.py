@@ -30,6 +30,7 @@ from pydantic import (
     model_validator,
 )
 
+from enn_traffic.cache import file_stamp
 from enn_traffic.errors import InputError
 from enn_traffic.kinds import STRATEGIES, SUMO
 from enn_traffic.neural import NetworkSpec
@@ -37,20 +38,19 @@ from enn_traffic.roads.lanes import auto_lane
 from enn_traffic.roads.network import least_start_length
 from enn_traffic.roads.sumocfg import SumoConfig, read_sumocfg
 
-PositiveFloat = Annotated[float, Field(gt=0, allow_inf_nan=False)]
+PositiveFloat = Annotated[float, Field(gt=0)]
 Heading = Annotated[float, Field(ge=-360, le=360)]
 Radius = Annotated[float, Field(gt=0, le=10_000)]
 Length = Annotated[float, Field(gt=0, le=100_000)]
 MAX_POPULATION_GENES = 50_000_000  # 0.4 GB a copy of the population; the GA holds a few
-Finite = Annotated[float, Field(allow_inf_nan=False)]
 # TOML has no tuples and no paths: these two take a list and a string (their items stay strict)
-XY = Annotated[tuple[Finite, Finite], Strict(False)]
+XY = Annotated[tuple[float, float], Strict(False)]
 FilePath = Annotated[Path, Strict(False)]
 
 
 class _Section(BaseModel):
     """Strict: a string or a boolean is never taken for a number (``beams = "19"`` is an
-    error, not 19), nor a float for an integer."""
+    error, not 19), nor a float for an integer; and no number is NaN or infinite."""
 
     model_config = ConfigDict(extra="forbid", frozen=True, strict=True, allow_inf_nan=False)
 
@@ -85,7 +85,7 @@ class TrackConfig(_Section):
         "vehicle's body has 1 m to the walls and 10 m free ahead (instead of `start_xy`, "
         "`start_lane`, `start_edge`)")
     start_offset: float = Field(
-        10.0, ge=0, le=100_000, allow_inf_nan=False,
+        10.0, ge=0, le=100_000,
         description="distance of a lane or edge start from the "
         "lane's beginning (m)")
     surface: Literal["passenger", "all"] = Field(
@@ -138,7 +138,7 @@ class VehicleConfig(_Section):
     speed: PositiveFloat = Field(10.0, ge=0.1, le=100, description="constant speed (m/s, 0.1 to "
                                  "100)")
     dt: float = Field(
-        0.1, ge=0.001, le=1, allow_inf_nan=False, description="time step (s, 0.001 to 1); with "
+        0.1, ge=0.001, le=1, description="time step (s, 0.001 to 1); with "
         "the default speed one step is 1 m. A step may not carry the vehicle farther than its "
         "own length (`speed` × `dt` ≤ `length`), so that it cannot jump a wall")
 
@@ -159,10 +159,10 @@ class RingConfig(_Section):
     ``centre_deg``, right to left, each ``range`` long."""
 
     beams: int = Field(ge=1, le=361, description="beams of the ring")
-    span_deg: float = Field(gt=0, le=360, allow_inf_nan=False, description="horizontal span")
+    span_deg: float = Field(gt=0, le=360, description="horizontal span")
     range: PositiveFloat = Field(le=1000, description="beam length (m, at most 1000)")
     centre_deg: float = Field(
-        0.0, ge=-180, le=180, allow_inf_nan=False, description="direction of the ring's middle, "
+        0.0, ge=-180, le=180, description="direction of the ring's middle, "
         "relative to the heading: 0 ahead, 180 behind, positive to the left")
 
 
@@ -174,7 +174,7 @@ class SensorConfig(_Section):
         19, ge=1, le=361, description="rangefinder beams, equally spaced, right to left; 1 = "
         "straight ahead")
     span_deg: float = Field(
-        180.0, gt=0, le=360, allow_inf_nan=False, description="horizontal span of the beams")
+        180.0, gt=0, le=360, description="horizontal span of the beams")
     range: PositiveFloat = Field(
         25.0, le=1000, description="beam length (m, at most 1000); a beam that hits nothing "
         "reads the range")
@@ -219,7 +219,7 @@ class NetworkConfig(_Section):
         "inputs straight to outputs); inputs = beams, outputs = 2 (right, left force), sigmoid "
         "everywhere")
     steering_gain_deg: float = Field(
-        90.0, gt=0, le=180, allow_inf_nan=False, description="steering = gain × (left − right)")
+        90.0, gt=0, le=180, description="steering = gain × (left − right)")
     layout: Literal["source", "target"] = Field(
         "source", description="chromosome layout: `source` (paper Fig. 1: weights out of one "
         "neuron consecutive, bias last) or `target` (the authors' MATLAB grouping)")
@@ -248,7 +248,7 @@ class GAConfig(_Section):
         0, ge=0, description="best chromosomes copied unchanged (0 = children replace parents, as "
         "in the paper)")
     target_fitness: float | None = Field(
-        None, gt=0, allow_inf_nan=False, description="stop early once a generation's best fitness "
+        None, gt=0, description="stop early once a generation's best fitness "
         "reaches this")
 
     @model_validator(mode="after")
@@ -269,7 +269,7 @@ class EpisodeConfig(_Section):
         description="a vehicle whose last `spin_window` positions have variance ≤ "
         "`spin_variance` m² on both axes is spinning in place: fitness 0 (paper §5.3)")
     spin_variance: float = Field(
-        64.0, ge=0, allow_inf_nan=False, description="see `spin_window` (m²)")
+        64.0, ge=0, description="see `spin_window` (m²)")
 
 
 # the arena's strategies (enn_traffic.kinds.STRATEGIES; "none" is no traffic, not a choice) or SUMO
@@ -299,7 +299,7 @@ class DriversConfig(_Section):
         None, le=10, description="mean factor on the lanes' speed limits that drivers aim at "
         "(at most 10)")
     lc_speed_gain: float | None = Field(
-        None, ge=0, le=100, allow_inf_nan=False, description="lane-change eagerness for speed "
+        None, ge=0, le=100, description="lane-change eagerness for speed "
         "(`lcSpeedGain`, default 1, at most 100); set on each vehicle as it departs")
     lc_cooperative: float | None = Field(
         None, ge=0, le=1, description="willingness to change lanes to let others in "
@@ -308,7 +308,7 @@ class DriversConfig(_Section):
         None, le=100, description="acceptance of small gaps when changing lanes (`lcAssertive`, "
         "default 1, at most 100)")
     lc_keep_right: float | None = Field(
-        None, ge=0, le=100, allow_inf_nan=False, description="eagerness to keep to the right "
+        None, ge=0, le=100, description="eagerness to keep to the right "
         "lane (`lcKeepRight`, default 1, at most 100)")
     demand_scale: PositiveFloat | None = Field(
         None, le=100, description="demand scaled by this factor (SUMO's `--scale`, at most "
@@ -352,25 +352,25 @@ class TrafficConfig(_Section):
         1, ge=1, le=1000, description="traffic situations per chromosome and strategy; fitness is "
         "the mean")
     turn_distance: float = Field(
-        10.0, ge=0, le=1000, allow_inf_nan=False,
+        10.0, ge=0, le=1000,
         description="`straight`, `circling`, `wander`: turn when "
         "a wall is nearer than this (m) within ±`turn_cone_deg` ahead, until that cone is clear; "
         "0 = never turn")
     turn_steering_deg: float = Field(
-        35.0, gt=0, le=90, allow_inf_nan=False, description="the steering angle of those turns")
+        35.0, gt=0, le=90, description="the steering angle of those turns")
     turn_cone_deg: float = Field(
-        20.0, ge=0, le=90, allow_inf_nan=False, description="half-width of the cone ahead that "
+        20.0, ge=0, le=90, description="half-width of the cone ahead that "
         "starts a turn")
     wander_sigma_deg: float = Field(
-        6.0, ge=0, le=90, allow_inf_nan=False, description="`wander`: steering ← decay × steering "
+        6.0, ge=0, le=90, description="`wander`: steering ← decay × steering "
         "+ Normal(0, σ), clipped to ±`wander_max_deg`")
     wander_decay: float = Field(0.95, ge=0, le=1, description="`wander`: the decay of that process")
     wander_max_deg: float = Field(
-        45.0, gt=0, le=90, allow_inf_nan=False, description="`wander`: the largest steering angle")
+        45.0, gt=0, le=90, description="`wander`: the largest steering angle")
     circle_radius: Annotated[tuple[Radius, Radius], Strict(False)] = Field(
         (10.0, 30.0), description="`circling`: range of the circle radii (m), one drawn per life")
     respawn_clearance: float = Field(
-        10.0, ge=0, le=1000, allow_inf_nan=False,
+        10.0, ge=0, le=1000,
         description="an uncontrolled vehicle that causes a "
         "collision respawns at a random free spot at least this far (m) from every other vehicle; "
         "with SUMO traffic, vehicles this near the learner's start leave its world before the "
@@ -396,11 +396,11 @@ class TrafficConfig(_Section):
         "without the learner; every chromosome meets the recording) or `closed-loop` (the learner "
         "is in SUMO every step and drivers react; slower)")
     begin_s: float | None = Field(
-        None, ge=0, le=10_000_000, allow_inf_nan=False, description="SUMO time at which traffic "
+        None, ge=0, le=10_000_000, description="SUMO time at which traffic "
         "begins (s): the "
         "`.sumocfg`'s begin by default (0 without one)")
     warmup_s: float = Field(
-        60.0, ge=0, le=86_400, allow_inf_nan=False, description="SUMO time simulated after the "
+        60.0, ge=0, le=86_400, description="SUMO time simulated after the "
         "begin before the learner starts; a life also ends at the `.sumocfg`'s end")
     drivers: DriversConfig = Field(
         DriversConfig(), description="`strategy = \"sumo\"`: SUMO's driver models and demand "
@@ -484,7 +484,7 @@ class LaneKeepingConfig(_Section):
     road: Literal["sine", "circle"] = Field(
         "sine", description="`sine` (highway-env's lane-keeping road shape) or `circle`")
     amplitude: float = Field(
-        5.0, ge=0, le=1000, allow_inf_nan=False,
+        5.0, ge=0, le=1000,
         description="sine road: amplitude of the centre line (m)")
     period: float = Field(
         100.0, ge=10, le=100_000, description="sine road: period of the centre line (m, 10 to "
@@ -499,12 +499,12 @@ class LaneKeepingConfig(_Section):
     lane_width: float = Field(
         4.0, ge=1, le=20,
         description="lane width (m); the life ends when the vehicle's centre leaves the lane")
-    lookahead_m: list[Annotated[float, Field(gt=0, le=1000, allow_inf_nan=False)]] = Field(
+    lookahead_m: list[Annotated[float, Field(gt=0, le=1000)]] = Field(
         [5.0, 10.0, 15.0, 20.0], min_length=1, max_length=32, description="the camera's "
         "look-ahead distances along the lane (up to 32, each at most 1000 m); the network gets "
         "both markings' lateral offsets (vehicle frame) at each: 2 inputs per distance")
     noise_m: float = Field(
-        0.0, ge=0, le=100, allow_inf_nan=False, description="Gaussian noise on the offsets (m)")
+        0.0, ge=0, le=100, description="Gaussian noise on the offsets (m)")
     episodes: int = Field(1, ge=1, le=1000, description="episodes per chromosome")
     seed: int = Field(0, ge=0, description="noise and road-drawing seed")
     draw: RoadDraw | None = Field(
@@ -955,10 +955,10 @@ def sumo_config(scenario: Scenario) -> SumoConfig | None:
     if sumocfg is None:
         return None
     try:
-        stat = sumocfg.stat()
+        stamp = file_stamp(sumocfg)
     except OSError:
         return read_sumocfg(sumocfg)  # the error says what is wrong
-    return _config(sumocfg, stat.st_ino, stat.st_size, stat.st_mtime_ns, stat.st_ctime_ns)
+    return _config(sumocfg, *stamp)
 
 
 def begin_time(scenario: Scenario) -> float:

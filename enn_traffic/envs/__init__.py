@@ -13,9 +13,11 @@ The arena and navigation ids vectorise in one compiled call::
     gymnasium.make_vec("enn_traffic/NavigationNarrow-v0", num_envs=4096,
                        vectorization_mode="vector_entry_point")
 
-Every vector environment resets a world whose life ended in the same step
-(``AutoresetMode.SAME_STEP``). ``parallel_env(scenario, learners)`` gives the PettingZoo
-environment of several learners at once, ``env(...)`` the same as an AEC environment.
+The vector environments made here (``vectorization_mode="vector_entry_point"``, and a SUMO
+scenario's Sync/Async ones) reset a world whose life ended in the same step
+(``AutoresetMode.SAME_STEP``); gymnasium's own ``"sync"`` mode keeps its next-step default.
+``parallel_env(scenario, learners)`` gives the PettingZoo environment of several learners at
+once, ``env(...)`` the same as an AEC environment.
 
 The held-out tracks (``test_*``, ``unseen_*``) and lane keeping are not registered: the first
 are for ``enn-traffic evaluate``, the second is highway-env's own environment.

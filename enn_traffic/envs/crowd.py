@@ -27,11 +27,11 @@ from enn_traffic.envs.batch import compiled
 from enn_traffic.envs.rangefinder import (
     TRAINING_KEYS,
     checked_actions,
-    forces,
     observation_of,
     picture,
     rangefinder_world,
     spaces_of,
+    steering_of,
 )
 from enn_traffic.kinds import ACTION
 from enn_traffic.scenario import Scenario
@@ -120,8 +120,7 @@ class ArenaCrowdEnv(ParallelEnv):
         steering = crowd.work.steering
         actions = checked_actions(actions, self.agents)
         for row, agent in enumerate(self.agents):
-            force = forces(actions[agent])
-            steering[row] = gain * (force[1] - force[0])
+            steering[row] = steering_of(actions[agent], gain)
         args = (crowd.kinds, self.genes, self.world.layer_sizes, crowd.physics, crowd.geometry,
                 crowd.vehicles, crowd.lives, crowd.rng, crowd.work)
         if self._step is None:

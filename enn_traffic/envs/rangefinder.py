@@ -78,6 +78,12 @@ def forces(action, shape: tuple[int, ...] = (2,)) -> np.ndarray:
     return (np.clip(action, -1.0, 1.0) + 1.0) / 2.0
 
 
+def steering_of(action, gain: float) -> float:
+    """The steering angle an action asks for: gain · (force 1 − force 0) (:func:`forces`)."""
+    force = forces(action)
+    return gain * (force[1] - force[0])
+
+
 def action_of(outputs) -> np.ndarray:
     """A network's two outputs in [0, 1] (..., 2) as an action in [-1, 1]: ``2 outputs − 1``
     (the inverse of :func:`forces`), to drive a saved controller through the

@@ -25,10 +25,10 @@ from enn_traffic.envs.batch import compiled
 from enn_traffic.envs.rangefinder import (
     TRAINING_KEYS,
     checked_actions,
-    forces,
     observation_of,
     picture,
     spaces_of,
+    steering_of,
 )
 from enn_traffic.scenario import Scenario, load_scenario
 from enn_traffic.sim import sumo_world as recordings
@@ -144,8 +144,7 @@ class SumoEnv(gym.Env):
         if traffic is None:
             raise ResetNeeded("call reset() before step()")
         if self.outcome == RUNNING:  # else the life ended where it started
-            force = forces(action)
-            traffic.state.work.steering[0] = self.world.physics.gain * (force[1] - force[0])
+            traffic.state.work.steering[0] = steering_of(action, self.world.physics.gain)
             if self._move is None:
                 self._move = compiled(move_once, traffic.physics, traffic.state)
             self._move(traffic.physics, traffic.state)
@@ -258,8 +257,7 @@ class SumoCrowdEnv(ParallelEnv):
     def step(self, actions: dict):
         crowd, lives, gain = self.crowd, self.crowd.lives, self.world.physics.gain
         for agent, action in checked_actions(actions, self.agents).items():
-            force = forces(action)
-            lives.work.steering[int(agent.rpartition("_")[2])] = gain * (force[1] - force[0])
+            lives.work.steering[int(agent.rpartition("_")[2])] = steering_of(action, gain)
         args = (lives.work.steering, crowd.physics, lives.vehicles, lives.learners)
         if self._move is None:
             self._move = compiled(move_learners, *args)

@@ -29,6 +29,7 @@ from shapely.geometry import LineString, MultiPolygon, Point, Polygon
 from shapely.ops import unary_union
 
 from enn_traffic import cache
+from enn_traffic.cache import file_stamp
 from enn_traffic.errors import InputError
 from enn_traffic.geometry import body_corners
 from enn_traffic.progress import slow_step
@@ -206,9 +207,7 @@ def read_net(path: Path) -> sumolib.net.Net:
     file is unchanged; a clear InputError if it is missing or unreadable."""
     if not path.is_file():
         raise InputError("network file not found", path)
-    stat = path.stat()
-    return _read_net(path.resolve(), stat.st_ino, stat.st_size, stat.st_mtime_ns,
-                     stat.st_ctime_ns)
+    return _read_net(path.resolve(), *file_stamp(path))
 
 
 @functools.lru_cache(maxsize=2)

@@ -23,6 +23,7 @@ from pathlib import Path
 
 import sumolib
 
+from enn_traffic.cache import file_stamp
 from enn_traffic.errors import InputError
 
 FILE_OPTIONS = ("net-file", "route-files", "additional-files")
@@ -219,10 +220,9 @@ def with_includes(files: list[Path] | tuple[Path, ...]) -> list[Path]:
             continue
         found.append(file)
         try:
-            stat = file.stat()
+            pending += _included(file, *file_stamp(file))
         except OSError:
             continue
-        pending += _included(file, stat.st_ino, stat.st_size, stat.st_mtime_ns, stat.st_ctime_ns)
     return found
 
 

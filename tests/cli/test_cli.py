@@ -1,5 +1,6 @@
 """The command line, run as a user runs it: a real process, real files."""
 
+import argparse
 import subprocess
 import sys
 
@@ -209,3 +210,20 @@ def test_the_summary_names_the_code_and_date_of_each_experiment(quick_fig7):
     row = next(line for line in summary.splitlines() if line.startswith("| fig7 |"))
     assert f"| {code_version()} |" in row and f"| {record['seconds']} |" in row
     assert f"| all | | | | | {record['seconds']:.1f} |" in summary
+
+
+def test_the_command_lines_bounds_are_the_schemas():
+    """cli.py writes the schema's bounds again (so that --help imports no schema)."""
+    from enn_traffic import cli
+    from enn_traffic.scenario import EpisodeConfig, GAConfig, TrafficConfig
+
+    def upper(model, name):
+        return next(m.le for m in model.model_fields[name].metadata if hasattr(m, "le"))
+
+    for parse, bound in [(cli._count, upper(GAConfig, "generations")),
+                         (cli._count, upper(GAConfig, "population_size")),
+                         (cli._steps, upper(EpisodeConfig, "max_steps")),
+                         (cli._episodes, upper(TrafficConfig, "episodes"))]:
+        assert parse(str(bound)) == bound
+        with pytest.raises(argparse.ArgumentTypeError):
+            parse(str(bound + 1))
