@@ -62,20 +62,17 @@ def _single_threaded_world(scenario: Scenario) -> World:
 def _init_worker(scenario: Scenario, parent: int) -> None:
     global _worker_world
     end_with_parent(parent)
-    # Ctrl-C reaches the terminal's whole process group: the parent says it, a worker leaves
-    signal.signal(signal.SIGINT, _leave)
+    # Ctrl-C reaches the terminal's whole process group: the parent says it and ends the
+    # workers (a worker that left by itself could break the pool before the parent heard it)
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
     _worker_world = _single_threaded_world(scenario)
-
-
-def _leave(number, frame) -> None:
-    os._exit(130)
 
 
 @contextlib.contextmanager
 def _deaf_to_ctrl_c():
-    """SIGINT ignored while workers are started, so that they start ignoring it (Python
-    keeps an inherited SIG_IGN) until :func:`_init_worker` sets their own handler: a Ctrl-C
-    while a worker imports would print its traceback."""
+    """SIGINT ignored while workers are started, so that they ignore it from their first
+    instruction (Python keeps an inherited SIG_IGN; :func:`_init_worker` then keeps it): a
+    Ctrl-C while a worker imports would print its traceback."""
     if threading.current_thread() is not threading.main_thread():
         yield
         return
@@ -111,7 +108,13 @@ class ProcessEvaluator:
         chunks = np.array_split(population, min(self.workers * 4, len(population)))
         with _deaf_to_ctrl_c():  # the pool starts its workers as chunks are submitted
             futures = [self.pool.submit(_evaluate_chunk, chunk, key) for chunk in chunks]
-        return SituationResults.concatenate([future.result() for future in futures])
+        try:
+            return SituationResults.concatenate([future.result() for future in futures])
+        except BaseException:  # Ctrl-C, SIGTERM: the workers end now, their chunks unfinished
+            for process in list((getattr(self.pool, "_processes", None) or {}).values()):
+                process.terminate()
+            self.pool.shutdown(wait=False, cancel_futures=True)
+            raise
 
     def close(self) -> None:
         self.pool.shutdown()

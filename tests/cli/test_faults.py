@@ -42,8 +42,10 @@ def _generations(out: Path) -> int:
 
 
 def _wait_for_generation(process: subprocess.Popen, out: Path, count: int = 1) -> None:
+    """Until ``count`` generations are written and checkpointed (the checkpoint, written
+    after the table, is what makes a generation finished)."""
     deadline = time.monotonic() + 180
-    while _generations(out) < count:
+    while _generations(out) < count or not (out / "checkpoint.npz").is_file():
         assert process.poll() is None, process.stderr.read()
         assert time.monotonic() < deadline, "the run never got going"
         time.sleep(0.05)
