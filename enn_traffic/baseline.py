@@ -1,226 +1,556 @@
-"""The paper's GA against gradient RL (PPO, Stable-Baselines3) at the same simulation budget
-(docs/results.md, "The GA against PPO").
+"""The paper's GA against gradient RL (PPO and SAC, Stable-Baselines3) at equal learner-steps
+(docs/results.md, "The GA against gradient RL"; issue 52).
 
-Both learn in the same worlds: the GA evaluates its populations on training keys (generation
-``g`` draws key ``g``), PPO steps :class:`~enn_traffic.envs.rangefinder.RangefinderVectorEnv`
-on training keys too. Their controllers are recorded along the way (the GA's best of each
-generation by its training fitness; PPO's policy after each rollout past a checkpoint), with
-the learner-steps simulated so far and the wall time; afterwards each is scored on the sealed
-test situations that ``enn-traffic evaluate`` reads (:data:`enn_traffic.deploy.EVALUATION_KEY`),
-the PPO policy acting deterministically (its mean action).
+The protocol, the same for every method:
 
-PPO runs with Stable-Baselines3's default settings, ``VecNormalize`` on observations and
-rewards, and 16 worlds; nothing was tuned. It needs the ``rl`` extra
-(``pip install -e .[rl]``).
+- it learns on training keys: the GA on its scenario's own settings (the paper's, §4), PPO and
+  SAC on :class:`~enn_traffic.envs.rangefinder.RangefinderVectorEnv` through
+  :func:`~enn_traffic.envs.sb3.sb3_vec_env`, with ``VecNormalize`` on the observations;
+- its controllers along the way (the GA: each generation's best by training fitness; PPO and
+  SAC: the policy after every ``budget / CHECKPOINTS`` learner-steps, acting on its mean) are
+  scored on validation situations, and the best there is the run's controller;
+- that controller alone is scored on test situations sealed for this comparison
+  (:data:`TEST_KEY`), read once, by the final configuration.
+
+PPO's and SAC's settings come from a search on validation keys (:data:`SEARCH`, starting at RL
+Zoo's settings for BipedalWalker-v3, a continuous-control task read through rangefinders):
+each scenario takes the setting whose run scored best on validation. A run is one (scenario,
+method, budget, seed); it is written to ``comparison.csv`` as soon as it ends and skipped when
+already there, so the same command continues an interrupted comparison.
 """
 
 from __future__ import annotations
 
 import copy
+import os
 import time
-from collections.abc import Iterator
+from collections.abc import Callable
+from concurrent.futures import ProcessPoolExecutor, as_completed
+from dataclasses import dataclass
 from functools import partial
 from pathlib import Path
 
 import numpy as np
 import pandas as pd
 
-from enn_traffic.deploy import EVALUATION_KEY
+from enn_traffic import keys
 from enn_traffic.envs.rangefinder import RangefinderVectorEnv, rangefinder_world
 from enn_traffic.errors import InputError
 from enn_traffic.evolution import ga
 from enn_traffic.io import write_atomic
-from enn_traffic.report.plots import save_figure
 from enn_traffic.runner import ga_params
 from enn_traffic.scenario import Scenario
+from enn_traffic.sim.world import SituationResults
 
-TEST_SITUATIONS = 8  # situations of the test key each controller is scored on
-PPO_WORLDS = 16
+METHODS = ("GA", "PPO", "SAC")
+# Keys of this comparison alone, never read by anything else (enn_traffic.keys).
+VALIDATION_KEY = keys.VALIDATION.start + 520_000
+TEST_KEY = keys.TEST.start + 520_000
+VALIDATION_SITUATIONS = 16
+TEST_SITUATIONS = 64
+CHECKPOINTS = 20  # PPO's and SAC's policies scored on validation along a run
+TUNING_SEED = 0  # the search's runs; the comparison's seeds are 1, 2, ...
 
 
-def test_scenario(scenario: Scenario) -> Scenario:
-    """``scenario`` with the test situations' count of episodes per strategy."""
-    strategies = len(scenario.traffic.strategy_list)
-    return scenario.with_overrides(
-        traffic={"episodes": max(1, TEST_SITUATIONS // max(strategies, 1))})
+@dataclass(frozen=True)
+class Planned:
+    """``seeds`` runs of ``method`` at ``budget_steps`` learner-steps each."""
+
+    method: str
+    budget_steps: int
+    seeds: int
 
 
-def ga_checkpoints(scenario: Scenario, budget: int, seed: int
-                   ) -> Iterator[tuple[int, float, np.ndarray]]:
-    """The GA run of ``scenario`` (its own settings, seeded by ``seed``) until ``budget``
-    learner-steps are simulated: after each generation, (learner-steps so far, seconds so far,
-    the generation's best chromosome by its training fitness)."""
+# Issue 52: every method at about 1 M learner-steps, then the GA at 20 M and PPO at 5 M.
+PLAN = (Planned("GA", 1_000_000, 5), Planned("PPO", 1_000_000, 5), Planned("SAC", 1_000_000, 3),
+        Planned("GA", 20_000_000, 5), Planned("PPO", 5_000_000, 3))
+
+# RL Zoo's BipedalWalker-v3 settings (rl-baselines3-zoo, hyperparams/ppo.yml and sac.yml: a
+# continuous-control task read through rangefinders) as the search's start. Two changes make
+# the budgets fit a 2-core machine (measured here, one thread per run): PPO's minibatch of 64
+# trains at 1.9 k learner-steps/s (5 M steps: 45 min a seed), so the search's minibatches are
+# 1,024; SAC's one gradient step per learner-step on its 400-300 network at 1 k steps/s, so
+# SAC takes one per 32 (32 worlds, one step per vector step) on a 256-256 network.
+ZOO_PPO = {"n_envs": 32, "n_steps": 2048, "batch_size": 1024, "n_epochs": 10, "gamma": 0.999,
+           "gae_lambda": 0.95, "clip_range": 0.18, "ent_coef": 0.0, "learning_rate": 3e-4,
+           "norm_reward": True}
+ZOO_SAC = {"n_envs": 32, "learning_rate": 7.3e-4, "buffer_size": 300_000, "batch_size": 256,
+           "gamma": 0.98, "tau": 0.02, "train_freq": 1, "gradient_steps": 1,
+           "learning_starts": 10_000, "use_sde": True, "log_std_init": -3.0,
+           "net_arch": [256, 256], "norm_reward": False}
+# The search: the start and its variations, one run each on validation keys at TUNING_BUDGET.
+SEARCH = {
+    "PPO": {"zoo": ZOO_PPO,
+            "zoo, gamma 0.99": ZOO_PPO | {"gamma": 0.99},
+            "short rollouts": ZOO_PPO | {"n_steps": 256},
+            "short rollouts, gamma 0.99": ZOO_PPO | {"n_steps": 256, "gamma": 0.99}},
+    "SAC": {"zoo": ZOO_SAC,
+            "zoo, gamma 0.999": ZOO_SAC | {"gamma": 0.999}},
+}
+TUNING_BUDGET = {"PPO": 300_000, "SAC": 300_000}
+
+
+@dataclass(frozen=True)
+class RunResult:
+    """One run: its validation curve (learner_steps, wall_s, validation_fitness per
+    candidate), the chosen candidate's row in it, and that controller's fitness on each test
+    situation (empty for a search run, which reads no test key)."""
+
+    curve: pd.DataFrame
+    chosen: int
+    test_fitness: np.ndarray
+    wall_s: float
+
+
+# --- situations -----------------------------------------------------------------------------
+
+def situation_count(scenario: Scenario, wanted: int) -> int:
+    """``wanted`` situations, or 1 for a world without traffic: its every situation is the
+    same (the narrow track starts at one pose, §5.1)."""
+    return wanted if rangefinder_world(scenario).vehicles > 1 else 1
+
+
+def situation_keys(scenario: Scenario, first_key: int, count: int) -> list[int]:
+    """The keys, from ``first_key`` on, whose situations (in order) hold ``count``."""
+    per_key = len(rangefinder_world(scenario).situations(first_key))
+    return list(range(first_key, first_key + -(-count // per_key)))
+
+
+def chromosome_fitness(scenario: Scenario, chromosomes: np.ndarray, first_key: int,
+                       count: int) -> np.ndarray:
+    """(C, count): each GA controller's fitness (steps lived, 0 for a spin) per situation."""
+    world = rangefinder_world(scenario)
+    columns = []
+    for key in situation_keys(scenario, first_key, count):
+        results = world.evaluate(chromosomes, key)
+        columns.append(SituationResults.lifetime_fitness(results.steps, results.outcome))
+    return np.concatenate(columns, axis=1)[:, :count]
+
+
+def policy_fitness(scenario: Scenario, act: Callable[[np.ndarray], np.ndarray],
+                   first_key: int, count: int) -> np.ndarray:
+    """(count,): a policy's fitness per situation, each driven once through the vector
+    environment (``act``: observations (N, B) → actions (N, 2))."""
+    env = RangefinderVectorEnv(scenario, count)
+    observation, _ = env.reset(options={"keys": situation_keys(scenario, first_key, count)})
+    fitness = np.full(count, np.nan)
+    while np.isnan(fitness).any():
+        observation, _, terminated, truncated, info = env.step(act(observation))
+        for i in np.flatnonzero((terminated | truncated) & np.isnan(fitness)):
+            fitness[i] = info["final_info"]["fitness"][i]
+    return fitness
+
+
+# --- the GA ---------------------------------------------------------------------------------
+
+def ga_run(scenario: Scenario, budget: int, seed: int, test: bool = True) -> RunResult:
+    """The scenario's GA, seeded by ``seed``, until ``budget`` learner-steps are simulated;
+    each generation's champion scored on validation, the best of them on test."""
     world = rangefinder_world(scenario)
     params = ga_params(scenario)
     rng = np.random.default_rng([scenario.seed, seed])
     population = ga.initial_population(rng, params.population_size,
                                        world.spec.chromosome_length, params.init_range)
-    spent, began = 0, time.perf_counter()
     run = ga.generations(ga.GAState(generation=0, population=population, rng=rng),
                          world.evaluate, params)
+    spent, began, rows, state = 0, time.perf_counter(), [], None
     while spent < budget:
         state, _, results = next(run)
         spent += int(results.steps.sum())
-        yield spent, time.perf_counter() - began, state.champions[-1].copy()
+        rows.append((spent, time.perf_counter() - began))
+    wall = time.perf_counter() - began
+    validation = chromosome_fitness(scenario, state.champions, VALIDATION_KEY,
+                                    situation_count(scenario, VALIDATION_SITUATIONS)).mean(1)
+    chosen = int(np.argmax(validation))
+    tested = (chromosome_fitness(scenario, state.champions[chosen:chosen + 1], TEST_KEY,
+                                 situation_count(scenario, TEST_SITUATIONS))[0]
+              if test else np.empty(0))
+    curve = pd.DataFrame(rows, columns=["learner_steps", "wall_s"])
+    return RunResult(curve.assign(validation_fitness=validation), chosen, tested, wall)
 
 
-def ga_curve(scenario: Scenario, budget: int, seed: int) -> pd.DataFrame:
-    """Test fitness of the GA's controllers against learner-steps and wall time."""
-    rows = list(ga_checkpoints(scenario, budget, seed))
-    world = rangefinder_world(test_scenario(scenario))
-    champions = np.stack([row[2] for row in rows])
-    scores = world.evaluate(champions, EVALUATION_KEY).fitness
-    return pd.DataFrame({"method": "GA", "seed": seed,
-                         "learner_steps": [row[0] for row in rows],
-                         "wall_s": [row[1] for row in rows], "test_fitness": scores})
+# --- PPO and SAC ----------------------------------------------------------------------------
+
+def numpy_actor(model, obs_rms, clip_obs: float = 10.0) -> Callable[[np.ndarray], np.ndarray]:
+    """The policy's deterministic action (its mean, squashed for SAC) as plain numpy, with
+    ``VecNormalize``'s observation scaling: scoring thousands of steps without torch's
+    per-call cost."""
+    import torch.nn as nn
+
+    if hasattr(model.policy, "actor"):  # SAC
+        layers = [*model.policy.actor.latent_pi, model.policy.actor.mu]
+        squash = True
+    else:  # PPO
+        layers = [*model.policy.mlp_extractor.policy_net, model.policy.action_net]
+        squash = False
+    steps = []
+    for layer in _flat(layers):
+        if isinstance(layer, nn.Linear):
+            steps.append(("linear", layer.weight.detach().numpy().T.copy(),
+                          layer.bias.detach().numpy().copy()))
+        elif isinstance(layer, nn.Hardtanh):  # SAC's clipped mean under gSDE
+            steps.append(("clip", layer.min_val, layer.max_val))
+        elif isinstance(layer, (nn.Tanh, nn.ReLU)):
+            steps.append((type(layer).__name__, None, None))
+        else:
+            raise TypeError(f"numpy_actor: no numpy form for {type(layer).__name__}")
+    mean, scale = obs_rms.mean.copy(), np.sqrt(obs_rms.var + 1e-8)
+
+    def act(observation: np.ndarray) -> np.ndarray:
+        x = np.clip((observation - mean) / scale, -clip_obs, clip_obs)
+        for kind, weight, bias in steps:
+            x = (x @ weight + bias if kind == "linear" else np.clip(x, weight, bias)
+                 if kind == "clip" else np.tanh(x) if kind == "Tanh" else np.maximum(x, 0.0))
+        return np.tanh(x) if squash else np.clip(x, -1.0, 1.0)
+
+    return act
 
 
-def sb3_vec_env(env: RangefinderVectorEnv):
-    """A Stable-Baselines3 ``VecEnv`` over the compiled vector environment (SB3 keeps its
-    own vector API: a list of infos, ``terminal_observation``)."""
-    from stable_baselines3.common.vec_env import VecEnv
+def _flat(modules) -> list:
+    """``modules`` with every ``nn.Sequential`` opened, in order."""
+    import torch.nn as nn
 
-    class Adapter(VecEnv):
-        def __init__(self):
-            super().__init__(env.num_envs, env.single_observation_space,
-                             env.single_action_space)
-            self._actions = None
-
-        def reset(self):
-            observation, _ = env.reset(seed=self._seeds[0] if self._seeds else None)
-            self._reset_seeds()
-            return observation.astype(np.float32)
-
-        def step_async(self, actions):
-            self._actions = actions  # the environment clips them to its box
-
-        def step_wait(self):
-            observation, reward, terminated, truncated, info = env.step(self._actions)
-            done = terminated | truncated
-            infos = [{} for _ in range(self.num_envs)]
-            for i in np.flatnonzero(done):
-                infos[i] = {"terminal_observation": info["final_obs"][i].astype(np.float32),
-                            "TimeLimit.truncated": bool(truncated[i])}
-            return observation.astype(np.float32), reward.astype(np.float32), done, infos
-
-        def close(self):
-            env.close()
-
-        def get_attr(self, name, indices=None):
-            return [getattr(env, name)] * self.num_envs
-
-        def set_attr(self, name, value, indices=None):
-            setattr(env, name, value)
-
-        def env_method(self, name, *args, indices=None, **kwargs):
-            return [getattr(env, name)(*args, **kwargs)] * self.num_envs
-
-        def env_is_wrapped(self, wrapper_class, indices=None):
-            return [False] * self.num_envs
-
-    return Adapter()
+    return [leaf for module in modules for leaf in
+            (_flat(module) if isinstance(module, nn.Sequential) else [module])]
 
 
-def ppo_curve(scenario: Scenario, budget: int, seed: int, checkpoints: int = 20
-              ) -> pd.DataFrame:
-    """Test fitness of PPO's policy against learner-steps and wall time."""
+def rl_model(method: str, venv, settings: dict, seed: int):
+    """An SB3 PPO or SAC model with ``settings`` (:data:`SEARCH`'s keys)."""
+    from stable_baselines3 import PPO, SAC
+
+    if method == "PPO":
+        names = ("n_steps", "batch_size", "n_epochs", "gamma", "gae_lambda", "clip_range",
+                 "ent_coef", "learning_rate")
+        return PPO("MlpPolicy", venv, seed=seed, device="cpu", verbose=0,
+                   **{name: settings[name] for name in names})
+    names = ("learning_rate", "buffer_size", "batch_size", "gamma", "tau", "train_freq",
+             "gradient_steps", "learning_starts", "use_sde")
+    return SAC("MlpPolicy", venv, seed=seed, device="cpu", verbose=0,
+               policy_kwargs={"log_std_init": settings["log_std_init"],
+                              "net_arch": settings["net_arch"]},
+               **{name: settings[name] for name in names})
+
+
+def rl_run(scenario: Scenario, method: str, settings: dict, budget: int, seed: int,
+           test: bool = True) -> RunResult:
+    """PPO or SAC with ``settings`` for ``budget`` learner-steps; its policy at every
+    ``budget / CHECKPOINTS`` steps scored on validation, the best of them on test."""
     try:
         import torch
-        from stable_baselines3 import PPO
         from stable_baselines3.common.callbacks import BaseCallback
         from stable_baselines3.common.vec_env import VecNormalize
+
+        from enn_traffic.envs.sb3 import sb3_vec_env
     except ImportError:
-        raise InputError("PPO needs the rl extra: pip install -e .[rl]") from None
+        raise InputError(f"{method} needs the rl extra: pip install -e .[rl] "
+                         "(docs/envs.md: a CPU-only torch)") from None
     torch.set_num_threads(1)
-    venv = VecNormalize(sb3_vec_env(RangefinderVectorEnv(scenario, PPO_WORLDS)))
+    venv = VecNormalize(sb3_vec_env(RangefinderVectorEnv(scenario, settings["n_envs"])),
+                        norm_obs=True, norm_reward=settings["norm_reward"],
+                        gamma=settings["gamma"])
     venv.seed(seed)
-    model = PPO("MlpPolicy", venv, seed=seed, device="cpu", verbose=0)
-    every = budget // checkpoints
-    snapshots = []
+    model = rl_model(method, venv, settings, seed)
+    every = max(1, budget // CHECKPOINTS)
+    snapshots: list[tuple[int, float, Callable]] = []
+    began = time.perf_counter()
 
     class Snapshots(BaseCallback):
-        def __init__(self):
-            super().__init__()
-            self.began = time.perf_counter()
-
         def _on_step(self) -> bool:
+            if self.num_timesteps >= every * (len(snapshots) + 1):
+                snapshots.append((self.num_timesteps, time.perf_counter() - began,
+                                  numpy_actor(model, copy.deepcopy(venv.obs_rms))))
             return True
 
-        def _on_rollout_end(self) -> None:
-            if self.num_timesteps >= every * (len(snapshots) + 1):
-                snapshots.append((self.num_timesteps, time.perf_counter() - self.began,
-                                  copy.deepcopy(model.policy.state_dict()),
-                                  copy.deepcopy(venv.obs_rms)))
-
     model.learn(total_timesteps=budget, callback=Snapshots())
-    scores = []
-    for _, _, weights, obs_rms in snapshots:
-        model.policy.load_state_dict(weights)
-        scores.append(policy_test_fitness(model, obs_rms, scenario))
-    return pd.DataFrame({"method": "PPO", "seed": seed,
-                         "learner_steps": [s[0] for s in snapshots],
-                         "wall_s": [s[1] for s in snapshots], "test_fitness": scores})
+    wall = time.perf_counter() - began
+    validation = np.array([
+        policy_fitness(scenario, act, VALIDATION_KEY,
+                       situation_count(scenario, VALIDATION_SITUATIONS)).mean()
+        for _, _, act in snapshots])
+    chosen = int(np.argmax(validation))
+    tested = (policy_fitness(scenario, snapshots[chosen][2], TEST_KEY,
+                             situation_count(scenario, TEST_SITUATIONS))
+              if test else np.empty(0))
+    curve = pd.DataFrame([s[:2] for s in snapshots], columns=["learner_steps", "wall_s"])
+    return RunResult(curve.assign(validation_fitness=validation), chosen, tested, wall)
 
 
-def policy_test_fitness(model, obs_rms, scenario: Scenario) -> float:
-    """Mean fitness of a policy (deterministic) over the test situations, each driven once."""
-    tested = test_scenario(scenario)
-    situations = len(tested.traffic.strategy_list) * tested.traffic.episodes
-    env = RangefinderVectorEnv(tested, situations)
-    observation, _ = env.reset(options={"keys": [EVALUATION_KEY]})
-    fitness = np.full(situations, np.nan)
-    while np.isnan(fitness).any():
-        scaled = np.clip((observation - obs_rms.mean) / np.sqrt(obs_rms.var + 1e-8), -10, 10)
-        action, _ = model.predict(scaled.astype(np.float32), deterministic=True)
-        observation, _, terminated, truncated, info = env.step(action)
-        for i in np.flatnonzero((terminated | truncated) & np.isnan(fitness)):
-            fitness[i] = info["final_info"]["fitness"][i]
-    return float(fitness.mean())
+# --- the comparison -------------------------------------------------------------------------
+
+def run_one(scenario: Scenario, method: str, setting: str, budget: int, seed: int,
+            test: bool) -> RunResult:
+    """One run in a worker process (one thread: the runs run side by side)."""
+    import numba
+
+    numba.set_num_threads(1)
+    if method == "GA":
+        return ga_run(scenario, budget, seed, test)
+    return rl_run(scenario, method, SEARCH[method][setting], budget, seed, test)
 
 
-def compare(scenario: Scenario, budget: int, seeds: list[int], out: Path,
-            methods: tuple[str, ...] = ("GA", "PPO")) -> pd.DataFrame:
-    """Each method's curve for every seed, written to ``out/baseline.csv`` as they come,
-    then ``out/baseline_summary.csv`` and the plot ``out/baseline.png``."""
+def _read(path: Path) -> pd.DataFrame:
+    return pd.read_csv(path) if path.exists() else pd.DataFrame()
+
+
+def _append(path: Path, rows: pd.DataFrame, run: dict | None = None) -> None:
+    """``rows`` added to the CSV at ``path``, replacing the rows of the same ``run`` (left
+    there by a run interrupted before its comparison row)."""
+    table = _read(path)
+    if run and not table.empty:
+        table = table[~np.logical_and.reduce([table[k] == v for k, v in run.items()])]
+    table = pd.concat([table, rows], ignore_index=True)
+    write_atomic(path, partial(table.to_csv, index=False))
+
+
+def _worker_start(parent: int) -> None:
+    """A worker ends with the comparison that started it, and leaves Ctrl-C to it."""
+    import signal
+
+    from enn_traffic.traffic.fresh import end_with_parent
+
+    end_with_parent(parent)
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+
+
+def _jobs(jobs: list[tuple], workers: int, done: Callable[[tuple, RunResult], None],
+          progress: bool) -> None:
+    """Run ``jobs`` (run_one's arguments) on ``workers`` spawned processes (numba's threads
+    do not survive a fork), handing each result to ``done`` as it ends."""
+    import multiprocessing
+
+    from tqdm import tqdm
+
+    from enn_traffic.evolution.backends import _deaf_to_ctrl_c
+
+    bar = tqdm(total=len(jobs), desc="runs", unit="run", disable=not progress or not jobs)
+    if workers == 1 or len(jobs) <= 1:
+        for job in jobs:
+            done(job, run_one(*job))
+            bar.update()
+        bar.close()
+        return
+    pool = ProcessPoolExecutor(workers, mp_context=multiprocessing.get_context("spawn"),
+                               initializer=_worker_start, initargs=(os.getpid(),))
+    try:
+        with _deaf_to_ctrl_c():
+            futures = {pool.submit(run_one, *job): job for job in jobs}
+        for future in as_completed(futures):
+            done(futures[future], future.result())
+            bar.update()
+    except BaseException:  # Ctrl-C, SIGTERM: the runs end now; finished ones are written
+        for process in list((getattr(pool, "_processes", None) or {}).values()):
+            process.terminate()
+        pool.shutdown(wait=False, cancel_futures=True)
+        raise
+    pool.shutdown()
+    bar.close()
+
+
+def tune(scenarios: list[Scenario], out: Path, methods: tuple[str, ...], workers: int,
+         progress: bool = True, budgets: dict[str, int] | None = None) -> pd.DataFrame:
+    """Every setting of :data:`SEARCH` for ``methods``, one run each per scenario on
+    validation keys, into ``out/tuning.csv`` (a setting already there is not run again)."""
+    path = out / "tuning.csv"
+    budgets = budgets or TUNING_BUDGET
+    have = _read(path)
+    done_before = set() if have.empty else set(
+        zip(have["scenario"], have["method"], have["setting"], strict=True))
+    jobs = [(scenario, method, setting, budgets[method], TUNING_SEED, False)
+            for scenario in scenarios for method in methods if method != "GA"
+            for setting in SEARCH[method] if (scenario.name, method, setting) not in done_before]
+
+    def record(job: tuple, result: RunResult) -> None:
+        scenario, method, setting, budget, seed, _ = job
+        best = result.curve.iloc[result.chosen]
+        _append(path, pd.DataFrame([{
+            "scenario": scenario.name, "method": method, "setting": setting,
+            "budget_steps": budget, "seed": seed,
+            "validation_situations": situation_count(scenario, VALIDATION_SITUATIONS),
+            "validation_fitness": best["validation_fitness"],
+            "chosen_at_steps": int(best["learner_steps"]), "wall_s": result.wall_s}]))
+
+    _jobs(sorted(jobs, key=_cost, reverse=True), workers, record, progress)
+    return _read(path)
+
+
+def _cost(job: tuple) -> float:
+    """A run's rough cost, to start the longest first: SAC's step is dearest, the GA's
+    cheapest."""
+    _, method, _, budget, _, _ = job
+    return budget * {"GA": 0.2, "PPO": 1.0, "SAC": 5.0}[method]
+
+
+def chosen_setting(tuning: pd.DataFrame, scenario: str, method: str) -> str:
+    """The setting of ``method`` whose search run scored best on validation in ``scenario``."""
+    rows = tuning[(tuning["scenario"] == scenario) & (tuning["method"] == method)]
+    if rows.empty:
+        raise InputError(f"no search run of {method} for {scenario}: run the search first")
+    return str(rows.sort_values("validation_fitness", kind="stable").iloc[-1]["setting"])
+
+
+def compare(scenarios: list[Scenario], out: Path, plan: tuple[Planned, ...] = PLAN,
+            workers: int = 1, progress: bool = True,
+            tuning_budgets: dict[str, int] | None = None) -> pd.DataFrame:
+    """The search, then every planned run of each scenario not yet in ``out/comparison.csv``:
+    its row there, its validation curve in ``curves.csv``, its test situations in
+    ``situations.csv``; then the summary and plot (:func:`write_summary`)."""
     out.mkdir(parents=True, exist_ok=True)
-    table = pd.DataFrame()
-    for method in methods:
-        for seed in seeds:
-            curve = (ga_curve if method == "GA" else ppo_curve)(scenario, budget, seed)
-            table = pd.concat([table, curve.assign(scenario=scenario.name)], ignore_index=True)
-            write_atomic(out / "baseline.csv", partial(table.to_csv, index=False))
-    write_atomic(out / "baseline_summary.csv", partial(summary(table).to_csv, index=False))
-    plot(table, out / "baseline.png")
+    methods = tuple(dict.fromkeys(p.method for p in plan))
+    tuning = tune(scenarios, out, methods, workers, progress, tuning_budgets)
+    have = _read(out / "comparison.csv")
+    done_before = set() if have.empty else set(
+        zip(have["scenario"], have["method"], have["budget_steps"], have["seed"], strict=True))
+    jobs = [(scenario, p.method,
+             "paper" if p.method == "GA" else chosen_setting(tuning, scenario.name, p.method),
+             p.budget_steps, seed, True)
+            for scenario in scenarios for p in plan for seed in range(1, p.seeds + 1)
+            if (scenario.name, p.method, p.budget_steps, seed) not in done_before]
+
+    def record(job: tuple, result: RunResult) -> None:
+        scenario, method, setting, budget, seed, _ = job
+        run = {"scenario": scenario.name, "method": method, "budget_steps": budget,
+               "seed": seed}
+        best = result.curve.iloc[result.chosen]
+        fitness = result.test_fitness
+        low, high = mean_interval(fitness, np.random.default_rng(seed))
+        # the situations and curve first: a run is done once its comparison row is written
+        _append(out / "situations.csv", pd.DataFrame(
+            {**run, "situation": np.arange(len(fitness)), "test_fitness": fitness}), run)
+        _append(out / "curves.csv", result.curve.assign(**run), run)
+        _append(out / "comparison.csv", pd.DataFrame([{
+            **run, "setting": setting,
+            "learner_steps": int(result.curve["learner_steps"].iloc[-1]),
+            "test_situations": len(fitness), "test_fitness": fitness.mean(),
+            "test_fitness_low": low, "test_fitness_high": high,
+            "validation_fitness": best["validation_fitness"],
+            "chosen_at_steps": int(best["learner_steps"]), "wall_s": result.wall_s}]))
+
+    _jobs(sorted(jobs, key=_cost, reverse=True), workers, record, progress)
+    write_summary(out)
+    return _read(out / "comparison.csv")
+
+
+def mean_interval(values: np.ndarray, rng: np.random.Generator, level: float = 0.9,
+                  draws: int = 2000) -> tuple[float, float]:
+    """The central ``level`` bootstrap interval of the mean of ``values`` (the test
+    situations, or the seeds); a single value is its own interval."""
+    values = np.asarray(values, dtype=np.float64)
+    means = values[rng.integers(0, len(values), (draws, len(values)))].mean(axis=1)
+    low, high = np.quantile(means, [(1 - level) / 2, (1 + level) / 2])
+    return float(low), float(high)
+
+
+def summary(comparison: pd.DataFrame, situations: pd.DataFrame) -> pd.DataFrame:
+    """Per scenario, method and budget: the seeds' mean test fitness with its 90% interval
+    over the seeds, and the difference from the GA at the same budget (or the nearest below),
+    paired on the test situations (each situation's mean over seeds), with its interval."""
+    rows = []
+    rng = np.random.default_rng(0)
+    per_situation = situations.groupby(
+        ["scenario", "method", "budget_steps", "situation"])["test_fitness"].mean()
+    for (name, method, budget), runs in comparison.groupby(
+            ["scenario", "method", "budget_steps"]):
+        low, high = mean_interval(runs["test_fitness"].to_numpy(), rng)
+        row = {"scenario": name, "method": method, "budget_steps": budget,
+               "seeds": len(runs), "test_situations": int(runs["test_situations"].iloc[0]),
+               "test_fitness": runs["test_fitness"].mean(), "seeds_low": low,
+               "seeds_high": high, "wall_s": runs["wall_s"].mean()}
+        ga_budgets = sorted(b for (s, m, b) in comparison.groupby(
+            ["scenario", "method", "budget_steps"]).groups if s == name and m == "GA")
+        reference = max((b for b in ga_budgets if b <= budget), default=None)
+        if method != "GA" and reference is not None:
+            mine = per_situation.loc[(name, method, budget)]
+            theirs = per_situation.loc[(name, "GA", reference)]
+            difference = mine.to_numpy() - theirs.loc[mine.index].to_numpy()
+            low, high = mean_interval(difference, rng)
+            row |= {"vs_ga_budget": reference, "minus_ga": difference.mean(),
+                    "minus_ga_low": low, "minus_ga_high": high}
+        rows.append(row)
+    return pd.DataFrame(rows)
+
+
+def write_summary(out: Path) -> pd.DataFrame:
+    """``out/comparison_summary.csv`` and ``out/comparison.png`` from the runs' CSVs."""
+    table = summary(_read(out / "comparison.csv"), _read(out / "situations.csv"))
+    write_atomic(out / "comparison_summary.csv", partial(table.to_csv, index=False))
+    plot(_read(out / "curves.csv"), _read(out / "comparison.csv"), out / "comparison.png")
     return table
 
 
-def plot(table: pd.DataFrame, path: Path) -> None:
-    """Test fitness against learner-steps and against wall time, a line per run."""
+COLOURS = {"GA": "tab:blue", "PPO": "tab:orange", "SAC": "tab:green"}
+
+
+def plot(curves: pd.DataFrame, comparison: pd.DataFrame, path: Path) -> None:
+    """Per scenario: the validation fitness of each run's controllers against learner-steps
+    (a line per run, the longest budgets), and each method's test fitness per run."""
     import matplotlib.pyplot as plt
 
+    from enn_traffic.report.plots import save_figure
 
-    figure, axes = plt.subplots(1, 2, figsize=(10, 4), sharey=True)
-    colours = {"GA": "tab:blue", "PPO": "tab:orange"}
-    for (method, _), run in table.groupby(["method", "seed"]):
-        for ax, x in zip(axes, ["learner_steps", "wall_s"], strict=True):
-            ax.plot(run[x], run["test_fitness"], color=colours.get(method, "gray"), alpha=0.7,
-                    label=method)
-    axes[0].set_xlabel("learner-steps simulated")
-    axes[1].set_xlabel("wall time (s)")
-    axes[0].set_ylabel("test fitness (steps lived, mean of the test situations)")
-    handles, labels = axes[0].get_legend_handles_labels()
-    unique = dict(zip(labels, handles, strict=True))
-    axes[0].legend(unique.values(), unique.keys())
-    figure.suptitle(str(table["scenario"].iloc[0]) if len(table) else "")
+    scenarios = sorted(comparison["scenario"].unique())
+    figure, axes = plt.subplots(len(scenarios), 2, figsize=(11, 3.6 * len(scenarios)),
+                                squeeze=False)
+    for row, name in zip(axes, scenarios, strict=True):
+        mine = curves[curves["scenario"] == name]
+        for (method, budget, _), run in mine.groupby(["method", "budget_steps", "seed"]):
+            row[0].plot(run["learner_steps"], run["validation_fitness"],
+                        color=COLOURS.get(method, "gray"), alpha=0.5,
+                        linestyle="-" if budget > 1_000_000 else ":",
+                        label=f"{method}, {budget / 1e6:g} M")
+        row[0].set_xscale("log")
+        row[0].set_xlabel("learner-steps simulated")
+        row[0].set_ylabel(f"{name}\nvalidation fitness (steps lived)")
+        handles, labels = row[0].get_legend_handles_labels()
+        unique = dict(zip(labels, handles, strict=True))
+        row[0].legend(unique.values(), unique.keys(), fontsize=7)
+        runs = comparison[comparison["scenario"] == name].sort_values(
+            ["method", "budget_steps"])
+        groups = list(runs.groupby(["method", "budget_steps"], sort=False))
+        for x, ((method, _), group) in enumerate(groups):
+            row[1].errorbar(np.full(len(group), x) + np.linspace(-0.2, 0.2, len(group)),
+                            group["test_fitness"],
+                            yerr=[group["test_fitness"] - group["test_fitness_low"],
+                                  group["test_fitness_high"] - group["test_fitness"]],
+                            fmt="o", color=COLOURS.get(method, "gray"), capsize=2)
+        row[1].set_xticks(range(len(groups)),
+                          [f"{m}\n{b / 1e6:g} M" for (m, b), _ in groups])
+        row[1].set_ylabel("test fitness, chosen controller\n(90% interval over situations)")
     save_figure(figure, path)
 
 
-def summary(table: pd.DataFrame) -> pd.DataFrame:
-    """Per scenario and method: the last checkpoint's test fitness (mean and range over the
-    seeds), learner-steps and wall time."""
-    last = table.sort_values("learner_steps").groupby(["scenario", "method", "seed"]).tail(1)
-    return last.groupby(["scenario", "method"]).agg(
-        seeds=("seed", "nunique"), learner_steps=("learner_steps", "mean"),
-        wall_s=("wall_s", "mean"), test_fitness_mean=("test_fitness", "mean"),
-        test_fitness_min=("test_fitness", "min"), test_fitness_max=("test_fitness", "max"),
-    ).reset_index()
+def parse_plan(text: str) -> tuple[Planned, ...]:
+    """``"GA:1M:5,PPO:5M:3"`` → the runs to make (method, budget with k/M, seeds)."""
+    plan = []
+    for item in filter(None, (part.strip() for part in text.split(","))):
+        try:
+            method, budget, seeds = item.split(":")
+            scale = {"k": 1_000, "m": 1_000_000}.get(budget[-1:].lower(), 1)
+            steps = int(float(budget[:-1] if scale > 1 else budget) * scale)
+            planned = Planned(method.strip().upper(), steps, int(seeds))
+        except ValueError:
+            raise InputError(f"--plan {item!r}: expected METHOD:BUDGET:SEEDS, e.g. GA:1M:5")\
+                from None
+        if planned.method not in METHODS or not 1 <= planned.budget_steps <= 10**10 \
+                or not 1 <= planned.seeds <= 100:
+            raise InputError(f"--plan {item!r}: METHOD one of {', '.join(METHODS)}, BUDGET "
+                             "1 to 10^10 steps, SEEDS 1 to 100")
+        plan.append(planned)
+    if not plan:
+        raise InputError("--plan names no run")
+    return tuple(plan)
+
+
+def summary_text(out: Path) -> str:
+    """The summary table as the command prints it."""
+    table = _read(out / "comparison_summary.csv")
+    if table.empty:
+        return "no run finished"
+    shown = table[["scenario", "method", "budget_steps", "seeds", "test_situations",
+                   "test_fitness", "seeds_low", "seeds_high", "wall_s"]].copy()
+    for column in ("test_fitness", "seeds_low", "seeds_high", "wall_s"):
+        shown[column] = shown[column].map("{:.0f}".format)
+    return shown.to_string(index=False)
+
+
+def default_workers() -> int:
+    return max(1, min(os.cpu_count() or 1, 8))

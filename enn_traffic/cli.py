@@ -146,18 +146,23 @@ def build_parser() -> argparse.ArgumentParser:
                             "the top start lanes numbered")
 
     baseline = commands.add_parser(
-        "baseline", help="the GA against PPO (Stable-Baselines3) at equal simulated steps",
-        epilog=EPILOG, description="Train the scenario's GA and PPO for the same number of "
-        "learner-steps, several seeds each, and score their controllers along the way on the "
-        "test situations that evaluate reads. Writes OUT/baseline.csv, baseline_summary.csv "
-        "and baseline.png. PPO needs the rl extra (pip install -e .[rl]).")
-    baseline.add_argument("scenario", type=_path, metavar="SCENARIO.toml",
-                          help="an arena or navigation scenario, or a shipped one's name")
-    baseline.add_argument("--budget", type=_int_in(1, 10**10), default=1_000_000,
-                          help="learner-steps per run (default 1,000,000)")
-    baseline.add_argument("--seeds", type=_int_in(1, 100), default=3, help="runs per method")
-    baseline.add_argument("--methods", default="GA,PPO", help="GA, PPO or both (default)")
-    baseline.add_argument("--out", type=_path, help="folder (default: results/baseline/NAME)")
+        "baseline", help="the GA against PPO and SAC (Stable-Baselines3) at equal learner-steps",
+        epilog=EPILOG, description="For each scenario: search PPO's and SAC's settings on "
+        "validation keys, then make the planned runs; each run's controller is the best of "
+        "its checkpoints on validation, scored once on 64 sealed test situations. Writes "
+        "OUT/tuning.csv, comparison.csv (a row per run), situations.csv, curves.csv, "
+        "comparison_summary.csv and comparison.png; runs already there are skipped, so the "
+        "same command continues an interrupted comparison. PPO and SAC need the rl extra "
+        "(pip install -e .[rl]; docs/envs.md).")
+    baseline.add_argument("scenario", type=_path, nargs="+", metavar="SCENARIO.toml",
+                          help="arena or navigation scenarios, or shipped ones' names")
+    baseline.add_argument("--plan", default="GA:1M:5,PPO:1M:5,SAC:1M:3,GA:20M:5,PPO:5M:3",
+                          help="runs as METHOD:BUDGET:SEEDS,... (METHOD GA, PPO or SAC; "
+                          "default: %(default)s)")
+    baseline.add_argument("--workers", type=_int_in(1, 256), default=None,
+                          help="runs side by side, one core each (default: the cores, up to 8)")
+    baseline.add_argument("--out", type=_path, help="folder (default: results/baseline)")
+    baseline.add_argument("--quiet", action="store_true", help="no progress bar or messages")
 
     bench = commands.add_parser("bench", help="throughput table (vehicle-steps per second)")
     bench.add_argument("--quick", action="store_true", help="shorter timing runs")
@@ -365,19 +370,23 @@ def _cmd_reproduce(args) -> int:
 
 def _cmd_baseline(args) -> int:
     from enn_traffic import baseline
-    from enn_traffic.io import check_output_folder
+    from enn_traffic.io import check_output_folder, check_unlocked, folder_lock
     from enn_traffic.scenario import load_scenario
     from enn_traffic.shipped import scenario_path
 
-    scenario = load_scenario(scenario_path(args.scenario))
-    methods = tuple(m.strip().upper() for m in args.methods.split(",") if m.strip())
-    if not methods or set(methods) - {"GA", "PPO"}:
-        raise InputError(f"--methods {args.methods!r}: expected GA, PPO or GA,PPO")
-    out = args.out or Path("results/baseline") / scenario.name
+    plan = baseline.parse_plan(args.plan)
+    scenarios = [load_scenario(scenario_path(name)) for name in args.scenario]
+    for scenario in scenarios:
+        if scenario.world_kind != "arena":
+            raise InputError(f"{scenario.name}: baseline compares on arena and navigation "
+                             "scenarios (the compiled vector environment)")
+    out = args.out or Path("results/baseline")
     check_output_folder(out)
-    table = baseline.compare(scenario, args.budget, list(range(1, args.seeds + 1)), out,
-                             methods)
-    print(baseline.summary(table).to_string(index=False))
+    check_unlocked(out)
+    with folder_lock(out):
+        baseline.compare(scenarios, out, plan, args.workers or baseline.default_workers(),
+                         progress=not args.quiet)
+    print(baseline.summary_text(out))
     return 0
 
 

@@ -1,32 +1,121 @@
-"""The GA-against-PPO comparison: the GA's curve, its budget and its test scores; PPO's
-adapter when Stable-Baselines3 is installed (the optional ``rl`` extra)."""
+"""The GA against PPO and SAC (issue 52): each run spends its budget, chooses its controller
+on validation and is scored once on the sealed test situations; the comparison resumes
+without running a finished run again; PPO and SAC run through the SB3 adapter."""
 
 import numpy as np
+import pandas as pd
 import pytest
 
-from enn_traffic import baseline
+from enn_traffic import baseline, keys
 from enn_traffic.cli import main
+from enn_traffic.errors import InputError
 from enn_traffic.shipped import shipped_scenario
 
 
-def test_the_ga_curve_spends_its_budget_and_improves_on_the_test_track(tmp_path):
-    scenario = shipped_scenario("navigation_narrow").with_overrides(
-        ga={"population_size": 30})
-    curve = baseline.ga_curve(scenario, 60_000, seed=1)
-    assert curve["learner_steps"].is_monotonic_increasing
-    assert curve["learner_steps"].iloc[-1] >= 60_000
-    assert curve["learner_steps"].iloc[-2] < 60_000  # it stops once the budget is spent
-    assert curve["test_fitness"].iloc[-1] > 5 * curve["test_fitness"].iloc[0]
+def test_the_comparisons_keys_are_its_own_and_held_out():
+    assert baseline.VALIDATION_KEY in keys.VALIDATION and baseline.TEST_KEY in keys.TEST
+    arena = shipped_scenario("arena_strategy1")
+    test = baseline.situation_keys(arena, baseline.TEST_KEY, baseline.TEST_SITUATIONS)
+    assert len(test) == 16  # 4 situations a key: 16 keys hold the 64
+    assert baseline.situation_count(shipped_scenario("navigation_narrow"), 64) == 1
 
 
-def test_a_bad_method_is_refused_with_status_2(capsys):
-    assert main(["baseline", "navigation_narrow", "--methods", "GA,DQN"]) == 2
-    assert "--methods" in capsys.readouterr().err
+def test_a_ga_run_spends_its_budget_and_chooses_on_validation():
+    scenario = shipped_scenario("arena_strategy1").with_overrides(
+        ga={"population_size": 20, "elite_count": 2})
+    result = baseline.ga_run(scenario, 40_000, seed=1)
+    steps = result.curve["learner_steps"]
+    assert steps.iloc[-1] >= 40_000 > steps.iloc[-2]  # it stops once the budget is spent
+    assert result.chosen == int(np.argmax(result.curve["validation_fitness"]))
+    assert len(result.test_fitness) == baseline.TEST_SITUATIONS
+    assert (result.test_fitness > 0).any()
 
 
-def test_ppo_learns_through_the_compiled_vector_env():
+def test_a_policy_and_its_chromosome_score_alike():
+    """policy_fitness drives the vector environment; a GA controller's actions through it
+    give the GA world's lives (the two scorers agree)."""
+    from enn_traffic.envs.rangefinder import action_of, rangefinder_world
+
+    scenario = shipped_scenario("arena_strategy1")
+    spec = rangefinder_world(scenario).spec
+    chromosome = np.random.default_rng(3).uniform(-1, 1, (1, spec.chromosome_length))
+    ga = baseline.chromosome_fitness(scenario, chromosome, keys.VALIDATION.start, 8)[0]
+    env = baseline.policy_fitness(
+        scenario, lambda o: action_of(spec.forward(np.repeat(chromosome, len(o), 0), o)),
+        keys.VALIDATION.start, 8)
+    assert ga.std() > 0  # situations that tell the scorers apart
+    np.testing.assert_allclose(env, ga)
+
+
+def test_plans_are_read_and_bad_ones_refused():
+    assert baseline.parse_plan("GA:1M:5, ppo:250k:2") == (
+        baseline.Planned("GA", 1_000_000, 5), baseline.Planned("PPO", 250_000, 2))
+    for bad in ("GA:1M", "DQN:1M:3", "GA:0:3", "GA:1M:0", "GA:lots:3", ""):
+        with pytest.raises(InputError):
+            baseline.parse_plan(bad)
+
+
+def test_bad_command_lines_exit_2(capsys):
+    assert main(["baseline", "navigation_narrow", "--plan", "GA:1M:5,DQN:1M:3"]) == 2
+    assert "--plan" in capsys.readouterr().err
+    assert main(["baseline", "sumo_strategy1", "--plan", "GA:1k:1"]) == 2
+    assert "sumo_strategy1" in capsys.readouterr().err
+
+
+def test_the_summary_pairs_each_method_with_the_ga_on_the_same_situations():
+    runs = pd.DataFrame({"scenario": "s", "method": ["GA", "GA", "PPO"],
+                         "budget_steps": 100, "seed": [1, 2, 1], "test_situations": 3,
+                         "test_fitness": [2.0, 4.0, 10.0], "wall_s": 1.0})
+    situations = pd.DataFrame({
+        "scenario": "s", "method": ["GA"] * 6 + ["PPO"] * 3, "budget_steps": 100,
+        "seed": [1, 1, 1, 2, 2, 2, 1, 1, 1], "situation": [0, 1, 2] * 3,
+        "test_fitness": [1.0, 2, 3, 3, 4, 5, 9, 10, 11]})
+    table = baseline.summary(runs, situations).set_index("method")
+    assert table.loc["GA", "test_fitness"] == 3.0 and table.loc["GA", "seeds"] == 2
+    # PPO minus the GA's per-situation means (2, 3, 4): 7 on every situation
+    assert table.loc["PPO", "minus_ga"] == 7.0
+    assert table.loc["PPO", "minus_ga_low"] == table.loc["PPO", "minus_ga_high"] == 7.0
+
+
+def test_the_comparison_resumes_without_running_a_finished_run_again(tmp_path):
     pytest.importorskip("stable_baselines3")
-    curve = baseline.ppo_curve(shipped_scenario("navigation_narrow"), 40_000, seed=1,
-                               checkpoints=2)
-    assert len(curve) >= 1
-    assert np.isfinite(curve["test_fitness"]).all()
+    scenario = shipped_scenario("navigation_narrow").with_overrides(
+        ga={"population_size": 10}, episode={"max_steps": 300})
+    plan = baseline.parse_plan("GA:20k:2,PPO:16k:1")
+    budgets = {"PPO": 8_192, "SAC": 1_000}
+    baseline.compare([scenario], tmp_path, plan, workers=1, progress=False,
+                     tuning_budgets=budgets)
+    tuning = pd.read_csv(tmp_path / "tuning.csv")
+    assert sorted(tuning["setting"]) == sorted(baseline.SEARCH["PPO"])
+    first = pd.read_csv(tmp_path / "comparison.csv")
+    assert len(first) == 3 and set(first["test_situations"]) == {1}
+    ppo = first[first["method"] == "PPO"].iloc[0]
+    assert ppo["setting"] == baseline.chosen_setting(tuning, scenario.name, "PPO")
+    assert ppo["learner_steps"] >= 16_000
+    # a second call with one more seed makes that run alone
+    baseline.compare([scenario], tmp_path, baseline.parse_plan("GA:20k:3,PPO:16k:1"),
+                     workers=1, progress=False, tuning_budgets=budgets)
+    second = pd.read_csv(tmp_path / "comparison.csv")
+    pd.testing.assert_frame_equal(second.iloc[:3], first)
+    assert len(second) == 4 and second.iloc[3]["seed"] == 3
+    assert len(pd.read_csv(tmp_path / "situations.csv")) == 4
+    assert (tmp_path / "comparison.png").stat().st_size > 0
+
+
+def test_sac_learns_through_the_adapter_and_its_numpy_actor_is_its_policy():
+    pytest.importorskip("stable_baselines3")
+    from stable_baselines3.common.vec_env import VecNormalize
+
+    from enn_traffic.envs.rangefinder import RangefinderVectorEnv
+    from enn_traffic.envs.sb3 import sb3_vec_env
+
+    scenario = shipped_scenario("arena_strategy1")
+    for method, setting in (("SAC", "zoo"), ("PPO", "zoo")):
+        settings = baseline.SEARCH[method][setting] | {"learning_starts": 100}
+        venv = VecNormalize(sb3_vec_env(RangefinderVectorEnv(scenario, settings["n_envs"])))
+        model = baseline.rl_model(method, venv, settings, seed=1)
+        model.learn(2_000)
+        act = baseline.numpy_actor(model, venv.obs_rms)
+        observation = np.random.default_rng(0).uniform(0, 25, (7, 19)).astype(np.float32)
+        expected, _ = model.predict(venv.normalize_obs(observation), deterministic=True)
+        np.testing.assert_allclose(act(observation), expected, atol=1e-5)

@@ -321,7 +321,7 @@ def test_every_output_file_is_checked_before_any_work(capsys, tmp_path, monkeypa
 FOLDER_COMMANDS = {
     "run --out": ["run", NARROW, "--generations", "1", "--out"],
     "reproduce --out": ["reproduce", "--quick", "--only", "fig7", "--out"],
-    "baseline --out": ["baseline", NARROW, "--methods", "GA", "--budget", "1000", "--out"],
+    "baseline --out": ["baseline", NARROW, "--plan", "GA:1k:1", "--out"],
 }
 
 
