@@ -143,9 +143,11 @@ def policy_fitness(scenario: Scenario, act: Callable[[np.ndarray], np.ndarray],
 
 # --- the GA ---------------------------------------------------------------------------------
 
-def ga_run(scenario: Scenario, budget: int, seed: int, test: bool = True) -> RunResult:
+def ga_run(scenario: Scenario, budget: int, seed: int, test: bool = True,
+           lives: list | None = None) -> RunResult:
     """The scenario's GA, seeded by ``seed``, until ``budget`` learner-steps are simulated;
-    each generation's champion scored on validation, the best of them on test."""
+    each generation's champion scored on validation, the best of them on test. ``lives``
+    collects the length of every life lived in training."""
     world = rangefinder_world(scenario)
     params = ga_params(scenario)
     rng = np.random.default_rng([scenario.seed, seed])
@@ -157,6 +159,8 @@ def ga_run(scenario: Scenario, budget: int, seed: int, test: bool = True) -> Run
     while spent < budget:
         state, _, results = next(run)
         spent += int(results.steps.sum())
+        if lives is not None:
+            lives.extend(results.steps.ravel().tolist())
         rows.append((spent, time.perf_counter() - began))
     wall = time.perf_counter() - began
     validation = chromosome_fitness(scenario, state.champions, VALIDATION_KEY,
@@ -232,9 +236,10 @@ def rl_model(method: str, venv, settings: dict, seed: int):
 
 
 def rl_run(scenario: Scenario, method: str, settings: dict, budget: int, seed: int,
-           test: bool = True) -> RunResult:
+           test: bool = True, lives: list | None = None) -> RunResult:
     """PPO or SAC with ``settings`` for ``budget`` learner-steps; its policy at every
-    ``budget / CHECKPOINTS`` steps scored on validation, the best of them on test."""
+    ``budget / CHECKPOINTS`` steps scored on validation, the best of them on test. ``lives``
+    collects the length of every life lived in training (the exploring policy's)."""
     try:
         import torch
         from stable_baselines3.common.callbacks import BaseCallback
@@ -256,6 +261,9 @@ def rl_run(scenario: Scenario, method: str, settings: dict, budget: int, seed: i
 
     class Snapshots(BaseCallback):
         def _on_step(self) -> bool:
+            if lives is not None:
+                lives.extend(info["episode"]["l"] for info in self.locals["infos"]
+                             if "episode" in info)
             if self.num_timesteps >= every * (len(snapshots) + 1):
                 snapshots.append((self.num_timesteps, time.perf_counter() - began,
                                   numpy_actor(model, copy.deepcopy(venv.obs_rms))))
@@ -312,8 +320,8 @@ def _worker_start(parent: int) -> None:
     signal.signal(signal.SIGINT, signal.SIG_IGN)
 
 
-def _jobs(jobs: list[tuple], workers: int, done: Callable[[tuple, RunResult], None],
-          progress: bool) -> None:
+def _jobs(jobs: list[tuple], workers: int, done: Callable[[tuple, object], None],
+          progress: bool, run: Callable = run_one) -> None:
     """Run ``jobs`` (run_one's arguments) on ``workers`` spawned processes (numba's threads
     do not survive a fork), handing each result to ``done`` as it ends."""
     import multiprocessing
@@ -325,7 +333,7 @@ def _jobs(jobs: list[tuple], workers: int, done: Callable[[tuple, RunResult], No
     bar = tqdm(total=len(jobs), desc="runs", unit="run", disable=not progress or not jobs)
     if workers == 1 or len(jobs) <= 1:
         for job in jobs:
-            done(job, run_one(*job))
+            done(job, run(*job))
             bar.update()
         bar.close()
         return
@@ -333,7 +341,7 @@ def _jobs(jobs: list[tuple], workers: int, done: Callable[[tuple, RunResult], No
                                initializer=_worker_start, initargs=(os.getpid(),))
     try:
         with _deaf_to_ctrl_c():
-            futures = {pool.submit(run_one, *job): job for job in jobs}
+            futures = {pool.submit(run, *job): job for job in jobs}
         for future in as_completed(futures):
             done(futures[future], future.result())
             bar.update()
@@ -393,7 +401,8 @@ def compare(scenarios: list[Scenario], out: Path, plan: tuple[Planned, ...] = PL
             tuning_budgets: dict[str, int] | None = None) -> pd.DataFrame:
     """The search, then every planned run of each scenario not yet in ``out/comparison.csv``:
     its row there, its validation curve in ``curves.csv``, its test situations in
-    ``situations.csv``; then the summary and plot (:func:`write_summary`)."""
+    ``situations.csv``; then the lives lived in training (:func:`training_lives`), the
+    summary and the plot (:func:`write_summary`)."""
     out.mkdir(parents=True, exist_ok=True)
     methods = tuple(dict.fromkeys(p.method for p in plan))
     tuning = tune(scenarios, out, methods, workers, progress, tuning_budgets)
@@ -426,8 +435,53 @@ def compare(scenarios: list[Scenario], out: Path, plan: tuple[Planned, ...] = PL
             "chosen_at_steps": int(best["learner_steps"]), "wall_s": result.wall_s}]))
 
     _jobs(sorted(jobs, key=_cost, reverse=True), workers, record, progress)
+    training_lives(scenarios, out, plan, workers, progress)
     write_summary(out)
     return _read(out / "comparison.csv")
+
+
+def training_lives(scenarios: list[Scenario], out: Path, plan: tuple[Planned, ...],
+                   workers: int = 1, progress: bool = True) -> pd.DataFrame:
+    """How long the lives lived in training were: one run of each method (seed 1, its first
+    budget in ``plan``, the comparison's setting) with every life recorded, into
+    ``out/training_lives.csv`` (a run already there is not made again). Training keys only:
+    this reads no validation or test situation beyond the run's own choice."""
+    path = out / "training_lives.csv"
+    tuning, have = _read(out / "tuning.csv"), _read(path)
+    done_before = set() if have.empty else set(zip(have["scenario"], have["method"],
+                                                   strict=True))
+    budgets = {p.method: p.budget_steps for p in reversed(plan)}  # each method's first
+    jobs = [(scenario, method, "paper" if method == "GA"
+             else chosen_setting(tuning, scenario.name, method), budget, 1, False)
+            for scenario in scenarios for method, budget in budgets.items()
+            if (scenario.name, method) not in done_before]
+
+    def record(job: tuple, result: tuple[RunResult, np.ndarray]) -> None:
+        scenario, method, setting, budget, seed, _ = job
+        lived = result[1]
+        _append(path, pd.DataFrame([{
+            "scenario": scenario.name, "method": method, "setting": setting,
+            "budget_steps": budget, "seed": seed, "lives": len(lived),
+            "median_life": float(np.median(lived)), "longest_life": int(lived.max()),
+            "lives_over_100": int((lived > 100).sum()),
+            "lives_over_1000": int((lived > 1000).sum())}]))
+
+    _jobs(jobs, workers, record, progress, run=run_recording_lives)
+    return _read(path)
+
+
+def run_recording_lives(scenario: Scenario, method: str, setting: str, budget: int,
+                        seed: int, test: bool) -> tuple[RunResult, np.ndarray]:
+    """:func:`run_one`, with the length of every training life."""
+    import numba
+
+    numba.set_num_threads(1)
+    lives: list[int] = []
+    if method == "GA":
+        result = ga_run(scenario, budget, seed, test, lives)
+    else:
+        result = rl_run(scenario, method, SEARCH[method][setting], budget, seed, test, lives)
+    return result, np.asarray(lives)
 
 
 def mean_interval(values: np.ndarray, rng: np.random.Generator, level: float = 0.9,

@@ -11,10 +11,12 @@ shipped Cologne scenario) counts everything, warm-ups included, and reports thei
 the wall time: with warm-ups shared and simulated once, and with each situation its own.
 The gymnasium workload steps the compiled vector environment (:mod:`enn_traffic.envs`) of
 256 and 4,096 narrow-track worlds with random actions, against gymnasium's ``SyncVectorEnv``
-of the single environment in the same run. The network workload prepares large random road
-networks (SUMO's netgenerate): walls and wall grid the first time and from the cache, and
-the grid as it was built until issue 39 (every cell against every wall) in the same run,
-with the peak memory of each.
+of the single environment in the same run. The SB3 workload times Stable-Baselines3's PPO
+learning through the adapter of :mod:`enn_traffic.envs.sb3` (the docs/envs.md example)
+beside the compiled vector environment of the same worlds. The network workload prepares
+large random road networks (SUMO's netgenerate): walls and wall grid the first time and from
+the cache, and the grid as it was built until issue 39 (every cell against every wall) in the
+same run, with the peak memory of each.
 """
 
 from __future__ import annotations
@@ -152,6 +154,53 @@ def env_bench(steps: int = 200, sync_seconds: float = 5.0) -> pd.DataFrame:
     table = _rate_table(rows)
     sync = table["vehicle_steps_per_s"].iloc[-1]
     table["speedup_vs_reference"] = table["vehicle_steps_per_s"] / sync
+    return table
+
+
+def sb3_bench(learn_steps: int = 65_536, steps: int = 500) -> pd.DataFrame:
+    """Stable-Baselines3 through :func:`~enn_traffic.envs.sb3.sb3_vec_env` (issue 52): the
+    docs/envs.md example's PPO learning on 32 arena worlds, one torch thread, and the adapter
+    stepped with random actions, against the compiled vector environment of the same 32
+    worlds stepped alone, in the same run. Empty without the ``rl`` extra."""
+    try:
+        import torch
+        from stable_baselines3 import PPO
+        from stable_baselines3.common.vec_env import VecNormalize
+
+        from enn_traffic.envs import make_vector_env
+        from enn_traffic.envs.sb3 import sb3_vec_env
+    except ImportError:
+        return _rate_table([])
+    torch.set_num_threads(1)
+    worlds, rng = 32, np.random.default_rng(0)
+    actions = rng.uniform(-1, 1, (8, worlds, 2)).astype(np.float32)
+    workload = f"SB3: arena strategy 1, {worlds} worlds"
+    rows = []
+    for label, env in (("compiled vector env, random actions",
+                        make_vector_env("arena_strategy1", num_envs=worlds)),
+                       ("SB3 VecEnv adapter, random actions",
+                        sb3_vec_env(make_vector_env("arena_strategy1", num_envs=worlds)))):
+        env.reset()
+        for k in range(20):  # compile and warm the threads outside the timing
+            env.step(actions[k % len(actions)])
+        started = time.perf_counter()
+        for k in range(steps):
+            env.step(actions[k % len(actions)])
+        seconds = time.perf_counter() - started
+        rows.append((workload, label, numba.get_num_threads(), steps * worlds,
+                     steps * worlds, seconds))
+    venv = VecNormalize(sb3_vec_env(make_vector_env("arena_strategy1", num_envs=worlds)),
+                        gamma=0.999)
+    model = PPO("MlpPolicy", venv, n_steps=256, batch_size=1024, gamma=0.999, seed=1,
+                device="cpu")
+    started = time.perf_counter()
+    model.learn(total_timesteps=learn_steps)
+    seconds = time.perf_counter() - started
+    rows.append((workload, "SB3 PPO learning (the docs/envs.md example)", 1,
+                 model.num_timesteps, model.num_timesteps, seconds))
+    table = _rate_table(rows)
+    table["speedup_vs_reference"] = (table["vehicle_steps_per_s"]
+                                     / table["vehicle_steps_per_s"].iloc[0])
     return table
 
 
@@ -473,6 +522,7 @@ def run_bench(quick: bool = False) -> pd.DataFrame:
                          reference_seconds=3.0 if quick else 10.0),
         arena_bench(generations=3 if quick else 10),
         env_bench(steps=50 if quick else 200, sync_seconds=2.0 if quick else 5.0),
+        sb3_bench(learn_steps=16_384 if quick else 65_536, steps=100 if quick else 500),
         sumo_bench(generations=3 if quick else 10, closed_loop_steps=2_000 if quick else 10_000),
         recording_bench(generations=1 if quick else 2),
         city_bench(generations=3 if quick else 20, closed_loop_steps=1_000 if quick else 5_000),

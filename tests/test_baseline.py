@@ -100,6 +100,9 @@ def test_the_comparison_resumes_without_running_a_finished_run_again(tmp_path):
     assert len(second) == 4 and second.iloc[3]["seed"] == 3
     assert len(pd.read_csv(tmp_path / "situations.csv")) == 4
     assert (tmp_path / "comparison.png").stat().st_size > 0
+    lives = pd.read_csv(tmp_path / "training_lives.csv").set_index("method")
+    assert sorted(lives.index) == ["GA", "PPO"] and (lives["lives"] > 0).all()
+    assert (lives["longest_life"] <= 300).all() and (lives["median_life"] > 0).all()
 
 
 def test_sac_learns_through_the_adapter_and_its_numpy_actor_is_its_policy():

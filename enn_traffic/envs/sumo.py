@@ -22,6 +22,7 @@ from gymnasium.error import ResetNeeded
 from pettingzoo import ParallelEnv
 
 from enn_traffic.envs.batch import compiled
+from enn_traffic.envs.child import InChild
 from enn_traffic.envs.rangefinder import (
     TRAINING_KEYS,
     checked_actions,
@@ -39,6 +40,7 @@ from enn_traffic.sim.sumo_crowd import SumoCrowd, observe
 from enn_traffic.sim.sumo_crowd import move_once as move_learners
 from enn_traffic.sim.sumo_world import LiveTraffic, SumoWorld
 from enn_traffic.sim.world import CAPPED, OUTCOMES, RUNNING, SPUN
+from enn_traffic.traffic.sumo import Simulation
 
 
 def sumo_world(scenario: str | Path | Scenario) -> SumoWorld:
@@ -187,7 +189,9 @@ class SumoCrowdEnv(ParallelEnv):
     is terminated and leaves SUMO, where the crowd of the SUMO tables re-enters it; all are
     truncated at ``episode.max_steps``. ``reset(options={"key": k, "situation": e})`` as
     :class:`SumoEnv`; the learners enter at free spots drawn from the situation's seed. Call
-    :meth:`close` to end SUMO."""
+    :meth:`close` to end SUMO. A crowd reset while another SUMO runs in this process runs its
+    own in a child process (:mod:`enn_traffic.envs.child`), so that two crowds (PettingZoo's
+    seed test) step side by side."""
 
     metadata = {"name": "enn_traffic_sumo_crowd_v0", "render_modes": []}
 
@@ -211,6 +215,17 @@ class SumoCrowdEnv(ParallelEnv):
         self.crowd: SumoCrowd | None = None
         self._rng = np.random.default_rng()
         self._observe = self._move = None
+        self._observation_dtype = observation_dtype
+        self._child: InChild | None = None
+
+    def _in_child(self) -> InChild | None:
+        """The child process this crowd runs in, started when another SUMO runs here."""
+        running = Simulation.running
+        own = self.crowd is not None and running is self.crowd.simulation
+        if self._child is None and running is not None and not own:
+            self._child = InChild(self, SumoCrowdEnv, (self.world.scenario,),
+                                  {"observation_dtype": self._observation_dtype})
+        return self._child
 
     def observation_space(self, agent: str):
         return self._observation_space
@@ -219,6 +234,9 @@ class SumoCrowdEnv(ParallelEnv):
         return self._action_space
 
     def reset(self, seed: int | None = None, options: dict | None = None):
+        if self._in_child() is not None:
+            result, self.agents = self._child.call("reset", seed, options)
+            return result
         if seed is not None:
             self._rng = np.random.default_rng(seed)
         options, world = options or {}, self.world
@@ -255,6 +273,11 @@ class SumoCrowdEnv(ParallelEnv):
         return out
 
     def step(self, actions: dict):
+        if self._child is not None:
+            result, self.agents = self._child.call("step", actions)
+            return result
+        if self.crowd is None:
+            raise ResetNeeded("call reset() before step()")
         crowd, lives, gain = self.crowd, self.crowd.lives, self.world.physics.gain
         for agent, action in checked_actions(actions, self.agents).items():
             lives.work.steering[int(agent.rpartition("_")[2])] = steering_of(action, gain)
@@ -289,6 +312,9 @@ class SumoCrowdEnv(ParallelEnv):
         return observations, rewards, terminated, truncated, infos
 
     def close(self):
+        if self._child is not None:
+            self._child.call("close")
+            self.agents = []
         if self.crowd is not None:
             self.crowd.close()
             self.crowd = None

@@ -360,11 +360,87 @@ def closed_loop(paper: Path, family: Family) -> str:
             f"(../results/paper/{family.folder}/closed_loop.csv)).\n")
 
 
+def _steps(budget: float) -> str:
+    return f"{budget / 1e6:g} M"
+
+
+def _per_seed_choice(runs: pd.DataFrame) -> str:
+    """Where the runs' controllers were chosen, as a share of the budget (median)."""
+    return f"{(runs['chosen_at_steps'] / runs['budget_steps']).median():.0%}"
+
+
+def baseline(paper: Path) -> str:
+    """The GA against PPO and SAC (:mod:`enn_traffic.baseline`), from ``results/baseline``
+    beside ``paper``: the protocol, the search, the table and the paired differences."""
+    from enn_traffic import baseline as comparison
+
+    folder = paper.parent / "baseline"
+    runs = pd.read_csv(folder / "comparison.csv")
+    summary = pd.read_csv(folder / "comparison_summary.csv")
+    tuning = pd.read_csv(folder / "tuning.csv")
+    names = {"navigation_narrow": "narrow track", "arena_strategy1": "arena, strategy 1"}
+    lines = [
+        "`enn-traffic baseline navigation_narrow arena_strategy1` (needs `pip install -e "
+        ".[rl]`). Every method learns on training keys; each run's controllers along the way "
+        "(the GA: each generation's best by training fitness; PPO and SAC: the policy every "
+        f"1/{comparison.CHECKPOINTS} of the budget, acting on its mean) are scored on "
+        f"{comparison.VALIDATION_SITUATIONS} validation situations (keys from "
+        f"{comparison.VALIDATION_KEY:,}); the best there is the run's controller, scored once "
+        f"on {comparison.TEST_SITUATIONS} test situations (keys from {comparison.TEST_KEY:,}, "
+        "read by nothing else). The narrow track has no traffic and one start (§5.1): its "
+        "every situation is the same, so validation and test are one situation there and "
+        "its intervals are over seeds only. The GA runs the scenario's own settings (the "
+        "paper's); PPO and SAC (Stable-Baselines3, `VecNormalize` on the observations, one "
+        "torch thread) take the setting that scored best in the search below. Runs ran two "
+        "at a time on the shared 2-core machine; wall time is training alone.",
+        "",
+        "The search (`tuning.csv`): one run of each setting per scenario, seed "
+        f"{comparison.TUNING_SEED}, on validation keys; settings in "
+        "`enn_traffic/baseline.py` (`SEARCH`), starting at RL Zoo's BipedalWalker-v3 entries.",
+        "",
+        "| scenario | method | setting | learner-steps | validation fitness, best checkpoint "
+        "| chosen |",
+        "|---|---|---|---|---|---|",
+    ]
+    for (name, method), rows in tuning.groupby(["scenario", "method"], sort=False):
+        best = comparison.chosen_setting(tuning, name, method)
+        for row in rows.itertuples():
+            lines.append(f"| {names.get(name, name)} | {method} | {row.setting} | "
+                         f"{_steps(row.budget_steps)} | {row.validation_fitness:.0f} | "
+                         f"{'yes' if row.setting == best else ''} |")
+    lines += [
+        "",
+        "Test fitness (steps lived, 0 for a spin) of each run's chosen controller; the mean "
+        "over seeds with its 90% bootstrap interval over seeds; the difference from the GA "
+        "at the same budget, paired on the test situations (each situation's mean over "
+        "seeds), with its 90% interval over situations:",
+        "",
+        "| scenario | method | learner-steps | seeds | test situations | test fitness (90% "
+        "interval over seeds) | runs, min–max | minus the GA (90% interval) | chosen at "
+        "(median share of the budget) | wall time per run |",
+        "|---|---|---|---|---|---|---|---|---|---|",
+    ]
+    for row in summary.itertuples():
+        mine = runs[(runs["scenario"] == row.scenario) & (runs["method"] == row.method)
+                    & (runs["budget_steps"] == row.budget_steps)]
+        difference = (f"{row.minus_ga:+.0f} ({row.minus_ga_low:+.0f} to "
+                      f"{row.minus_ga_high:+.0f}) vs GA {_steps(row.vs_ga_budget)}"
+                      if not pd.isna(getattr(row, "minus_ga", np.nan)) else "")
+        lines.append(
+            f"| {names.get(row.scenario, row.scenario)} | {row.method} | "
+            f"{_steps(row.budget_steps)} | {row.seeds} | {row.test_situations} | "
+            f"{row.test_fitness:.0f} ({row.seeds_low:.0f}–{row.seeds_high:.0f}) | "
+            f"{mine['test_fitness'].min():.0f}–{mine['test_fitness'].max():.0f} | "
+            f"{difference} | {_per_seed_choice(mine)} | {row.wall_s:.0f} s |")
+    lines += ["", "![GA, PPO and SAC](../results/baseline/comparison.png)"]
+    return "\n".join(lines)
+
+
 SECTIONS: dict[str, Callable[[Path], str]] = {
     "tables34": tables34, "sumo_tables34": lambda paper: family_tables34(paper, SUMO),
     "city_tables34": lambda paper: family_tables34(paper, CITY),
     "sumo_closed_loop": lambda paper: closed_loop(paper, SUMO),
-    "city_closed_loop": lambda paper: closed_loop(paper, CITY)}
+    "city_closed_loop": lambda paper: closed_loop(paper, CITY), "baseline": baseline}
 
 
 def markers(name: str) -> tuple[str, str]:

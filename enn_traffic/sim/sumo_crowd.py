@@ -205,6 +205,11 @@ class SumoCrowd:
     def __enter__(self) -> SumoCrowd:
         return self
 
+    @property
+    def simulation(self) -> sumo.Simulation | None:
+        """The live SUMO, once started and until closed."""
+        return self._simulation
+
     def __exit__(self, *exc) -> None:
         self.close()
 

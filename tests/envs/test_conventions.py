@@ -10,7 +10,7 @@ import gymnasium as gym
 import numpy as np
 import pytest
 from gymnasium.vector import AutoresetMode
-from pettingzoo.test import api_test
+from pettingzoo.test import api_test, parallel_seed_test
 
 from enn_traffic import keys
 from enn_traffic.envs import env, env_id, make_vector_env, parallel_env
@@ -86,8 +86,13 @@ def test_sumo_vector_envs_reset_in_the_same_step_too():
     vector.close()
 
 
-def test_the_aec_env_passes_pettingzoos_api_test():
-    api_test(env(shipped_scenario("arena_strategy1"), learners=4), num_cycles=300)
+@pytest.mark.parametrize("name", ["arena_strategy1", "sumo_strategy1"])
+def test_both_crowds_pass_pettingzoos_aec_api_test_and_parallel_seed_test(name):
+    """The arena's crowd and SUMO's (the second SUMO crowd runs in a child process)."""
+    aec = env(shipped_scenario(name), learners=3)
+    api_test(aec, num_cycles=100)
+    aec.close()
+    parallel_seed_test(lambda: parallel_env(shipped_scenario(name), learners=3), num_cycles=100)
 
 
 def test_an_action_for_an_agent_that_is_gone_is_an_error():

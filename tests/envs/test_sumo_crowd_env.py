@@ -4,7 +4,7 @@ test, seeding, and the same trajectories as the SUMO crowd of the GA
 
 import numpy as np
 import pytest
-from pettingzoo.test import parallel_api_test
+from pettingzoo.test import parallel_api_test, parallel_seed_test
 
 from enn_traffic import keys
 from enn_traffic.envs import parallel_env
@@ -102,3 +102,20 @@ def test_parallel_env_gives_the_sumo_crowd_for_a_sumo_scenario():
         env.close()
     with pytest.raises(ValueError, match="learners must be at least 1"):
         SumoCrowdEnv(shipped_scenario("sumo_strategy1"), learners=0)
+
+
+def test_two_sumo_crowds_in_one_process_pass_pettingzoos_seed_test():
+    """libsumo runs one SUMO per process: the second crowd runs its own in a child process,
+    and the two give the same run for the same seed."""
+    made = []
+
+    def make():
+        made.append(SumoCrowdEnv(shipped_scenario("sumo_strategy1"), learners=2))
+        return made[-1]
+
+    parallel_seed_test(make, num_cycles=60)
+    first, second = made
+    assert first._child is None and second._child is not None
+    observations, _ = second.reset(seed=5)  # the child's crowd, reset again
+    assert sorted(observations) == ["vehicle_0", "vehicle_1"]
+    second.close()
