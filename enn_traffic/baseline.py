@@ -38,6 +38,7 @@ from enn_traffic.envs.rangefinder import RangefinderVectorEnv, rangefinder_world
 from enn_traffic.errors import InputError
 from enn_traffic.evolution import ga
 from enn_traffic.io import write_atomic
+from enn_traffic.progress import log
 from enn_traffic.runner import ga_params
 from enn_traffic.scenario import Scenario
 from enn_traffic.sim.world import SituationResults
@@ -93,13 +94,15 @@ TUNING_BUDGET = {"PPO": 300_000, "SAC": 300_000}
 @dataclass(frozen=True)
 class RunResult:
     """One run: its validation curve (learner_steps, wall_s, validation_fitness per
-    candidate), the chosen candidate's row in it, and that controller's fitness on each test
-    situation (empty for a search run, which reads no test key)."""
+    candidate), the chosen candidate's row in it, that controller's fitness on each test
+    situation (empty for a search run, which reads no test key), and the learner-steps it
+    simulated in all (the GA's last generation and PPO's last rollout end past the budget)."""
 
     curve: pd.DataFrame
     chosen: int
     test_fitness: np.ndarray
     wall_s: float
+    learner_steps: int
 
 
 # --- situations -----------------------------------------------------------------------------
@@ -170,7 +173,7 @@ def ga_run(scenario: Scenario, budget: int, seed: int, test: bool = True,
                                  situation_count(scenario, TEST_SITUATIONS))[0]
               if test else np.empty(0))
     curve = pd.DataFrame(rows, columns=["learner_steps", "wall_s"])
-    return RunResult(curve.assign(validation_fitness=validation), chosen, tested, wall)
+    return RunResult(curve.assign(validation_fitness=validation), chosen, tested, wall, spent)
 
 
 # --- PPO and SAC ----------------------------------------------------------------------------
@@ -280,7 +283,8 @@ def rl_run(scenario: Scenario, method: str, settings: dict, budget: int, seed: i
                              situation_count(scenario, TEST_SITUATIONS))
               if test else np.empty(0))
     curve = pd.DataFrame([s[:2] for s in snapshots], columns=["learner_steps", "wall_s"])
-    return RunResult(curve.assign(validation_fitness=validation), chosen, tested, wall)
+    return RunResult(curve.assign(validation_fitness=validation), chosen, tested, wall,
+                     int(model.num_timesteps))
 
 
 # --- the comparison -------------------------------------------------------------------------
@@ -389,11 +393,15 @@ def _cost(job: tuple) -> float:
 
 
 def chosen_setting(tuning: pd.DataFrame, scenario: str, method: str) -> str:
-    """The setting of ``method`` whose search run scored best on validation in ``scenario``."""
+    """The setting of ``method`` whose search run scored best on validation in ``scenario``
+    (of equal scores, the one :data:`SEARCH` lists first)."""
     rows = tuning[(tuning["scenario"] == scenario) & (tuning["method"] == method)]
     if rows.empty:
         raise InputError(f"no search run of {method} for {scenario}: run the search first")
-    return str(rows.sort_values("validation_fitness", kind="stable").iloc[-1]["setting"])
+    order = list(SEARCH[method])  # a tie goes to the setting listed first, not the CSV's order
+    rows = rows.assign(listed=rows["setting"].map(order.index))
+    return str(rows.sort_values(["validation_fitness", "listed"],
+                                ascending=[False, True]).iloc[0]["setting"])
 
 
 def compare(scenarios: list[Scenario], out: Path, plan: tuple[Planned, ...] = PLAN,
@@ -405,7 +413,10 @@ def compare(scenarios: list[Scenario], out: Path, plan: tuple[Planned, ...] = PL
     summary and the plot (:func:`write_summary`)."""
     out.mkdir(parents=True, exist_ok=True)
     methods = tuple(dict.fromkeys(p.method for p in plan))
-    tuning = tune(scenarios, out, methods, workers, progress, tuning_budgets)
+    budgets = {m: min([(tuning_budgets or TUNING_BUDGET)[m]]
+                      + [p.budget_steps for p in plan if p.method == m])
+               for m in methods if m != "GA"}
+    tuning = tune(scenarios, out, methods, workers, progress, budgets)
     have = _read(out / "comparison.csv")
     done_before = set() if have.empty else set(
         zip(have["scenario"], have["method"], have["budget_steps"], have["seed"], strict=True))
@@ -414,6 +425,14 @@ def compare(scenarios: list[Scenario], out: Path, plan: tuple[Planned, ...] = PL
              p.budget_steps, seed, True)
             for scenario in scenarios for p in plan for seed in range(1, p.seeds + 1)
             if (scenario.name, p.method, p.budget_steps, seed) not in done_before]
+
+    for scenario, method, setting, budget, _, _ in jobs:
+        if method == "PPO":
+            rollout = SEARCH["PPO"][setting]["n_steps"] * SEARCH["PPO"][setting]["n_envs"]
+            if budget < 4 * rollout:
+                log.warning(f"{scenario.name}: PPO's setting {setting!r} learns in rollouts of "
+                            f"{rollout:,} steps: a budget of {budget:,} gives "
+                            f"{-(-budget // rollout)} of them")
 
     def record(job: tuple, result: RunResult) -> None:
         scenario, method, setting, budget, seed, _ = job
@@ -428,7 +447,7 @@ def compare(scenarios: list[Scenario], out: Path, plan: tuple[Planned, ...] = PL
         _append(out / "curves.csv", result.curve.assign(**run), run)
         _append(out / "comparison.csv", pd.DataFrame([{
             **run, "setting": setting,
-            "learner_steps": int(result.curve["learner_steps"].iloc[-1]),
+            "learner_steps": result.learner_steps,
             "test_situations": len(fitness), "test_fitness": fitness.mean(),
             "test_fitness_low": low, "test_fitness_high": high,
             "validation_fitness": best["validation_fitness"],
@@ -494,30 +513,59 @@ def mean_interval(values: np.ndarray, rng: np.random.Generator, level: float = 0
     return float(low), float(high)
 
 
+def seeds_interval(values: np.ndarray, level: float = 0.9) -> tuple[float, float]:
+    """Student's t interval of the mean of a few seeds' scores (a bootstrap over 3–5 seeds
+    covers poorly); one seed is its own interval."""
+    from scipy import stats
+
+    values = np.asarray(values, dtype=np.float64)
+    if len(values) < 2:
+        return float(values.mean()), float(values.mean())
+    half = stats.t.ppf((1 + level) / 2, len(values) - 1) * values.std(ddof=1) / np.sqrt(
+        len(values))
+    return float(values.mean() - half), float(values.mean() + half)
+
+
+def difference_interval(mine: np.ndarray, theirs: np.ndarray, rng: np.random.Generator,
+                        level: float = 0.9, draws: int = 4000) -> tuple[float, float]:
+    """The central ``level`` interval of mean(mine) − mean(theirs), each (seeds, situations)
+    on the same situations, when the seeds of each method and the situations (paired) are
+    drawn again with replacement: the seeds' spread counts, as well as the situations'."""
+    situations = rng.integers(0, mine.shape[1], (draws, mine.shape[1]))
+    means = []
+    for chosen in situations:
+        a = mine[rng.integers(0, len(mine), len(mine))][:, chosen].mean()
+        b = theirs[rng.integers(0, len(theirs), len(theirs))][:, chosen].mean()
+        means.append(a - b)
+    low, high = np.quantile(means, [(1 - level) / 2, (1 + level) / 2])
+    return float(low), float(high)
+
+
 def summary(comparison: pd.DataFrame, situations: pd.DataFrame) -> pd.DataFrame:
-    """Per scenario, method and budget: the seeds' mean test fitness with its 90% interval
-    over the seeds, and the difference from the GA at the same budget (or the nearest below),
-    paired on the test situations (each situation's mean over seeds), with its interval."""
+    """Per scenario, method and budget: the seeds' mean test fitness with its 90% t interval
+    over the seeds, and the difference from the GA at the same budget (or the nearest below)
+    on the same test situations, with its 90% interval over seeds and situations
+    (:func:`difference_interval`)."""
     rows = []
     rng = np.random.default_rng(0)
-    per_situation = situations.groupby(
-        ["scenario", "method", "budget_steps", "situation"])["test_fitness"].mean()
+    per_run = situations.pivot_table(index=["scenario", "method", "budget_steps", "seed"],
+                                     columns="situation", values="test_fitness")
     for (name, method, budget), runs in comparison.groupby(
             ["scenario", "method", "budget_steps"]):
-        low, high = mean_interval(runs["test_fitness"].to_numpy(), rng)
+        low, high = seeds_interval(runs["test_fitness"].to_numpy())
         row = {"scenario": name, "method": method, "budget_steps": budget,
                "seeds": len(runs), "test_situations": int(runs["test_situations"].iloc[0]),
                "test_fitness": runs["test_fitness"].mean(), "seeds_low": low,
-               "seeds_high": high, "wall_s": runs["wall_s"].mean()}
+               "seeds_high": high, "learner_steps": runs["learner_steps"].mean(),
+               "wall_s": runs["wall_s"].mean()}
         ga_budgets = sorted(b for (s, m, b) in comparison.groupby(
             ["scenario", "method", "budget_steps"]).groups if s == name and m == "GA")
         reference = max((b for b in ga_budgets if b <= budget), default=None)
         if method != "GA" and reference is not None:
-            mine = per_situation.loc[(name, method, budget)]
-            theirs = per_situation.loc[(name, "GA", reference)]
-            difference = mine.to_numpy() - theirs.loc[mine.index].to_numpy()
-            low, high = mean_interval(difference, rng)
-            row |= {"vs_ga_budget": reference, "minus_ga": difference.mean(),
+            mine = per_run.loc[(name, method, budget)].dropna(axis=1).to_numpy()
+            theirs = per_run.loc[(name, "GA", reference)].dropna(axis=1).to_numpy()
+            low, high = difference_interval(mine, theirs, rng)
+            row |= {"vs_ga_budget": reference, "minus_ga": mine.mean() - theirs.mean(),
                     "minus_ga_low": low, "minus_ga_high": high}
         rows.append(row)
     return pd.DataFrame(rows)

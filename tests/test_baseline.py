@@ -65,16 +65,23 @@ def test_bad_command_lines_exit_2(capsys):
 def test_the_summary_pairs_each_method_with_the_ga_on_the_same_situations():
     runs = pd.DataFrame({"scenario": "s", "method": ["GA", "GA", "PPO"],
                          "budget_steps": 100, "seed": [1, 2, 1], "test_situations": 3,
-                         "test_fitness": [2.0, 4.0, 10.0], "wall_s": 1.0})
+                         "test_fitness": [2.0, 4.0, 10.0], "learner_steps": 100,
+                         "wall_s": 1.0})
     situations = pd.DataFrame({
         "scenario": "s", "method": ["GA"] * 6 + ["PPO"] * 3, "budget_steps": 100,
         "seed": [1, 1, 1, 2, 2, 2, 1, 1, 1], "situation": [0, 1, 2] * 3,
         "test_fitness": [1.0, 2, 3, 3, 4, 5, 9, 10, 11]})
     table = baseline.summary(runs, situations).set_index("method")
-    assert table.loc["GA", "test_fitness"] == 3.0 and table.loc["GA", "seeds"] == 2
-    # PPO minus the GA's per-situation means (2, 3, 4): 7 on every situation
-    assert table.loc["PPO", "minus_ga"] == 7.0
-    assert table.loc["PPO", "minus_ga_low"] == table.loc["PPO", "minus_ga_high"] == 7.0
+    ga = table.loc["GA"]
+    assert ga["test_fitness"] == 3.0 and ga["seeds"] == 2
+    # Student's t over 2 seeds: 3 ± t(0.95, 1) · 1.414 / 1.414
+    assert ga["seeds_high"] - 3.0 == pytest.approx(3.0 - ga["seeds_low"]) == pytest.approx(
+        6.3138, abs=1e-3)
+    # PPO minus the GA, on the same situations: 7, its interval spanning the GA's two seeds
+    # (8 with seed 1 alone, 6 with seed 2) as well as the situations
+    ppo = table.loc["PPO"]
+    assert ppo["minus_ga"] == 7.0
+    assert 6.0 <= ppo["minus_ga_low"] < 7.0 < ppo["minus_ga_high"] <= 8.0
 
 
 def test_the_comparison_resumes_without_running_a_finished_run_again(tmp_path):
@@ -122,3 +129,20 @@ def test_sac_learns_through_the_adapter_and_its_numpy_actor_is_its_policy():
         observation = np.random.default_rng(0).uniform(0, 25, (7, 19)).astype(np.float32)
         expected, _ = model.predict(venv.normalize_obs(observation), deterministic=True)
         np.testing.assert_allclose(act(observation), expected, atol=1e-5)
+
+
+@pytest.mark.full
+def test_a_committed_ga_run_of_the_comparison_comes_out_the_same():
+    """The GA's 1 M-step run of seed 1 in the arena, made again: the same generations, the
+    same chosen controller, the same test score as results/baseline/comparison.csv."""
+    from pathlib import Path
+
+    folder = Path(__file__).resolve().parents[1] / "results" / "baseline"
+    runs = pd.read_csv(folder / "comparison.csv").set_index(
+        ["scenario", "method", "budget_steps", "seed"])
+    committed = runs.loc[("arena_strategy1", "GA", 1_000_000, 1)]
+    result = baseline.ga_run(shipped_scenario("arena_strategy1"), 1_000_000, seed=1)
+    best = result.curve.iloc[result.chosen]
+    assert int(result.curve["learner_steps"].iloc[-1]) == committed["learner_steps"]
+    assert int(best["learner_steps"]) == committed["chosen_at_steps"]
+    assert result.test_fitness.mean() == pytest.approx(committed["test_fitness"], abs=1e-9)

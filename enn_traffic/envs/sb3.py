@@ -17,6 +17,8 @@ subprocesses: every world still steps in one compiled call. It needs the ``rl`` 
 
 from __future__ import annotations
 
+import time
+
 import numpy as np
 
 from enn_traffic.envs.rangefinder import RangefinderVectorEnv
@@ -32,12 +34,15 @@ class Sb3VecEnv(VecEnv):
     """``env``'s worlds under SB3's ``VecEnv`` API. A world whose life ended has already
     started its next situation (same-step autoreset, as SB3 expects); its last observation is
     ``infos[i]["terminal_observation"]`` and a life cut at ``max_steps`` says
-    ``TimeLimit.truncated``, so that SB3 bootstraps its value."""
+    ``TimeLimit.truncated``, so that SB3 bootstraps its value. Each life's end also carries
+    what SB3's ``Monitor`` would write (``episode``: return, length and time), so the adapter
+    counts as wrapped in one: ``evaluate_policy`` reads true returns under ``VecNormalize``."""
 
     def __init__(self, env: RangefinderVectorEnv):
         self.env = env  # before VecEnv's own set-up, which reads its render_mode
         super().__init__(env.num_envs, env.single_observation_space, env.single_action_space)
         self._actions: np.ndarray | None = None
+        self._began = time.time()
 
     def reset(self) -> np.ndarray:
         observation, _ = self.env.reset(seed=self._seeds[0] if self._seeds else None)
@@ -56,7 +61,8 @@ class Sb3VecEnv(VecEnv):
             infos[i] = {"terminal_observation": info["final_obs"][i],
                         "TimeLimit.truncated": bool(truncated[i]),
                         "episode": {"r": float(final["fitness"][i]),
-                                    "l": int(final["steps"][i])},
+                                    "l": int(final["steps"][i]),
+                                    "t": round(time.time() - self._began, 6)},
                         "outcome": str(final["outcome"][i])}
         return observation, reward, done, infos
 
@@ -73,7 +79,9 @@ class Sb3VecEnv(VecEnv):
         return [getattr(self.env, name)(*args, **kwargs)] * len(self._get_indices(indices))
 
     def env_is_wrapped(self, wrapper_class, indices=None) -> list[bool]:
-        return [False] * len(self._get_indices(indices))
+        from stable_baselines3.common.monitor import Monitor
+
+        return [wrapper_class is Monitor] * len(self._get_indices(indices))
 
 
 def sb3_vec_env(env: RangefinderVectorEnv) -> Sb3VecEnv:

@@ -432,8 +432,28 @@ def baseline(paper: Path) -> str:
             f"{row.test_fitness:.0f} ({row.seeds_low:.0f}–{row.seeds_high:.0f}) | "
             f"{mine['test_fitness'].min():.0f}–{mine['test_fitness'].max():.0f} | "
             f"{difference} | {_per_seed_choice(mine)} | {row.wall_s:.0f} s |")
-    lines += ["", "![GA, PPO and SAC](../results/baseline/comparison.png)"]
+    lines += ["", "![GA, PPO and SAC](../results/baseline/comparison.png)", ""]
+    lines += _training_lives(pd.read_csv(folder / "training_lives.csv"), names)
     return "\n".join(lines)
+
+
+def _training_lives(lives: pd.DataFrame, names: dict[str, str]) -> list[str]:
+    """``training_lives.csv``: how long the lives lived while learning were, per method."""
+    lines = [
+        "How long the lives lived while learning were (`training_lives.csv`: one run per "
+        "method, seed 1, its first budget; the GA's every individual in every situation, "
+        "PPO's and SAC's exploring policy):",
+        "",
+        "| scenario | method | learner-steps | lives | median | longest | over 100 steps | "
+        "over 1,000 steps |",
+        "|---|---|---|---|---|---|---|---|",
+    ]
+    for row in lives.sort_values(["scenario", "method"]).itertuples():
+        lines.append(f"| {names.get(row.scenario, row.scenario)} | {row.method} | "
+                     f"{_steps(row.budget_steps)} | {row.lives:,} | {row.median_life:.0f} | "
+                     f"{row.longest_life:,} | {row.lives_over_100:,} | "
+                     f"{row.lives_over_1000:,} |")
+    return lines
 
 
 SECTIONS: dict[str, Callable[[Path], str]] = {

@@ -48,7 +48,8 @@ def test_a_lifes_end_gives_sb3_its_terminal_observation_and_truncation():
             ended.setdefault(int(i), (infos[i], observation[i]))
     assert set(ended) == {0, 1} and reward.dtype == np.float32
     (hit, _), (capped, first_of_next) = ended[0], ended[1]
-    assert capped["TimeLimit.truncated"] and capped["episode"] == {"r": 30.0, "l": 30}
+    assert capped["TimeLimit.truncated"]
+    assert capped["episode"]["r"] == 30.0 == capped["episode"]["l"]
     assert capped["outcome"] == "capped"
     assert not hit["TimeLimit.truncated"] and hit["outcome"] == "collision"
     assert hit["episode"]["r"] == hit["episode"]["l"] < 30
@@ -68,3 +69,21 @@ def test_the_docs_training_example_runs_as_written(capsys):
     printed = capsys.readouterr().out
     mean = float(re.search(r"mean fitness: (\d+) steps lived", printed).group(1))
     assert mean > 0
+
+
+def test_sb3s_evaluate_policy_reads_true_returns_under_vecnormalize():
+    """The adapter writes what SB3's Monitor would, so evaluate_policy takes the lives'
+    returns (the fitness: whole steps) rather than VecNormalize's scaled rewards."""
+    import warnings
+
+    from stable_baselines3 import PPO
+    from stable_baselines3.common.evaluation import evaluate_policy
+    from stable_baselines3.common.vec_env import VecNormalize
+
+    venv = VecNormalize(sb3_vec_env(make_vector_env("arena_strategy1", num_envs=4)))
+    model = PPO("MlpPolicy", venv, n_steps=64, batch_size=256, device="cpu", seed=1)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        returns, lengths = evaluate_policy(model, venv, n_eval_episodes=4,
+                                           return_episode_rewards=True)
+    assert returns == [float(n) for n in lengths] and min(lengths) > 1
