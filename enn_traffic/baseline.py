@@ -590,8 +590,8 @@ def plot(curves: pd.DataFrame, comparison: pd.DataFrame, path: Path) -> None:
     from enn_traffic.report.plots import save_figure
 
     scenarios = sorted(comparison["scenario"].unique())
-    figure, axes = plt.subplots(len(scenarios), 2, figsize=(11, 3.6 * len(scenarios)),
-                                squeeze=False)
+    figure, axes = plt.subplots(len(scenarios), 2, figsize=(12, 3.8 * len(scenarios)),
+                                squeeze=False, gridspec_kw={"wspace": 0.35})
     for row, name in zip(axes, scenarios, strict=True):
         mine = curves[curves["scenario"] == name]
         for (method, budget, _), run in mine.groupby(["method", "budget_steps", "seed"]):

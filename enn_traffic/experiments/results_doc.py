@@ -410,14 +410,16 @@ def baseline(paper: Path) -> str:
                          f"{'yes' if row.setting == best else ''} |")
     lines += [
         "",
-        "Test fitness (steps lived, 0 for a spin) of each run's chosen controller; the mean "
-        "over seeds with its 90% bootstrap interval over seeds; the difference from the GA "
-        "at the same budget, paired on the test situations (each situation's mean over "
-        "seeds), with its 90% interval over situations:",
+        "Test fitness (steps lived, 0 for a spin) of each run's chosen controller: the mean "
+        "over seeds with its 90% Student's t interval over seeds; the difference from the GA "
+        "at the same budget (or the largest GA budget below it) on the same test situations, "
+        "with its 90% bootstrap interval drawing the seeds of both methods and the situations "
+        "(paired) again. The GA's last generation and PPO's last rollout end past the "
+        "budget: the learner-steps simulated are in brackets.",
         "",
-        "| scenario | method | learner-steps | seeds | test situations | test fitness (90% "
-        "interval over seeds) | runs, min–max | minus the GA (90% interval) | chosen at "
-        "(median share of the budget) | wall time per run |",
+        "| scenario | method | budget (simulated) | seeds | test situations | test fitness "
+        "(90% interval over seeds) | runs, min–max | minus the GA (90% interval) | chosen "
+        "at (median share of the budget) | wall time per run |",
         "|---|---|---|---|---|---|---|---|---|---|",
     ]
     for row in summary.itertuples():
@@ -428,7 +430,8 @@ def baseline(paper: Path) -> str:
                       if not pd.isna(getattr(row, "minus_ga", np.nan)) else "")
         lines.append(
             f"| {names.get(row.scenario, row.scenario)} | {row.method} | "
-            f"{_steps(row.budget_steps)} | {row.seeds} | {row.test_situations} | "
+            f"{_steps(row.budget_steps)} ({row.learner_steps / 1e6:.2f} M) | {row.seeds} | "
+            f"{row.test_situations} | "
             f"{row.test_fitness:.0f} ({row.seeds_low:.0f}–{row.seeds_high:.0f}) | "
             f"{mine['test_fitness'].min():.0f}–{mine['test_fitness'].max():.0f} | "
             f"{difference} | {_per_seed_choice(mine)} | {row.wall_s:.0f} s |")
