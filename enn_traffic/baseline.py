@@ -39,6 +39,7 @@ from enn_traffic.errors import InputError
 from enn_traffic.evolution import ga
 from enn_traffic.io import write_atomic
 from enn_traffic.progress import log
+from enn_traffic.report.stats import bootstrap_interval
 from enn_traffic.runner import ga_params
 from enn_traffic.scenario import Scenario
 from enn_traffic.sim.world import SituationResults
@@ -440,7 +441,7 @@ def compare(scenarios: list[Scenario], out: Path, plan: tuple[Planned, ...] = PL
                "seed": seed}
         best = result.curve.iloc[result.chosen]
         fitness = result.test_fitness
-        low, high = mean_interval(fitness, np.random.default_rng(seed))
+        low, high = bootstrap_interval(fitness, np.random.default_rng(seed))
         # the situations and curve first: a run is done once its comparison row is written
         _append(out / "situations.csv", pd.DataFrame(
             {**run, "situation": np.arange(len(fitness)), "test_fitness": fitness}), run)
@@ -501,16 +502,6 @@ def run_recording_lives(scenario: Scenario, method: str, setting: str, budget: i
     else:
         result = rl_run(scenario, method, SEARCH[method][setting], budget, seed, test, lives)
     return result, np.asarray(lives)
-
-
-def mean_interval(values: np.ndarray, rng: np.random.Generator, level: float = 0.9,
-                  draws: int = 2000) -> tuple[float, float]:
-    """The central ``level`` bootstrap interval of the mean of ``values`` (the test
-    situations, or the seeds); a single value is its own interval."""
-    values = np.asarray(values, dtype=np.float64)
-    means = values[rng.integers(0, len(values), (draws, len(values)))].mean(axis=1)
-    low, high = np.quantile(means, [(1 - level) / 2, (1 + level) / 2])
-    return float(low), float(high)
 
 
 def seeds_interval(values: np.ndarray, level: float = 0.9) -> tuple[float, float]:

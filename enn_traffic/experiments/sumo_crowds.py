@@ -68,6 +68,7 @@ from enn_traffic.experiments.simultaneous import (
 from enn_traffic.experiments.study import Study
 from enn_traffic.io import write_csv, write_text
 from enn_traffic.provenance import rules_version, sources_of
+from enn_traffic.report.stats import bootstrap_interval
 from enn_traffic.runner import ga_params
 from enn_traffic.sim.sumo_crowd import SumoCrowd
 from enn_traffic.sim.sumo_world import SumoWorld
@@ -335,16 +336,6 @@ def measure(study: Study, family: Family, learning: SumoLearning,
     return measured
 
 
-def interval(values: np.ndarray, rng: np.random.Generator, draws: int = 2000,
-             level: float = 0.9) -> tuple[float, float]:
-    """The central ``level`` interval of the mean of ``values`` when they are drawn again
-    with replacement (bootstrap)."""
-    values = np.asarray(values, dtype=np.float64)
-    means = values[rng.integers(0, len(values), (draws, len(values)))].mean(axis=1)
-    low, high = np.quantile(means, [(1 - level) / 2, (1 + level) / 2])
-    return float(low), float(high)
-
-
 def table(situations: pd.DataFrame, columns: list[str]) -> pd.DataFrame:
     """Per strategy: the mean of each span's collision and conflict rates, with the 90%
     interval of the collision rate over the situations."""
@@ -353,7 +344,7 @@ def table(situations: pd.DataFrame, columns: list[str]) -> pd.DataFrame:
     for strategy, group in situations.groupby("strategy"):
         row = {"strategy": strategy}
         for span in columns:
-            low, high = interval(group[span].to_numpy(), rng)
+            low, high = bootstrap_interval(group[span].to_numpy(), rng)
             row |= {f"{span}_collisions_per_s": round(group[span].mean(), 4),
                     f"{span}_low": round(low, 4), f"{span}_high": round(high, 4),
                     f"{span}_conflicts_per_h": round(group[f"{span}_conflicts"].mean(), 1)}

@@ -4,7 +4,8 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from enn_traffic.experiments.sumo_crowds import interval, table
+from enn_traffic.experiments.sumo_crowds import table
+from enn_traffic.report.stats import bootstrap_interval as interval
 
 
 def test_interval_of_equal_values_is_that_value_and_brackets_the_mean_otherwise():

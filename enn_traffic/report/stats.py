@@ -1,0 +1,15 @@
+"""Intervals the result tables carry (docs/results.md): a claim is a measurement with one."""
+
+from __future__ import annotations
+
+import numpy as np
+
+
+def bootstrap_interval(values: np.ndarray, rng: np.random.Generator, draws: int = 2000,
+                       level: float = 0.9) -> tuple[float, float]:
+    """The central ``level`` interval of the mean of ``values`` when they are drawn again
+    with replacement (bootstrap)."""
+    values = np.asarray(values, dtype=np.float64)
+    means = values[rng.integers(0, len(values), (draws, len(values)))].mean(axis=1)
+    low, high = np.quantile(means, [(1 - level) / 2, (1 + level) / 2])
+    return float(low), float(high)
