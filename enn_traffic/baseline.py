@@ -517,55 +517,62 @@ def seeds_interval(values: np.ndarray, level: float = 0.9) -> tuple[float, float
     return float(values.mean() - half), float(values.mean() + half)
 
 
-def difference_interval(mine: np.ndarray, theirs: np.ndarray, rng: np.random.Generator,
-                        level: float = 0.9, draws: int = 4000) -> tuple[float, float]:
-    """The central ``level`` interval of mean(mine) − mean(theirs), each (seeds, situations)
-    on the same situations, when the seeds of each method and the situations (paired) are
-    drawn again with replacement: the seeds' spread counts, as well as the situations'."""
-    situations = rng.integers(0, mine.shape[1], (draws, mine.shape[1]))
-    means = []
-    for chosen in situations:
-        a = mine[rng.integers(0, len(mine), len(mine))][:, chosen].mean()
-        b = theirs[rng.integers(0, len(theirs), len(theirs))][:, chosen].mean()
-        means.append(a - b)
-    low, high = np.quantile(means, [(1 - level) / 2, (1 + level) / 2])
-    return float(low), float(high)
-
-
-def summary(comparison: pd.DataFrame, situations: pd.DataFrame) -> pd.DataFrame:
+def summary(comparison: pd.DataFrame, curves: pd.DataFrame) -> pd.DataFrame:
     """Per scenario, method and budget: the seeds' mean test fitness with its 90% t interval
-    over the seeds, and the difference from the GA at the same budget (or the nearest below)
-    on the same test situations, with its 90% interval over seeds and situations
-    (:func:`difference_interval`)."""
+    over the seeds, the learner-steps and wall time, how many candidates each run chose
+    among (mean), how many runs chose their last one, and how far the chosen controllers'
+    validation scores stood above their test scores (the choice's optimism)."""
+    run_keys = ["scenario", "method", "budget_steps", "seed"]
+    per_run = curves.groupby(run_keys)["learner_steps"].agg(["size", "max"])
+    runs_of = comparison.join(per_run, on=run_keys)
     rows = []
-    rng = np.random.default_rng(0)
-    per_run = situations.pivot_table(index=["scenario", "method", "budget_steps", "seed"],
-                                     columns="situation", values="test_fitness")
+    for (name, method, budget), runs in runs_of.groupby(["scenario", "method", "budget_steps"]):
+        low, high = seeds_interval(runs["test_fitness"].to_numpy())
+        rows.append({
+            "scenario": name, "method": method, "budget_steps": budget, "seeds": len(runs),
+            "test_situations": int(runs["test_situations"].iloc[0]),
+            "test_fitness": runs["test_fitness"].mean(), "seeds_low": low, "seeds_high": high,
+            "learner_steps": runs["learner_steps"].mean(), "wall_s": runs["wall_s"].mean(),
+            "candidates": runs["size"].mean(),
+            "last_chosen": int((runs["chosen_at_steps"] == runs["max"]).sum()),
+            "validation_minus_test": (runs["validation_fitness"] - runs["test_fitness"]).mean()})
+    return pd.DataFrame(rows)
+
+
+def differences(comparison: pd.DataFrame, level: float = 0.9) -> pd.DataFrame:
+    """PPO's and SAC's test fitness minus the GA's, at every pair of budgets in a scenario:
+    the difference of the seeds' means with its Welch t interval (the seeds' spread, the
+    main spread of RL, counts; each seed's score is the mean over the same situations)."""
+    from scipy import stats
+
+    rows = []
     for (name, method, budget), runs in comparison.groupby(
             ["scenario", "method", "budget_steps"]):
-        low, high = seeds_interval(runs["test_fitness"].to_numpy())
-        row = {"scenario": name, "method": method, "budget_steps": budget,
-               "seeds": len(runs), "test_situations": int(runs["test_situations"].iloc[0]),
-               "test_fitness": runs["test_fitness"].mean(), "seeds_low": low,
-               "seeds_high": high, "learner_steps": runs["learner_steps"].mean(),
-               "wall_s": runs["wall_s"].mean()}
-        ga_budgets = sorted(b for (s, m, b) in comparison.groupby(
-            ["scenario", "method", "budget_steps"]).groups if s == name and m == "GA")
-        reference = max((b for b in ga_budgets if b <= budget), default=None)
-        if method != "GA" and reference is not None:
-            mine = per_run.loc[(name, method, budget)].dropna(axis=1).to_numpy()
-            theirs = per_run.loc[(name, "GA", reference)].dropna(axis=1).to_numpy()
-            low, high = difference_interval(mine, theirs, rng)
-            row |= {"vs_ga_budget": reference, "minus_ga": mine.mean() - theirs.mean(),
-                    "minus_ga_low": low, "minus_ga_high": high}
-        rows.append(row)
+        if method == "GA":
+            continue
+        ga = comparison[(comparison["scenario"] == name) & (comparison["method"] == "GA")]
+        for ga_budget, theirs in ga.groupby("budget_steps"):
+            mine, other = runs["test_fitness"].to_numpy(), theirs["test_fitness"].to_numpy()
+            low = high = np.nan
+            if len(mine) > 1 and len(other) > 1:
+                interval = stats.ttest_ind(mine, other, equal_var=False).confidence_interval(
+                    level)
+                low, high = float(interval.low), float(interval.high)
+            rows.append({"scenario": name, "method": method, "budget_steps": budget,
+                         "ga_budget_steps": ga_budget, "seeds": len(mine),
+                         "ga_seeds": len(other), "minus_ga": mine.mean() - other.mean(),
+                         "minus_ga_low": low, "minus_ga_high": high})
     return pd.DataFrame(rows)
 
 
 def write_summary(out: Path) -> pd.DataFrame:
-    """``out/comparison_summary.csv`` and ``out/comparison.png`` from the runs' CSVs."""
-    table = summary(_read(out / "comparison.csv"), _read(out / "situations.csv"))
+    """``out/comparison_summary.csv``, ``comparison_differences.csv`` and
+    ``comparison.png`` from the runs' CSVs."""
+    runs = _read(out / "comparison.csv")
+    table = summary(runs, _read(out / "curves.csv"))
     write_atomic(out / "comparison_summary.csv", partial(table.to_csv, index=False))
+    write_atomic(out / "comparison_differences.csv",
+                 partial(differences(runs).to_csv, index=False))
     plot(_read(out / "curves.csv"), _read(out / "comparison.csv"), out / "comparison.png")
     return table
 

@@ -70,26 +70,26 @@ def test_bad_command_lines_exit_2(capsys):
     assert "sumo_strategy1" in capsys.readouterr().err
 
 
-def test_the_summary_pairs_each_method_with_the_ga_on_the_same_situations():
-    runs = pd.DataFrame({"scenario": "s", "method": ["GA", "GA", "PPO"],
-                         "budget_steps": 100, "seed": [1, 2, 1], "test_situations": 3,
-                         "test_fitness": [2.0, 4.0, 10.0], "learner_steps": 100,
-                         "wall_s": 1.0})
-    situations = pd.DataFrame({
-        "scenario": "s", "method": ["GA"] * 6 + ["PPO"] * 3, "budget_steps": 100,
-        "seed": [1, 1, 1, 2, 2, 2, 1, 1, 1], "situation": [0, 1, 2] * 3,
-        "test_fitness": [1.0, 2, 3, 3, 4, 5, 9, 10, 11]})
-    table = baseline.summary(runs, situations).set_index("method")
+def test_the_summary_and_the_differences_carry_the_seeds_spread():
+    runs = pd.DataFrame({"scenario": "s", "method": ["GA", "GA", "PPO", "PPO"],
+                         "budget_steps": 100, "seed": [1, 2, 1, 2], "test_situations": 3,
+                         "test_fitness": [2.0, 4.0, 9.0, 11.0], "learner_steps": 100,
+                         "validation_fitness": [5.0, 4.0, 9.0, 12.0],
+                         "chosen_at_steps": [50, 100, 100, 100], "wall_s": 1.0})
+    curves = pd.DataFrame({"scenario": "s", "method": ["GA"] * 4 + ["PPO"] * 2,
+                           "budget_steps": 100, "seed": [1, 1, 2, 2, 1, 2],
+                           "learner_steps": [50, 100, 50, 100, 100, 100]})
+    table = baseline.summary(runs, curves).set_index("method")
     ga = table.loc["GA"]
-    assert ga["test_fitness"] == 3.0 and ga["seeds"] == 2
+    assert ga["test_fitness"] == 3.0 and ga["seeds"] == 2 and ga["candidates"] == 2
+    assert ga["last_chosen"] == 1 and ga["validation_minus_test"] == 1.5
     # Student's t over 2 seeds: 3 ± t(0.95, 1) · 1.414 / 1.414
     assert ga["seeds_high"] - 3.0 == pytest.approx(3.0 - ga["seeds_low"]) == pytest.approx(
         6.3138, abs=1e-3)
-    # PPO minus the GA, on the same situations: 7, its interval spanning the GA's two seeds
-    # (8 with seed 1 alone, 6 with seed 2) as well as the situations
-    ppo = table.loc["PPO"]
-    assert ppo["minus_ga"] == 7.0
-    assert 6.0 <= ppo["minus_ga_low"] < 7.0 < ppo["minus_ga_high"] <= 8.0
+    difference = baseline.differences(runs).iloc[0]
+    # Welch over 2 + 2 seeds of spread 1.414: 7 ± t(0.95, 2) · 1.414
+    assert difference["minus_ga"] == 7.0
+    assert difference["minus_ga_high"] - 7.0 == pytest.approx(2.9200 * np.sqrt(2), abs=1e-3)
 
 
 def test_the_comparison_resumes_without_running_a_finished_run_again(tmp_path):
