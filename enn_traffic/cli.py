@@ -426,7 +426,9 @@ COMMANDS = {"run": _cmd_run, "evaluate": _cmd_evaluate, "render": _cmd_render,
 # What an interrupted command leaves (the others leave nothing finished).
 INTERRUPTED = {"run": "; finished generations are checkpointed (continue with --resume)",
                "reproduce": "; finished runs and experiments are kept: the same command "
-                            "continues"}
+                            "continues",
+               "baseline": "; finished runs are kept in OUT/comparison.csv: the same command "
+                           "continues"}
 
 
 def main(argv: list[str] | None = None) -> int:

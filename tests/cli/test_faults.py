@@ -100,6 +100,26 @@ def test_ctrl_c_ends_every_executor_with_one_line_130_and_the_checkpoint(tmp_pat
         assert resumed.returncode == 0, resumed.stderr
 
 
+def test_ctrl_c_ends_a_baseline_comparison_and_its_workers(tmp_path):
+    """The comparison's runs in worker processes: Ctrl-C exits 130 with one line that says
+    finished runs are kept, and no worker outlives it."""
+    process = subprocess.Popen(
+        [sys.executable, "-m", "enn_traffic", "baseline", str(ARENA), "--plan", "GA:20M:2",
+         "--workers", "2", "--quiet", "--out", str(tmp_path / "baseline")],
+        stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True, start_new_session=True)
+    deadline = time.monotonic() + 60
+    while len(_children(process.pid)) < 2 and time.monotonic() < deadline:
+        time.sleep(0.2)
+    workers = _children(process.pid)
+    assert len(workers) >= 2, "the comparison started no workers"
+    time.sleep(2)  # past their imports: mid-run
+    os.killpg(process.pid, signal.SIGINT)
+    assert process.wait(timeout=60) == 130
+    message = process.stderr.read().strip().splitlines()
+    assert len(message) == 1 and "finished runs are kept" in message[0], message
+    assert _gone(workers, 30), "a worker outlived the comparison"
+
+
 @pytest.mark.parametrize("when", ["while the pool starts", "mid-run"])
 def test_workers_end_with_a_killed_parent(tmp_path, when):
     """kill -9 of a run of the process executor: its pool workers end within seconds (they
