@@ -39,7 +39,7 @@ from enn_traffic.errors import InputError
 from enn_traffic.evolution import ga
 from enn_traffic.io import write_atomic
 from enn_traffic.progress import log
-from enn_traffic.report.stats import bootstrap_interval
+from enn_traffic.report.stats import bootstrap_interval, t_interval
 from enn_traffic.runner import ga_params
 from enn_traffic.scenario import Scenario
 from enn_traffic.sim.world import SituationResults
@@ -97,13 +97,16 @@ class RunResult:
     """One run: its validation curve (learner_steps, wall_s, validation_fitness per
     candidate), the chosen candidate's row in it, that controller's fitness on each test
     situation (empty for a search run, which reads no test key), and the learner-steps it
-    simulated in all (the GA's last generation and PPO's last rollout end past the budget)."""
+    simulated in all (the GA's last generation and PPO's last rollout end past the budget)
+    and the length of every life lived in training (the GA's individuals', the exploring
+    policy's)."""
 
     curve: pd.DataFrame
     chosen: int
     test_fitness: np.ndarray
     wall_s: float
     learner_steps: int
+    training_lives: np.ndarray
 
 
 # --- situations -----------------------------------------------------------------------------
@@ -147,11 +150,9 @@ def policy_fitness(scenario: Scenario, act: Callable[[np.ndarray], np.ndarray],
 
 # --- the GA ---------------------------------------------------------------------------------
 
-def ga_run(scenario: Scenario, budget: int, seed: int, test: bool = True,
-           lives: list | None = None) -> RunResult:
+def ga_run(scenario: Scenario, budget: int, seed: int, test: bool = True) -> RunResult:
     """The scenario's GA, seeded by ``seed``, until ``budget`` learner-steps are simulated;
-    each generation's champion scored on validation, the best of them on test. ``lives``
-    collects the length of every life lived in training."""
+    each generation's champion scored on validation, the best of them on test."""
     world = rangefinder_world(scenario)
     params = ga_params(scenario)
     rng = np.random.default_rng([scenario.seed, seed])
@@ -159,12 +160,11 @@ def ga_run(scenario: Scenario, budget: int, seed: int, test: bool = True,
                                        world.spec.chromosome_length, params.init_range)
     run = ga.generations(ga.GAState(generation=0, population=population, rng=rng),
                          world.evaluate, params)
-    spent, began, rows, state = 0, time.perf_counter(), [], None
+    spent, began, rows, lives, state = 0, time.perf_counter(), [], [], None
     while spent < budget:
         state, _, results = next(run)
         spent += int(results.steps.sum())
-        if lives is not None:
-            lives.extend(results.steps.ravel().tolist())
+        lives.append(results.steps.ravel())
         rows.append((spent, time.perf_counter() - began))
     wall = time.perf_counter() - began
     validation = chromosome_fitness(scenario, state.champions, VALIDATION_KEY,
@@ -174,7 +174,8 @@ def ga_run(scenario: Scenario, budget: int, seed: int, test: bool = True,
                                  situation_count(scenario, TEST_SITUATIONS))[0]
               if test else np.empty(0))
     curve = pd.DataFrame(rows, columns=["learner_steps", "wall_s"])
-    return RunResult(curve.assign(validation_fitness=validation), chosen, tested, wall, spent)
+    return RunResult(curve.assign(validation_fitness=validation), chosen, tested, wall, spent,
+                     np.concatenate(lives))
 
 
 # --- PPO and SAC ----------------------------------------------------------------------------
@@ -240,10 +241,9 @@ def rl_model(method: str, venv, settings: dict, seed: int):
 
 
 def rl_run(scenario: Scenario, method: str, settings: dict, budget: int, seed: int,
-           test: bool = True, lives: list | None = None) -> RunResult:
+           test: bool = True) -> RunResult:
     """PPO or SAC with ``settings`` for ``budget`` learner-steps; its policy at every
-    ``budget / CHECKPOINTS`` steps scored on validation, the best of them on test. ``lives``
-    collects the length of every life lived in training (the exploring policy's)."""
+    ``budget / CHECKPOINTS`` steps scored on validation, the best of them on test."""
     try:
         import torch
         from stable_baselines3.common.callbacks import BaseCallback
@@ -261,13 +261,13 @@ def rl_run(scenario: Scenario, method: str, settings: dict, budget: int, seed: i
     model = rl_model(method, venv, settings, seed)
     every = max(1, budget // CHECKPOINTS)
     snapshots: list[tuple[int, float, Callable]] = []
+    lives: list[int] = []
     began = time.perf_counter()
 
     class Snapshots(BaseCallback):
         def _on_step(self) -> bool:
-            if lives is not None:
-                lives.extend(info["episode"]["l"] for info in self.locals["infos"]
-                             if "episode" in info)
+            lives.extend(info["episode"]["l"] for info in self.locals["infos"]
+                         if "episode" in info)
             if self.num_timesteps >= every * (len(snapshots) + 1):
                 snapshots.append((self.num_timesteps, time.perf_counter() - began,
                                   numpy_actor(model, copy.deepcopy(venv.obs_rms))))
@@ -275,17 +275,16 @@ def rl_run(scenario: Scenario, method: str, settings: dict, budget: int, seed: i
 
     model.learn(total_timesteps=budget, callback=Snapshots())
     wall = time.perf_counter() - began
-    validation = np.array([
-        policy_fitness(scenario, act, VALIDATION_KEY,
-                       situation_count(scenario, VALIDATION_SITUATIONS)).mean()
-        for _, _, act in snapshots])
+    validation_count = situation_count(scenario, VALIDATION_SITUATIONS)
+    validation = np.array([policy_fitness(scenario, act, VALIDATION_KEY, validation_count).mean()
+                           for _, _, act in snapshots])
     chosen = int(np.argmax(validation))
     tested = (policy_fitness(scenario, snapshots[chosen][2], TEST_KEY,
                              situation_count(scenario, TEST_SITUATIONS))
               if test else np.empty(0))
     curve = pd.DataFrame([s[:2] for s in snapshots], columns=["learner_steps", "wall_s"])
     return RunResult(curve.assign(validation_fitness=validation), chosen, tested, wall,
-                     int(model.num_timesteps))
+                     int(model.num_timesteps), np.asarray(lives, dtype=np.int64))
 
 
 # --- the comparison -------------------------------------------------------------------------
@@ -315,45 +314,33 @@ def _append(path: Path, rows: pd.DataFrame, run: dict | None = None) -> None:
     write_atomic(path, partial(table.to_csv, index=False))
 
 
-def _worker_start(parent: int) -> None:
-    """A worker ends with the comparison that started it, and leaves Ctrl-C to it."""
-    import signal
-
-    from enn_traffic.traffic.fresh import end_with_parent
-
-    end_with_parent(parent)
-    signal.signal(signal.SIGINT, signal.SIG_IGN)
-
-
-def _jobs(jobs: list[tuple], workers: int, done: Callable[[tuple, object], None],
-          progress: bool, run: Callable = run_one) -> None:
+def _jobs(jobs: list[tuple], workers: int, done: Callable[[tuple, RunResult], None],
+          progress: bool) -> None:
     """Run ``jobs`` (run_one's arguments) on ``workers`` spawned processes (numba's threads
     do not survive a fork), handing each result to ``done`` as it ends."""
     import multiprocessing
 
     from tqdm import tqdm
 
-    from enn_traffic.evolution.backends import _deaf_to_ctrl_c
+    from enn_traffic.evolution.backends import deaf_to_ctrl_c, quiet_worker, stop_pool
 
     bar = tqdm(total=len(jobs), desc="runs", unit="run", disable=not progress or not jobs)
     if workers == 1 or len(jobs) <= 1:
         for job in jobs:
-            done(job, run(*job))
+            done(job, run_one(*job))
             bar.update()
         bar.close()
         return
     pool = ProcessPoolExecutor(workers, mp_context=multiprocessing.get_context("spawn"),
-                               initializer=_worker_start, initargs=(os.getpid(),))
+                               initializer=quiet_worker, initargs=(os.getpid(),))
     try:
-        with _deaf_to_ctrl_c():
-            futures = {pool.submit(run, *job): job for job in jobs}
+        with deaf_to_ctrl_c():
+            futures = {pool.submit(run_one, *job): job for job in jobs}
         for future in as_completed(futures):
             done(futures[future], future.result())
             bar.update()
     except BaseException:  # Ctrl-C, SIGTERM: the runs end now; finished ones are written
-        for process in list((getattr(pool, "_processes", None) or {}).values()):
-            process.terminate()
-        pool.shutdown(wait=False, cancel_futures=True)
+        stop_pool(pool)
         raise
     pool.shutdown()
     bar.close()
@@ -442,7 +429,9 @@ def compare(scenarios: list[Scenario], out: Path, plan: tuple[Planned, ...] = PL
         best = result.curve.iloc[result.chosen]
         fitness = result.test_fitness
         low, high = bootstrap_interval(fitness, np.random.default_rng(seed))
-        # the situations and curve first: a run is done once its comparison row is written
+        # the rest first: a run is done once its comparison row is written
+        if _lives_run(plan, method, budget, seed):
+            _record_lives(out / "training_lives.csv", job, result)
         _append(out / "situations.csv", pd.DataFrame(
             {**run, "situation": np.arange(len(fitness)), "test_fitness": fitness}), run)
         _append(out / "curves.csv", result.curve.assign(**run), run)
@@ -455,7 +444,7 @@ def compare(scenarios: list[Scenario], out: Path, plan: tuple[Planned, ...] = PL
             "chosen_at_steps": int(best["learner_steps"]), "wall_s": result.wall_s}]))
 
     _jobs(sorted(jobs, key=_cost, reverse=True), workers, record, progress)
-    training_lives(scenarios, out, plan, workers, progress)
+    training_lives(scenarios, out, plan, workers, progress)  # rows a past run left out
     write_summary(out)
     return _read(out / "comparison.csv")
 
@@ -464,57 +453,41 @@ def training_lives(scenarios: list[Scenario], out: Path, plan: tuple[Planned, ..
                    workers: int = 1, progress: bool = True) -> pd.DataFrame:
     """How long the lives lived in training were: one run of each method (seed 1, its first
     budget in ``plan``, the comparison's setting) with every life recorded, into
-    ``out/training_lives.csv`` (a run already there is not made again). Training keys only:
-    this reads no validation or test situation beyond the run's own choice."""
+    ``out/training_lives.csv``. :func:`compare` writes these rows as it makes those runs; a
+    run made again here is one whose row is missing. Training keys only: this reads no
+    validation or test situation beyond the run's own choice."""
     path = out / "training_lives.csv"
     tuning, have = _read(out / "tuning.csv"), _read(path)
     done_before = set() if have.empty else set(zip(have["scenario"], have["method"],
                                                    strict=True))
-    budgets = {p.method: p.budget_steps for p in reversed(plan)}  # each method's first
-    jobs = [(scenario, method, "paper" if method == "GA"
-             else chosen_setting(tuning, scenario.name, method), budget, 1, False)
-            for scenario in scenarios for method, budget in budgets.items()
-            if (scenario.name, method) not in done_before]
+    jobs = [(scenario, p.method, "paper" if p.method == "GA"
+             else chosen_setting(tuning, scenario.name, p.method), p.budget_steps, 1, False)
+            for scenario in scenarios for p in plan
+            if _lives_run(plan, p.method, p.budget_steps, 1)
+            and (scenario.name, p.method) not in done_before]
 
-    def record(job: tuple, result: tuple[RunResult, np.ndarray]) -> None:
-        scenario, method, setting, budget, seed, _ = job
-        lived = result[1]
-        _append(path, pd.DataFrame([{
-            "scenario": scenario.name, "method": method, "setting": setting,
-            "budget_steps": budget, "seed": seed, "lives": len(lived),
-            "median_life": float(np.median(lived)), "longest_life": int(lived.max()),
-            "lives_over_100": int((lived > 100).sum()),
-            "lives_over_1000": int((lived > 1000).sum())}]))
-
-    _jobs(jobs, workers, record, progress, run=run_recording_lives)
+    _jobs(jobs, workers, partial(_record_lives, path), progress)
     return _read(path)
 
 
-def run_recording_lives(scenario: Scenario, method: str, setting: str, budget: int,
-                        seed: int, test: bool) -> tuple[RunResult, np.ndarray]:
-    """:func:`run_one`, with the length of every training life."""
-    import numba
-
-    numba.set_num_threads(1)
-    lives: list[int] = []
-    if method == "GA":
-        result = ga_run(scenario, budget, seed, test, lives)
-    else:
-        result = rl_run(scenario, method, SEARCH[method][setting], budget, seed, test, lives)
-    return result, np.asarray(lives)
+def _lives_run(plan: tuple[Planned, ...], method: str, budget: int, seed: int) -> bool:
+    """Is this run the one whose training lives ``training_lives.csv`` holds: seed 1 at
+    the method's first budget in ``plan``?"""
+    first = next(p.budget_steps for p in plan if p.method == method)
+    return seed == 1 and budget == first
 
 
-def seeds_interval(values: np.ndarray, level: float = 0.9) -> tuple[float, float]:
-    """Student's t interval of the mean of a few seeds' scores (a bootstrap over 3–5 seeds
-    covers poorly); one seed is its own interval."""
-    from scipy import stats
-
-    values = np.asarray(values, dtype=np.float64)
-    if len(values) < 2:
-        return float(values.mean()), float(values.mean())
-    half = stats.t.ppf((1 + level) / 2, len(values) - 1) * values.std(ddof=1) / np.sqrt(
-        len(values))
-    return float(values.mean() - half), float(values.mean() + half)
+def _record_lives(path: Path, job: tuple, result: RunResult) -> None:
+    """A run's training lives, summarised as a row of ``training_lives.csv``."""
+    scenario, method, setting, budget, seed, _ = job
+    lived = result.training_lives
+    _append(path, pd.DataFrame([{
+        "scenario": scenario.name, "method": method, "setting": setting,
+        "budget_steps": budget, "seed": seed, "lives": len(lived),
+        "median_life": float(np.median(lived)), "longest_life": int(lived.max()),
+        "lives_over_100": int((lived > 100).sum()),
+        "lives_over_1000": int((lived > 1000).sum())}]),
+        {"scenario": scenario.name, "method": method})
 
 
 def summary(comparison: pd.DataFrame, curves: pd.DataFrame) -> pd.DataFrame:
@@ -527,7 +500,7 @@ def summary(comparison: pd.DataFrame, curves: pd.DataFrame) -> pd.DataFrame:
     runs_of = comparison.join(per_run, on=run_keys)
     rows = []
     for (name, method, budget), runs in runs_of.groupby(["scenario", "method", "budget_steps"]):
-        low, high = seeds_interval(runs["test_fitness"].to_numpy())
+        low, high = t_interval(runs["test_fitness"].to_numpy())
         rows.append({
             "scenario": name, "method": method, "budget_steps": budget, "seeds": len(runs),
             "test_situations": int(runs["test_situations"].iloc[0]),

@@ -120,7 +120,7 @@ def test_the_comparison_resumes_without_running_a_finished_run_again(tmp_path):
     assert (lives["longest_life"] <= 300).all() and (lives["median_life"] > 0).all()
 
 
-def test_sac_learns_through_the_adapter_and_its_numpy_actor_is_its_policy():
+def test_numpy_actor_is_the_sb3_policy_of_ppo_and_sac_after_learning():
     pytest.importorskip("stable_baselines3")
     from stable_baselines3.common.vec_env import VecNormalize
 

@@ -59,19 +59,31 @@ def _single_threaded_world(scenario: Scenario) -> World:
     return make_world(scenario)
 
 
+def quiet_worker(parent: int) -> None:
+    """A pool worker's start: it ends with its parent, and leaves Ctrl-C to it (Ctrl-C
+    reaches the terminal's whole process group: the parent says it and ends the workers; a
+    worker that left by itself could break the pool before the parent heard it)."""
+    end_with_parent(parent)
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+
+
+def stop_pool(pool: ProcessPoolExecutor) -> None:
+    """End a pool's workers now, their work unfinished (on Ctrl-C or SIGTERM)."""
+    for process in list((getattr(pool, "_processes", None) or {}).values()):
+        process.terminate()
+    pool.shutdown(wait=False, cancel_futures=True)
+
+
 def _init_worker(scenario: Scenario, parent: int) -> None:
     global _worker_world
-    end_with_parent(parent)
-    # Ctrl-C reaches the terminal's whole process group: the parent says it and ends the
-    # workers (a worker that left by itself could break the pool before the parent heard it)
-    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    quiet_worker(parent)
     _worker_world = _single_threaded_world(scenario)
 
 
 @contextlib.contextmanager
-def _deaf_to_ctrl_c():
+def deaf_to_ctrl_c():
     """SIGINT ignored while workers are started, so that they ignore it from their first
-    instruction (Python keeps an inherited SIG_IGN; :func:`_init_worker` then keeps it): a
+    instruction (Python keeps an inherited SIG_IGN; :func:`quiet_worker` then keeps it): a
     Ctrl-C while a worker imports would print its traceback."""
     if threading.current_thread() is not threading.main_thread():
         yield
@@ -106,14 +118,12 @@ class ProcessEvaluator:
 
     def evaluate(self, population: np.ndarray, key: int = 0) -> SituationResults:
         chunks = np.array_split(population, min(self.workers * 4, len(population)))
-        with _deaf_to_ctrl_c():  # the pool starts its workers as chunks are submitted
+        with deaf_to_ctrl_c():  # the pool starts its workers as chunks are submitted
             futures = [self.pool.submit(_evaluate_chunk, chunk, key) for chunk in chunks]
         try:
             return SituationResults.concatenate([future.result() for future in futures])
         except BaseException:  # Ctrl-C, SIGTERM: the workers end now, their chunks unfinished
-            for process in list((getattr(self.pool, "_processes", None) or {}).values()):
-                process.terminate()
-            self.pool.shutdown(wait=False, cancel_futures=True)
+            stop_pool(self.pool)
             raise
 
     def close(self) -> None:

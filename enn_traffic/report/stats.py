@@ -13,3 +13,16 @@ def bootstrap_interval(values: np.ndarray, rng: np.random.Generator, draws: int 
     means = values[rng.integers(0, len(values), (draws, len(values)))].mean(axis=1)
     low, high = np.quantile(means, [(1 - level) / 2, (1 + level) / 2])
     return float(low), float(high)
+
+
+def t_interval(values: np.ndarray, level: float = 0.9) -> tuple[float, float]:
+    """Student's t interval of the mean of a few values (seeds' scores: a bootstrap over 3–5
+    covers poorly); a single value is its own interval."""
+    from scipy import stats
+
+    values = np.asarray(values, dtype=np.float64)
+    if len(values) < 2:
+        return float(values.mean()), float(values.mean())
+    half = stats.t.ppf((1 + level) / 2, len(values) - 1) * values.std(ddof=1) / np.sqrt(
+        len(values))
+    return float(values.mean() - half), float(values.mean() + half)
