@@ -364,11 +364,6 @@ def _steps(budget: float) -> str:
     return f"{budget / 1e6:g} M"
 
 
-def _per_seed_choice(runs: pd.DataFrame) -> str:
-    """Where the runs' controllers were chosen, as a share of the budget (median)."""
-    return f"{(runs['chosen_at_steps'] / runs['budget_steps']).median():.0%}"
-
-
 def baseline(paper: Path) -> str:
     """The GA against PPO and SAC (:mod:`enn_traffic.baseline`), from ``results/baseline``
     beside ``paper``: the protocol, the search, the table and the paired differences."""
