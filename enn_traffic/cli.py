@@ -13,7 +13,7 @@ import threading
 import time
 from pathlib import Path
 
-from enn_traffic import __version__
+from enn_traffic import __version__, stopping
 from enn_traffic.errors import InputError
 
 EPILOG = "Scenario files are described in docs/scenarios.md."
@@ -436,25 +436,33 @@ def main(argv: list[str] | None = None) -> int:
 
     args = build_parser().parse_args(argv)
     show_messages(quiet=getattr(args, "quiet", False))
-    handlers = {}
+    handlers, hook = {}, sys.unraisablehook
+    stopping.reset()
     if threading.current_thread() is threading.main_thread():
         # a job started with & by a script inherits SIGINT ignored: kill -INT must stop it;
         # SIGTERM (kill, a batch system's time limit) stops a command as Ctrl-C does
-        handlers = {signal.SIGINT: signal.signal(signal.SIGINT, signal.default_int_handler),
+        handlers = {signal.SIGINT: signal.signal(signal.SIGINT, _interrupt),
                     signal.SIGTERM: signal.signal(signal.SIGTERM, _terminate)}
+        sys.unraisablehook = stopping.unraisable
     try:
         return _run_command(args)
     finally:
         for number, handler in handlers.items():
             signal.signal(number, handler)
+        sys.unraisablehook = hook
+        stopping.reset()
 
 
 class Terminated(KeyboardInterrupt):
     """SIGTERM, met as Ctrl-C is: the command stops where it is and says so."""
 
 
+def _interrupt(number, frame) -> None:
+    stopping.request(KeyboardInterrupt)
+
+
 def _terminate(number, frame) -> None:
-    raise Terminated
+    stopping.request(Terminated)
 
 
 def _run_command(args) -> int:

@@ -22,7 +22,7 @@ import numpy as np
 import pandas as pd
 from tqdm import tqdm
 
-from enn_traffic import generations
+from enn_traffic import generations, stopping
 from enn_traffic.controller import Controller
 from enn_traffic.errors import InputError
 from enn_traffic.evolution import ga
@@ -302,6 +302,7 @@ def _evolve(scenario: Scenario, out: Path, evaluator: Evaluator | None, resume: 
     try:
         run = ga.generations(state, evaluator.evaluate, params)
         while state.generation < total and not state.extra.get("target_reached", False):
+            stopping.raise_if_requested()
             started = time.perf_counter()
             generation, best_before = state.generation, state.best_fitness
             first = len(rows) == len(done)  # this process's first: the kernels may compile

@@ -64,7 +64,9 @@ def quiet_worker(parent: int) -> None:
     reaches the terminal's whole process group: the parent says it and ends the workers; a
     worker that left by itself could break the pool before the parent heard it)."""
     end_with_parent(parent)
-    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    signal.signal(signal.SIGINT, signal.SIG_IGN)  # drops a Ctrl-C held back since the start
+    if hasattr(signal, "pthread_sigmask"):
+        signal.pthread_sigmask(signal.SIG_UNBLOCK, {signal.SIGINT})
 
 
 def stop_pool(pool: ProcessPoolExecutor) -> None:
@@ -82,17 +84,20 @@ def _init_worker(scenario: Scenario, parent: int) -> None:
 
 @contextlib.contextmanager
 def deaf_to_ctrl_c():
-    """SIGINT ignored while workers are started, so that they ignore it from their first
-    instruction (Python keeps an inherited SIG_IGN; :func:`quiet_worker` then keeps it): a
-    Ctrl-C while a worker imports would print its traceback."""
-    if threading.current_thread() is not threading.main_thread():
+    """SIGINT held back while workers are started, so that they hold it back from their first
+    instruction (a spawned process inherits its parent's signal mask; :func:`quiet_worker`
+    then ignores it and lets it through): a Ctrl-C while a worker imports would print its
+    traceback. The parent's Ctrl-C is only delayed: it arrives as the block ends. (Ignoring
+    SIGINT here instead lost a Ctrl-C that came during the block: the run went on.)"""
+    if (threading.current_thread() is not threading.main_thread()
+            or not hasattr(signal, "pthread_sigmask")):
         yield
         return
-    previous = signal.signal(signal.SIGINT, signal.SIG_IGN)
+    previous = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
     try:
         yield
     finally:
-        signal.signal(signal.SIGINT, previous)
+        signal.pthread_sigmask(signal.SIG_SETMASK, previous)
 
 
 def _evaluate_chunk(chunk: np.ndarray, key: int) -> SituationResults:
@@ -118,9 +123,9 @@ class ProcessEvaluator:
 
     def evaluate(self, population: np.ndarray, key: int = 0) -> SituationResults:
         chunks = np.array_split(population, min(self.workers * 4, len(population)))
-        with deaf_to_ctrl_c():  # the pool starts its workers as chunks are submitted
-            futures = [self.pool.submit(_evaluate_chunk, chunk, key) for chunk in chunks]
         try:
+            with deaf_to_ctrl_c():  # the pool starts its workers as chunks are submitted
+                futures = [self.pool.submit(_evaluate_chunk, chunk, key) for chunk in chunks]
             return SituationResults.concatenate([future.result() for future in futures])
         except BaseException:  # Ctrl-C, SIGTERM: the workers end now, their chunks unfinished
             stop_pool(self.pool)
