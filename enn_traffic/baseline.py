@@ -6,11 +6,18 @@ The protocol, the same for every method:
 - it learns on training keys: the GA on its scenario's own settings (the paper's, §4), PPO and
   SAC on :class:`~enn_traffic.envs.rangefinder.RangefinderVectorEnv` through
   :func:`~enn_traffic.envs.sb3.sb3_vec_env`, with ``VecNormalize`` on the observations;
-- its controllers along the way (the GA: each generation's best by training fitness; PPO and
-  SAC: the policy after every ``budget / CHECKPOINTS`` learner-steps, acting on its mean) are
-  scored on validation situations, and the best there is the run's controller;
+  PPO and SAC each life in a situation of their own (a pool of :data:`TRAINING_POOL_KEYS`
+  training keys), as the GA meets a new key each generation;
+- its controllers along the way, one at every ``budget / CHECKPOINTS`` learner-steps and one
+  at the end (the GA: the best of the generation that reached it, by training fitness; PPO
+  and SAC: the policy then, acting on its mean), are scored on validation situations, and the
+  best there is the run's controller, saved in ``controllers/``;
 - that controller alone is scored on test situations sealed for this comparison
   (:data:`TEST_KEY`), read once, by the final configuration.
+
+Validation and test situations are the scenario's own, except on a track without traffic
+that starts at one pose (the narrow track, §5.1): there they start anywhere on the same track
+(:func:`scoring_scenario`), so that its 64 test situations differ.
 
 PPO's and SAC's settings come from a search on validation keys (:data:`SEARCH`, starting at RL
 Zoo's settings for BipedalWalker-v3, a continuous-control task read through rangefinders):
@@ -29,11 +36,13 @@ from concurrent.futures import ProcessPoolExecutor, as_completed
 from dataclasses import dataclass
 from functools import partial
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pandas as pd
 
 from enn_traffic import keys
+from enn_traffic.controller import Controller
 from enn_traffic.envs.rangefinder import RangefinderVectorEnv, rangefinder_world
 from enn_traffic.errors import InputError
 from enn_traffic.evolution import ga
@@ -41,16 +50,19 @@ from enn_traffic.io import write_atomic
 from enn_traffic.progress import log
 from enn_traffic.report.stats import bootstrap_interval, t_interval
 from enn_traffic.runner import ga_params
-from enn_traffic.scenario import Scenario
+from enn_traffic.scenario import Scenario, TrackConfig
 from enn_traffic.sim.world import SituationResults
 
 METHODS = ("GA", "PPO", "SAC")
-# Keys of this comparison alone, never read by anything else (enn_traffic.keys).
-VALIDATION_KEY = keys.VALIDATION.start + 520_000
-TEST_KEY = keys.TEST.start + 520_000
-VALIDATION_SITUATIONS = 16
+# Keys of this comparison alone, never read by anything else (enn_traffic.keys). Its first
+# round read the test keys from keys.TEST.start + 520_000 on; this, the second, reads fresh
+# ones.
+VALIDATION_KEY = keys.VALIDATION.start + 530_000
+TEST_KEY = keys.TEST.start + 530_000
+VALIDATION_SITUATIONS = 32
 TEST_SITUATIONS = 64
-CHECKPOINTS = 20  # PPO's and SAC's policies scored on validation along a run
+CHECKPOINTS = 20  # candidates along a run, every method alike (and one at its end)
+TRAINING_POOL_KEYS = 4096  # PPO's and SAC's training situations: 4 per arena key
 TUNING_SEED = 0  # the search's runs; the comparison's seeds are 1, 2, ...
 
 
@@ -99,7 +111,7 @@ class RunResult:
     situation (empty for a search run, which reads no test key), and the learner-steps it
     simulated in all (the GA's last generation and PPO's last rollout end past the budget)
     and the length of every life lived in training (the GA's individuals', the exploring
-    policy's)."""
+    policy's), and the chosen controller."""
 
     curve: pd.DataFrame
     chosen: int
@@ -107,14 +119,22 @@ class RunResult:
     wall_s: float
     learner_steps: int
     training_lives: np.ndarray
+    controller: Controller | NumpyPolicy  # the chosen one
 
 
 # --- situations -----------------------------------------------------------------------------
 
-def situation_count(scenario: Scenario, wanted: int) -> int:
-    """``wanted`` situations, or 1 for a world without traffic: its every situation is the
-    same (the narrow track starts at one pose, §5.1)."""
-    return wanted if rangefinder_world(scenario).vehicles > 1 else 1
+def scoring_scenario(scenario: Scenario) -> Scenario:
+    """The scenario validation and test situations are drawn from: ``scenario``, or, for a
+    world without traffic and one start (every situation of it the same: the narrow track
+    starts at one pose, §5.1), the same track started anywhere (every 5 m along its lanes,
+    facing either way: ``track.start_anywhere``)."""
+    track = scenario.track
+    if (rangefinder_world(scenario).vehicles > 1 or not isinstance(track, TrackConfig)
+            or track.start_anywhere or len(track.start_names) > 1):
+        return scenario
+    return scenario.with_overrides(track={"start_xy": None, "start_lane": None,
+                                          "start_edge": None, "start_anywhere": True})
 
 
 def situation_keys(scenario: Scenario, first_key: int, count: int) -> list[int]:
@@ -125,7 +145,9 @@ def situation_keys(scenario: Scenario, first_key: int, count: int) -> list[int]:
 
 def chromosome_fitness(scenario: Scenario, chromosomes: np.ndarray, first_key: int,
                        count: int) -> np.ndarray:
-    """(C, count): each GA controller's fitness (steps lived, 0 for a spin) per situation."""
+    """(C, count): each GA controller's fitness (steps lived, 0 for a spin) per situation of
+    :func:`scoring_scenario`."""
+    scenario = scoring_scenario(scenario)
     world = rangefinder_world(scenario)
     columns = []
     for key in situation_keys(scenario, first_key, count):
@@ -136,8 +158,9 @@ def chromosome_fitness(scenario: Scenario, chromosomes: np.ndarray, first_key: i
 
 def policy_fitness(scenario: Scenario, act: Callable[[np.ndarray], np.ndarray],
                    first_key: int, count: int) -> np.ndarray:
-    """(count,): a policy's fitness per situation, each driven once through the vector
-    environment (``act``: observations (N, B) → actions (N, 2))."""
+    """(count,): a policy's fitness per situation of :func:`scoring_scenario`, each driven
+    once through the vector environment (``act``: observations (N, B) → actions (N, 2))."""
+    scenario = scoring_scenario(scenario)
     env = RangefinderVectorEnv(scenario, count)
     observation, _ = env.reset(options={"keys": situation_keys(scenario, first_key, count)})
     fitness = np.full(count, np.nan)
@@ -152,7 +175,8 @@ def policy_fitness(scenario: Scenario, act: Callable[[np.ndarray], np.ndarray],
 
 def ga_run(scenario: Scenario, budget: int, seed: int, test: bool = True) -> RunResult:
     """The scenario's GA, seeded by ``seed``, until ``budget`` learner-steps are simulated;
-    each generation's champion scored on validation, the best of them on test."""
+    the champion of each generation that reached a checkpoint (and of the last) scored on
+    validation, the best of them on test."""
     world = rangefinder_world(scenario)
     params = ga_params(scenario)
     rng = np.random.default_rng([scenario.seed, seed])
@@ -160,30 +184,77 @@ def ga_run(scenario: Scenario, budget: int, seed: int, test: bool = True) -> Run
                                        world.spec.chromosome_length, params.init_range)
     run = ga.generations(ga.GAState(generation=0, population=population, rng=rng),
                          world.evaluate, params)
-    spent, began, rows, lives, state = 0, time.perf_counter(), [], [], None
+    every = max(1, budget // CHECKPOINTS)
+    spent, began, rows, lives, candidates = 0, time.perf_counter(), [], [], []
     while spent < budget:
         state, _, results = next(run)
         spent += int(results.steps.sum())
         lives.append(results.steps.ravel())
-        rows.append((spent, time.perf_counter() - began))
+        if spent >= every * (len(rows) + 1) or spent >= budget:
+            generation = len(state.champions) - 1
+            candidates.append(state.champions[generation])
+            rows.append((spent, time.perf_counter() - began, generation))
     wall = time.perf_counter() - began
-    validation = chromosome_fitness(scenario, state.champions, VALIDATION_KEY,
-                                    situation_count(scenario, VALIDATION_SITUATIONS)).mean(1)
+    candidates = np.asarray(candidates)
+    validation = chromosome_fitness(scenario, candidates, VALIDATION_KEY,
+                                    VALIDATION_SITUATIONS).mean(1)
     chosen = int(np.argmax(validation))
-    tested = (chromosome_fitness(scenario, state.champions[chosen:chosen + 1], TEST_KEY,
-                                 situation_count(scenario, TEST_SITUATIONS))[0]
+    tested = (chromosome_fitness(scenario, candidates[chosen:chosen + 1], TEST_KEY,
+                                 TEST_SITUATIONS)[0]
               if test else np.empty(0))
-    curve = pd.DataFrame(rows, columns=["learner_steps", "wall_s"])
-    return RunResult(curve.assign(validation_fitness=validation), chosen, tested, wall, spent,
-                     np.concatenate(lives))
+    curve = pd.DataFrame(rows, columns=["learner_steps", "wall_s", "generation"])
+    controller = Controller.from_scenario(scenario, candidates[chosen], validation[chosen],
+                                          int(curve["generation"].iloc[chosen]))
+    return RunResult(curve.drop(columns="generation").assign(validation_fitness=validation),
+                     chosen, tested, wall, spent, np.concatenate(lives), controller)
 
 
 # --- PPO and SAC ----------------------------------------------------------------------------
 
-def numpy_actor(model, obs_rms, clip_obs: float = 10.0) -> Callable[[np.ndarray], np.ndarray]:
-    """The policy's deterministic action (its mean, squashed for SAC) as plain numpy, with
+@dataclass
+class NumpyPolicy:
+    """A policy's deterministic action (its mean, squashed for SAC) as plain numpy, with
     ``VecNormalize``'s observation scaling: scoring thousands of steps without torch's
-    per-call cost."""
+    per-call cost, and a controller saved as arrays (:meth:`save`, :meth:`load`).
+    ``layers``: ("linear", weight (in, out), bias), ("clip", low, high), ("Tanh" or "ReLU",
+    None, None), in order."""
+
+    layers: list[tuple[str, Any, Any]]
+    mean: np.ndarray
+    scale: np.ndarray
+    squash: bool
+    clip_obs: float = 10.0
+
+    def __call__(self, observation: np.ndarray) -> np.ndarray:
+        x = np.clip((observation - self.mean) / self.scale, -self.clip_obs, self.clip_obs)
+        for kind, a, b in self.layers:
+            x = (x @ a + b if kind == "linear" else np.clip(x, a, b) if kind == "clip"
+                 else np.tanh(x) if kind == "Tanh" else np.maximum(x, 0.0))
+        return np.tanh(x) if self.squash else np.clip(x, -1.0, 1.0)
+
+    def save(self, path: Path) -> None:
+        arrays = {"mean": self.mean, "scale": self.scale, "squash": self.squash,
+                  "clip_obs": self.clip_obs,
+                  "kinds": np.array([kind for kind, _, _ in self.layers])}
+        for i, (_, a, b) in enumerate(self.layers):
+            if a is not None:
+                arrays[f"a{i}"], arrays[f"b{i}"] = a, b
+        write_atomic(path, lambda handle: np.savez(handle, **arrays), binary=True)
+
+    @classmethod
+    def load(cls, path: Path) -> NumpyPolicy:
+        with np.load(path) as data:
+            layers = [(str(kind), *((data[f"a{i}"], data[f"b{i}"]) if f"a{i}" in data.files
+                                    else (None, None)))
+                      for i, kind in enumerate(data["kinds"])]
+            layers = [(kind, float(a), float(b)) if kind == "clip" else (kind, a, b)
+                      for kind, a, b in layers]
+            return cls(layers, data["mean"], data["scale"], bool(data["squash"]),
+                       float(data["clip_obs"]))
+
+
+def numpy_actor(model, obs_rms, clip_obs: float = 10.0) -> NumpyPolicy:
+    """The SB3 PPO or SAC ``model``'s actor with ``obs_rms`` as a :class:`NumpyPolicy`."""
     import torch.nn as nn
 
     if hasattr(model.policy, "actor"):  # SAC
@@ -198,21 +269,13 @@ def numpy_actor(model, obs_rms, clip_obs: float = 10.0) -> Callable[[np.ndarray]
             steps.append(("linear", layer.weight.detach().numpy().T.copy(),
                           layer.bias.detach().numpy().copy()))
         elif isinstance(layer, nn.Hardtanh):  # SAC's clipped mean under gSDE
-            steps.append(("clip", layer.min_val, layer.max_val))
+            steps.append(("clip", float(layer.min_val), float(layer.max_val)))
         elif isinstance(layer, (nn.Tanh, nn.ReLU)):
             steps.append((type(layer).__name__, None, None))
         else:
             raise TypeError(f"numpy_actor: no numpy form for {type(layer).__name__}")
-    mean, scale = obs_rms.mean.copy(), np.sqrt(obs_rms.var + 1e-8)
-
-    def act(observation: np.ndarray) -> np.ndarray:
-        x = np.clip((observation - mean) / scale, -clip_obs, clip_obs)
-        for kind, weight, bias in steps:
-            x = (x @ weight + bias if kind == "linear" else np.clip(x, weight, bias)
-                 if kind == "clip" else np.tanh(x) if kind == "Tanh" else np.maximum(x, 0.0))
-        return np.tanh(x) if squash else np.clip(x, -1.0, 1.0)
-
-    return act
+    return NumpyPolicy(steps, obs_rms.mean.copy(), np.sqrt(obs_rms.var + 1e-8), squash,
+                       clip_obs)
 
 
 def _flat(modules) -> list:
@@ -243,7 +306,8 @@ def rl_model(method: str, venv, settings: dict, seed: int):
 def rl_run(scenario: Scenario, method: str, settings: dict, budget: int, seed: int,
            test: bool = True) -> RunResult:
     """PPO or SAC with ``settings`` for ``budget`` learner-steps; its policy at every
-    ``budget / CHECKPOINTS`` steps scored on validation, the best of them on test."""
+    ``budget / CHECKPOINTS`` steps and at the end scored on validation, the best of them on
+    test."""
     try:
         import torch
         from stable_baselines3.common.callbacks import BaseCallback
@@ -254,13 +318,14 @@ def rl_run(scenario: Scenario, method: str, settings: dict, budget: int, seed: i
         raise InputError(f"{method} needs the rl extra: pip install -e .[rl] "
                          "(docs/envs.md: a CPU-only torch)") from None
     torch.set_num_threads(1)
-    venv = VecNormalize(sb3_vec_env(RangefinderVectorEnv(scenario, settings["n_envs"])),
+    training = RangefinderVectorEnv(scenario, settings["n_envs"], situations=TRAINING_POOL_KEYS)
+    venv = VecNormalize(sb3_vec_env(training),
                         norm_obs=True, norm_reward=settings["norm_reward"],
                         gamma=settings["gamma"])
     venv.seed(seed)
     model = rl_model(method, venv, settings, seed)
     every = max(1, budget // CHECKPOINTS)
-    snapshots: list[tuple[int, float, Callable]] = []
+    snapshots: list[tuple[int, float, NumpyPolicy]] = []
     lives: list[int] = []
     began = time.perf_counter()
 
@@ -275,16 +340,19 @@ def rl_run(scenario: Scenario, method: str, settings: dict, budget: int, seed: i
 
     model.learn(total_timesteps=budget, callback=Snapshots())
     wall = time.perf_counter() - began
-    validation_count = situation_count(scenario, VALIDATION_SITUATIONS)
-    validation = np.array([policy_fitness(scenario, act, VALIDATION_KEY, validation_count).mean()
+    if not snapshots or snapshots[-1][0] < model.num_timesteps:  # PPO's last update
+        snapshots.append((model.num_timesteps, wall,
+                          numpy_actor(model, copy.deepcopy(venv.obs_rms))))
+    validation = np.array([policy_fitness(scenario, act, VALIDATION_KEY,
+                                          VALIDATION_SITUATIONS).mean()
                            for _, _, act in snapshots])
     chosen = int(np.argmax(validation))
-    tested = (policy_fitness(scenario, snapshots[chosen][2], TEST_KEY,
-                             situation_count(scenario, TEST_SITUATIONS))
+    tested = (policy_fitness(scenario, snapshots[chosen][2], TEST_KEY, TEST_SITUATIONS)
               if test else np.empty(0))
     curve = pd.DataFrame([s[:2] for s in snapshots], columns=["learner_steps", "wall_s"])
     return RunResult(curve.assign(validation_fitness=validation), chosen, tested, wall,
-                     int(model.num_timesteps), np.asarray(lives, dtype=np.int64))
+                     int(model.num_timesteps), np.asarray(lives, dtype=np.int64),
+                     snapshots[chosen][2])
 
 
 # --- the comparison -------------------------------------------------------------------------
@@ -365,7 +433,7 @@ def tune(scenarios: list[Scenario], out: Path, methods: tuple[str, ...], workers
         _append(path, pd.DataFrame([{
             "scenario": scenario.name, "method": method, "setting": setting,
             "budget_steps": budget, "seed": seed,
-            "validation_situations": situation_count(scenario, VALIDATION_SITUATIONS),
+            "validation_situations": VALIDATION_SITUATIONS,
             "validation_fitness": best["validation_fitness"],
             "chosen_at_steps": int(best["learner_steps"]), "wall_s": result.wall_s}]))
 
@@ -430,6 +498,7 @@ def compare(scenarios: list[Scenario], out: Path, plan: tuple[Planned, ...] = PL
         fitness = result.test_fitness
         low, high = bootstrap_interval(fitness, np.random.default_rng(seed))
         # the rest first: a run is done once its comparison row is written
+        save_controller(out, job, result)
         if _lives_run(plan, method, budget, seed):
             _record_lives(out / "training_lives.csv", job, result)
         _append(out / "situations.csv", pd.DataFrame(
@@ -447,6 +516,20 @@ def compare(scenarios: list[Scenario], out: Path, plan: tuple[Planned, ...] = PL
     training_lives(scenarios, out, plan, workers, progress)  # rows a past run left out
     write_summary(out)
     return _read(out / "comparison.csv")
+
+
+def controller_path(out: Path, scenario: str, method: str, budget: int, seed: int) -> Path:
+    """Where a comparison run's chosen controller is saved."""
+    return out / "controllers" / f"{scenario}-{method}-{budget}-{seed}.npz"
+
+
+def save_controller(out: Path, job: tuple, result: RunResult) -> None:
+    """A run's chosen controller: the GA's as a controller file every command reads
+    (``enn-traffic evaluate``, ``deploy``), PPO's and SAC's as a :class:`NumpyPolicy`."""
+    scenario, method, _, budget, seed, _ = job
+    path = controller_path(out, scenario.name, method, budget, seed)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    result.controller.save(path)
 
 
 def training_lives(scenarios: list[Scenario], out: Path, plan: tuple[Planned, ...],

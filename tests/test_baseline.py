@@ -8,6 +8,7 @@ import pytest
 
 from enn_traffic import baseline, keys
 from enn_traffic.cli import main
+from enn_traffic.controller import Controller
 from enn_traffic.errors import InputError
 from enn_traffic.shipped import shipped_scenario
 
@@ -18,7 +19,22 @@ def test_the_comparisons_keys_are_its_own_and_held_out(monkeypatch):
     arena = shipped_scenario("arena_strategy1")
     test = baseline.situation_keys(arena, baseline.TEST_KEY, baseline.TEST_SITUATIONS)
     assert len(test) == 16  # 4 situations a key: 16 keys hold the 64
-    assert baseline.situation_count(shipped_scenario("navigation_narrow"), 64) == 1
+
+
+def test_the_narrow_track_is_scored_from_starts_all_along_it():
+    """The narrow track starts at one pose (§5.1): its validation and test situations start
+    anywhere on it instead, a different start each; a world with traffic keeps its own."""
+    from enn_traffic.envs.rangefinder import rangefinder_world
+
+    narrow = shipped_scenario("navigation_narrow")
+    scored = baseline.scoring_scenario(narrow)
+    assert scored.track.start_anywhere and scored.track.net == narrow.track.net
+    world = rangefinder_world(scored)
+    starts = {tuple(np.round(world.situations(key)[0].start[0], 3))
+              for key in baseline.situation_keys(scored, keys.VALIDATION.start, 64)}
+    assert len(starts) > 50  # 64 draws from every 5 m of 1.3 km, facing either way
+    arena = shipped_scenario("arena_strategy1")
+    assert baseline.scoring_scenario(arena) is arena
 
 
 @pytest.fixture(autouse=True)
@@ -34,9 +50,16 @@ def test_a_ga_run_spends_its_budget_and_chooses_on_validation():
     result = baseline.ga_run(scenario, 40_000, seed=1)
     steps = result.curve["learner_steps"]
     assert steps.iloc[-1] >= 40_000 > steps.iloc[-2]  # it stops once the budget is spent
+    # a candidate at each checkpoint (every 2,000 steps) a generation reached, and the last
+    assert 2 <= len(steps) <= baseline.CHECKPOINTS + 1 and steps.is_monotonic_increasing
     assert result.chosen == int(np.argmax(result.curve["validation_fitness"]))
     assert len(result.test_fitness) == baseline.TEST_SITUATIONS
     assert (result.test_fitness > 0).any()
+    # the chosen controller, scored again: its validation score
+    again = baseline.chromosome_fitness(scenario, result.controller.chromosome[None],
+                                        baseline.VALIDATION_KEY,
+                                        baseline.VALIDATION_SITUATIONS).mean()
+    assert again == result.curve["validation_fitness"].iloc[result.chosen]
 
 
 def test_a_policy_and_its_chromosome_score_alike():
@@ -103,17 +126,32 @@ def test_the_comparison_resumes_without_running_a_finished_run_again(tmp_path):
     tuning = pd.read_csv(tmp_path / "tuning.csv")
     assert sorted(tuning["setting"]) == sorted(baseline.SEARCH["PPO"])
     first = pd.read_csv(tmp_path / "comparison.csv")
-    assert len(first) == 3 and set(first["test_situations"]) == {1}
+    assert len(first) == 3 and set(first["test_situations"]) == {baseline.TEST_SITUATIONS}
     ppo = first[first["method"] == "PPO"].iloc[0]
     assert ppo["setting"] == baseline.chosen_setting(tuning, scenario.name, "PPO")
     assert ppo["learner_steps"] >= 16_000
+    # PPO's policy after its last update is a candidate too
+    curves = pd.read_csv(tmp_path / "curves.csv")
+    assert curves[curves["method"] == "PPO"]["learner_steps"].max() == ppo["learner_steps"]
+    # every run's controller is saved, and scores on test what the run's row says
+    policy = baseline.NumpyPolicy.load(baseline.controller_path(
+        tmp_path, scenario.name, "PPO", 16_000, 1))
+    tested = baseline.policy_fitness(scenario, policy, baseline.TEST_KEY,
+                                     baseline.TEST_SITUATIONS)
+    assert tested.mean() == pytest.approx(ppo["test_fitness"])
+    controller = Controller.load(baseline.controller_path(
+        tmp_path, scenario.name, "GA", 20_000, 1))
+    ga = first[first["method"] == "GA"].iloc[0]
+    assert baseline.chromosome_fitness(scenario, controller.chromosome[None], baseline.TEST_KEY,
+                                       baseline.TEST_SITUATIONS).mean() == pytest.approx(
+        ga["test_fitness"])
     # a second call with one more seed makes that run alone
     baseline.compare([scenario], tmp_path, baseline.parse_plan("GA:20k:3,PPO:16k:1"),
                      workers=1, progress=False, tuning_budgets=budgets)
     second = pd.read_csv(tmp_path / "comparison.csv")
     pd.testing.assert_frame_equal(second.iloc[:3], first)
     assert len(second) == 4 and second.iloc[3]["seed"] == 3
-    assert len(pd.read_csv(tmp_path / "situations.csv")) == 4
+    assert len(pd.read_csv(tmp_path / "situations.csv")) == 4 * baseline.TEST_SITUATIONS
     assert (tmp_path / "comparison.png").stat().st_size > 0
     lives = pd.read_csv(tmp_path / "training_lives.csv").set_index("method")
     assert sorted(lives.index) == ["GA", "PPO"] and (lives["lives"] > 0).all()
