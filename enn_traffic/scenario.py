@@ -555,6 +555,20 @@ class Scenario(_Section):
         return self
 
     @model_validator(mode="after")
+    def _lane_keeping_reads_its_own(self) -> Scenario:
+        """Lane keeping (§5.6) drives highway-env's vehicle and reads its camera: a
+        [vehicle], [sensor] or [traffic] key set there would do nothing."""
+        if self.lane_keeping is not None:
+            for name, default in (("vehicle", VehicleConfig()), ("sensor", SensorConfig()),
+                                  ("traffic", TrafficConfig())):
+                if getattr(self, name) != default:
+                    raise ValueError(
+                        f"[{name}] is not read by lane keeping, which drives highway-env's "
+                        "vehicle and reads its camera ([lane_keeping] lookahead_m, noise_m): "
+                        f"remove the [{name}] keys")
+        return self
+
+    @model_validator(mode="after")
     def _track_net(self) -> Scenario:
         if (isinstance(self.track, TrackConfig) and self.track.net is None
                 and self.traffic.sumocfg is None):

@@ -113,6 +113,17 @@ def test_scenario_needs_exactly_one_task(tmp_path):
         load_scenario(path)
 
 
+@pytest.mark.parametrize("section", ["[sensor]\nbeams = 7", "[vehicle]\nspeed = 20.0",
+                                     "[traffic]\nseed = 7"])
+def test_a_key_lane_keeping_would_not_read_is_refused(tmp_path, section):
+    """Lane keeping drives highway-env's vehicle from its camera: a [sensor], [vehicle] or
+    [traffic] key there did nothing before; now it is an error naming the section."""
+    path = tmp_path / "lk.toml"
+    path.write_text(f'name = "x"\n[lane_keeping]\nroad = "sine"\n{section}\n')
+    name = section.split("]")[0] + "]"
+    with pytest.raises(InputError, match=rf"\{name[:-1]}\] is not read by lane keeping"):
+        load_scenario(path)
+
 
 @pytest.mark.parametrize("road", ["circle", "sine"])
 def test_a_mirrored_road_is_seen_mirrored(road):
