@@ -97,7 +97,8 @@ def build_parser() -> argparse.ArgumentParser:
                                "(default: the scenario's traffic.mode)")
     evaluate.add_argument("--traffic-seed", type=_non_negative, metavar="N",
                           help="traffic seed (default: each scenario's traffic.seed); another "
-                          "seed gives traffic situations that no training or choice drew")
+                          "seed gives traffic situations that no training or choice drew "
+                          "(lane keeping has no traffic: it ignores this)")
     evaluate.add_argument("--executor", choices=["local", "process", "ray"], default="local",
                           help="where the pairs run (default: local, one after another)")
     evaluate.add_argument("--address", help="Ray cluster address (with --executor ray)")
@@ -151,7 +152,9 @@ def build_parser() -> argparse.ArgumentParser:
         "validation keys, then make the planned runs; each run's controller is the best of "
         "its checkpoints on validation, scored once on 64 sealed test situations. Writes "
         "OUT/tuning.csv, comparison.csv (a row per run), situations.csv, curves.csv, "
-        "comparison_summary.csv and comparison.png; runs already there are skipped, so the "
+        "training_lives.csv, comparison_summary.csv, comparison_differences.csv, "
+        "comparison.png and each run's controller in OUT/controllers/; runs already there "
+        "are skipped, so the "
         "same command continues an interrupted comparison. PPO and SAC need the rl extra "
         "(pip install -e .[rl]; docs/envs.md).")
     baseline.add_argument("scenario", type=_path, nargs="+", metavar="SCENARIO.toml",
@@ -256,7 +259,10 @@ def _cmd_evaluate(args) -> int:
         scenarios = [s.with_overrides(traffic={"mode": args.mode}) if s.traffic.is_sumo else s
                      for s in scenarios]
     if args.traffic_seed is not None:
-        scenarios = [s.with_overrides(traffic={"seed": args.traffic_seed}) for s in scenarios]
+        # lane keeping has no traffic: its situations come from the scenario's seed alone
+        scenarios = [s if s.lane_keeping is not None
+                     else s.with_overrides(traffic={"seed": args.traffic_seed})
+                     for s in scenarios]
     scenarios = [s.with_sumo_output(_sumo_folder(args.out), args.verbose) for s in scenarios]
     table = evaluate_batch(controllers, scenarios, args.episodes, args.executor, args.address,
                            progress=not args.quiet)

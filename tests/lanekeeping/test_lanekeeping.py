@@ -3,6 +3,7 @@
 import math
 
 import numpy as np
+import pandas as pd
 import pytest
 from conftest import local_and_spread
 
@@ -78,6 +79,24 @@ def test_leaving_the_lane_ends_the_life(tmp_path):
     results = world.evaluate(np.zeros((1, world.spec.chromosome_length)))
     assert results.outcome[0, 0] == LEFT_LANE
     assert 17 <= results.steps[0, 0] <= 21
+
+
+def test_evaluate_with_a_traffic_seed_takes_a_lane_keeping_controller(tmp_path, capsys):
+    """``evaluate --traffic-seed`` on a lane-keeping scenario: no traffic to reseed, so the
+    same lifetimes as without it (it once failed: "remove the [traffic] keys")."""
+    from enn_traffic.cli import main
+    from enn_traffic.controller import Controller
+
+    sc = scenario(tmp_path, "circle")
+    genes = np.zeros(make_world(sc).spec.chromosome_length)
+    Controller.from_scenario(sc, genes, 0.0, 0).save(tmp_path / "c.npz")
+    lifetimes = []
+    for extra in ([], ["--traffic-seed", "7"]):
+        out = tmp_path / f"l{len(extra)}.csv"
+        assert main(["evaluate", str(tmp_path / "c.npz"), str(tmp_path / "lk.toml"),
+                     "--out", str(out), "--quiet", *extra]) == 0, capsys.readouterr().err
+        lifetimes.append(pd.read_csv(out))
+    pd.testing.assert_frame_equal(*lifetimes)
 
 
 def test_evolution_learns_to_keep_the_lane(tmp_path):
