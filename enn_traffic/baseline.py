@@ -41,7 +41,7 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
-from enn_traffic import keys
+from enn_traffic import keys, stopping
 from enn_traffic.controller import Controller
 from enn_traffic.envs.rangefinder import RangefinderVectorEnv, rangefinder_world
 from enn_traffic.errors import InputError
@@ -62,7 +62,7 @@ TEST_KEY = keys.TEST.start + 530_000
 VALIDATION_SITUATIONS = 32
 TEST_SITUATIONS = 64
 CHECKPOINTS = 20  # candidates along a run, every method alike (and one at its end)
-TRAINING_POOL_KEYS = 4096  # PPO's and SAC's training situations: 4 per arena key
+TRAINING_POOL_KEYS = 4096  # PPO's and SAC's training keys: 16,384 arena situations
 TUNING_SEED = 0  # the search's runs; the comparison's seeds are 1, 2, ...
 
 
@@ -187,6 +187,7 @@ def ga_run(scenario: Scenario, budget: int, seed: int, test: bool = True) -> Run
     every = max(1, budget // CHECKPOINTS)
     spent, began, rows, lives, candidates = 0, time.perf_counter(), [], [], []
     while spent < budget:
+        stopping.raise_if_requested()
         state, _, results = next(run)
         spent += int(results.steps.sum())
         lives.append(results.steps.ravel())
@@ -211,7 +212,7 @@ def ga_run(scenario: Scenario, budget: int, seed: int, test: bool = True) -> Run
 
 # --- PPO and SAC ----------------------------------------------------------------------------
 
-@dataclass
+@dataclass(eq=False)  # arrays: compare with numpy
 class NumpyPolicy:
     """A policy's deterministic action (its mean, squashed for SAC) as plain numpy, with
     ``VecNormalize``'s observation scaling: scoring thousands of steps without torch's
@@ -331,6 +332,7 @@ def rl_run(scenario: Scenario, method: str, settings: dict, budget: int, seed: i
 
     class Snapshots(BaseCallback):
         def _on_step(self) -> bool:
+            stopping.raise_if_requested()
             lives.extend(info["episode"]["l"] for info in self.locals["infos"]
                          if "episode" in info)
             if self.num_timesteps >= every * (len(snapshots) + 1):
@@ -390,11 +392,12 @@ def _jobs(jobs: list[tuple], workers: int, done: Callable[[tuple, RunResult], No
 
     from tqdm import tqdm
 
-    from enn_traffic.evolution.backends import deaf_to_ctrl_c, quiet_worker, stop_pool
+    from enn_traffic.evolution.backends import quiet_worker, sigint_held_back, stop_pool
 
     bar = tqdm(total=len(jobs), desc="runs", unit="run", disable=not progress or not jobs)
     if workers == 1 or len(jobs) <= 1:
         for job in jobs:
+            stopping.raise_if_requested()
             done(job, run_one(*job))
             bar.update()
         bar.close()
@@ -402,9 +405,10 @@ def _jobs(jobs: list[tuple], workers: int, done: Callable[[tuple, RunResult], No
     pool = ProcessPoolExecutor(workers, mp_context=multiprocessing.get_context("spawn"),
                                initializer=quiet_worker, initargs=(os.getpid(),))
     try:
-        with deaf_to_ctrl_c():
+        with sigint_held_back():
             futures = {pool.submit(run_one, *job): job for job in jobs}
         for future in as_completed(futures):
+            stopping.raise_if_requested()
             done(futures[future], future.result())
             bar.update()
     except BaseException:  # Ctrl-C, SIGTERM: the runs end now; finished ones are written

@@ -14,10 +14,12 @@ _requested: type[KeyboardInterrupt] | None = None
 
 
 def request(stop: type[KeyboardInterrupt]) -> None:
-    """Record ``stop`` (KeyboardInterrupt or a subclass) and raise it."""
+    """Record ``stop`` (KeyboardInterrupt or a subclass) and raise it; after a first stop,
+    raise that one again (a SIGTERM then a Ctrl-C: the command says "terminated")."""
     global _requested
-    _requested = stop
-    raise stop
+    if _requested is None:
+        _requested = stop
+    raise _requested
 
 
 def raise_if_requested() -> None:

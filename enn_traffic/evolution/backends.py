@@ -83,21 +83,29 @@ def _init_worker(scenario: Scenario, parent: int) -> None:
 
 
 @contextlib.contextmanager
-def deaf_to_ctrl_c():
-    """SIGINT held back while workers are started, so that they hold it back from their first
-    instruction (a spawned process inherits its parent's signal mask; :func:`quiet_worker`
-    then ignores it and lets it through): a Ctrl-C while a worker imports would print its
-    traceback. The parent's Ctrl-C is only delayed: it arrives as the block ends. (Ignoring
-    SIGINT here instead lost a Ctrl-C that came during the block: the run went on.)"""
-    if (threading.current_thread() is not threading.main_thread()
-            or not hasattr(signal, "pthread_sigmask")):
+def sigint_held_back():
+    """SIGINT held back while workers are started: they inherit the calling thread's blocked
+    signal mask, so a Ctrl-C while one imports prints no traceback (:func:`quiet_worker` then
+    ignores SIGINT and unblocks it). The parent's Ctrl-C is delayed, not lost: another thread
+    of the parent may take the signal while this one blocks it, so the handler here only
+    notes it, and it is raised again as the block ends. (Ignoring SIGINT here instead lost a
+    Ctrl-C that came during the block: the run went on.)"""
+    if not hasattr(signal, "pthread_sigmask"):  # Windows: no masks, no process group Ctrl-C
         yield
         return
-    previous = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
+    heard: list[int] = []
+    main = threading.current_thread() is threading.main_thread()
+    previous = signal.signal(signal.SIGINT, lambda number, frame: heard.append(number)) \
+        if main else None
+    mask = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
     try:
         yield
     finally:
-        signal.pthread_sigmask(signal.SIG_SETMASK, previous)
+        signal.pthread_sigmask(signal.SIG_SETMASK, mask)
+        if main:
+            signal.signal(signal.SIGINT, previous)
+            if heard:
+                signal.raise_signal(signal.SIGINT)  # to the handler it was meant for
 
 
 def _evaluate_chunk(chunk: np.ndarray, key: int) -> SituationResults:
@@ -124,7 +132,7 @@ class ProcessEvaluator:
     def evaluate(self, population: np.ndarray, key: int = 0) -> SituationResults:
         chunks = np.array_split(population, min(self.workers * 4, len(population)))
         try:
-            with deaf_to_ctrl_c():  # the pool starts its workers as chunks are submitted
+            with sigint_held_back():  # the pool starts its workers as chunks are submitted
                 futures = [self.pool.submit(_evaluate_chunk, chunk, key) for chunk in chunks]
             return SituationResults.concatenate([future.result() for future in futures])
         except BaseException:  # Ctrl-C, SIGTERM: the workers end now, their chunks unfinished
