@@ -29,6 +29,7 @@ already there, so the same command continues an interrupted comparison.
 from __future__ import annotations
 
 import copy
+import json
 import os
 import time
 from collections.abc import Callable
@@ -55,8 +56,8 @@ from enn_traffic.sim.world import SituationResults
 
 METHODS = ("GA", "PPO", "SAC")
 # Keys of this comparison alone, never read by anything else (enn_traffic.keys). Its first
-# round read the test keys from keys.TEST.start + 520_000 on; this, the second, reads fresh
-# ones.
+# round read the test keys from FIRST_ROUND_TEST_KEY on; this, the second, reads fresh ones.
+FIRST_ROUND_TEST_KEY = keys.TEST.start + 520_000
 VALIDATION_KEY = keys.VALIDATION.start + 530_000
 TEST_KEY = keys.TEST.start + 530_000
 VALIDATION_SITUATIONS = 32
@@ -472,6 +473,7 @@ def compare(scenarios: list[Scenario], out: Path, plan: tuple[Planned, ...] = PL
     ``situations.csv``; then the lives lived in training (:func:`training_lives`), the
     summary and the plot (:func:`write_summary`)."""
     out.mkdir(parents=True, exist_ok=True)
+    check_protocol(out)
     methods = tuple(dict.fromkeys(p.method for p in plan))
     budgets = {m: min([(tuning_budgets or TUNING_BUDGET)[m]]
                       + [p.budget_steps for p in plan if p.method == m])
@@ -520,6 +522,35 @@ def compare(scenarios: list[Scenario], out: Path, plan: tuple[Planned, ...] = PL
     training_lives(scenarios, out, plan, workers, progress)  # rows a past run left out
     write_summary(out)
     return _read(out / "comparison.csv")
+
+
+def protocol() -> dict[str, int]:
+    """What makes a run's scores comparable with another's: its keys and counts."""
+    return {"validation_key": VALIDATION_KEY, "test_key": TEST_KEY,
+            "validation_situations": VALIDATION_SITUATIONS,
+            "test_situations": TEST_SITUATIONS, "checkpoints": CHECKPOINTS,
+            "training_pool_keys": TRAINING_POOL_KEYS}
+
+
+def check_protocol(out: Path) -> None:
+    """``out/protocol.json`` written for a new folder; a folder of runs made under another
+    protocol (or before one was recorded) refused, since the same command would mix their
+    rows with new ones."""
+    path = out / "protocol.json"
+    if path.is_file():
+        try:
+            theirs = json.loads(path.read_text())
+        except (OSError, ValueError) as exc:
+            raise InputError(f"not readable ({exc})", path) from None
+        if theirs != protocol():
+            changed = ", ".join(sorted(k for k in protocol() if theirs.get(k) != protocol()[k]))
+            raise InputError(f"its runs were made with another {changed}: give another --out",
+                             path)
+        return
+    if any((out / name).exists() for name in ("tuning.csv", "comparison.csv")):
+        raise InputError("holds runs but no protocol.json (made by an older enn-traffic): "
+                         "give another --out", out)
+    write_atomic(path, lambda handle: json.dump(protocol(), handle, indent=1))
 
 
 def controller_path(out: Path, scenario: str, method: str, budget: int, seed: int) -> Path:

@@ -2,6 +2,8 @@
 on validation and is scored once on the sealed test situations; the comparison resumes
 without running a finished run again; PPO and SAC run through the SB3 adapter."""
 
+import json
+
 import numpy as np
 import pandas as pd
 import pytest
@@ -115,6 +117,23 @@ def test_the_summary_and_the_differences_carry_the_seeds_spread():
     assert difference["minus_ga_high"] - 7.0 == pytest.approx(2.9200 * np.sqrt(2), abs=1e-3)
 
 
+def test_a_folder_of_runs_made_another_way_is_refused(tmp_path, monkeypatch):
+    """Runs are skipped by (scenario, method, budget, seed): a folder made with other keys or
+    counts would have its rows mixed with new ones, so it is refused."""
+    baseline.check_protocol(tmp_path)  # a new folder: its protocol written
+    written = json.loads((tmp_path / "protocol.json").read_text())
+    assert written["test_key"] == baseline.TEST_KEY
+    baseline.check_protocol(tmp_path)  # the same protocol: on
+    monkeypatch.setattr(baseline, "VALIDATION_SITUATIONS", 16)
+    with pytest.raises(InputError, match="validation_situations"):
+        baseline.check_protocol(tmp_path)
+    older = tmp_path / "older"
+    older.mkdir()
+    (older / "comparison.csv").write_text("scenario\n")
+    with pytest.raises(InputError, match="no protocol.json"):
+        baseline.check_protocol(older)
+
+
 def test_the_comparison_resumes_without_running_a_finished_run_again(tmp_path):
     pytest.importorskip("stable_baselines3")
     scenario = shipped_scenario("navigation_narrow").with_overrides(
@@ -158,7 +177,8 @@ def test_the_comparison_resumes_without_running_a_finished_run_again(tmp_path):
     assert (lives["longest_life"] <= 300).all() and (lives["median_life"] > 0).all()
 
 
-def test_numpy_actor_is_the_sb3_policy_of_ppo_and_sac_after_learning():
+def test_numpy_actor_is_the_sb3_policy_of_ppo_and_sac_after_learning(tmp_path):
+    """... and saved and loaded, the same (SAC's clipped mean under gSDE included)."""
     pytest.importorskip("stable_baselines3")
     from stable_baselines3.common.vec_env import VecNormalize
 
@@ -175,6 +195,11 @@ def test_numpy_actor_is_the_sb3_policy_of_ppo_and_sac_after_learning():
         observation = np.random.default_rng(0).uniform(0, 25, (7, 19)).astype(np.float32)
         expected, _ = model.predict(venv.normalize_obs(observation), deterministic=True)
         np.testing.assert_allclose(act(observation), expected, atol=1e-5)
+        act.save(tmp_path / f"{method}.npz")
+        loaded = baseline.NumpyPolicy.load(tmp_path / f"{method}.npz")
+        assert [kind for kind, _, _ in loaded.layers] == [kind for kind, _, _ in act.layers]
+        assert ("clip" in [kind for kind, _, _ in act.layers]) == (method == "SAC")
+        np.testing.assert_array_equal(loaded(observation), act(observation))
 
 
 @pytest.mark.full
