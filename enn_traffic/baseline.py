@@ -679,8 +679,8 @@ def plot(curves: pd.DataFrame, comparison: pd.DataFrame, path: Path) -> None:
     from enn_traffic.report.plots import save_figure
 
     scenarios = sorted(comparison["scenario"].unique())
-    figure, axes = plt.subplots(len(scenarios), 2, figsize=(12, 3.8 * len(scenarios)),
-                                squeeze=False, gridspec_kw={"wspace": 0.35})
+    figure, axes = plt.subplots(len(scenarios), 2, figsize=(12, 4.4 * len(scenarios)),
+                                squeeze=False, gridspec_kw={"wspace": 0.35, "hspace": 0.35})
     for row, name in zip(axes, scenarios, strict=True):
         mine = curves[curves["scenario"] == name]
         for (method, budget, _), run in mine.groupby(["method", "budget_steps", "seed"]):
@@ -702,10 +702,18 @@ def plot(curves: pd.DataFrame, comparison: pd.DataFrame, path: Path) -> None:
                             group["test_fitness"],
                             yerr=[group["test_fitness"] - group["test_fitness_low"],
                                   group["test_fitness_high"] - group["test_fitness"]],
-                            fmt="o", color=COLOURS.get(method, "gray"), capsize=2)
+                            fmt="o", color=COLOURS.get(method, "gray"), capsize=2,
+                            alpha=0.6)
+            mean = group["test_fitness"].mean()
+            low, high = t_interval(group["test_fitness"].to_numpy())
+            row[1].errorbar([x + 0.3], [mean], yerr=[[mean - low], [high - mean]], fmt="D",
+                            color="black", capsize=3)
         row[1].set_xticks(range(len(groups)),
                           [f"{m}\n{b / 1e6:g} M" for (m, b), _ in groups])
-        row[1].set_ylabel("test fitness, chosen controller\n(90% interval over situations)")
+        row[1].set_ylim(bottom=0)
+        row[1].set_ylabel("test fitness (steps lived)")
+        row[1].set_title("each run: 90% interval over its test situations; black: the "
+                         "seeds' mean, 90% t interval", fontsize=8)
     save_figure(figure, path)
 
 
