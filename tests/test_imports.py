@@ -14,8 +14,8 @@ PACKAGE = Path(__file__).resolve().parents[1] / "enn_traffic"
 
 # The layers, lowest first; within a layer too, a part imports only parts listed before it.
 LAYERS = {
-    "base": ["errors", "io", "progress", "provenance", "cache", "enn_traffic", "kinds", "keys",
-             "geometry", "neural"],
+    "base": ["errors", "io", "progress", "provenance", "cache", "enn_traffic", "stopping",
+             "kinds", "keys", "geometry", "neural"],
     "files": ["report", "roads"],
     "settings": ["scenario", "scenario_reference", "shipped"],
     "simulation": ["traffic", "sim", "lanekeeping"],

@@ -49,7 +49,8 @@ def test_numbas_cache_follows_the_users_cache_folder(tmp_path):
 # content), the saved controller, the generations table's columns, and the learning curve.
 DECIDES_NOTHING = {"enn_traffic", "enn_traffic.errors", "enn_traffic.io", "enn_traffic.progress",
                    "enn_traffic.provenance", "enn_traffic.cache", "enn_traffic.controller",
-                   "enn_traffic.generations", "enn_traffic.report.plots"}
+                   "enn_traffic.generations", "enn_traffic.report.plots",
+                   "enn_traffic.stopping"}
 
 
 def test_everything_the_rules_import_is_in_the_rules():

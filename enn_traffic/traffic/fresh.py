@@ -20,6 +20,7 @@ import pickle
 import signal
 import subprocess
 import sys
+import threading
 from collections.abc import Callable, Sequence
 from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
@@ -45,9 +46,11 @@ def end_with_parent(parent: int) -> None:
         os._exit(1)
 
 
-def _run(function: Callable, args: tuple, running: set | None = None):
+def _run(function: Callable, args: tuple, running: set | None = None,
+         cancelled: threading.Event | None = None):
     """``function(*args)`` in a new process; its exception, if any, raised here. The process
-    is in ``running`` while it runs, so that the caller can end it."""
+    is in ``running`` while it runs, so that the caller can end it; one started after the
+    caller set ``cancelled`` ends at once (it may have missed the caller's sweep)."""
     job = pickle.dumps((function, tuple(args)), protocol=pickle.HIGHEST_PROTOCOL)
     path = os.environ.get("PYTHONPATH")
     env = {**os.environ, "PYTHONPATH": os.pathsep.join(filter(None, [_PACKAGE_ROOT, path]))}
@@ -57,6 +60,8 @@ def _run(function: Callable, args: tuple, running: set | None = None):
                           preexec_fn=functools.partial(end_with_parent, os.getpid())) as process:
         running.add(process)
         try:
+            if cancelled is not None and cancelled.is_set():
+                process.kill()
             output, _ = process.communicate(job)
         except BaseException:  # Ctrl-C too: the process ends with the wait for it
             process.kill()
@@ -81,10 +86,12 @@ def fresh_calls(calls: Sequence[tuple], workers: int = 1) -> list:
     if workers <= 1 or len(calls) <= 1:
         return [_run(call[0], call[1:]) for call in calls]
     running: set[subprocess.Popen] = set()
+    cancelled = threading.Event()
     pool = ThreadPoolExecutor(max_workers=min(workers, len(calls)))
     try:
-        return list(pool.map(lambda call: _run(call[0], call[1:], running), calls))
+        return list(pool.map(lambda call: _run(call[0], call[1:], running, cancelled), calls))
     except BaseException:
+        cancelled.set()  # first: a process started from now on ends by itself
         for process in list(running):  # their threads then return, and the pool closes
             process.kill()
         raise

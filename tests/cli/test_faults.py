@@ -112,6 +112,7 @@ def test_a_ctrl_c_while_workers_start_is_delayed_not_lost():
     done = threading.Event()
     bystander = threading.Thread(target=done.wait)  # a thread that does not block SIGINT
     bystander.start()
+    handler = signal.signal(signal.SIGINT, signal.default_int_handler)  # Python's own
     held = False
     try:
         with pytest.raises(KeyboardInterrupt):
@@ -121,6 +122,7 @@ def test_a_ctrl_c_while_workers_start_is_delayed_not_lost():
                 held = True
             time.sleep(1)  # the interpreter raises it at its next check
     finally:
+        signal.signal(signal.SIGINT, handler)
         done.set()
         bystander.join()
     assert held
