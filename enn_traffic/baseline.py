@@ -6,12 +6,13 @@ The protocol, the same for every method:
 - it learns on training keys: the GA on its scenario's own settings (the paper's, §4), PPO and
   SAC on :class:`~enn_traffic.envs.rangefinder.RangefinderVectorEnv` through
   :func:`~enn_traffic.envs.sb3.sb3_vec_env`, with ``VecNormalize`` on the observations;
-  PPO and SAC each life in a situation of their own (a pool of :data:`TRAINING_POOL_KEYS`
-  training keys), as the GA meets a new key each generation;
+  PPO and SAC draw each life from a pool of :data:`TRAINING_POOL_KEYS` training keys, as
+  the GA meets a new key each generation;
 - its controllers along the way, one at every ``budget / CHECKPOINTS`` learner-steps and one
-  at the end (the GA: the best of the generation that reached it, by training fitness; PPO
-  and SAC: the policy then, acting on its mean), are scored on validation situations, and the
-  best there is the run's controller, saved in ``controllers/``;
+  at the end (the GA: the best of the generation that reached it, by training fitness, one a
+  generation at most; PPO and SAC: the policy then, acting on its mean), are scored on
+  validation situations, and the best there is the run's controller, saved in
+  ``controllers/``;
 - that controller alone is scored on test situations sealed for this comparison
   (:data:`TEST_KEY`), read once, by the final configuration.
 
@@ -176,8 +177,10 @@ def policy_fitness(scenario: Scenario, act: Callable[[np.ndarray], np.ndarray],
 
 def ga_run(scenario: Scenario, budget: int, seed: int, test: bool = True) -> RunResult:
     """The scenario's GA, seeded by ``seed``, until ``budget`` learner-steps are simulated;
-    the champion of each generation that reached a checkpoint (and of the last) scored on
-    validation, the best of them on test."""
+    a generation's champion is a candidate while the steps so far have passed more
+    checkpoints than there are candidates (one a generation at most: after a generation that
+    spans several checkpoints, the next ones are candidates too), and the last generation's;
+    the candidates are scored on validation, the best of them on test."""
     world = rangefinder_world(scenario)
     params = ga_params(scenario)
     rng = np.random.default_rng([scenario.seed, seed])
