@@ -7,6 +7,7 @@ import signal
 import subprocess
 import sys
 import time
+from pathlib import Path
 
 import pytest
 
@@ -60,12 +61,36 @@ def test_an_interrupted_caller_ends_its_fresh_processes_at_once(tmp_path):
     script.write_text("import sys, time\nfrom enn_traffic.traffic.fresh import fresh_calls\n"
                       "print('started', flush=True)\n"
                       "fresh_calls([(time.sleep, 60)] * 2, workers=2)\n")
+    inherited = _signal_state(os.getpid())  # this test process's, for a failure's message
     caller = subprocess.Popen([sys.executable, str(script)], stdout=subprocess.PIPE,
-                              stderr=subprocess.DEVNULL, text=True)
+                              stderr=subprocess.DEVNULL, text=True,
+                              preexec_fn=_sigint_as_a_terminal_gives_it)
     assert caller.stdout.readline().strip() == "started"
     time.sleep(4)  # the two fresh processes are asleep
     interrupted = time.perf_counter()
     caller.send_signal(signal.SIGINT)
-    caller.wait(timeout=50)
+    try:
+        caller.wait(timeout=50)
+    except subprocess.TimeoutExpired:
+        state = _signal_state(caller.pid)
+        caller.kill()
+        raise AssertionError(f"the caller ignored its Ctrl-C; its signals: {state}; this "
+                             f"test process's when it started the caller: {inherited}") from None
     assert time.perf_counter() - interrupted < 15
     assert caller.returncode != 0
+
+
+def _sigint_as_a_terminal_gives_it() -> None:
+    """The caller starts as a shell starts a command: SIGINT at its default and unblocked,
+    whatever this test process inherited or holds."""
+    signal.signal(signal.SIGINT, signal.SIG_DFL)
+    signal.pthread_sigmask(signal.SIG_UNBLOCK, {signal.SIGINT})
+
+
+def _signal_state(pid: int) -> str:
+    """A process's blocked, ignored and caught signals (Linux), for a failure's message."""
+    try:
+        lines = Path(f"/proc/{pid}/status").read_text().splitlines()
+    except OSError:
+        return "gone"
+    return "; ".join(line for line in lines if line.startswith(("SigBlk", "SigIgn", "SigCgt")))
