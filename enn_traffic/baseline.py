@@ -334,21 +334,23 @@ def rl_run(scenario: Scenario, method: str, settings: dict, budget: int, seed: i
     lives: list[int] = []
     began = time.perf_counter()
 
+    def snapshot() -> None:
+        snapshots.append((model.num_timesteps, time.perf_counter() - began,
+                          numpy_actor(model, copy.deepcopy(venv.obs_rms))))
+
     class Snapshots(BaseCallback):
         def _on_step(self) -> bool:
             stopping.raise_if_requested()
             lives.extend(info["episode"]["l"] for info in self.locals["infos"]
                          if "episode" in info)
             if self.num_timesteps >= every * (len(snapshots) + 1):
-                snapshots.append((self.num_timesteps, time.perf_counter() - began,
-                                  numpy_actor(model, copy.deepcopy(venv.obs_rms))))
+                snapshot()
             return True
 
     model.learn(total_timesteps=budget, callback=Snapshots())
     wall = time.perf_counter() - began
     if not snapshots or snapshots[-1][0] < model.num_timesteps:  # PPO's last update
-        snapshots.append((model.num_timesteps, wall,
-                          numpy_actor(model, copy.deepcopy(venv.obs_rms))))
+        snapshot()
     validation = np.array([policy_fitness(scenario, act, VALIDATION_KEY,
                                           VALIDATION_SITUATIONS).mean()
                            for _, _, act in snapshots])

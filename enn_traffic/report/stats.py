@@ -23,6 +23,6 @@ def t_interval(values: np.ndarray, level: float = 0.9) -> tuple[float, float]:
     values = np.asarray(values, dtype=np.float64)
     if len(values) < 2:
         return float(values.mean()), float(values.mean())
-    half = stats.t.ppf((1 + level) / 2, len(values) - 1) * values.std(ddof=1) / np.sqrt(
-        len(values))
-    return float(values.mean() - half), float(values.mean() + half)
+    low, high = stats.t.interval(level, len(values) - 1, loc=values.mean(),
+                                 scale=stats.sem(values))
+    return float(low), float(high)
