@@ -49,7 +49,7 @@ from enn_traffic.envs.rangefinder import RangefinderVectorEnv, rangefinder_world
 from enn_traffic.errors import InputError
 from enn_traffic.evolution import ga
 from enn_traffic.io import write_atomic
-from enn_traffic.progress import log
+from enn_traffic.progress import log, terminal
 from enn_traffic.report.stats import bootstrap_interval, t_interval
 from enn_traffic.runner import ga_params
 from enn_traffic.scenario import Scenario, TrackConfig
@@ -400,7 +400,8 @@ def _jobs(jobs: list[tuple], workers: int, done: Callable[[tuple, RunResult], No
 
     from enn_traffic.evolution.backends import quiet_worker, sigint_held_back, stop_pool
 
-    bar = tqdm(total=len(jobs), desc="runs", unit="run", disable=not progress or not jobs)
+    bar = tqdm(file=terminal(),
+               total=len(jobs), desc="runs", unit="run", disable=not progress or not jobs)
     if workers == 1 or len(jobs) <= 1:
         for job in jobs:
             stopping.raise_if_requested()

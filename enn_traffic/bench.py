@@ -22,8 +22,10 @@ same run, with the peak memory of each.
 from __future__ import annotations
 
 import itertools
+import math
 import os
 import subprocess
+import sys
 import tempfile
 import time
 import tracemalloc
@@ -455,6 +457,92 @@ def _random_city(folder: Path, iterations: int) -> Path:
     return net
 
 
+def _city_with_lights(folder: Path, iterations: int, period_s: float) -> tuple[Path, Path]:
+    """A random city (:func:`_random_city`'s roads) whose junctions have actuated traffic
+    lights where netgenerate guesses them, as OSM-built cities do, and random car trips
+    departing every ``period_s`` seconds for an hour (SUMO's randomTrips)."""
+    import sumo as sumo_wheel
+
+    net = folder / f"lights{iterations}.net.xml"
+    subprocess.run([f"{sumo_wheel.SUMO_HOME}/bin/netgenerate", "--rand",
+                    "--rand.iterations", str(iterations), "--rand.max-distance", "200",
+                    "--rand.min-distance", "80", "-L", "2", "--seed", "7", "--tls.guess",
+                    "--tls.default-type", "actuated", "-o", str(net)],
+                   check=True, capture_output=True)
+    trips = folder / f"lights{iterations}.trips.xml"
+    subprocess.run([sys.executable, f"{sumo_wheel.SUMO_HOME}/tools/randomTrips.py", "-n",
+                    str(net), "-o", str(trips), "--period", f"{period_s:g}", "--end", "3600",
+                    "--seed", "7", "--fringe-factor", "10", "--min-distance", "500"],
+                   check=True, capture_output=True)
+    return net, trips
+
+
+def _sumo_step_seconds(net: Path, trips: Path, learners: int, steps: int,
+                       speed_factor: float = 1.0) -> tuple[float, int, int]:
+    """Seconds per SUMO step (moving the learners included) after a 300 s warm-up, with
+    ``learners`` learners in SUMO as the closed loop puts them there (:func:`sumo.add_learner`,
+    SSM devices, each moved along a lane of its own at 10 m/s by :func:`sumo.move_learner`).
+    Also the network's lanes and the vehicles on it when the timing starts."""
+    import libsumo
+
+    with tempfile.TemporaryDirectory(prefix="enn-bench-sumo-") as folder:
+        libsumo.start(["sumo", "-n", str(net), "-r", str(trips), "--seed", "1",
+                       "--step-length", "0.1", "--no-step-log", "true", "--no-warnings", "true",
+                       "--collision.action", "none", "--output-prefix",
+                       sumo.output_prefix(Path(folder)),
+                       *sumo.ssm_options(tuple(sumo.learner_id(k) for k in range(learners)))])
+        try:
+            for _ in range(3000):
+                libsumo.simulationStep()
+            lanes = sorted(lane for lane in libsumo.lane.getIDList()
+                           if not lane.startswith(":") and libsumo.lane.getLength(lane) > 150)
+            paths = []
+            for k in range(learners):
+                lane = lanes[k * len(lanes) // max(learners, 1)]
+                edge, index = lane.rsplit("_", 1)
+                paths.append((edge, int(index)))
+                sumo.add_learner(4.3, 1.7, 10.0, sumo.learner_id(k))
+            if learners:
+                libsumo.vehicletype.setSpeedFactor(sumo.LEARNER_TYPE, speed_factor)
+            vehicles = libsumo.vehicle.getIDCount()
+            started = time.perf_counter()
+            for t in range(steps):
+                for k, (edge, index) in enumerate(paths):
+                    x, y = libsumo.simulation.convert2D(edge, 10.0 + t, index)
+                    ahead = libsumo.simulation.convert2D(edge, 11.0 + t, index)
+                    sumo.move_learner(x, y, math.atan2(ahead[1] - y, ahead[0] - x),
+                                      sumo.learner_id(k))
+                libsumo.simulationStep()
+            seconds = (time.perf_counter() - started) / steps
+            return seconds, len(libsumo.lane.getIDList()), vehicles
+        finally:
+            libsumo.close()
+
+
+def sumo_step_bench(quick: bool = False) -> pd.DataFrame:
+    """SUMO's own step time on a city of thousands of lanes with actuated lights, without a
+    learner, with one and with eight (issue 60: a learner once slowed SUMO 150-fold), each
+    start in a fresh process (libsumo keeps state between starts in one process)."""
+    from enn_traffic.traffic.fresh import fresh_calls
+
+    steps = 100 if quick else 300
+    rows = []
+    with tempfile.TemporaryDirectory(prefix="enn-bench-lights-") as folder:
+        net, trips = _city_with_lights(Path(folder), 1500, 0.5)
+        base = None
+        for learners in (0, 1, 8):
+            [(seconds, lanes, vehicles)] = fresh_calls([(_sumo_step_seconds, net, trips,
+                                                          learners, steps)])
+            base = base or seconds
+            rows.append({"workload": f"SUMO step: random city with actuated lights, {lanes:,} "
+                                     f"lanes, {vehicles:,} vehicles",
+                         "implementation": f"{learners} learner{'s' * (learners != 1)}",
+                         "threads": 1, "seconds": seconds * steps,
+                         "ms_per_step": 1000 * seconds,
+                         "slowdown_vs_no_learner": seconds / base})
+    return pd.DataFrame(rows)
+
+
 def _measured(work, memory: bool = True) -> tuple[float, float, object]:
     """Seconds and peak memory (MB of Python and numpy allocations, by tracemalloc; NaN when
     not ``memory``: tracing doubles the time of many small allocations, and does not see
@@ -518,6 +606,7 @@ def run_bench(quick: bool = False) -> pd.DataFrame:
     """Every workload's throughput table."""
     return pd.concat([
         network_bench(quick),
+        sumo_step_bench(quick),
         navigation_bench(generations=10 if quick else 30,
                          reference_seconds=3.0 if quick else 10.0),
         arena_bench(generations=3 if quick else 10),

@@ -21,7 +21,7 @@ from enn_traffic.controller import Controller
 from enn_traffic.errors import InputError
 from enn_traffic.evolution.backends import connect_ray
 from enn_traffic.io import write_csv
-from enn_traffic.progress import slow_step
+from enn_traffic.progress import slow_step, terminal
 from enn_traffic.report.animate import animate_run
 from enn_traffic.report.plots import heat_map, learner_among_traffic, trajectories
 from enn_traffic.scenario import Scenario
@@ -142,7 +142,8 @@ def evaluate_batch(controllers: dict[str, Controller], scenarios: Sequence[Scena
              for scenario in scenarios]
     for _, controller, scenario in pairs:
         controller.fit(scenario, scenario.source)
-    bar = tqdm(total=len(pairs), desc="evaluate", unit="pair", disable=not progress,
+    bar = tqdm(file=terminal(),
+               total=len(pairs), desc="evaluate", unit="pair", disable=not progress,
                leave=False)
     tables = []
     try:

@@ -19,6 +19,7 @@ from enn_traffic.experiments import EXPERIMENTS
 from enn_traffic.experiments.common import executor as runs_on
 from enn_traffic.experiments.study import Study
 from enn_traffic.io import write_text
+from enn_traffic.progress import terminal
 from enn_traffic.provenance import code_version, commit
 from enn_traffic.report.paper_tables import paper_tables
 
@@ -38,7 +39,8 @@ def reproduce(out: Path, quick: bool = False, only: list[str] | None = None,
     record_path = out / "summary.json"
     records = json.loads(record_path.read_text()) if record_path.exists() else {}
     study = Study(out, quick, progress, runs_on(executor, address))
-    bar = tqdm(names, desc="reproduce", unit="experiment", disable=not progress, position=0)
+    bar = tqdm(names, desc="reproduce", unit="experiment", disable=not progress, position=0,
+               file=terminal())
     for name in bar:
         bar.set_postfix_str(name)
         started = time.perf_counter()

@@ -29,7 +29,7 @@ from enn_traffic.evolution import ga
 from enn_traffic.evolution.backends import Evaluator, make_evaluator
 from enn_traffic.io import folder_lock, write_atomic, write_csv, write_text
 from enn_traffic.neural import NetworkSpec
-from enn_traffic.progress import slow_step
+from enn_traffic.progress import slow_step, terminal
 from enn_traffic.provenance import rules_version, sources_of
 from enn_traffic.report.plots import learning_curve
 from enn_traffic.roads.sumocfg import read_sumocfg, with_includes
@@ -298,7 +298,7 @@ def _evolve(scenario: Scenario, out: Path, evaluator: Evaluator | None, resume: 
     own_evaluator = evaluator is None
     evaluator = evaluator or make_evaluator(scenario)
     bar = tqdm(total=total, initial=min(state.generation, total), desc=scenario.name,
-               unit="gen", disable=not progress, leave=False)
+               unit="gen", disable=not progress, leave=False, file=terminal())
     try:
         run = ga.generations(state, evaluator.evaluate, params)
         while state.generation < total and not state.extra.get("target_reached", False):

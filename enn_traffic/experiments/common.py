@@ -15,6 +15,7 @@ from enn_traffic.controller import Controller
 from enn_traffic.errors import InputError
 from enn_traffic.evolution.backends import connect_ray
 from enn_traffic.io import write_atomic
+from enn_traffic.progress import terminal
 from enn_traffic.runner import CHECKPOINT, evolve
 from enn_traffic.scenario import Scenario
 
@@ -100,7 +101,8 @@ class RayRuns:
                      if out.is_dir() else {})
             pending[self.task.remote(sc, files)] = key
         tables = {}
-        with tqdm(total=len(pending), desc="runs on Ray", unit="run", disable=not progress,
+        with tqdm(file=terminal(),
+                  total=len(pending), desc="runs on Ray", unit="run", disable=not progress,
                   leave=False) as bar:
             while pending:
                 [done], _ = self.ray.wait(list(pending))

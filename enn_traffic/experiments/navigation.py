@@ -17,6 +17,7 @@ from enn_traffic.deploy import controller_trace
 from enn_traffic.experiments.common import first_generation, save_controller
 from enn_traffic.experiments.study import Runs, Study, seed_runs
 from enn_traffic.io import write_csv
+from enn_traffic.progress import terminal
 from enn_traffic.report.plots import draw_paths, heat_map, learning_curves, save_figure
 from enn_traffic.shipped import shipped_scenario
 from enn_traffic.sim.world import CAPPED, OUTCOMES
@@ -175,8 +176,9 @@ def generalization(study: Study) -> list[str]:
     pairs += [(key, track.net.name.removesuffix(".net.xml"), trainings[key[0]].on_track(i))
               for key in controllers for i, track in enumerate(trainings[key[0]].tracks)]
     rows, traces = [], {}
-    for (name, seed), track, scenario in tqdm(pairs, desc="generalization", unit="pair",
-                                              disable=not study.progress, leave=False):
+    for (name, seed), track, scenario in tqdm(
+            pairs, desc="generalization", unit="pair", disable=not study.progress, leave=False,
+            file=terminal()):
         world, poses, outcome = controller_trace(controllers[name, seed], scenario)
         trained_on = {t.net for t in trainings[name].tracks}
         rows.append({

@@ -59,6 +59,7 @@ from enn_traffic.experiments.protocol import ARENA
 from enn_traffic.experiments.study import Study
 from enn_traffic.io import write_csv
 from enn_traffic.kinds import STRATEGIES
+from enn_traffic.progress import terminal
 from enn_traffic.report.paper_tables import PAPER_TABLE3, PAPER_TABLE4
 from enn_traffic.report.plots import draw_paths, save_figure
 from enn_traffic.runner import ga_params
@@ -127,7 +128,7 @@ def _ranked(world: ArenaWorld, candidates: np.ndarray, progress: bool = False) -
     evidence = Evidence()
     source = world.spec.in_source_layout(candidates)
     for genes in tqdm(source, desc=f"ranking {world.scenario.name}", unit="candidate",
-                      disable=not progress, leave=False):
+                      disable=not progress, leave=False, file=terminal()):
         for situation in range(VALIDATION_SITUATIONS):
             run = _broadcast(world, genes, situation, VALIDATION_KEY)[0]
             evidence.record(genes, run.vehicle_steps,
@@ -219,7 +220,8 @@ def measure_strategy(world: ArenaWorld, strategy: int, winner: np.ndarray,
     evolved = world.spec.in_source_layout(population)
     rows, windows, learners, first = [], [], [], None
     for situation in tqdm(range(learning.situations), desc=f"arena_strategy{strategy} crowds",
-                          unit="situation", disable=not progress, leave=False):
+                          unit="situation", disable=not progress, leave=False,
+                          file=terminal()):
         result = situation_rates(world, situation, winner_genes, evolved, learning)
         label = {"strategy": strategy, "situation": situation}
         rows.append(label | result.rates)

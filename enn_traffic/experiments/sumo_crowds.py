@@ -67,6 +67,7 @@ from enn_traffic.experiments.simultaneous import (
 )
 from enn_traffic.experiments.study import Study
 from enn_traffic.io import write_csv, write_text
+from enn_traffic.progress import terminal
 from enn_traffic.provenance import rules_version, sources_of
 from enn_traffic.report.stats import bootstrap_interval
 from enn_traffic.runner import ga_params
@@ -300,7 +301,7 @@ def measure(study: Study, family: Family, learning: SumoLearning,
     settings = _settings(learning)
     settings["key"] = SITUATION_KEY
     rows, windows, learners = [], [], []
-    with tqdm(total=len(inputs) * learning.situations, unit="situation",
+    with tqdm(file=terminal(), total=len(inputs) * learning.situations, unit="situation",
               desc=f"{family.folder} crowds", disable=not study.progress, leave=False) as bar:
         for strategy, (world, winner, evolved) in inputs.items():
             for situation in range(learning.situations):

@@ -21,6 +21,7 @@ from tqdm import tqdm  # noqa: E402
 
 from enn_traffic.errors import InputError  # noqa: E402
 from enn_traffic.geometry import body_polygon  # noqa: E402
+from enn_traffic.progress import terminal  # noqa: E402
 from enn_traffic.report.plots import segments_within, square_view  # noqa: E402
 
 FRAMES = 150  # at most, spread evenly over the life
@@ -81,7 +82,7 @@ def animate_run(world, poses: np.ndarray, out: str | Path, title: str = "",
     partial = out.with_name(f".{out.stem}.tmp{out.suffix}")  # whole or not at all, as write_atomic
     try:
         out.parent.mkdir(parents=True, exist_ok=True)
-        with tqdm(total=len(indices), desc=f"{out.name}: frames", unit="frame",
+        with tqdm(file=terminal(), total=len(indices), desc=f"{out.name}: frames", unit="frame",
                   disable=not progress, leave=False) as bar:
             animation.save(str(partial), writer=PillowWriter(fps=FPS),
                            progress_callback=lambda *_: bar.update(1))

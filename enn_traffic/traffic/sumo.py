@@ -28,14 +28,12 @@ libsumo holds one simulation per process; every function here starts and closes 
 from __future__ import annotations
 
 import contextlib
-import ctypes
 import gzip
 import hashlib
 import math
 import os
 import re
 import shutil
-import sys
 import tempfile
 import xml.etree.ElementTree as ElementTree
 from dataclasses import dataclass
@@ -48,7 +46,7 @@ from numba import njit
 from enn_traffic.cache import cache_folder, content_digest
 from enn_traffic.errors import InputError
 from enn_traffic.geometry import body_corners
-from enn_traffic.progress import slow_step
+from enn_traffic.progress import bar, console_into, slow_step
 from enn_traffic.roads.sumocfg import departure_span, with_includes
 from enn_traffic.scenario import (
     Scenario,
@@ -172,29 +170,6 @@ def _file_names(value: str) -> str:
     return ",".join(Path(name).name for name in re.split(r"[,\s]+", value) if name)
 
 
-_C = ctypes.CDLL(None)
-
-
-@contextlib.contextmanager
-def _console_into(path: Path):
-    """The process's standard output and error (SUMO's console) into ``path`` while inside."""
-    for stream in (sys.stdout, sys.stderr):
-        if stream is not None:
-            stream.flush()
-    saved = os.dup(1), os.dup(2)
-    target = os.open(path, os.O_WRONLY | os.O_CREAT | os.O_APPEND, 0o644)
-    try:
-        os.dup2(target, 1)
-        os.dup2(target, 2)
-        yield
-    finally:
-        _C.fflush(None)
-        os.dup2(saved[0], 1)
-        os.dup2(saved[1], 2)
-        for handle in (*saved, target):
-            os.close(handle)
-
-
 def _key(scenario: Scenario) -> str:
     return "traffic.sumocfg" if scenario.traffic.sumocfg is not None else "traffic.routes"
 
@@ -243,10 +218,17 @@ class Simulation:
         Simulation.running = self
         command = sumo_command(scenario, seed, self.folder, state, save_rng)
         try:
-            with self.console():
+            with slow_step(f"starting SUMO on {scenario.name}'s traffic (seed {seed})"), \
+                    self.console():
                 libsumo.start([*command, *extra])
         except Exception as exc:  # libsumo raises its own exception types
-            self._fail("SUMO failed to start", exc)
+            if state is None:
+                self._fail("SUMO failed to start", exc)
+            # The state is enn-traffic's own file: say so, not that the user's files are wrong.
+            self._fail("SUMO failed to load this warm-up state, which enn-traffic saved (not "
+                       "a file of the scenario's: a SUMO bug in saving or loading states; "
+                       "delete it to simulate the warm-up again, or set traffic.warmup_s = 0 "
+                       "to start without one). SUMO said", exc, where=state)
         # vehicle -> (slot, number, length, width): the first row columns of :meth:`read`
         self.vehicles: dict[str, tuple[int, int, float, float]] = {}
         self.numbered = 0  # vehicles given a number so far
@@ -291,11 +273,15 @@ class Simulation:
         prints; its steps print nothing but warnings, which are off unless shown."""
         if self.scenario.sumo_console:
             return contextlib.nullcontext()
-        return _console_into(self.folder / CONSOLE_LOG)
+        return console_into(self.folder / CONSOLE_LOG)
 
-    def _fail(self, what: str, exc: Exception | None = None) -> None:
+    def _fail(self, what: str, exc: Exception | None = None, where: Path | None = None) -> None:
+        """Close SUMO and raise what went wrong, with SUMO's own message, naming the
+        scenario's traffic key, or ``where`` when a file of enn-traffic's own caused it."""
         detail = _sumo_errors(self.folder)
         self.close()
+        if where is not None:
+            raise InputError(f"{what}: {detail or exc or ''}", where)
         raise InputError(f"{what}: {detail or exc or ''}", self.scenario.source,
                          _key(self.scenario))
 
@@ -396,11 +382,11 @@ class Simulation:
 
     def save_state(self, path: Path) -> None:
         """Save the running SUMO's state to ``path`` (gzipped if it ends in ``.gz``) so that
-        it loads again (:func:`complete_routes`)."""
+        it loads again (:func:`make_loadable`)."""
         with self.console():
             libsumo.simulation.saveState(STATE_FILE)  # into the folder, by the output prefix
         written = self.folder / STATE_FILE
-        complete_routes(written)
+        make_loadable(written)
         shutil.move(written, path)
 
     def close(self, read: tuple[str, ...] = ()) -> dict[str, bytes]:
@@ -433,8 +419,10 @@ class Simulation:
         console = self.folder / CONSOLE_LOG
         printed = console.read_bytes() if console.is_file() else b""
         target.mkdir(parents=True, exist_ok=True)
+        ended = ("did not start" if math.isnan(self._ended_at)
+                 else f"ended at {self._ended_at:g} s")
         with open(target / RUN_LOG, "ab") as log:  # a block for every start, printed or not
-            log.write(f"== SUMO, seed {self.seed}, ended at {self._ended_at:g} s\n".encode()
+            log.write(f"== SUMO, seed {self.seed}, {ended}\n".encode()
                       + (printed or b"(SUMO printed nothing)\n"))
         outputs = [file for file in self.folder.iterdir() if file.name not in OWN_FILES]
         if outputs and self.scenario.traffic.sumo_outputs == "keep":
@@ -464,8 +452,25 @@ def warmup_steps(scenario: Scenario) -> int:
     return round(scenario.traffic.warmup_s / scenario.vehicle.dt)
 
 
+def warm_up(simulation: Simulation) -> None:
+    """Step a freshly started SUMO through the scenario's warm-up, with a bar in SUMO seconds
+    on a wait of more than a second (a city's long warm-up takes minutes)."""
+    scenario = simulation.scenario
+    steps, dt = warmup_steps(scenario), scenario.vehicle.dt
+    chunk = max(1, round(10.0 / dt))  # the bar moves every 10 s of SUMO time
+    with bar(round(steps * dt, 6), f"SUMO warm-up, seed {simulation.seed}", "SUMO s",
+             bar_format="{desc}: {n:.0f}/{total:.0f} SUMO s [{elapsed}<{remaining}, "
+                        "{rate_fmt}]") as progress:
+        done = 0
+        while done < steps:
+            count = min(chunk, steps - done)
+            simulation.step(count)
+            done += count
+            progress.update(count * dt)
+
+
 STATE_FOLDER_VARIABLE = "ENN_TRAFFIC_SUMO_STATES"
-STATE_VERSION = 3  # raised when the code that simulates and saves a warm-up changes
+STATE_VERSION = 4  # raised when the code that simulates and saves a warm-up changes
 
 
 def _inputs_key(scenario: Scenario) -> list[str]:
@@ -504,42 +509,50 @@ def warm_state(scenario: Scenario, seed: int, keep_rng: bool) -> Path:
         return path
     path.parent.mkdir(parents=True, exist_ok=True)
     partial = path.with_name(f"{key}.{os.getpid()}.partial.xml.gz")
-    with slow_step(f"simulating a SUMO warm-up ({scenario.traffic.warmup_s:g} s of SUMO "
-                   f"time, seed {seed})"):
-        simulation = Simulation(scenario, seed, save_rng=keep_rng)
-        try:
-            simulation.step(warmup_steps(scenario))
+    simulation = Simulation(scenario, seed, save_rng=keep_rng)
+    try:
+        warm_up(simulation)
+        with slow_step("saving the warm-up"):
             simulation.save_state(partial)
-        finally:
-            simulation.close()
+    finally:
+        simulation.close()
     os.replace(partial, path)  # whole or not at all, whichever process wrote it first
     return path
 
 
-def complete_routes(path: Path) -> None:
-    """Make the state SUMO just saved to ``path`` load again.
+EMPTY_TL_STATE = re.compile(r'(<tlLogic\b[^>]*?) state=""')
 
-    With a demand scaled above 1 (``--scale``), SUMO's copies of a vehicle share its embedded
-    route (``!id``), and SUMO 1.28 may leave such a route out of the state, which then fails to
-    load ("The route '!id' for vehicle 'id.1' is not known"). The routes a saved vehicle names
-    but the state lacks are written into it, with the edges of a vehicle that drives it (SUMO
-    is still running: the vehicles are asked only when a route is missing)."""
+
+def make_loadable(path: Path) -> None:
+    """Make the state SUMO just saved to ``path`` load again: SUMO 1.28 saves states that it
+    then refuses to load, in two ways.
+
+    - An actuated traffic light (``type="actuated"``, as every OSM-built city has) is saved
+      with ``state=""`` ("Attribute 'state' in definition of tlLogic '...' is empty"). The
+      empty attribute is left out: SUMO then takes the state of the saved phase.
+    - With a demand scaled above 1 (``--scale``), SUMO's copies of a vehicle share its
+      embedded route (``!id``), which the state may leave out ("The route '!id' for vehicle
+      'id.1' is not known"). The routes a saved vehicle names but the state lacks are written
+      into it, with the edges of a vehicle that drives it (SUMO is still running: the
+      vehicles are asked only when a route is missing)."""
     opener = gzip.open if path.name.endswith(".gz") else open
     with opener(path, "rt", encoding="utf-8") as file:
         text = file.read()
-    defined = set(re.findall(r'<route id="([^"]*)"', text))
+    repaired = EMPTY_TL_STATE.sub(r"\1", text)
+    defined = set(re.findall(r'<route id="([^"]*)"', repaired))
     drivers = {route: vehicle for vehicle, route
-               in re.findall(r'<vehicle id="([^"]*)"[^>]*? route="([^"]*)"', text)
+               in re.findall(r'<vehicle id="([^"]*)"[^>]*? route="([^"]*)"', repaired)
                if route not in defined}
-    if not drivers:
-        return
-    routes = "".join(f'    <route id="{route}" state="0" '
-                     f'edges="{" ".join(libsumo.vehicle.getRoute(vehicle))}"/>\n'
-                     for route, vehicle in sorted(drivers.items()))
-    first = text.index("<snapshot")
-    first = text.index("\n", first) + 1  # routes come first in the snapshot
-    with opener(path, "wt", encoding="utf-8") as file:
-        file.write(text[:first] + routes + text[first:])
+    if drivers:
+        routes = "".join(f'    <route id="{route}" state="0" '
+                         f'edges="{" ".join(libsumo.vehicle.getRoute(vehicle))}"/>\n'
+                         for route, vehicle in sorted(drivers.items()))
+        first = repaired.index("<snapshot")
+        first = repaired.index("\n", first) + 1  # routes come first in the snapshot
+        repaired = repaired[:first] + routes + repaired[first:]
+    if repaired != text:
+        with opener(path, "wt", encoding="utf-8") as file:
+            file.write(repaired)
 
 
 def no_traffic_error(scenario: Scenario, steps: int) -> InputError:
@@ -570,7 +583,7 @@ def first_traffic(scenario: Scenario, seed: int, state: Path | None, steps: int)
     simulation = Simulation(scenario, seed, state)
     try:
         if state is None:
-            simulation.step(warmup_steps(scenario))
+            warm_up(simulation)
         for t in range(steps + 1):
             if simulation.vehicle_count():
                 return t
@@ -613,7 +626,7 @@ def record(scenario: Scenario, seed: int, steps: int, state: Path | None = None,
     frames = []
     try:
         if state is None:
-            simulation.step(warmup_steps(scenario))
+            warm_up(simulation)
         for t in range(steps + 1):
             if t:
                 simulation.step()
@@ -651,7 +664,16 @@ def ssm_options(learners: tuple[str, ...] = (LEARNER,)) -> tuple[str, ...]:
             "--device.ssm.measures", " ".join(SSM_THRESHOLDS),
             "--device.ssm.thresholds", " ".join(f"{v:g}" for v in SSM_THRESHOLDS.values()),
             "--device.ssm.range", f"{SSM_RANGE_M:g}", "--device.ssm.trajectories", "false",
-            "--device.ssm.file", SSM_FILE)
+            "--device.ssm.file", SSM_FILE, *SSM_DEFAULTS)
+
+
+# SSM's other options at SUMO's defaults, set so that SUMO does not print for every learner
+# that it "does not supply vehicle parameter 'device.ssm....'" (between steps, on the
+# terminal).
+SSM_DEFAULTS = ("--device.ssm.extratime", "5", "--device.ssm.geo", "false",
+                "--device.ssm.mdrac.prt", "1", "--device.ssm.write-positions", "false",
+                "--device.ssm.write-lane-positions", "false",
+                "--device.ssm.exclude-conflict-types", "")
 
 
 @dataclass(frozen=True)
@@ -721,14 +743,24 @@ def add_learner(length: float, width: float, speed: float, vehicle: str = LEARNE
         libsumo.vehicletype.setMaxSpeed(kind, max(speed, 1e-3))
         libsumo.vehicletype.setSpeedDeviation(kind, 0.0)
         libsumo.vehicletype.setImperfection(kind, 0.0)
-        # It enters SUMO at its own speed (so that SSM sees it moving from the start) whatever
-        # the first edge's speed limit: its speed factor binds nothing else, as it is moved by
-        # moveToXY.
-        libsumo.vehicletype.setSpeedFactor(kind, 100.0)
-    libsumo.vehicle.add(vehicle, "", typeID=kind, departSpeed=f"{speed:g}")
-    libsumo.vehicle.setSpeedMode(vehicle, 0)
-    libsumo.vehicle.setLaneChangeMode(vehicle, 0)
-    libsumo.vehicle.setSpeed(vehicle, speed)  # for its first step; then SUMO derives it
+        # Speed factor 1, as SUMO's own cars: moveToXY places it at its own speed whatever the
+        # lane's limit (it enters at that speed, for SSM, even on a slower lane), and a larger
+        # factor makes SUMO plan its stopping distance across the city every step (a factor
+        # of 100 cost 876 ms a step on a 9,700-lane city, docs/sumo.md "Learners at SUMO's
+        # pace").
+        libsumo.vehicletype.setSpeedFactor(kind, 1.0)
+    # "max": its speed, or the lane's limit where that is lower (a number above the limit of
+    # the edge SUMO first puts it on is refused); from its second step on, SUMO derives its
+    # speed from the distance moveToXY moved it.
+    try:
+        libsumo.vehicle.add(vehicle, "", typeID=kind, departSpeed="max")
+        libsumo.vehicle.setSpeedMode(vehicle, 0)
+        libsumo.vehicle.setLaneChangeMode(vehicle, 0)
+        libsumo.vehicle.setSpeed(vehicle, speed)  # for its first step; then SUMO derives it
+    except libsumo.TraCIException as exc:
+        if Simulation.running is None:
+            raise
+        Simulation.running._fail(f"SUMO refused the learner {vehicle!r}", exc)
 
 
 def remove_learner(vehicle: str = LEARNER) -> None:

@@ -12,6 +12,7 @@ from conftest import local_and_spread
 from enn_traffic.errors import InputError
 from enn_traffic.scenario import load_scenario
 from enn_traffic.sim.sumo_world import SumoWorld
+from enn_traffic.sim.world import COLLIDED
 from enn_traffic.traffic import sumo
 from enn_traffic.worlds import make_world
 
@@ -44,6 +45,17 @@ FOLLOWER = """<routes>
            lcStrategic="-1" lcSpeedGain="0" lcKeepRight="0"/>
     <vehicle id="follower" type="fast" depart="0" departLane="0" departPos="0"
              departSpeed="20">
+        <route edges="g0_0to1_0"/>
+    </vehicle>
+</routes>
+"""
+
+# One slow car ahead of the learner's start, in its lane (2 m/s, front 45 m along the lane).
+LEADER = """<routes>
+    <vType id="slow" length="4.5" width="1.8" sigma="0" speedFactor="1" maxSpeed="2"
+           lcStrategic="-1" lcSpeedGain="0" lcKeepRight="0"/>
+    <vehicle id="leader" type="slow" depart="0" departLane="0" departPos="45"
+             departSpeed="2">
         <route edges="g0_0to1_0"/>
     </vehicle>
 </routes>
@@ -266,3 +278,20 @@ def test_closed_loop_records_the_learners_conflicts_with_ssm(tmp_path, root):
     assert (ttc, drac, pet) == (1, 1, 0)
     replay = make_world(sumo_scenario(tmp_path, root, FOLLOWER, **settings))
     assert replay.evaluate(straight).safety is None
+
+
+def test_ssm_sees_the_learner_closing_on_a_vehicle_ahead(tmp_path, root):
+    """The learner (10 m/s) drives straight at a 2 m/s car ahead in its lane: 25.5 m from the
+    car's rear at its start, it closes at 8 m/s and runs into it after about 3.2 s. On the way
+    the time-to-collision, gap / 8 m/s, falls through 1.5 s towards 0: SUMO's SSM device on
+    the learner records the conflict with a finite, small TTC (the device once saw nothing
+    of a learner that SUMO itself drove: issue 60)."""
+    length = SumoWorld(sumo_scenario(tmp_path, root, LEADER)).spec.chromosome_length
+    straight = np.zeros((1, length))
+    scenario = sumo_scenario(tmp_path, root, LEADER, mode="closed-loop", lane="g0_0to1_0_0",
+                             offset=15.0, steps=60, warmup=0.0, episodes=1)
+    results = make_world(scenario).evaluate(straight)
+    min_ttc, ttc, drac, _ = results.safety[0, 0]
+    assert results.outcome[0, 0] == COLLIDED and results.hit[0, 0] >= 0  # the car, not a wall
+    assert min_ttc < 0.5
+    assert ttc == 1 and drac == 1

@@ -314,3 +314,41 @@ def test_training_generations_take_the_shared_warmups_in_turn(tmp_path, road_net
     assert list(counts) == [20, 20, 20]
     held_out = 6_000_000_123
     assert shared_warmup(scenario, held_out, 1) == situation_seed(scenario, held_out, 1) % 3
+
+
+def test_a_warm_up_with_actuated_lights_loads(tmp_path, monkeypatch):
+    """The road's middle junction as an actuated traffic light, as OSM-built cities have them:
+    SUMO 1.28 saves such a light with ``state=""`` when it has no detectors (here: green
+    phases of fixed length) and then refuses to load its own state (checked below, so that
+    this test keeps exercising the bug while SUMO has it). The saved
+    warm-ups load, in replay and in closed loop (issue 60)."""
+    import subprocess
+
+    import libsumo
+    import sumo as sumo_wheel
+    from sumo_road import EDGES
+
+    (tmp_path / "road.nod.xml").write_text(
+        '<nodes><node id="w" x="0" y="0" type="priority"/>'
+        '<node id="m" x="100" y="0" type="traffic_light"/>'
+        '<node id="e" x="200" y="0" type="priority"/></nodes>')
+    (tmp_path / "road.edg.xml").write_text(EDGES)
+    subprocess.run([f"{sumo_wheel.SUMO_HOME}/bin/netconvert", "-n", "road.nod.xml", "-e",
+                    "road.edg.xml", "-o", "lights.net.xml", "--no-turnarounds", "true",
+                    "--tls.default-type", "actuated", "--tls.min-dur", "5", "--tls.max-dur",
+                    "5"], cwd=tmp_path, check=True, capture_output=True)
+    monkeypatch.setenv(sumo.STATE_FOLDER_VARIABLE, str(tmp_path / "states"))
+    path = road_scenario(tmp_path, tmp_path / "lights.net.xml", warmup=30.0,
+                         extra="warmup_states = 2")
+    scenario = load_scenario(path)
+    simulation = sumo.Simulation(scenario, seed=1)
+    try:
+        simulation.step(10)
+        libsumo.simulation.saveState("raw.xml")  # into the start's folder
+        assert 'state=""' in (simulation.folder / "raw.xml").read_text()
+    finally:
+        simulation.close()
+    for mode in ("replay", "closed-loop"):
+        world = make_world(scenario.with_overrides(traffic={"mode": mode}))
+        results = world.evaluate(straight(world))
+        assert (results.steps > 0).all()
