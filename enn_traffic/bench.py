@@ -477,70 +477,95 @@ def _city_with_lights(folder: Path, iterations: int, period_s: float) -> tuple[P
     return net, trips
 
 
-def _sumo_step_seconds(net: Path, trips: Path, learners: int, steps: int,
-                       speed_factor: float = 1.0) -> tuple[float, int, int]:
-    """Seconds per SUMO step (moving the learners included) after a 300 s warm-up, with
-    ``learners`` learners in SUMO as the closed loop puts them there (:func:`sumo.add_learner`,
-    SSM devices, each moved along a lane of its own at 10 m/s by :func:`sumo.move_learner`).
-    Also the network's lanes and the vehicles on it when the timing starts."""
+def sumo_step_seconds(source: list[str], learners: int, steps: int, warmup_steps: int,
+                      speed_factor: float = 1.0) -> tuple[float, int, int]:
+    """Seconds per SUMO step (moving the learners included) after ``warmup_steps`` steps of
+    0.1 s, of SUMO started on ``source`` (``["-c", "city.sumocfg"]``, or a network and route
+    files), with ``learners`` learners in SUMO as the closed loop puts them there
+    (:func:`sumo.add_learner`, SSM devices, each moved along a lane of its own at 10 m/s by
+    :func:`sumo.move_learner`); their vehicle type's speed factor ``speed_factor``. Also the
+    network's lanes (internal lanes excepted) and the vehicles on it when the timing
+    starts."""
     import libsumo
 
     with tempfile.TemporaryDirectory(prefix="enn-bench-sumo-") as folder:
-        libsumo.start(["sumo", "-n", str(net), "-r", str(trips), "--seed", "1",
-                       "--step-length", "0.1", "--no-step-log", "true", "--no-warnings", "true",
-                       "--collision.action", "none", "--output-prefix",
-                       sumo.output_prefix(Path(folder)),
+        libsumo.start(["sumo", *source, "--seed", "1", "--step-length", "0.1",
+                       "--no-step-log", "true", "--no-warnings", "true", "--verbose", "false",
+                       "--duration-log.statistics", "false", "--gui-settings-file", "",
+                       "--collision.action", "none",
+                       "--output-prefix", sumo.output_prefix(Path(folder)),
                        *sumo.ssm_options(tuple(sumo.learner_id(k) for k in range(learners)))])
         try:
-            for _ in range(3000):
+            for _ in range(warmup_steps):
                 libsumo.simulationStep()
             lanes = sorted(lane for lane in libsumo.lane.getIDList()
-                           if not lane.startswith(":") and libsumo.lane.getLength(lane) > 150)
+                           if not lane.startswith(":") and libsumo.lane.getLength(lane) > 60
+                           and (not libsumo.lane.getAllowed(lane)  # every class
+                                or "passenger" in libsumo.lane.getAllowed(lane)))
             paths = []
             for k in range(learners):
                 lane = lanes[k * len(lanes) // max(learners, 1)]
                 edge, index = lane.rsplit("_", 1)
-                paths.append((edge, int(index)))
+                paths.append((edge, int(index), libsumo.lane.getLength(lane)))
                 sumo.add_learner(4.3, 1.7, 10.0, sumo.learner_id(k))
             if learners:
                 libsumo.vehicletype.setSpeedFactor(sumo.LEARNER_TYPE, speed_factor)
-            vehicles = libsumo.vehicle.getIDCount()
+            vehicles = libsumo.vehicle.getIDCount() - learners
             started = time.perf_counter()
             for t in range(steps):
-                for k, (edge, index) in enumerate(paths):
-                    x, y = libsumo.simulation.convert2D(edge, 10.0 + t, index)
-                    ahead = libsumo.simulation.convert2D(edge, 11.0 + t, index)
+                for k, (edge, index, length) in enumerate(paths):
+                    along = 1.0 + t % (length - 2.0)  # back and forth along the lane
+                    x, y = libsumo.simulation.convert2D(edge, along, index)
+                    ahead = libsumo.simulation.convert2D(edge, along + 1.0, index)
                     sumo.move_learner(x, y, math.atan2(ahead[1] - y, ahead[0] - x),
                                       sumo.learner_id(k))
                 libsumo.simulationStep()
             seconds = (time.perf_counter() - started) / steps
-            return seconds, len(libsumo.lane.getIDList()), vehicles
+            lanes = sum(not lane.startswith(":") for lane in libsumo.lane.getIDList())
+            return seconds, lanes, vehicles
         finally:
             libsumo.close()
 
 
-def sumo_step_bench(quick: bool = False) -> pd.DataFrame:
-    """SUMO's own step time on a city of thousands of lanes with actuated lights, without a
-    learner, with one and with eight (issue 60: a learner once slowed SUMO 150-fold), each
-    start in a fresh process (libsumo keeps state between starts in one process)."""
+def sumo_step_table(source: list[str], name: str, steps: int, warmup_steps: int,
+                    repeats: int, before_steps: int = 0) -> pd.DataFrame:
+    """:func:`sumo_step_seconds` without a learner, with one and with eight, one after another
+    ``repeats`` times (the median kept: machine drift hits every count alike), each start in
+    a fresh process (libsumo keeps state between starts in one process); with
+    ``before_steps``, also one learner at the speed factor of 100 used before issue 60."""
     from enn_traffic.traffic.fresh import fresh_calls
 
-    steps = 100 if quick else 300
-    rows = []
+    counts = (0, 1, 8)
+    calls = [(sumo_step_seconds, source, learners, steps, warmup_steps)
+             for _ in range(repeats) for learners in counts]
+    if before_steps:
+        calls.append((sumo_step_seconds, source, 1, before_steps, warmup_steps, 100.0))
+    measured = fresh_calls(calls)
+    lanes, vehicles = measured[0][1:]
+    seconds = {learners: float(np.median([m[0] for m, call in zip(measured, calls, strict=True)
+                                          if call[2] == learners and len(call) == 5]))
+               for learners in counts}
+    rows = [(f"{learners} learner{'s' * (learners != 1)}", seconds[learners], steps)
+            for learners in counts]
+    if before_steps:
+        rows.append(("1 learner, speed factor 100 (before issue 60)", measured[-1][0],
+                     before_steps))
+    return pd.DataFrame([{
+        "workload": f"SUMO step: {name}, {lanes:,} lanes, {vehicles:,} vehicles",
+        "implementation": label, "threads": 1, "seconds": step_s * count,
+        "steps": count, "ms_per_step": 1000 * step_s,
+        "slowdown_vs_no_learner": step_s / seconds[0]} for label, step_s, count in rows])
+
+
+def sumo_step_bench(quick: bool = False) -> pd.DataFrame:
+    """SUMO's own step time on a city of thousands of lanes with actuated lights, without a
+    learner, with one and with eight (issue 60: a learner once slowed SUMO 150-fold)."""
     with tempfile.TemporaryDirectory(prefix="enn-bench-lights-") as folder:
-        net, trips = _city_with_lights(Path(folder), 1500, 0.5)
-        base = None
-        for learners in (0, 1, 8):
-            [(seconds, lanes, vehicles)] = fresh_calls([(_sumo_step_seconds, net, trips,
-                                                          learners, steps)])
-            base = base or seconds
-            rows.append({"workload": f"SUMO step: random city with actuated lights, {lanes:,} "
-                                     f"lanes, {vehicles:,} vehicles",
-                         "implementation": f"{learners} learner{'s' * (learners != 1)}",
-                         "threads": 1, "seconds": seconds * steps,
-                         "ms_per_step": 1000 * seconds,
-                         "slowdown_vs_no_learner": seconds / base})
-    return pd.DataFrame(rows)
+        net, trips = _city_with_lights(Path(folder), 300 if quick else 1500, 0.5)
+        return sumo_step_table(["-n", str(net), "-r", str(trips)],
+                               "random city with actuated lights", 100 if quick else 300,
+                               1200 if quick else 3000, 1 if quick else 3,
+                               0 if quick else 3)
 
 
 def _measured(work, memory: bool = True) -> tuple[float, float, object]:

@@ -179,6 +179,22 @@ def _sumo_folder(out: Path | None) -> Path | None:
     return None if out is None else out.with_name(out.stem + "_sumo")
 
 
+def _note(message: str) -> None:
+    """A note on how the command reads its input, on standard error (not with --quiet)."""
+    from enn_traffic.progress import log
+
+    log.warning(message)
+
+
+def _warn_unread(scenario, command: str) -> None:
+    """Warn of keys the scenario file sets that ``command`` does not read."""
+    traffic = scenario.traffic
+    if traffic is not None and "learners" in traffic.model_fields_set:
+        _note(f"{scenario.source}: traffic.learners = {traffic.learners} is read only by "
+              f"'enn-traffic reproduce' (Tables 3-4, many learners in one SUMO); {command} "
+              "drives one learner per chromosome and ignores it")
+
+
 def _cmd_run(args) -> int:
     from enn_traffic.evolution.backends import make_evaluator
     from enn_traffic.io import check_output_folder, check_unlocked
@@ -193,6 +209,11 @@ def _cmd_run(args) -> int:
         overrides["generations"] = args.generations
     if args.population:
         overrides["population_size"] = args.population
+        if args.population < scenario.ga.tournament_size:  # a tournament fits its population
+            overrides["tournament_size"] = args.population
+            _note(f"ga.tournament_size {scenario.ga.tournament_size} lowered to "
+                  f"--population {args.population}")
+    _warn_unread(scenario, "run")
     scenario = scenario.with_overrides(
         **({"ga": overrides} if overrides else {}),
         **({"seed": args.seed} if args.seed is not None else {}),
@@ -317,18 +338,31 @@ def _cmd_lanes(args) -> int:
             "asks" + ("; a .sumocfg is read with start_offset = 10 m and a 4.3 m body: run "
                       "lanes on your scenario file for its own" if source.suffix == ".sumocfg"
                       else ""))
+    fringe = int((cars & table["ends_at_fringe"]).sum())
     print(f"{net.name}: {len(table):,} lanes; {int(cars.sum()):,} allow passenger cars, of "
-          f"which {len(learner):,} are {shortest:g} m long or longer (a learner may start "
-          f"there: {rule}); {int((~cars).sum()):,} do not allow cars")
+          f"which {len(learner):,} {'is' if len(learner) == 1 else 'are'} {shortest:g} m long "
+          f"or longer and do not end at the network's fringe (a learner may start there: "
+          f"{rule}); {fringe:,} end at the network's fringe (an exit, or a dead end); "
+          f"{int((~cars).sum()):,} do not allow cars")
     if (~cars).any():
         kinds = table[~cars]["allowed"].replace("", "no vehicle").value_counts()
         print("  not for cars: " + ", ".join(f"{count:,} {kind}" for kind, count
                                                in kinds.head(6).items()))
     demand = "routes: " + ", ".join(p.name for p in routes) if routes else "no route files"
-    print(f"the learner's lanes by the vehicles the demand sends over them ({demand}):")
-    shown = learner.head(args.top).drop(columns=["allows_cars", "learner_may_start"])
-    print(shown.to_string(index=False))
-    if len(learner):
+    print(f"the learner's lanes by the vehicles the demand sends over them, trips routed as "
+          f"SUMO routes them ({demand}):")
+    columns = ["lane", "edge", "vehicles", "length_m", "speed_limit_kmh", "allowed"]
+    ranked = learner[columns].assign(rank=range(1, len(learner) + 1))
+    print(ranked.head(args.top)[["rank", *columns]].to_string(index=False))
+    starts = _scenario_starts(source, table)
+    if starts is not None:
+        key, chosen = starts
+        chosen = chosen.merge(ranked[["lane", "rank"]], on="lane", how="left")
+        chosen["rank"] = chosen["rank"].map(lambda r: "-" if r != r else f"{int(r)}")
+        print(f"\nthe scenario's own start, {key} (rank among the learner's lanes; - where "
+              "auto would not start):")
+        print(chosen[["rank", *columns, "ends_at_fringe"]].to_string(index=False))
+    elif len(learner):
         print(f'\nstart there: [track] start_lane = "{learner.iloc[0]["lane"]}" '
               '(or start_lane = "auto")')
     if args.out:
@@ -338,6 +372,30 @@ def _cmd_lanes(args) -> int:
         _plot_lanes(net, learner.head(min(args.top, 9)), args.plot)
         print(f"written {args.plot}")
     return 0
+
+
+def _scenario_starts(source, table):
+    """A scenario file's own start lanes, when it names them (``start_lane`` or
+    ``start_edge``, not ``auto``): (its key as written, their rows of ``table``)."""
+    import tomllib
+
+    from enn_traffic.scenario import load_scenario
+
+    if source.suffix == ".sumocfg":
+        return None
+    written = tomllib.loads(source.read_text()).get("track", {})
+    if not isinstance(written, dict) or written.get("start_lane") == "auto":
+        return None
+    track = load_scenario(source).track
+    for key in ("start_lane", "start_edge"):
+        value = getattr(track, key)
+        if value is None or value == "auto":
+            continue
+        names = [value] if isinstance(value, str) else list(value)
+        column = "lane" if key == "start_lane" else "edge"
+        rows = table[table[column].isin(names)]
+        return f"{key} = {names if len(names) > 1 else names[0]!r}", rows
+    return None
 
 
 def _plot_lanes(net: Path, top, out: Path) -> None:

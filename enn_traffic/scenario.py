@@ -232,7 +232,8 @@ class GAConfig(_Section):
     population_size: int = Field(200, ge=2, le=100_000, description="chromosomes per generation")
     generations: int = Field(50, ge=1, le=100_000, description="generations to run")
     tournament_size: int = Field(
-        10, ge=1, description="tournament selection, contestants drawn with replacement")
+        10, ge=1, description="tournament selection, contestants drawn with replacement "
+        "(left out: 10, or `population_size` when that is smaller)")
     crossover_probability: float = Field(
         1.0, ge=0, le=1, description="one-point crossover probability")
     crossover_cut_mean: float = Field(
@@ -250,6 +251,16 @@ class GAConfig(_Section):
     target_fitness: float | None = Field(
         None, gt=0, description="stop early once a generation's best fitness "
         "reaches this")
+
+    @model_validator(mode="before")
+    @classmethod
+    def _default_tournament(cls, data):
+        """A tournament left out fits any population: 10, or the whole population."""
+        if isinstance(data, dict) and "tournament_size" not in data:
+            size = data.get("population_size", cls.model_fields["population_size"].default)
+            if isinstance(size, int) and not isinstance(size, bool) and size >= 1:
+                data = {**data, "tournament_size": min(size, 10)}
+        return data
 
     @model_validator(mode="after")
     def _fits_population(self) -> GAConfig:

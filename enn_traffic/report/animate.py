@@ -8,6 +8,7 @@ vehicles near it can be seen; only the walls and bodies near the view are drawn.
 from __future__ import annotations
 
 import os
+import textwrap
 from pathlib import Path
 
 import matplotlib
@@ -27,6 +28,16 @@ from enn_traffic.report.plots import segments_within, square_view  # noqa: E402
 FRAMES = 150  # at most, spread evenly over the life
 FPS = 15
 FOLLOW_M = 150.0  # a larger map is shown this wide around the learner
+
+
+def _sumo_start(scenario) -> float | None:
+    """The SUMO time at the learner's start, for a scenario with SUMO traffic."""
+    traffic = getattr(scenario, "traffic", None)
+    if traffic is None or not traffic.is_sumo:
+        return None
+    from enn_traffic.scenario import learner_start_time
+
+    return learner_start_time(scenario)
 
 
 def animate_run(world, poses: np.ndarray, out: str | Path, title: str = "",
@@ -49,8 +60,12 @@ def animate_run(world, poses: np.ndarray, out: str | Path, title: str = "",
     else:
         axes.set_xlim(low[0], high[0])
         axes.set_ylim(low[1], high[1])
-    axes.set_title(title, fontsize=9)
+    axes.set_title("\n".join(textwrap.wrap(title, 60)), fontsize=9)
+    figure.tight_layout()
     (line,) = axes.plot([], [], color="C0", lw=1.2, zorder=3)
+    clock = axes.text(0.02, 0.98, "", transform=axes.transAxes, va="top", fontsize=8, zorder=5,
+                      bbox={"boxstyle": "round,pad=0.2", "fc": "white", "ec": "0.6"})
+    sumo_start = _sumo_start(world.scenario)
     traffic = PolyCollection([], facecolors="0.45", edgecolors="0.25", linewidths=0.4,
                              zorder=2)
     learner = PolyCollection([], facecolors="C3", edgecolors="black", linewidths=0.6,
@@ -75,7 +90,9 @@ def animate_run(world, poses: np.ndarray, out: str | Path, title: str = "",
                        & (others[:, :2] <= view_high + reach).all(1)]
         traffic.set_verts([body_polygon(*pose, vehicle.length, vehicle.width)
                            for pose in shown])
-        return line, traffic, learner
+        clock.set_text(f"t = {i * vehicle.dt:.1f} s, step {i}" + (
+            "" if sumo_start is None else f"\nSUMO time {sumo_start + i * vehicle.dt:.1f} s"))
+        return line, traffic, learner, clock
 
     animation = FuncAnimation(figure, draw, frames=len(indices), blit=not follow)
     out = Path(out)

@@ -209,35 +209,53 @@ def road_surfaces(surfaces: dict[str, tuple[object, np.ndarray]],
                   lanes: list[tuple[str, np.ndarray]], path: str | Path, title: str) -> None:
     """The network's road surface one way and another, side by side: for each ``surfaces``
     entry (label: (area, walls)) the area in grey and its walls in black; on the last, the
-    ``lanes`` (id, centre line (n, 2)) numbered in their order, the start lanes to choose."""
+    ``lanes`` (id, centre line (n, 2)) numbered in their order, the start lanes to choose,
+    listed under the panels. Every panel shows the last surface's extent (the cars' road: a
+    railway or a ship lane beyond it does not shrink the city), its lines thinner on a
+    larger network."""
+    import textwrap
+
     from matplotlib.collections import LineCollection
 
-    figure, axes_row = plt.subplots(1, len(surfaces), figsize=(6.0 * len(surfaces), 6.0),
-                                    sharex=True, sharey=True, squeeze=False)
+    last_area = list(surfaces.values())[-1][0]
+    x0, y0, x1, y1 = last_area.bounds
+    margin = 0.02 * max(x1 - x0, y1 - y0, 1.0)
+    aspect = (y1 - y0 + 2 * margin) / max(x1 - x0 + 2 * margin, 1.0)
+    width = 7.0
+    figure, axes_row = plt.subplots(1, len(surfaces), sharex=True, sharey=True, squeeze=False,
+                                    figsize=(width * len(surfaces),
+                                             min(max(width * aspect, 4.0), 12.0) + 1.2))
+    line = float(np.clip(600.0 / max(x1 - x0, y1 - y0, 1.0), 0.15, 0.7))
     for axes, (label, (area, walls)) in zip(axes_row[0], surfaces.items(), strict=True):
         for polygon in getattr(area, "geoms", [area]):
             axes.fill(*polygon.exterior.xy, color="0.85", lw=0)
             for hole in polygon.interiors:
                 axes.fill(*hole.xy, color="white", lw=0)
         axes.add_collection(LineCollection(walls.reshape(-1, 2, 2), colors="black",
-                                           linewidths=0.7))
-        axes.set_title(f"{label}: {len(walls):,} walls", fontsize=10)
+                                           linewidths=line))
+        axes.set_title("\n".join(textwrap.wrap(f"{label}: {len(walls):,} walls", 48)),
+                       fontsize=10)
         axes.set_aspect("equal")
+        axes.set_xlim(x0 - margin, x1 + margin)
+        axes.set_ylim(y0 - margin, y1 + margin)
         axes.set_xlabel("x [m]")
     axes_row[0, 0].set_ylabel("y [m]")
     last = axes_row[0, -1]
     for rank, (_, shape) in enumerate(lanes, start=1):
-        last.plot(*shape.T, color="C3", lw=1.6, zorder=3)
+        last.plot(*shape.T, color="C3", lw=max(2 * line, 1.2), zorder=3)
         last.annotate("", xy=shape[-1], xytext=shape[-2], zorder=3,
-                      arrowprops={"arrowstyle": "->", "color": "C3", "lw": 1.6})
+                      arrowprops={"arrowstyle": "->", "color": "C3", "lw": 1.2})
         steps = np.hypot(*np.diff(shape, axis=0).T)
         halfway = int(np.searchsorted(np.cumsum(steps), steps.sum() / 2))
         middle = shape[halfway] + (shape[halfway + 1] - shape[halfway]) * 0.5
-        last.text(*middle, f"{rank}", color="C3", fontsize=8, zorder=4, va="bottom")
+        last.text(*middle, f"{rank}", color="C3", fontsize=9, fontweight="bold", zorder=4,
+                  va="bottom", bbox={"boxstyle": "round,pad=0.1", "fc": "white", "ec": "none",
+                                     "alpha": 0.7})
     if lanes:
-        last.plot([], [], color="C3", label="start lanes, by the demand over them: "
-                  + ", ".join(f"{rank} {lane}" for rank, (lane, _) in enumerate(lanes, 1)))
-        last.legend(fontsize=7, loc="upper left")
+        listed = "start lanes, by the demand over them: " + ", ".join(
+            f"{rank} {lane}" for rank, (lane, _) in enumerate(lanes, 1))
+        figure.text(0.5, 0.01, "\n".join(textwrap.wrap(listed, 60 * len(surfaces))),
+                    ha="center", va="bottom", fontsize=8, color="C3")
     figure.suptitle(title, fontsize=11)
-    figure.tight_layout()
+    figure.tight_layout(rect=(0, 0.05 if lanes else 0, 1, 1))
     save_figure(figure, path)

@@ -2,25 +2,36 @@
 (``enn-traffic lanes``; ``[track] start_lane = "auto"``; docs/sumo.md, "Choosing a start
 lane").
 
-The demand is read from the route files as published, without routing: a vehicle or flow with
-a route counts on each edge of it; a trip or a flow between edges (``from``, ``via``, ``to``)
-counts on those edges only. A flow counts its vehicles: ``number``, or its span over ``period``,
-``vehsPerHour`` or ``probability`` (a flow without an ``end`` counts one hour). A lane carries
-the demand of its edge by the vehicle classes it allows (a vehicle's class is its type's
-``vClass``, from the route and additional files; passenger when not given, as SUMO's).
+The demand is read from the route files as published: a vehicle or flow with a route counts on
+each edge of it; a trip or a flow between edges (``from``, ``via``, ``to``) is routed by SUMO's
+own ``duarouter`` on the network, as SUMO routes it when it departs, and counts on every edge
+of that route (where ``duarouter`` finds none, on its given edges only). A flow counts its
+vehicles: ``number``, or its span over ``period``, ``vehsPerHour`` or ``probability`` (a flow
+without an ``end`` counts one hour). A lane carries the demand of its edge by the vehicle
+classes it allows (a vehicle's class is its type's ``vClass``, from the route and additional
+files; passenger when not given, as SUMO's). The counts are kept in the cache folder, named
+by the files' bytes (:mod:`enn_traffic.cache`).
+
+A lane whose edge ends at the network's fringe (an exit: the learner would leave the network
+within the lane's length) is never a learner's lane for ``auto``.
 """
 
 from __future__ import annotations
 
 import gzip
+import subprocess
+import tempfile
 import xml.etree.ElementTree as ElementTree
 from collections import Counter
 from pathlib import Path
 
+import numpy as np
 import pandas as pd
 
+from enn_traffic.cache import cached_arrays, content_digest, key_of
 from enn_traffic.errors import InputError
-from enn_traffic.roads.network import LEARNER_CLASS, read_net
+from enn_traffic.progress import slow_step
+from enn_traffic.roads.network import LEARNER_CLASS, fringe_nodes, read_net
 from enn_traffic.roads.sumocfg import parse_time
 
 # The vehicle classes the ``allowed`` column names (of SUMO's 41), in this order.
@@ -77,13 +88,17 @@ def vehicle_classes(files: list[Path] | tuple[Path, ...]) -> dict[str, str]:
 
 
 def demand_per_edge(route_files: list[Path] | tuple[Path, ...],
-                    classes: dict[str, str] | None = None) -> Counter[tuple[str, str]]:
+                    classes: dict[str, str] | None = None,
+                    net_file: Path | None = None) -> Counter[tuple[str, str]]:
     """Vehicles the route files send over each edge, by vehicle class: (edge, class) ->
     vehicles (see the module's docstring); ``classes``: each vehicle type's class, besides
-    those the route files define."""
+    those the route files define. With ``net_file``, trips and flows between edges are routed
+    on it by ``duarouter`` (:func:`_route_trips`); without, they count on their given edges."""
     classes = {**(classes or {}), **vehicle_classes(route_files)}
     routes: dict[str, list[tuple[list[str], float]]] = {}  # a route or distribution's routes
     demand: Counter[tuple[str, str]] = Counter()
+    types: list[bytes] = []  # every vType and vTypeDistribution, for duarouter
+    unrouted: list[bytes] = []  # trips and flows between edges
 
     def count(element: ElementTree.Element, vehicles: float) -> None:
         kind = classes.get(element.get("type", "DEFAULT_VEHTYPE"), "passenger")
@@ -93,6 +108,9 @@ def demand_per_edge(route_files: list[Path] | tuple[Path, ...],
         elif element.get("route") in routes:
             paths = routes[element.get("route")]
         else:  # a trip, or a flow between edges
+            if net_file is not None and element.get("from") and element.get("to"):
+                unrouted.append(ElementTree.tostring(element))
+                return
             paths = [([element.get(k) for k in ("from", "to") if element.get(k)]
                       + element.get("via", "").split(), 1.0)]
         total = sum(weight for _, weight in paths) or 1.0
@@ -118,6 +136,8 @@ def demand_per_edge(route_files: list[Path] | tuple[Path, ...],
                         routes[element.get("id")] = [
                             (r.get("edges", "").split(), float(r.get("probability", "1")))
                             for r in element.findall("route") if r.get("edges")]
+                    elif tag in ("vType", "vTypeDistribution"):
+                        types.append(ElementTree.tostring(element))
                     elif tag in ("vehicle", "trip"):
                         count(element, 1.0)
                     elif tag == "flow":
@@ -125,7 +145,61 @@ def demand_per_edge(route_files: list[Path] | tuple[Path, ...],
                     element.clear()
         except (ElementTree.ParseError, OSError, ValueError) as exc:
             raise InputError(f"not a readable SUMO route file: {exc}", path) from None
+    if unrouted:
+        routed = _route_trips(net_file, types, unrouted)
+        demand.update(demand_per_edge([routed], classes))
+        routed.unlink()
     return demand
+
+
+DUAROUTER_MAX_S = 600.0
+
+
+def _route_trips(net_file: Path, types: list[bytes], trips: list[bytes]) -> Path:
+    """The ``trips`` (trip and flow elements between edges) routed on the network by SUMO's
+    ``duarouter``, as SUMO routes them (fastest path at free flow), into a temporary route
+    file; one it cannot route is left out with a warning, and counts nowhere."""
+    import sumo as sumo_wheel  # duarouter of the eclipse-sumo wheel
+
+    folder = Path(tempfile.mkdtemp(prefix="enn-routes-"))
+    given, routed = folder / "trips.xml", folder / "routes.xml"
+    given.write_bytes(b"<routes>\n" + b"\n".join(types + trips) + b"\n</routes>\n")
+    with slow_step(f"routing {len(trips):,} trips and flows of the demand on "
+                   f"{Path(net_file).name} (SUMO's duarouter), to count where they drive"):
+        done = subprocess.run(
+            [f"{sumo_wheel.SUMO_HOME}/bin/duarouter", "-n", str(net_file), "-r", str(given),
+             "-o", str(routed), "--ignore-errors", "true", "--unsorted-input", "true",
+             "--no-step-log", "true", "--no-warnings", "true", "--routing-threads", "1"],
+            capture_output=True, text=True, timeout=DUAROUTER_MAX_S, check=False)
+    given.unlink()
+    if done.returncode != 0 or not routed.is_file():
+        raise InputError(f"SUMO's duarouter could not route the demand's trips: "
+                         f"{' '.join((done.stderr or done.stdout).split())[:400]}", net_file)
+    return routed
+
+
+DEMAND_VERSION = 1  # raised when the counting changes
+
+
+def cached_demand(net_file: Path, route_files: list[Path] | tuple[Path, ...],
+                  additional_files: list[Path] | tuple[Path, ...] = ()
+                  ) -> Counter[tuple[str, str]]:
+    """:func:`demand_per_edge` with the trips routed on ``net_file``, counted once and kept in
+    the cache folder (named by every file's bytes)."""
+    key = key_of(DEMAND_VERSION, content_digest(net_file),
+                 *(content_digest(f) for f in (*route_files, *additional_files)))
+
+    def build() -> dict[str, np.ndarray]:
+        demand = demand_per_edge(route_files, vehicle_classes(additional_files), net_file)
+        pairs = list(demand.items())
+        return {"edges": np.array([edge for (edge, _), _ in pairs], dtype=str),
+                "classes": np.array([kind for (_, kind), _ in pairs], dtype=str),
+                "vehicles": np.array([v for _, v in pairs], dtype=np.float64)}
+
+    with slow_step(f"counting the demand over {Path(net_file).name}'s lanes"):
+        arrays = cached_arrays("demand", key, build)
+    return Counter({(str(e), str(k)): float(v) for e, k, v
+                    in zip(arrays["edges"], arrays["classes"], arrays["vehicles"], strict=True)})
 
 
 def _allowed(lane) -> str:
@@ -142,43 +216,57 @@ def _allowed(lane) -> str:
 
 def lane_table(net_file: Path, route_files: list[Path] | tuple[Path, ...],
                additional_files: list[Path] | tuple[Path, ...] = (),
-               min_length: float = 0.0) -> pd.DataFrame:
-    """Every lane of the network (internal ones excepted): its edge, length, speed limit,
-    allowed classes (of :data:`SHOWN_CLASSES`), whether the learner may start on it (it allows
-    passenger cars and is ``min_length`` long or longer,
-    :func:`~enn_traffic.roads.network.least_start_length`) and the demand's vehicles over it
-    that it allows; the learner's lanes first, ranked by that demand, then by length.
-    ``additional_files``: where vehicle types may be defined too."""
-    net = read_net(net_file)
+               min_length: float = 0.0, exits: bool = True) -> pd.DataFrame:
+    """Every lane of the network (internal ones excepted): its edge, length, speed limit (km/h),
+    allowed classes (of :data:`SHOWN_CLASSES`), whether its edge ends at an exit (the
+    network's fringe, with ``exits``), whether the learner may start on it (it allows
+    passenger cars, is ``min_length`` long or longer,
+    :func:`~enn_traffic.roads.network.least_start_length`, and does not end at an exit) and
+    the demand's vehicles over it that it allows (whole vehicles); the learner's lanes first,
+    ranked by that demand, then by length. ``additional_files``: where vehicle types may be
+    defined too."""
+    with slow_step(f"reading {Path(net_file).name}"):
+        net = read_net(net_file)
     demand: dict[str, list[tuple[str, float]]] = {}
-    for (edge, kind), vehicles in demand_per_edge(route_files,
-                                                  vehicle_classes(additional_files)).items():
+    for (edge, kind), vehicles in cached_demand(net_file, route_files,
+                                                additional_files).items():
         demand.setdefault(edge, []).append((kind, vehicles))
+    fringe = fringe_nodes(net) if exits else set()
 
-    def carried(edge, lane) -> float:
+    def carried(edge, lane) -> int:
         allowed = lane.getPermissions()
-        return round(sum(v for kind, v in demand.get(edge.getID(), []) if kind in allowed), 1)
+        return round(sum(v for kind, v in demand.get(edge.getID(), []) if kind in allowed))
 
-    rows = [{"lane": lane.getID(), "edge": edge.getID(), "vehicles": carried(edge, lane),
-             "length_m": round(lane.getLength(), 1), "speed_limit_ms": round(lane.getSpeed(), 2),
-             "allowed": _allowed(lane), "allows_cars": lane.allows(LEARNER_CLASS),
-             "learner_may_start": lane.allows(LEARNER_CLASS) and lane.getLength() >= min_length}
-            for edge in net.getEdges(withInternal=False) for lane in edge.getLanes()]
+    rows = []
+    for edge in net.getEdges(withInternal=False):
+        at_exit = edge.getToNode().getID() in fringe
+        for lane in edge.getLanes():
+            cars = lane.allows(LEARNER_CLASS)
+            rows.append({
+                "lane": lane.getID(), "edge": edge.getID(), "vehicles": carried(edge, lane),
+                "length_m": round(lane.getLength(), 1),
+                "speed_limit_kmh": round(3.6 * lane.getSpeed()), "allowed": _allowed(lane),
+                "ends_at_fringe": at_exit, "allows_cars": cars,
+                "learner_may_start": cars and lane.getLength() >= min_length and not at_exit})
     table = pd.DataFrame(rows, columns=["lane", "edge", "vehicles", "length_m",
-                                        "speed_limit_ms", "allowed", "allows_cars",
-                                        "learner_may_start"])
+                                        "speed_limit_kmh", "allowed", "ends_at_fringe",
+                                        "allows_cars", "learner_may_start"])
+    table["vehicles"] = table["vehicles"].astype(np.int64)
     table = table.sort_values(["learner_may_start", "vehicles", "length_m", "lane"],
                               ascending=[False, False, False, True], kind="stable")
     return table.reset_index(drop=True)
 
 
 def auto_lane(net_file: Path, route_files: list[Path] | tuple[Path, ...],
-              min_length: float, additional_files: list[Path] | tuple[Path, ...] = ()) -> str:
+              min_length: float, additional_files: list[Path] | tuple[Path, ...] = (),
+              exits: bool = True) -> str:
     """``start_lane = "auto"``: the learner's lane that the demand uses most, among those at
-    least ``min_length`` long (an InputError if there is none)."""
-    table = lane_table(net_file, route_files, additional_files, min_length)
+    least ``min_length`` long whose edge does not end at an exit (an InputError if there is
+    none)."""
+    table = lane_table(net_file, route_files, additional_files, min_length, exits)
     fit = table[table["learner_may_start"]]
     if fit.empty:
         raise InputError(f"no lane that allows passenger cars is {min_length:g} m long or "
-                         "longer", net_file)
+                         "longer" + (" and does not end at the network's fringe" if exits
+                                     else ""), net_file)
     return str(fit.iloc[0]["lane"])

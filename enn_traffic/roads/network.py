@@ -297,6 +297,31 @@ def _without_slivers(area: Polygon | MultiPolygon) -> Polygon | MultiPolygon:
     return kept[0] if len(kept) == 1 else MultiPolygon(kept)
 
 
+def _fringe(net: sumolib.net.Net, surface: Surface) -> list[tuple[object, list]]:
+    """The fringe's nodes (a single neighbouring node by road, :func:`drives_on`), each with
+    its road edges and whether each leaves the node (True) or reaches it."""
+
+    def road(edges):
+        return [e for e in edges if e.getFunction() != "internal"
+                and any(drives_on(lane, surface) for lane in e.getLanes())]
+
+    fringe = []
+    for node in net.getNodes():
+        edges = [(e, True) for e in road(node.getOutgoing())]
+        edges += [(e, False) for e in road(node.getIncoming())]
+        neighbours = {(e.getToNode() if out else e.getFromNode()).getID() for e, out in edges}
+        neighbours.discard(node.getID())
+        if len(neighbours) == 1:
+            fringe.append((node, edges))
+    return fringe
+
+
+def fringe_nodes(net: sumolib.net.Net, surface: Surface = "passenger") -> set[str]:
+    """The ids of the network's fringe nodes (:func:`fringe_mouths`): an edge that ends at one
+    leads out of the network, or into a dead end."""
+    return {node.getID() for node, _ in _fringe(net, surface)}
+
+
 def fringe_mouths(net: sumolib.net.Net, surface: Surface = "passenger"
                   ) -> list[tuple[np.ndarray, np.ndarray, float, float]]:
     """The road ends at the network's fringe, one per node with a single neighbouring node
@@ -304,18 +329,7 @@ def fringe_mouths(net: sumolib.net.Net, surface: Surface = "passenger"
     network, the mouth's extent across the road from that point: lowest and highest, lane
     edges included)."""
     mouths = []
-
-    def road(edges):
-        return [e for e in edges if e.getFunction() != "internal"
-                and any(drives_on(lane, surface) for lane in e.getLanes())]
-
-    for node in net.getNodes():
-        edges = [(e, True) for e in road(node.getOutgoing())]
-        edges += [(e, False) for e in road(node.getIncoming())]
-        neighbours = {(e.getToNode() if out else e.getFromNode()).getID() for e, out in edges}
-        neighbours.discard(node.getID())
-        if len(neighbours) != 1:
-            continue
+    for node, edges in _fringe(net, surface):
         ends, inward, widths = [], [], []
         for edge, out in edges:
             for lane in edge.getLanes():

@@ -52,22 +52,43 @@ def test_demand_counts_every_kind_of_route_by_hand(tmp_path):
         ("a", "tram"): 2, ("b", "tram"): 2})
 
 
-def test_the_buses_lane_ranks_first_and_auto_picks_it(tmp_path, road_net, capsys):
+def test_demand_routes_trips_where_they_drive(tmp_path, root):
+    """A trip and a flow of 4 from the ring's west side to its north side: counted on their
+    end edges only, the ring's south and east sides between would get nothing; routed by
+    duarouter, as SUMO routes them when they depart, every edge of the way counts 5."""
+    path = tmp_path / "trips.rou.xml"
+    path.write_text('<routes><trip id="t" depart="0" from="g1_0to0_0" to="g1_1to1_0"/>'
+                    '<flow id="f" begin="0" end="100" number="4" from="g1_0to0_0" '
+                    'to="g1_1to1_0"/></routes>')
+    ends = {("g1_0to0_0", "passenger"): 5, ("g1_1to1_0", "passenger"): 5}
+    assert demand_per_edge([path]) == ends
+    routed = demand_per_edge([path], net_file=root / "sumo_nets" / "sumo_ring.net.xml")
+    assert routed == {**ends, ("g0_0to0_1", "passenger"): 5, ("g0_1to1_1", "passenger"): 5}
+
+
+def test_the_busiest_lane_that_does_not_lead_out_is_auto(tmp_path, road_net, capsys):
     """The road's westbound buses (60 in 600 s) drive em, then ew: of the lanes cars may use
-    (we_0, ew_0, me_0; em_0 is for buses), ew_0 carries them; the other two carry none and
-    are ranked by length, then name. ``start_lane = "auto"`` starts there."""
+    (we_0, ew_0, me_0; em_0 is for buses), ew_0 carries them, but it ends at the road's west
+    end, the network's fringe: a learner there leaves the network within 100 m. So does
+    me_0, eastwards. we_0 leads into the road: ``start_lane = "auto"`` starts there, and
+    ``lanes`` lists it alone; the counts are whole vehicles."""
     path = road_scenario(tmp_path, road_net, start='start_lane = "auto"')
     scenario = load_scenario(path)
-    assert scenario.track.start_lane == "ew_0"
+    assert scenario.track.start_lane == "we_0"
     table = lane_table(scenario.track.net, [tmp_path / "buses.rou.xml"])
-    assert list(table["lane"]) == ["ew_0", "me_0", "we_0", "em_0"]
-    assert list(table["vehicles"]) == [60.0, 0.0, 0.0, 60.0]
-    assert list(table["learner_may_start"]) == [True, True, True, False]
+    assert list(table["lane"][:1]) == ["we_0"]
+    assert dict(zip(table["lane"], table["vehicles"], strict=True)) == {
+        "we_0": 0, "ew_0": 60, "em_0": 60, "me_0": 0}
+    assert table["vehicles"].dtype.kind == "i"
+    assert dict(zip(table["lane"], table["ends_at_fringe"], strict=True)) == {
+        "we_0": False, "ew_0": True, "em_0": False, "me_0": True}
+    assert list(table["learner_may_start"]) == [True, False, False, False]
     assert main(["lanes", str(path), "--top", "2", "--out", str(tmp_path / "lanes.csv")]) == 0
     printed = capsys.readouterr().out
-    assert "4 lanes; 3 allow passenger cars, of which 3 are 34.3 m long" in printed
+    assert "4 lanes; 3 allow passenger cars, of which 1 is 34.3 m long or longer" in printed
+    assert "2 end at the network's fringe" in printed
     assert "1 bus" in printed
-    assert 'start_lane = "ew_0"' in printed
+    assert 'start_lane = "we_0"' in printed
     assert (tmp_path / "lanes.csv").read_text().count("\n") == 5
 
 

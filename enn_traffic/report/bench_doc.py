@@ -1,0 +1,54 @@
+"""Sections of docs/bench.md written from the committed bench tables in ``results/bench``
+rather than typed, as docs/results.md's are (:mod:`enn_traffic.experiments.results_doc`).
+
+``python -m enn_traffic.report.bench_doc`` rewrites each section between its markers
+(``<!-- generated: NAME -->`` … ``<!-- end generated: NAME -->``); a test checks that the
+committed docs/bench.md holds what the committed tables give.
+"""
+
+from __future__ import annotations
+
+import sys
+from collections.abc import Callable
+from pathlib import Path
+
+import pandas as pd
+
+from enn_traffic.experiments.results_doc import markers
+
+
+def sumo_step(folder: Path) -> str:
+    """SUMO's step time with and without learners (issue 60), from ``sumo_step_issue60.csv``
+    (:func:`enn_traffic.bench.sumo_step_table`)."""
+    table = pd.read_csv(folder / "sumo_step_issue60.csv")
+    lines = ["| network | learners in SUMO | steps timed | ms per SUMO step | × without a learner |",
+             "|---|---|---:|---:|---:|"]
+    for row in table.itertuples():
+        lines.append(f"| {row.workload.removeprefix('SUMO step: ')} | {row.implementation} | "
+                     f"{row.steps:,} | {row.ms_per_step:.2f} | "
+                     f"{row.slowdown_vs_no_learner:.2f} |")
+    return "\n".join(lines)
+
+
+SECTIONS: dict[str, Callable[[Path], str]] = {"sumo_step": sumo_step}
+
+
+def section(name: str, folder: Path) -> str:
+    """Section ``name`` with its markers, from the tables in ``folder``."""
+    begin, end = markers(name)
+    return f"{begin}\n{SECTIONS[name](folder)}\n{end}"
+
+
+def rewrite(doc: Path, folder: Path) -> None:
+    """Replace every generated section of ``doc``."""
+    text = doc.read_text()
+    for name in SECTIONS:
+        begin, end = markers(name)
+        start, stop = text.index(begin), text.index(end) + len(end)
+        text = text[:start] + section(name, folder) + text[stop:]
+    doc.write_text(text)
+
+
+if __name__ == "__main__":
+    root = Path(sys.argv[1]) if len(sys.argv) > 1 else Path(".")
+    rewrite(root / "docs" / "bench.md", root / "results" / "bench")
