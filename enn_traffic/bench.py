@@ -530,7 +530,9 @@ def sumo_step_seconds(source: list[str], learners: int, steps: int, warmup_steps
 def sumo_step_table(source: list[str], name: str, steps: int, warmup_steps: int,
                     repeats: int, before_steps: int = 0) -> pd.DataFrame:
     """:func:`sumo_step_seconds` without a learner, with one and with eight, one after another
-    ``repeats`` times (the median kept: machine drift hits every count alike), each start in
+    ``repeats`` times (the median kept, and the fastest and slowest run: machine drift hits
+    every count alike, but a run's step time on a shared machine varies by a quarter and
+    more), each start in
     a fresh process (libsumo keeps state between starts in one process); with
     ``before_steps``, also one learner at the speed factor of 100 used before issue 60."""
     from enn_traffic.traffic.fresh import fresh_calls
@@ -542,19 +544,21 @@ def sumo_step_table(source: list[str], name: str, steps: int, warmup_steps: int,
         calls.append((sumo_step_seconds, source, 1, before_steps, warmup_steps, 100.0))
     measured = fresh_calls(calls)
     lanes, vehicles = measured[0][1:]
-    seconds = {learners: float(np.median([m[0] for m, call in zip(measured, calls, strict=True)
-                                          if call[2] == learners and len(call) == 5]))
-               for learners in counts}
-    rows = [(f"{learners} learner{'s' * (learners != 1)}", seconds[learners], steps)
+    runs = {learners: [m[0] for m, call in zip(measured, calls, strict=True)
+                       if call[2] == learners and len(call) == 5] for learners in counts}
+    rows = [(f"{learners} learner{'s' * (learners != 1)}", runs[learners], steps)
             for learners in counts]
     if before_steps:
-        rows.append(("1 learner, speed factor 100 (before issue 60)", measured[-1][0],
+        rows.append(("1 learner, speed factor 100 (before issue 60)", [measured[-1][0]],
                      before_steps))
+    base = float(np.median(runs[0]))
     return pd.DataFrame([{
         "workload": f"SUMO step: {name}, {lanes:,} lanes, {vehicles:,} vehicles",
-        "implementation": label, "threads": 1, "seconds": step_s * count,
-        "steps": count, "ms_per_step": 1000 * step_s,
-        "slowdown_vs_no_learner": step_s / seconds[0]} for label, step_s, count in rows])
+        "implementation": label, "threads": 1, "seconds": float(np.median(times)) * count,
+        "steps": count, "runs": len(times), "ms_per_step": 1000 * float(np.median(times)),
+        "ms_per_step_min": 1000 * min(times), "ms_per_step_max": 1000 * max(times),
+        "slowdown_vs_no_learner": float(np.median(times)) / base}
+        for label, times, count in rows])
 
 
 def sumo_step_bench(quick: bool = False) -> pd.DataFrame:

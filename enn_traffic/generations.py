@@ -40,6 +40,14 @@ def column(function: Callable[[Generation], object]) -> Callable[[Generation], o
     return function
 
 
+def columns_markdown() -> str:
+    """The columns as a markdown table, from their docstrings (docs/design.md's table)."""
+    lines = ["| column | meaning |", "|---|---|"]
+    for name, function in COLUMNS.items():
+        lines.append(f"| `{name}` | {' '.join(function.__doc__.split())} |")
+    return "\n".join(lines)
+
+
 def row(evaluated: Generation) -> dict[str, object]:
     """The generation's row of ``generations.csv``."""
     return {name: value(evaluated) for name, value in COLUMNS.items()}
@@ -51,26 +59,32 @@ def _ended(evaluated: Generation, outcome: int) -> int:
 
 @column
 def generation(evaluated: Generation) -> int:
+    """The generation's number, from 0."""
     return evaluated.number
 
 
 @column
 def best_fitness(evaluated: Generation) -> float:
+    """The best chromosome's fitness: steps survived, averaged over the generation's
+    situations (0 for a spin, paper §5.3)."""
     return evaluated.fitness.max()
 
 
 @column
 def mean_fitness(evaluated: Generation) -> float:
+    """The population's mean fitness."""
     return evaluated.fitness.mean()
 
 
 @column
 def median_fitness(evaluated: Generation) -> float:
+    """The population's median fitness."""
     return float(np.median(evaluated.fitness))
 
 
 @column
 def min_fitness(evaluated: Generation) -> float:
+    """The worst chromosome's fitness."""
     return evaluated.fitness.min()
 
 
@@ -94,21 +108,28 @@ def vehicle_collisions(evaluated: Generation) -> int:
 
 @column
 def spins(evaluated: Generation) -> int:
+    """Lives that ended spinning in place (paper §5.3's rule: fitness 0)."""
     return _ended(evaluated, SPUN)
 
 
 @column
 def capped(evaluated: Generation) -> int:
+    """Lives still going at the step cap (`episode.max_steps`) or at the end of SUMO's
+    simulation."""
     return _ended(evaluated, CAPPED)
 
 
 @column
 def left_network(evaluated: Generation) -> int:
+    """Lives that ended at an exit: the learner's body touched the network's fringe, where
+    roads leave a SUMO map (docs/sumo.md, "Walls and exits")."""
     return _ended(evaluated, LEFT_NETWORK)
 
 
 @column
 def left_lane(evaluated: Generation) -> int:
+    """Lane keeping only (paper §5.6): lives that ended with the vehicle across a lane
+    marking."""
     return _ended(evaluated, LEFT_LANE)
 
 
@@ -120,18 +141,20 @@ def suffered(evaluated: Generation) -> int:
 
 @column
 def traffic_at_start(evaluated: Generation) -> float:
-    """Vehicles in the world when the learner starts (docs/sumo.md, "No silent empty
-    traffic"), and below, within sensor range per learner step and at most."""
+    """Vehicles in the world when the learner starts, mean over its worlds and situations
+    (docs/sumo.md, "No silent empty traffic")."""
     return evaluated.results.traffic_summary()["traffic_at_start"]
 
 
 @column
 def traffic_near_mean(evaluated: Generation) -> float:
+    """Vehicles within sensor range per learner step, mean."""
     return evaluated.results.traffic_summary()["traffic_near_mean"]
 
 
 @column
 def traffic_near_max(evaluated: Generation) -> float:
+    """The most vehicles within sensor range at once."""
     return evaluated.results.traffic_summary()["traffic_near_max"]
 
 
@@ -143,4 +166,5 @@ def warmups(evaluated: Generation) -> str:
 
 @column
 def elapsed_s(evaluated: Generation) -> float:
+    """The run's compute time up to the end of this generation (s)."""
     return evaluated.elapsed_s

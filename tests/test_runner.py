@@ -185,3 +185,13 @@ def test_a_slow_step_speaks_on_stderr_where_no_logging_is_configured():
     assert done.returncode == 0, done.stderr
     assert "enn-traffic: compiling something ..." in done.stderr
     assert "compiling something: done in" in done.stderr
+
+
+def test_design_md_lists_every_generations_column_as_its_function_says(root):
+    """docs/design.md's table of generations.csv is generated from the column functions'
+    docstrings: a column added, renamed or redescribed shows there."""
+    from enn_traffic.generations import COLUMNS, columns_markdown
+
+    doc = (root / "docs" / "design.md").read_text()
+    assert columns_markdown() in doc
+    assert all(function.__doc__ for function in COLUMNS.values())

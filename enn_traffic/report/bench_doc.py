@@ -21,11 +21,13 @@ def sumo_step(folder: Path) -> str:
     """SUMO's step time with and without learners (issue 60), from ``sumo_step_issue60.csv``
     (:func:`enn_traffic.bench.sumo_step_table`)."""
     table = pd.read_csv(folder / "sumo_step_issue60.csv")
-    lines = ["| network | learners in SUMO | steps timed | ms per SUMO step | × without a learner |",
+    lines = ["| network | learners in SUMO | runs × steps timed | ms per SUMO step, median "
+             "(fastest–slowest run) | × without a learner (medians) |",
              "|---|---|---:|---:|---:|"]
     for row in table.itertuples():
         lines.append(f"| {row.workload.removeprefix('SUMO step: ')} | {row.implementation} | "
-                     f"{row.steps:,} | {row.ms_per_step:.2f} | "
+                     f"{row.runs} × {row.steps:,} | {row.ms_per_step:.2f} "
+                     f"({row.ms_per_step_min:.2f}–{row.ms_per_step_max:.2f}) | "
                      f"{row.slowdown_vs_no_learner:.2f} |")
     return "\n".join(lines)
 

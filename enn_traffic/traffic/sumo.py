@@ -470,7 +470,7 @@ def warm_up(simulation: Simulation) -> None:
 
 
 STATE_FOLDER_VARIABLE = "ENN_TRAFFIC_SUMO_STATES"
-STATE_VERSION = 4  # raised when the code that simulates and saves a warm-up changes
+STATE_VERSION = 5  # raised when the code that simulates and saves a warm-up changes
 
 
 def _inputs_key(scenario: Scenario) -> list[str]:
@@ -521,6 +521,7 @@ def warm_state(scenario: Scenario, seed: int, keep_rng: bool) -> Path:
 
 
 EMPTY_TL_STATE = re.compile(r'(<tlLogic\b[^>]*?) state=""')
+DRIVE_WAYS = re.compile(r'^[ \t]*<(?:sub)?[dD]riveWay\b[^>]*/>[ \t]*\n', re.M)
 
 
 def make_loadable(path: Path) -> None:
@@ -530,6 +531,11 @@ def make_loadable(path: Path) -> None:
     - An actuated traffic light (``type="actuated"``, as every OSM-built city has) is saved
       with ``state=""`` ("Attribute 'state' in definition of tlLogic '...' is empty"). The
       empty attribute is left out: SUMO then takes the state of the saved phase.
+    - The drive ways of rail signals (a city with trams or trains) load once or twice, and
+      then crash libsumo at the next start in the same process (a segmentation fault in
+      ``simulation.start``, issue 60). They are left out: SUMO builds them again as the
+      trains come, and only which train had reserved a track block at the moment of saving
+      is lost.
     - With a demand scaled above 1 (``--scale``), SUMO's copies of a vehicle share its
       embedded route (``!id``), which the state may leave out ("The route '!id' for vehicle
       'id.1' is not known"). The routes a saved vehicle names but the state lacks are written
@@ -538,7 +544,7 @@ def make_loadable(path: Path) -> None:
     opener = gzip.open if path.name.endswith(".gz") else open
     with opener(path, "rt", encoding="utf-8") as file:
         text = file.read()
-    repaired = EMPTY_TL_STATE.sub(r"\1", text)
+    repaired = DRIVE_WAYS.sub("", EMPTY_TL_STATE.sub(r"\1", text))
     defined = set(re.findall(r'<route id="([^"]*)"', repaired))
     drivers = {route: vehicle for vehicle, route
                in re.findall(r'<vehicle id="([^"]*)"[^>]*? route="([^"]*)"', repaired)

@@ -295,3 +295,24 @@ def test_ssm_sees_the_learner_closing_on_a_vehicle_ahead(tmp_path, root):
     assert results.outcome[0, 0] == COLLIDED and results.hit[0, 0] >= 0  # the car, not a wall
     assert min_ttc < 0.5
     assert ttc == 1 and drac == 1
+
+
+def test_a_saved_state_is_made_loadable(tmp_path):
+    """What SUMO 1.28 saves but cannot load again (issue 60): an actuated light's empty
+    ``state`` is left out, and so are rail signals' drive ways (they crash libsumo at the
+    third start in a process, seen on an OSM-built city with trams); the rest stays as
+    saved, byte for byte."""
+    import gzip
+
+    kept = ('<snapshot time="300.00" version="1.28.0">\n'
+            '    <tlLogic id="a" programID="0" phase="5" active="1"{}/>\n'
+            '    <tlLogic id="b" programID="0" phase="1" active="1" state="4.00 5.00"/>\n')
+    saved = (kept.format(' state=""')
+             + '    <driveWay id="s.d0" edges="e1 e2" vehicles="tram:0.0"/>\n'
+             + '    <subDriveWay id="s.d0.0" edges="e1" vehicles="tram:0.0"/>\n</snapshot>\n')
+    path = tmp_path / "state.xml.gz"
+    with gzip.open(path, "wt") as file:
+        file.write(saved)
+    sumo.make_loadable(path)
+    with gzip.open(path, "rt") as file:
+        assert file.read() == kept.format("") + "</snapshot>\n"
