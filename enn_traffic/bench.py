@@ -572,6 +572,52 @@ def sumo_step_bench(quick: bool = False) -> pd.DataFrame:
                                0 if quick else 3)
 
 
+def _folder_state(folder: Path) -> dict[str, tuple]:
+    """Every file under ``folder``: its size, modification time and SHA-256."""
+    from enn_traffic.cache import file_digest
+
+    return {str(path.relative_to(folder)): (path.stat().st_size, path.stat().st_mtime_ns,
+                                            file_digest(path))
+            for path in sorted(folder.rglob("*")) if path.is_file()}
+
+
+def published_check(scenario: Path, name: str, work: Path, generations: int = 2
+                    ) -> pd.DataFrame:
+    """A user's published scenario as the docs' template runs it: ``enn-traffic run`` for
+    ``generations`` generations, then a closed-loop ``evaluate`` of its best controller,
+    each timed as a command (wall seconds, caches as they are), and whether the scenario's
+    own folder (its ``.sumocfg``'s) is byte-identical after (issue 60's check)."""
+    from enn_traffic.scenario import load_scenario
+
+    folder = load_scenario(scenario).traffic.sumocfg.parent
+    before = _folder_state(folder)
+    commands = {"run": ["run", str(scenario), "--generations", str(generations), "--out",
+                        str(work / "run"), "--force", "--quiet"],
+                "closed-loop evaluate": ["evaluate", str(work / "run" / "best.npz"),
+                                         str(scenario), "--mode", "closed-loop", "--out",
+                                         str(work / "closed.csv"), "--quiet"]}
+    rows = []
+    for label, arguments in commands.items():
+        started = time.perf_counter()
+        done = subprocess.run([sys.executable, "-m", "enn_traffic", *arguments],
+                              capture_output=True, text=True, check=False)
+        rows.append({"scenario": name, "command": label,
+                     "seconds": time.perf_counter() - started, "exit_status": done.returncode})
+    closed = pd.read_csv(work / "closed.csv")
+    generations_csv = pd.read_csv(work / "run" / "generations.csv")
+    for row in rows:
+        row["folder_unchanged"] = _folder_state(folder) == before
+    rows[0]["detail"] = (f"{len(generations_csv)} generations, best "
+                         f"{int(generations_csv['best_fitness'].max())} steps")
+    life = closed.iloc[0]
+    rows[1]["detail"] = (f"{int(life['steps'])} steps, {life['outcome']}"
+                         + (f" with {life['hit_vehicle']} ({life['hit_type']})"
+                            if life["hit"] == "vehicle" else "")
+                         + f"; SSM: lowest TTC {life['min_ttc_s']:g} s, "
+                         f"{int(life['ttc_conflicts'])} TTC conflicts")
+    return pd.DataFrame(rows)
+
+
 def _measured(work, memory: bool = True) -> tuple[float, float, object]:
     """Seconds and peak memory (MB of Python and numpy allocations, by tracemalloc; NaN when
     not ``memory``: tracing doubles the time of many small allocations, and does not see

@@ -32,7 +32,20 @@ def sumo_step(folder: Path) -> str:
     return "\n".join(lines)
 
 
-SECTIONS: dict[str, Callable[[Path], str]] = {"sumo_step": sumo_step}
+def published(folder: Path) -> str:
+    """A published city through the docs' template, from ``published_issue60.csv``
+    (:func:`enn_traffic.bench.published_check`)."""
+    table = pd.read_csv(folder / "published_issue60.csv")
+    lines = ["| scenario | command | wall time | exit status | what it gave | its folder |",
+             "|---|---|---:|---:|---|---|"]
+    for row in table.itertuples():
+        lines.append(f"| {row.scenario} | {row.command} | {row.seconds:.1f} s | "
+                     f"{row.exit_status} | {row.detail} | "
+                     f"{'unchanged' if row.folder_unchanged else 'CHANGED'} |")
+    return "\n".join(lines)
+
+
+SECTIONS: dict[str, Callable[[Path], str]] = {"sumo_step": sumo_step, "published": published}
 
 
 def section(name: str, folder: Path) -> str:
