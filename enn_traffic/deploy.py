@@ -24,7 +24,7 @@ from enn_traffic.io import write_csv
 from enn_traffic.progress import slow_step, terminal
 from enn_traffic.report.animate import animate_run
 from enn_traffic.report.plots import heat_map, learner_among_traffic, trajectories
-from enn_traffic.scenario import Scenario
+from enn_traffic.scenario import Scenario, learner_start_time
 from enn_traffic.sim.world import (
     CAPPED,
     HIT_WALL,
@@ -230,7 +230,9 @@ def render(
     steps = len(poses) - 1
     title = f"{scenario.name}: {steps} steps, {OUTCOMES[outcome]}"
     if out.suffix.lower() == ".gif":
-        animate_run(world, poses, out, title, progress=progress)
+        animate_run(world, poses, out, title, progress=progress,
+                    sumo_start=learner_start_time(scenario) if scenario.traffic.is_sumo
+                    else None)
     else:
         paths = [poses[:, v] for v in range(poses.shape[1])]
         labels, colors = ["learner"] + [f"vehicle {v}" for v in range(1, len(paths))], None

@@ -422,6 +422,14 @@ class TrafficConfig(_Section):
         "each SUMO start and deleted) or `keep` (kept in the run folder's `sumo/outputs/`, a "
         "folder per SUMO start). Never into the scenario's own folder "
         "([sumo.md](sumo.md#what-is-written-where))")
+    outputs: list[Literal["tripinfo", "fcd", "ssm"]] = Field(
+        [], description="SUMO's own outputs of every vehicle, without writing a `.sumocfg`: "
+        "`tripinfo` (each trip's times, delays and route length, unfinished ones too), "
+        "`fcd` (every vehicle's "
+        "position and speed each step: large), `ssm` (every vehicle's conflicts: TTC, DRAC, "
+        "PET, the learners' among them); each SUMO start writes them into the run folder's "
+        "`sumo/outputs/` (a folder per start, as with `sumo_outputs = \"keep\"`, which they "
+        "imply) ([sumo.md](sumo.md#what-is-written-where))")
     warmup_states: int = Field(
         0, ge=0, le=1000, description="`N` > 0: `N` warm-ups, simulated once and saved as SUMO "
         "states, shared by every traffic situation (each then drives on with its own seed); `0`: "

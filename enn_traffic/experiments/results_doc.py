@@ -30,6 +30,7 @@ from enn_traffic.experiments.simultaneous import (
 )
 from enn_traffic.experiments.sumo_crowds import SITUATION_KEY as SUMO_SITUATION_KEY
 from enn_traffic.experiments.sumo_crowds import SUMO_LEARNING
+from enn_traffic.report import generated
 from enn_traffic.report.paper_tables import PAPER_TABLE3, PAPER_TABLE4
 from enn_traffic.roads.network import read_net
 from enn_traffic.shipped import shipped_scenario
@@ -524,24 +525,14 @@ SECTIONS: dict[str, Callable[[Path], str]] = {
     "city_closed_loop": lambda paper: closed_loop(paper, CITY), "baseline": baseline}
 
 
-def markers(name: str) -> tuple[str, str]:
-    return f"<!-- generated: {name} -->", f"<!-- end generated: {name} -->"
-
-
 def section(name: str, paper: Path) -> str:
     """Section ``name`` with its markers, from the tables in ``paper``."""
-    begin, end = markers(name)
-    return f"{begin}\n{SECTIONS[name](paper)}\n{end}"
+    return generated.section(name, paper, SECTIONS)
 
 
 def rewrite(doc: Path, paper: Path) -> None:
     """Replace every generated section of ``doc``."""
-    text = doc.read_text()
-    for name in SECTIONS:
-        begin, end = markers(name)
-        start, stop = text.index(begin), text.index(end) + len(end)
-        text = text[:start] + section(name, paper) + text[stop:]
-    doc.write_text(text)
+    generated.rewrite(doc, paper, SECTIONS)
 
 
 if __name__ == "__main__":

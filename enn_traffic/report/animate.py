@@ -30,20 +30,12 @@ FPS = 15
 FOLLOW_M = 150.0  # a larger map is shown this wide around the learner
 
 
-def _sumo_start(scenario) -> float | None:
-    """The SUMO time at the learner's start, for a scenario with SUMO traffic."""
-    traffic = getattr(scenario, "traffic", None)
-    if traffic is None or not traffic.is_sumo:
-        return None
-    from enn_traffic.scenario import learner_start_time
-
-    return learner_start_time(scenario)
-
-
 def animate_run(world, poses: np.ndarray, out: str | Path, title: str = "",
-                frames: int = FRAMES, progress: bool = True) -> None:
+                frames: int = FRAMES, progress: bool = True,
+                sumo_start: float | None = None) -> None:
     """``poses`` (n, V, 3): vehicle 0 is the learner (red), the others grey (NaN: not on the
-    network at that step)."""
+    network at that step). Each frame shows the learner's time and step, and with
+    ``sumo_start`` (the SUMO time at the learner's start) SUMO's time."""
     vehicle = world.scenario.vehicle
     path = poses[:, 0, :2]
     low, high = square_view(path, FOLLOW_M / 2, world.track.walls)
@@ -65,7 +57,6 @@ def animate_run(world, poses: np.ndarray, out: str | Path, title: str = "",
     (line,) = axes.plot([], [], color="C0", lw=1.2, zorder=3)
     clock = axes.text(0.02, 0.98, "", transform=axes.transAxes, va="top", fontsize=8, zorder=5,
                       bbox={"boxstyle": "round,pad=0.2", "fc": "white", "ec": "0.6"})
-    sumo_start = _sumo_start(world.scenario)
     traffic = PolyCollection([], facecolors="0.45", edgecolors="0.25", linewidths=0.4,
                              zorder=2)
     learner = PolyCollection([], facecolors="C3", edgecolors="black", linewidths=0.6,

@@ -1,5 +1,5 @@
 """Sections of docs/bench.md written from the committed bench tables in ``results/bench``
-rather than typed, as docs/results.md's are (:mod:`enn_traffic.experiments.results_doc`).
+rather than typed (:mod:`enn_traffic.report.generated`), as docs/results.md's are.
 
 ``python -m enn_traffic.report.bench_doc`` rewrites each section between its markers
 (``<!-- generated: NAME -->`` … ``<!-- end generated: NAME -->``); a test checks that the
@@ -9,12 +9,11 @@ committed docs/bench.md holds what the committed tables give.
 from __future__ import annotations
 
 import sys
-from collections.abc import Callable
 from pathlib import Path
 
 import pandas as pd
 
-from enn_traffic.experiments.results_doc import markers
+from enn_traffic.report import generated
 
 
 def sumo_step(folder: Path) -> str:
@@ -45,23 +44,17 @@ def published(folder: Path) -> str:
     return "\n".join(lines)
 
 
-SECTIONS: dict[str, Callable[[Path], str]] = {"sumo_step": sumo_step, "published": published}
+SECTIONS: generated.Sections = {"sumo_step": sumo_step, "published": published}
 
 
 def section(name: str, folder: Path) -> str:
     """Section ``name`` with its markers, from the tables in ``folder``."""
-    begin, end = markers(name)
-    return f"{begin}\n{SECTIONS[name](folder)}\n{end}"
+    return generated.section(name, folder, SECTIONS)
 
 
 def rewrite(doc: Path, folder: Path) -> None:
     """Replace every generated section of ``doc``."""
-    text = doc.read_text()
-    for name in SECTIONS:
-        begin, end = markers(name)
-        start, stop = text.index(begin), text.index(end) + len(end)
-        text = text[:start] + section(name, folder) + text[stop:]
-    doc.write_text(text)
+    generated.rewrite(doc, folder, SECTIONS)
 
 
 if __name__ == "__main__":

@@ -134,10 +134,18 @@ def sumo_command(scenario: Scenario, seed: int, folder: Path, state: Path | None
         source += ["--scale", f"{drivers.demand_scale:g}"]
     if config is not None:
         for name, value in config.outputs.items():
-            if name != "error-log":
+            if name != "error-log" and name not in (OUTPUT_OPTIONS.get(output)
+                                                     for output in traffic.outputs):
                 source += [f"--{name}", _file_names(value)]
         for name in config.gui_only:
             source += [f"--{name}", ""]
+    for output in traffic.outputs:  # every vehicle's, into the start's folder
+        if output in OUTPUT_OPTIONS:
+            source += [f"--{OUTPUT_OPTIONS[output]}", f"{output}.xml"]
+            if output == "tripinfo":  # a life ends SUMO long before most trips do
+                source += ["--tripinfo-output.write-unfinished", "true"]
+        else:  # ssm: a device on every vehicle, writing where the learners' write
+            source += ["--device.ssm.probability", "1"]
     # Warnings are SUMO's only console output between its start and its end, so they stay off
     # unless its console is shown: the console is then logged around start and end alone,
     # where a switch per step cost 24% of the closed loop's speed (docs/bench.md).
@@ -151,6 +159,8 @@ def sumo_command(scenario: Scenario, seed: int, folder: Path, state: Path | None
     ]  # fmt: skip
 
 
+# ``traffic.outputs`` that are SUMO options of their own (``ssm`` is a device, below).
+OUTPUT_OPTIONS = {"tripinfo": "tripinfo-output", "fcd": "fcd-output"}
 CLIMB = 64  # more folders deep than any place SUMO resolves an output from
 
 
@@ -217,6 +227,8 @@ class Simulation:
         self._open = True
         Simulation.running = self
         command = sumo_command(scenario, seed, self.folder, state, save_rng)
+        if "ssm" in scenario.traffic.outputs and "--device.ssm.file" not in extra:
+            extra = (*extra, *ssm_options(()))  # no learner here: every vehicle's device
         try:
             with slow_step(f"starting SUMO on {scenario.name}'s traffic (seed {seed})"), \
                     self.console():
@@ -424,8 +436,12 @@ class Simulation:
         with open(target / RUN_LOG, "ab") as log:  # a block for every start, printed or not
             log.write(f"== SUMO, seed {self.seed}, {ended}\n".encode()
                       + (printed or b"(SUMO printed nothing)\n"))
+        traffic = self.scenario.traffic
+        ssm = self.folder / SSM_FILE
+        if "ssm" in traffic.outputs and ssm.is_file():  # every vehicle's conflicts, kept
+            shutil.copyfile(ssm, self.folder / "ssm.xml")
         outputs = [file for file in self.folder.iterdir() if file.name not in OWN_FILES]
-        if outputs and self.scenario.traffic.sumo_outputs == "keep":
+        if outputs and (traffic.sumo_outputs == "keep" or traffic.outputs):
             (target / "outputs").mkdir(parents=True, exist_ok=True)
             kept = Path(tempfile.mkdtemp(dir=target / "outputs", prefix=f"seed{self.seed}-"))
             for file in outputs:
@@ -666,8 +682,8 @@ SSM_RANGE_M = 50.0
 def ssm_options(learners: tuple[str, ...] = (LEARNER,)) -> tuple[str, ...]:
     """SUMO options that equip the learners (their SUMO ids) with SSM devices writing to
     ``SSM_FILE`` in the start's folder (read it with ``Simulation.close(read=...)``)."""
-    return ("--device.ssm.explicit", ",".join(learners),
-            "--device.ssm.measures", " ".join(SSM_THRESHOLDS),
+    explicit = ("--device.ssm.explicit", ",".join(learners)) if learners else ()
+    return (*explicit, "--device.ssm.measures", " ".join(SSM_THRESHOLDS),
             "--device.ssm.thresholds", " ".join(f"{v:g}" for v in SSM_THRESHOLDS.values()),
             "--device.ssm.range", f"{SSM_RANGE_M:g}", "--device.ssm.trajectories", "false",
             "--device.ssm.file", SSM_FILE, *SSM_DEFAULTS)
@@ -695,11 +711,13 @@ class Conflicts:
 
 
 def _conflicts(output: bytes) -> list:
-    """The conflict elements of an SSM output (none for an empty one)."""
+    """The learners' conflict elements of an SSM output (none for an empty one): with
+    ``traffic.outputs = ["ssm"]`` every vehicle has a device, writing into the same file."""
     try:
-        return ElementTree.fromstring(output).findall("conflict")
+        conflicts = ElementTree.fromstring(output).findall("conflict")
     except ElementTree.ParseError:
         return []
+    return [c for c in conflicts if (c.get("ego") or LEARNER).startswith(LEARNER)]
 
 
 def _measure(conflict, tag: str, attribute: str = "value") -> float | None:

@@ -316,3 +316,32 @@ def test_a_saved_state_is_made_loadable(tmp_path):
     sumo.make_loadable(path)
     with gzip.open(path, "rt") as file:
         assert file.read() == kept.format("") + "</snapshot>\n"
+
+
+def test_sumo_outputs_of_every_vehicle_without_a_sumocfg(tmp_path, root):
+    """``traffic.outputs``: SUMO's tripinfo, FCD and SSM outputs of every vehicle, kept per
+    SUMO start in the run's ``sumo/outputs/``. The closed loop of the leader test: the slow
+    car's trip (unfinished when the life ends) and positions are there, and SSM's file, where
+    every vehicle's device writes, holds the learner's conflict, which its own figures count
+    as they do without the outputs."""
+    import xml.etree.ElementTree as ElementTree
+
+    scenario = sumo_scenario(tmp_path, root, LEADER, mode="closed-loop", lane="g0_0to1_0_0",
+                             offset=15.0, steps=60, warmup=0.0, episodes=1)
+    alone = make_world(scenario)
+    straight = np.zeros((1, alone.spec.chromosome_length))
+    own = alone.evaluate(straight).safety
+    scenario = scenario.with_overrides(traffic={"outputs": ["tripinfo", "fcd", "ssm"]}
+                                       ).with_sumo_output(tmp_path / "sumo")
+    results = make_world(scenario).evaluate(straight)
+    np.testing.assert_array_equal(results.safety, own)
+    starts = list((tmp_path / "sumo" / "outputs").iterdir())  # the check for traffic, the life
+    vehicles = {start: {v.get("id") for v in ElementTree.parse(start / "fcd.xml").iter("vehicle")}
+                for start in starts}
+    [start] = [start for start in starts if sumo.LEARNER in vehicles[start]]
+    assert "leader" in vehicles[start]
+    assert {p.name for p in start.iterdir()} == {"tripinfo.xml", "fcd.xml", "ssm.xml"}
+    assert ElementTree.parse(start / "tripinfo.xml").getroot().find("tripinfo") is not None
+    conflicts = ElementTree.parse(start / "ssm.xml").getroot().findall("conflict")
+    assert {c.get("ego") for c in conflicts} <= {sumo.LEARNER, "leader"}
+    assert len([c for c in conflicts if c.get("ego") == sumo.LEARNER]) == own[0, 0, 1] == 1
