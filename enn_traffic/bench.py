@@ -478,12 +478,13 @@ def _city_with_lights(folder: Path, iterations: int, period_s: float) -> tuple[P
 
 
 def sumo_step_seconds(source: list[str], learners: int, steps: int, warmup_steps: int,
-                      speed_factor: float = 1.0) -> tuple[float, int, int]:
+                      speed_factor: float | None = None) -> tuple[float, int, int]:
     """Seconds per SUMO step (moving the learners included) after ``warmup_steps`` steps of
     0.1 s, of SUMO started on ``source`` (``["-c", "city.sumocfg"]``, or a network and route
     files), with ``learners`` learners in SUMO as the closed loop puts them there
     (:func:`sumo.add_learner`, SSM devices, each moved along a lane of its own at 10 m/s by
-    :func:`sumo.move_learner`); their vehicle type's speed factor ``speed_factor``. Also the
+    :func:`sumo.move_learner`); their vehicle type's speed factor ``speed_factor`` (default:
+    :func:`sumo.add_learner`'s, :func:`sumo.learner_speed_factor`). Also the
     network's lanes (internal lanes excepted) and the vehicles on it when the timing
     starts."""
     import libsumo
@@ -508,7 +509,7 @@ def sumo_step_seconds(source: list[str], learners: int, steps: int, warmup_steps
                 edge, index = lane.rsplit("_", 1)
                 paths.append((edge, int(index), libsumo.lane.getLength(lane)))
                 sumo.add_learner(4.3, 1.7, 10.0, sumo.learner_id(k))
-            if learners:
+            if learners and speed_factor is not None:
                 libsumo.vehicletype.setSpeedFactor(sumo.LEARNER_TYPE, speed_factor)
             vehicles = libsumo.vehicle.getIDCount() - learners
             started = time.perf_counter()
@@ -613,6 +614,8 @@ def published_check(scenario: Path, name: str, work: Path, generations: int = 2
     rows[1]["detail"] = (f"{int(life['steps'])} steps, {life['outcome']}"
                          + (f" with {life['hit_vehicle']} ({life['hit_type']})"
                             if life["hit"] == "vehicle" else "")
+                         + f" at ({life['end_x_m']:.1f}, {life['end_y_m']:.1f}) on edge "
+                         f"{life['end_edge']}, SUMO time {life['end_sumo_time_s']:g} s"
                          + f"; SSM: lowest TTC {life['min_ttc_s']:g} s, "
                          f"{int(life['ttc_conflicts'])} TTC conflicts")
     return pd.DataFrame(rows)

@@ -24,6 +24,7 @@ from enn_traffic.io import write_csv
 from enn_traffic.progress import slow_step, terminal
 from enn_traffic.report.animate import animate_run
 from enn_traffic.report.plots import heat_map, learner_among_traffic, trajectories
+from enn_traffic.roads.network import lanes_at
 from enn_traffic.scenario import Scenario, learner_start_time
 from enn_traffic.sim.world import (
     CAPPED,
@@ -49,7 +50,8 @@ def evaluate_controller(controller: Controller, scenario: Scenario, episodes: in
     """One row per traffic strategy and situation: lifetime in steps and seconds, distance, how
     it ended and, for a collision, what it ran into (a wall, or a vehicle: its SUMO id and
     type, or an arena vehicle's index and strategy), and the collisions the controller
-    suffered without causing them.
+    suffered without causing them. Among SUMO's traffic, also where and when the life ended
+    (:func:`_ends`: the network's x, y, lane and edge, and SUMO's clock).
 
     Episodes draw their traffic from the test keys (:data:`EVALUATION_KEY`), never from
     training's; scenarios without traffic are deterministic, so their episodes repeat one
@@ -69,6 +71,7 @@ def evaluate_controller(controller: Controller, scenario: Scenario, episodes: in
     steps, outcome = results.steps[0], results.outcome[0]
     fitness = SituationResults.lifetime_fitness(steps, outcome)
     traffic = results.traffic[0]
+    ends = _ends(results, scenario)
     rows = []
     for column, strategy in enumerate(world.situation_labels()):
         rows.append({
@@ -82,6 +85,7 @@ def evaluate_controller(controller: Controller, scenario: Scenario, episodes: in
             "fitness": fitness[column],
             "outcome": OUTCOMES[int(outcome[column])],
             **_hit(results, column, strategy),
+            **ends[column],
             "capped": bool(outcome[column] == CAPPED),
             "suffered": int(results.suffered[0, column]),
             "traffic_at_start": int(traffic[column, MET_START]),
@@ -104,6 +108,23 @@ def _hit(results: SituationResults, column: int, strategy: str) -> dict[str, str
     named = None if results.hit_vehicle is None else results.hit_vehicle[0, column]
     vehicle, kind = named if named is not None else (str(hit), strategy)
     return {"hit": "vehicle", "hit_vehicle": vehicle, "hit_type": kind}
+
+
+def _ends(results: SituationResults, scenario: Scenario) -> list[dict]:
+    """Where and when each life of the first world ended, among SUMO's traffic (else no
+    columns): the learner's position in the network's coordinates (``end_x_m``,
+    ``end_y_m``), the lane and edge of the learner's surface nearest it (blank off the road),
+    and the SUMO time (``end_sumo_time_s``: the learner's start plus its steps), to find a
+    collision in SUMO's own outputs (``traffic.outputs``) or in sumo-gui."""
+    if results.end_pose is None or not scenario.traffic.is_sumo:
+        return [{}] * results.steps.shape[1]
+    xy = results.end_pose[0, :, :2]
+    lanes = lanes_at(scenario.track.net, xy, scenario.track.surface)
+    times = learner_start_time(scenario) + results.steps[0] * scenario.vehicle.dt
+    return [{"end_x_m": round(float(x), 2), "end_y_m": round(float(y), 2),
+             "end_edge": lane.rpartition("_")[0], "end_lane": lane,
+             "end_sumo_time_s": round(float(time), 3)}
+            for (x, y), lane, time in zip(xy.tolist(), lanes, times.tolist(), strict=True)]
 
 
 def _safety(safety, column: int, lifetime_s: float) -> dict[str, float]:

@@ -42,6 +42,7 @@ EXIT_MARGIN_M = 0.5  # a fringe cut reaches this far past the road's outer lane 
 ANYWHERE_SPACING_M = 5.0
 ANYWHERE_CLEARANCE_M = 1.0
 ANYWHERE_AHEAD_M = 10.0
+NEAREST_LANE_M = 10.0  # a point farther than this from every lane's centre line is on none
 
 
 def least_start_length(offset: float, body: float) -> float:
@@ -180,6 +181,25 @@ def lane_spots(net_file: Path, surface: Surface = "passenger", spacing: float = 
         raise InputError(f"no lane of the {surface!r} surface is longer than {spacing:g} m",
                          net_file)
     return np.concatenate(spots)
+
+
+def lanes_at(net_file: Path, xy: np.ndarray, surface: Surface = "passenger",
+             within: float = NEAREST_LANE_M) -> list[str]:
+    """The SUMO lane of the surface nearest each point of ``xy`` (n, 2) (inside a junction,
+    one of its internal lanes ``:NODE_…``), or "" where no lane's centre line is within
+    ``within`` metres or the point is unknown (NaN): where on the network a life ended."""
+    lanes = [lane for edge in read_net(net_file).getEdges() for lane in edge.getLanes()
+             if drives_on(lane, surface)]
+    found = [""] * len(xy)
+    known = np.flatnonzero(np.isfinite(np.asarray(xy, dtype=np.float64)).all(axis=1))
+    if not lanes or not len(known):
+        return found
+    tree = shapely.STRtree([LineString(lane.getShape()) for lane in lanes])
+    points, nearest = tree.query_nearest(shapely.points(np.asarray(xy)[known]),
+                                         max_distance=within, all_matches=False)
+    for point, lane in zip(points.tolist(), nearest.tolist(), strict=True):
+        found[int(known[point])] = lanes[lane].getID()
+    return found
 
 
 def _lane(net: sumolib.net.Net, lane_id: str):

@@ -221,11 +221,12 @@ def compiled_step(*args):
 
 @njit(cache=True)
 def run_replay_life(genes, layer_sizes, physics, geometry, start, ids, corners, centres,
-                    max_steps, trace):
+                    max_steps, trace, end):
     """Drive one chromosome through a recorded traffic run (``ids`` etc. hold at least
     ``max_steps + 1`` steps). Returns (steps moved, outcome, collisions suffered, vehicle-steps
     within sensor range, most at once, what it hit: ``NO_HIT``, ``HIT_WALL`` or the vehicle's
-    id); ``trace`` (n, 3) receives the learner's poses of steps 0..n-1 when n > 0."""
+    id); ``trace`` (n, 3) receives the learner's poses of steps 0..n-1 when n > 0, ``end``
+    (3,) its pose as the life ended (where it collided, left or was capped)."""
     state = learner_state(start, physics, geometry.beams.shape[0], layer_sizes, ids.shape[1])
     pose, suffered, met = state.learner.pose, state.suffered, state.met
     clear_start(state.learner.centres, ids[0], centres[0], state.gone, physics.clearance)
@@ -236,6 +237,7 @@ def run_replay_life(genes, layer_sizes, physics, geometry, start, ids, corners, 
         outcome = learner_step(t, genes, layer_sizes, physics, geometry, ids, corners, centres,
                                max(t - 1, 0), t, max_steps, state)
         if outcome != RUNNING:
+            end[:] = pose[0]
             return t, outcome, suffered[0], met[0], met[1], state.hit[0]
         t += 1
 
@@ -245,12 +247,14 @@ def run_replay_population(population, layer_sizes, physics, geometry, start, ids
                           centres, max_steps):
     """:func:`run_replay_life` for every chromosome of ``population`` (P, G), spread over
     the cores; per world (steps, outcome, collisions suffered, vehicle-steps within sensor
-    range, most at once, what the learner hit)."""
+    range, most at once, what the learner hit) and the learner's pose as its life ended
+    (P, 3)."""
     size = population.shape[0]
     steps, outcome, suffered, near_steps, near_max, hit = life_columns(size)
+    end = np.empty((size, 3))
     no_trace = np.empty((0, 3))
     for p in prange(size):
         (steps[p], outcome[p], suffered[p], near_steps[p], near_max[p],
          hit[p]) = run_replay_life(population[p], layer_sizes, physics, geometry, start, ids,
-                                   corners, centres, max_steps, no_trace)
-    return steps, outcome, suffered, near_steps, near_max, hit
+                                   corners, centres, max_steps, no_trace, end[p])
+    return steps, outcome, suffered, near_steps, near_max, hit, end

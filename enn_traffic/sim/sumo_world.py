@@ -17,6 +17,7 @@ and differ by their own seed from the learner's start on (:func:`shared_warmup`)
 from __future__ import annotations
 
 import functools
+import math
 import os
 from collections import OrderedDict
 from pathlib import Path
@@ -50,7 +51,8 @@ class ClosedLoopLife(NamedTuple):
     """One life in a live SUMO: steps moved, outcome, collisions suffered, vehicle-steps
     within sensor range, most within range at once, what it ran into (``NO_HIT``, ``HIT_WALL``
     or the vehicle's number), vehicles on the network at the start, the conflicts its SSM
-    device recorded, and the SUMO id and type of the vehicle it ran into (or None)."""
+    device recorded, the SUMO id and type of the vehicle it ran into (or None), and its pose
+    (x, y, heading) as the life ended."""
 
     steps: int
     outcome: int
@@ -61,6 +63,7 @@ class ClosedLoopLife(NamedTuple):
     at_start: int
     conflicts: sumo.Conflicts
     hit_vehicle: tuple[str, str] | None = None
+    end: tuple[float, float, float] = (math.nan, math.nan, math.nan)
 
 
 class TracedLife(NamedTuple):
@@ -209,7 +212,7 @@ class SumoWorld(LearnerWorld):
         traffic situations of ``key``."""
         genes = self.spec.in_source_layout(population)
         closed = self.scenario.traffic.mode == "closed-loop"
-        runs, vehicles, at_start, safety, hit_vehicle = [], [], [], [], []
+        runs, vehicles, at_start, safety, hit_vehicle, ends = [], [], [], [], [], []
         situations = list(zip(self.seeds(key), self.situation_starts(key), self.warmups(key),
                               strict=True))
         if closed:  # in fresh processes, a share of the situations each
@@ -230,9 +233,11 @@ class SumoWorld(LearnerWorld):
                                          life.conflicts.drac, life.conflicts.pet]
                                         for life in lives], dtype=np.float64).reshape(-1, 4))
                 hit_vehicle.append(objects([life.hit_vehicle for life in lives]))
+                ends.append(np.array([life.end for life in lives], dtype=np.float64))
                 continue
-            lives, record = self.replay(genes, seed, start, warmup)
+            (*lives, end), record = self.replay(genes, seed, start, warmup)
             runs.append(lives)
+            ends.append(end)
             vehicles.append(record.mean_vehicles)
             at_start.append(int((record.ids[0] >= 0).sum()))
             hit_vehicle.append(named(runs[-1][5], record.names, record.types))
@@ -240,7 +245,8 @@ class SumoWorld(LearnerWorld):
             self._traffic_seen = vehicles
         return SituationResults.of_situations(runs, self.vehicles, at_start,
                                             np.stack(safety, axis=1) if safety else None,
-                                            np.stack(hit_vehicle, axis=1))
+                                            np.stack(hit_vehicle, axis=1),
+                                            np.stack(ends, axis=1))
 
     def live(self, seed: int, start: np.ndarray | None = None, warmup: int | None = None,
              max_steps: int | None = None) -> LiveTraffic:
@@ -291,7 +297,7 @@ class SumoWorld(LearnerWorld):
         state, hit = live.state, int(live.state.hit[0])
         return ClosedLoopLife(live.t, int(outcome), int(state.suffered[0]), int(state.met[0]),
                               int(state.met[1]), hit, live.at_start, conflicts,
-                              live.vehicle(hit))
+                              live.vehicle(hit), tuple(state.learner.pose[0].tolist()))
 
     def trace(self, chromosome: np.ndarray, key: int = 0, situation: int = 0,
               max_steps: int | None = None) -> tuple[np.ndarray, int]:
@@ -325,7 +331,7 @@ class SumoWorld(LearnerWorld):
             learner = np.full((limit + 1, 3), np.nan)
             steps, outcome, *_, hit = run_replay_life(
                 genes, self.layer_sizes, self._learner_physics(record.radius), self.geometry,
-                start, record.ids, record.corners, record.centres, limit, learner)
+                start, record.ids, record.corners, record.centres, limit, learner, np.empty(3))
             hit_vehicle = named(np.array([hit]), record.names, record.types)[0]
             ids, corners = record.ids[: steps + 1], record.corners[: steps + 1]
             learner = learner[: steps + 1]

@@ -72,7 +72,8 @@ class SituationResults:
     learner suffered, the traffic it met (P, E, 3; columns ``MET_*``) and what it ran into
     (``hit``: ``NO_HIT``, ``HIT_WALL``, or the vehicle: an arena vehicle's index, a SUMO
     vehicle's number in its situation; ``hit_vehicle``: that SUMO vehicle's id and type, where
-    known); fitness (P,) is the mean over situations of steps, 0 for a spin."""
+    known; ``end_pose``: the learner's pose as its life ended, where known); fitness (P,) is
+    the mean over situations of steps, 0 for a spin."""
 
     fitness: np.ndarray
     steps: np.ndarray
@@ -85,6 +86,7 @@ class SituationResults:
     safety: np.ndarray | None = None
     hit: np.ndarray | None = None
     hit_vehicle: np.ndarray | None = None  # (P, E) objects: (id, type), or None
+    end_pose: np.ndarray | None = None  # (P, E, 3): x, y (m, the network's), heading (rad)
 
     def __post_init__(self):
         if self.traffic is None:  # no traffic: nothing met
@@ -96,18 +98,20 @@ class SituationResults:
     def of_lives(cls, steps: np.ndarray, outcome: np.ndarray, suffered: np.ndarray | None = None,
                  vehicles: int = 1, traffic: np.ndarray | None = None,
                  safety: np.ndarray | None = None, hit: np.ndarray | None = None,
-                 hit_vehicle: np.ndarray | None = None) -> SituationResults:
+                 hit_vehicle: np.ndarray | None = None,
+                 end_pose: np.ndarray | None = None) -> SituationResults:
         """From every life (P, E): fitness is the mean over the situations of
         :meth:`lifetime_fitness`."""
         fitness = cls.lifetime_fitness(steps, outcome).mean(axis=1)
         suffered = np.zeros_like(steps) if suffered is None else suffered
         return cls(fitness, steps, outcome, suffered, vehicles, traffic, safety, hit,
-                   hit_vehicle)
+                   hit_vehicle, end_pose)
 
     @classmethod
     def of_situations(cls, runs: list[tuple], vehicles: int, at_start: list,
                       safety: np.ndarray | None = None,
-                      hit_vehicle: np.ndarray | None = None) -> SituationResults:
+                      hit_vehicle: np.ndarray | None = None,
+                      end_pose: np.ndarray | None = None) -> SituationResults:
         """From a compiled batch's (steps, outcome, suffered, vehicle-steps within range, most
         within range, what was hit), each (P,), per situation; ``at_start``: the vehicles in
         the world at the learner's start, per situation (a number, or one per world)."""
@@ -116,7 +120,7 @@ class SituationResults:
         start = np.column_stack([np.broadcast_to(a, len(steps)) for a in at_start])
         return cls.of_lives(steps, outcome, suffered, vehicles,
                             cls.traffic_met(start, near_steps, near_max), safety, hit,
-                            hit_vehicle)
+                            hit_vehicle, end_pose)
 
     @staticmethod
     def traffic_met(start: np.ndarray, near_steps: np.ndarray, near_max: np.ndarray
@@ -164,6 +168,6 @@ class SituationResults:
         return SituationResults.of_lives(
             steps, outcome, joined("suffered"), vehicles=parts[0].vehicles,
             traffic=joined("traffic"), safety=joined("safety"), hit=joined("hit"),
-            hit_vehicle=joined("hit_vehicle"))
+            hit_vehicle=joined("hit_vehicle"), end_pose=joined("end_pose"))
 
 

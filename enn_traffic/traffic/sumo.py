@@ -767,17 +767,14 @@ def add_learner(length: float, width: float, speed: float, vehicle: str = LEARNE
         libsumo.vehicletype.setMaxSpeed(kind, max(speed, 1e-3))
         libsumo.vehicletype.setSpeedDeviation(kind, 0.0)
         libsumo.vehicletype.setImperfection(kind, 0.0)
-        # Speed factor 1, as SUMO's own cars: moveToXY places it at its own speed whatever the
-        # lane's limit (it enters at that speed, for SSM, even on a slower lane), and a larger
-        # factor makes SUMO plan its stopping distance across the city every step (a factor
-        # of 100 cost 876 ms a step on a 9,700-lane city, docs/sumo.md "Learners at SUMO's
-        # pace").
-        libsumo.vehicletype.setSpeedFactor(kind, 1.0)
-    # "max": its speed, or the lane's limit where that is lower (a number above the limit of
-    # the edge SUMO first puts it on is refused); from its second step on, SUMO derives its
-    # speed from the distance moveToXY moved it.
+        # The least speed factor that lets it go its own speed on every lane it may drive
+        # (moveToXY places it at that speed whatever the lane's limit; SSM sees it at that
+        # speed from its insertion on). A far larger factor makes SUMO plan its stopping
+        # distance across the city every step (a factor of 100 cost 876 ms a step on a
+        # 9,700-lane city, docs/sumo.md "Learners at SUMO's pace").
+        libsumo.vehicletype.setSpeedFactor(kind, learner_speed_factor(speed))
     try:
-        libsumo.vehicle.add(vehicle, "", typeID=kind, departSpeed="max")
+        libsumo.vehicle.add(vehicle, "", typeID=kind, departSpeed=f"{speed:g}")
         libsumo.vehicle.setSpeedMode(vehicle, 0)
         libsumo.vehicle.setLaneChangeMode(vehicle, 0)
         libsumo.vehicle.setSpeed(vehicle, speed)  # for its first step; then SUMO derives it
@@ -785,6 +782,20 @@ def add_learner(length: float, width: float, speed: float, vehicle: str = LEARNE
         if Simulation.running is None:
             raise
         Simulation.running._fail(f"SUMO refused the learner {vehicle!r}", exc)
+
+
+def learner_speed_factor(speed: float) -> float:
+    """``speed`` over the lowest speed limit of the running SUMO's lanes that allow passenger
+    cars, junctions' internal lanes too (at least 1): the learners' type then has room to go
+    ``speed`` on each."""
+    limits = [libsumo.lane.getMaxSpeed(lane) for lane in libsumo.lane.getIDList()
+              if _allows_cars(lane)]
+    return max(1.0, speed / min(limits)) if limits else 1.0
+
+
+def _allows_cars(lane: str) -> bool:
+    allowed, disallowed = libsumo.lane.getAllowed(lane), libsumo.lane.getDisallowed(lane)
+    return ("passenger" in allowed or not allowed) and "passenger" not in disallowed
 
 
 def remove_learner(vehicle: str = LEARNER) -> None:

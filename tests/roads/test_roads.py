@@ -153,3 +153,17 @@ def test_lane_spots_lie_along_each_lane_facing_its_traffic(root):
                for lane in edge.getLanes() if lane.allows("passenger")]
     assert sum(int(length // 5) for length in lengths) <= len(spots) <= sum(
         int(length // 5) + 1 for length in lengths)
+
+
+def test_lanes_at_names_the_lane_under_a_point_and_none_off_the_road(root):
+    """A point 1 m beside the ring's start lane's centre line, 20 m along it, is on that lane;
+    a point 50 m outside the network's bounds, and an unknown (NaN) one, are on none."""
+    from enn_traffic.roads.network import lanes_at
+
+    net_file = root / "sumo_nets" / "sumo_ring.net.xml"
+    track = load_track(net_file)
+    x, y, heading = track.lane_pose(net_file, "g0_0to1_0_2", 20.0)
+    beside = (x - np.sin(heading), y + np.cos(heading))  # 1 m to the left of the centre line
+    x0, y0, _, _ = track.bounds
+    points = np.array([beside, (x0 - 50.0, y0 - 50.0), (np.nan, np.nan)])
+    assert lanes_at(net_file, points) == ["g0_0to1_0_2", "", ""]

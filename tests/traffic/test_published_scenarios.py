@@ -147,7 +147,9 @@ def test_every_missing_file_is_named_at_once(tmp_path, road_net, capsys):
 def test_a_collision_says_what_it_was_with(tmp_path, road_net, mode):
     """A straight driver on the westbound lane facing east meets the westbound buses head on:
     its collision is with a vehicle, named by its SUMO id and type; facing north from the
-    eastbound lane, it runs into the road's edge: a wall."""
+    eastbound lane, it runs into the road's edge: a wall. Each row says where and when: the
+    front bumper's x, y where a straight line at the vehicle's speed puts it, the lane nearest
+    it, and SUMO's clock (the .sumocfg's begin at 1000 s, 12 s of warm-up, then its steps)."""
     rows = {}
     for name, start in (("bus", "start_xy = [20.0, 2.0]\nstart_heading_deg = 0.0"),
                         ("edge", "start_xy = [20.0, -2.0]\nstart_heading_deg = 90.0")):
@@ -161,6 +163,14 @@ def test_a_collision_says_what_it_was_with(tmp_path, road_net, mode):
         assert main(["evaluate", str(controller), str(folder / "scenario.toml"),
                      "--mode", mode, "--out", str(out), "--quiet"]) == 0
         rows[name] = pd.read_csv(out, keep_default_na=False).iloc[0]
+    speed, dt = scenario.vehicle.speed, scenario.vehicle.dt
+    for name, (x, y, heading) in (("bus", (20.0, 2.0, 0.0)), ("edge", (20.0, -2.0, 90.0))):
+        row, moved = rows[name], rows[name]["steps"] * speed * dt
+        assert row["end_x_m"] == pytest.approx(x + moved * np.cos(np.radians(heading)), abs=0.01)
+        assert row["end_y_m"] == pytest.approx(y + moved * np.sin(np.radians(heading)), abs=0.01)
+        assert row["end_sumo_time_s"] == pytest.approx(1012.0 + row["steps"] * dt)
+    assert (rows["bus"]["end_edge"], rows["bus"]["end_lane"]) == ("ew", "ew_0")
+    assert rows["edge"]["end_lane"] == ("we_0" if rows["edge"]["end_y_m"] < 0 else "ew_0")
     assert rows["bus"]["outcome"] == "collision" and rows["bus"]["hit"] == "vehicle"
     assert rows["bus"]["hit_vehicle"].startswith("bus.") and rows["bus"]["hit_type"] == "bus"
     assert rows["edge"]["outcome"] == "collision" and rows["edge"]["hit"] == "wall"

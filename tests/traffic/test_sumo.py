@@ -297,6 +297,28 @@ def test_ssm_sees_the_learner_closing_on_a_vehicle_ahead(tmp_path, root):
     assert ttc == 1 and drac == 1
 
 
+def test_the_learners_speed_factor_lets_them_go_their_speed_on_the_slowest_lane(root):
+    """The ring's slowest car lanes are its right turns inside the junctions (4.88 m/s in its
+    .net.xml): a 10 m/s learner's type gets the factor 10 / 4.88, enters at 10 m/s, and a 3 m/s
+    one gets SUMO's usual 1 (in a fresh process: libsumo keeps state between starts)."""
+    script = f"""
+import libsumo
+from enn_traffic.traffic import sumo
+libsumo.start(["sumo", "-n", {str(root / "sumo_nets" / "sumo_ring.net.xml")!r},
+               "--no-step-log", "true"])
+print(sumo.learner_speed_factor(10.0), sumo.learner_speed_factor(3.0))
+sumo.add_learner(4.3, 1.7, 10.0)
+libsumo.simulationStep()
+print(libsumo.vehicletype.getSpeedFactor(sumo.LEARNER_TYPE), libsumo.vehicle.getSpeed(sumo.LEARNER))
+libsumo.close()
+"""
+    done = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True)
+    assert done.returncode == 0, done.stderr
+    factors, inserted = (list(map(float, line.split())) for line in done.stdout.split("\n")[:2])
+    assert factors == pytest.approx([10.0 / 4.88, 1.0])
+    assert inserted == pytest.approx([10.0 / 4.88, 10.0])
+
+
 def test_a_saved_state_is_made_loadable(tmp_path):
     """What SUMO 1.28 saves but cannot load again (issue 60): an actuated light's empty
     ``state`` is left out, and so are rail signals' drive ways (they crash libsumo at the
