@@ -20,7 +20,9 @@ ours to the authors' set-up one step at a time, so that each step's factor is me
 5. ``... authors' spin rule``: 4.9 s within 8 m (reference §6.2) instead of our 30 s, 17 m.
 
 Collisions and spins are counted apart; ``lives_lost_per_s`` is both (a spin also ends a life
-in the authors' code). Written to ``regime.csv``.
+in the authors' code). Written to ``regime.csv``, with the same rates in other time bases
+(:func:`time_bases`: per step, per 100 steps), as the paper may have counted per step of
+0.1 s rather than per second (issue 61's time-base hypothesis).
 """
 
 from __future__ import annotations
@@ -55,6 +57,17 @@ UNTRAINED = [  # (configuration, respawn at own start, learning, the authors' sp
     ("untrained learners from scratch, respawn at own start, authors' spin rule", True, True,
      True),
 ]
+
+
+TIME_BASES = {"step": 1, "100_steps": 100}  # the time bases beside seconds, in steps
+
+
+def time_bases(lives_lost_per_s: np.ndarray, dt: float) -> dict[str, np.ndarray]:
+    """Lives lost per second in each of :data:`TIME_BASES` (``lives_lost_per_step``, ...), for
+    a step of ``dt`` seconds."""
+    rates = np.asarray(lives_lost_per_s, dtype=np.float64)
+    return {f"lives_lost_per_{name}": np.round(rates * steps * dt, 4)
+            for name, steps in TIME_BASES.items()}
 
 
 def _row(strategy: object, configuration: str, runs: list, vehicles: int) -> dict:
@@ -108,6 +121,9 @@ def regime(study: Study) -> list[str]:
         runs = [untrained_run(world, s, at_start, learns) for s in range(situations)]
         rows.append(_row("any", configuration, runs, world.vehicles))
     table = pd.DataFrame(rows)
+    dt = shipped_scenario(ARENA.name(1)).vehicle.dt
+    for column, rates in time_bases(table["lives_lost_per_s"].to_numpy(), dt).items():
+        table[column] = rates
     table["paper_low"], table["paper_high"] = min(PAPER_INITIAL), max(PAPER_INITIAL)
     write_csv(study.out / "regime.csv", table)
     return [summary_line(table)]

@@ -244,7 +244,27 @@ def _regime(regime: pd.DataFrame) -> list[str]:
               f"{middle:g}. The arena, the 8 cars at 10 m/s and the blame rule are the authors' "
               "already; none of the differences measured here (respawn, learning from scratch, "
               "spin rule) closes that factor, and the paper does not say how it counted.", ""]
-    return lines
+    return lines + _time_bases(regime, paper)
+
+
+def _time_bases(regime: pd.DataFrame, paper: tuple[float, float]) -> list[str]:
+    """The authors' set-up's lives lost in each time base of ``regime.csv``, and which of them
+    the paper's range holds (issue 61's time-base hypothesis)."""
+    authors = regime.iloc[-1]
+    bases = {"second": authors.lives_lost_per_s, "step (0.1 s)": authors.lives_lost_per_step,
+             "100 steps": authors.lives_lost_per_100_steps}
+    inside = [base for base, rate in bases.items() if paper[0] <= rate <= paper[1]]
+    if inside:
+        verdict = (f"Only per {' and per '.join(inside)} does it fall inside the paper's range "
+                   f"({paper[0]:g}–{paper[1]:g}): a count per {inside[0]} would explain the "
+                   "paper's figures. Neither the paper nor the authors' code says so; it is "
+                   "a hypothesis the numbers allow, not a finding")
+    else:
+        verdict = (f"In none of them does it fall inside the paper's range ({paper[0]:g}–"
+                   f"{paper[1]:g}): the time base does not explain the factor")
+    return ["**The time base.** The authors' set-up's lives lost (all 8 vehicles) per "
+            + ", per ".join(f"{base}: {rate:g}" for base, rate in bases.items())
+            + f" (`regime.csv`). {verdict}.", ""]
 
 
 def family_tables34(paper: Path, family: Family) -> str:

@@ -79,3 +79,21 @@ def test_sumo_tables_carry_paired_intervals_into_the_summary(tmp_path):
     assert "median generations bred per learner 3, 4" in lines[1]
     text = "\n".join(paper_tables(tmp_path))
     assert "| 1 | 16.33 / 0.3 | 2.11 / 0.05 | -0.25 (" in text
+
+
+def test_regime_time_bases_and_the_words_they_choose():
+    """1.575 lives lost per second at steps of 0.1 s are 0.1575 per step and 15.75 per 100
+    steps: only the last lies in the paper's 13.49–20.05, and the text says so; at a rate
+    ten times lower, none does and the text says that instead."""
+    from enn_traffic.experiments.regime import time_bases
+    from enn_traffic.experiments.results_doc import _time_bases
+
+    bases = time_bases(np.array([1.575, 0.1575]), 0.1)
+    np.testing.assert_allclose(bases["lives_lost_per_step"], [0.1575, 0.0158])
+    np.testing.assert_allclose(bases["lives_lost_per_100_steps"], [15.75, 1.575])
+    for rate, expected in ((1.575, "Only per 100 steps does it fall inside"),
+                           (0.1575, "In none of them does it fall inside")):
+        regime = pd.DataFrame({"lives_lost_per_s": [rate],
+                               **{k: v[:1] for k, v in time_bases(np.array([rate]), 0.1).items()}})
+        text = " ".join(_time_bases(regime, (13.49, 20.05)))
+        assert expected in text and "(13.49–20.05)" in text
