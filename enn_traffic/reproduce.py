@@ -43,11 +43,13 @@ def reproduce(out: Path, quick: bool = False, only: list[str] | None = None,
                file=terminal())
     for name in bar:
         bar.set_postfix_str(name)
+        # the tree as the experiment starts: its own CSVs would mark it "+changes" after
+        tree, code = commit(), code_version()
         started = time.perf_counter()
         lines = EXPERIMENTS[name](study)
         records[name] = {"lines": lines, "seconds": round(time.perf_counter() - started, 1),
-                         "settings": "quick" if quick else "full", "commit": commit(),
-                         "code": code_version(),
+                         "settings": "quick" if quick else "full", "commit": tree,
+                         "code": code,
                          "date": datetime.now(UTC).strftime("%Y-%m-%d %H:%M UTC")}
         write_text(record_path, json.dumps(records, indent=1))
         tqdm.write("\n".join(lines))
