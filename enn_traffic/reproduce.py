@@ -70,6 +70,9 @@ def write_summary(out: Path, records: dict) -> None:
     summary += [f"| {n} | {records[n]['settings']} | {records[n].get('commit') or '-'} | "
                 f"{records[n].get('code', '-')} | {records[n].get('date', '-')} | "
                 f"{records[n]['seconds']} |" for n in done]
+    summary += [f"| {n}/{table} (measured again: {again['why']}) | {records[n]['settings']} | "
+                f"{again['commit']} | {again['code']} | {again['date']} | {again['seconds']} |"
+                for n in done for table, again in records[n].get("measured_again", {}).items()]
     total = sum(records[n]["seconds"] for n in done)
     summary += [f"| all | | | | | {total:.1f} |", "",
                 "A call reuses finished runs made by the same rules (the sources that decide a "

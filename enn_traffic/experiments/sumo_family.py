@@ -5,6 +5,12 @@ with SUMO's drivers reacting to it (closed loop). ``sumo``: our ring and grid ne
 
 from __future__ import annotations
 
+import json
+import time
+from datetime import UTC, datetime
+from pathlib import Path
+
+import numpy as np
 import pandas as pd
 
 from enn_traffic.deploy import EVALUATION_KEY
@@ -15,7 +21,7 @@ from enn_traffic.experiments.study import Study
 from enn_traffic.experiments.sumo_crowds import sumo_tables
 from enn_traffic.experiments.table1 import table1
 from enn_traffic.experiments.table2 import table2
-from enn_traffic.io import write_csv
+from enn_traffic.io import write_csv, write_text
 from enn_traffic.worlds import make_world
 
 
@@ -23,7 +29,14 @@ def replay_against_closed_loop(study: Study, family: Family = SUMO) -> list[str]
     """Each strategy's Table 1 controller (trained on replayed traffic) on the same test
     situations with the traffic replayed and in closed loop: lifetimes side by side."""
     family = study.settings(family)
-    controllers = specialists(study, family)
+    table = closed_loop_table(family, specialists(study, family))
+    write_csv(study.out / family.folder / "closed_loop.csv", table)
+    return [closed_loop_line(table, family)]
+
+
+def closed_loop_table(family: Family, controllers: dict[int, np.ndarray]) -> pd.DataFrame:
+    """``closed_loop.csv``: every strategy's controller (world layout) on its test situations,
+    the traffic replayed and in closed loop."""
     rows = []
     for strategy in family.strategies:
         test = family.scenario(strategy, family.test_situations)
@@ -35,13 +48,43 @@ def replay_against_closed_loop(study: Study, family: Family = SUMO) -> list[str]
             rows.append({"strategy": strategy, "episode": episode,
                          "replay_steps": int(lifetimes["replay"].steps[0, episode]),
                          "closed_loop_steps": int(lifetimes["closed-loop"].steps[0, episode])})
-    table = pd.DataFrame(rows)
-    write_csv(study.out / family.folder / "closed_loop.csv", table)
+    return pd.DataFrame(rows)
+
+
+def closed_loop_line(table: pd.DataFrame, family: Family) -> str:
+    """The summary line of ``closed_loop.csv``: each strategy's mean lifetimes."""
     means = table.groupby("strategy")[["replay_steps", "closed_loop_steps"]].mean()
     pairs = ", ".join(f"strategy {s}: {r.replay_steps:.0f} vs {r.closed_loop_steps:.0f}"
                       for s, r in means.iterrows())
-    return [f"{family.folder}/closed_loop: mean lifetime of each strategy's controller, replayed "
-            f"vs closed loop: {pairs}"]
+    return (f"{family.folder}/closed_loop: mean lifetime of each strategy's controller, "
+            f"replayed vs closed loop: {pairs}")
+
+
+def measure_closed_loop_again(paper: Path, family: Family, why: str) -> pd.DataFrame:
+    """``closed_loop.csv`` of a reproduce folder ``paper`` measured again from its committed
+    Table 1 controllers, when the simulation changed but the controllers did not; the
+    family's record in ``summary.json`` gets the new summary line and says when, at which
+    commit and ``why`` (:func:`enn_traffic.reproduce.write_summary` lists it)."""
+    from enn_traffic.controller import Controller
+    from enn_traffic.provenance import code_version, commit
+    from enn_traffic.reproduce import write_summary
+
+    tree, code, started = commit(), code_version(), time.perf_counter()
+    folder = paper / "controllers" / family.folder / "table1"
+    controllers = {s: Controller.load(folder / f"strategy{s}.npz").chromosome
+                   for s in family.strategies}
+    table = closed_loop_table(family, controllers)
+    write_csv(paper / family.folder / "closed_loop.csv", table)
+    records = json.loads((paper / "summary.json").read_text())
+    record = records[family.folder]
+    record["lines"] = [closed_loop_line(table, family) if line.startswith(
+        f"{family.folder}/closed_loop:") else line for line in record["lines"]]
+    record.setdefault("measured_again", {})["closed_loop.csv"] = {
+        "commit": tree, "code": code, "seconds": round(time.perf_counter() - started, 1),
+        "date": datetime.now(UTC).strftime("%Y-%m-%d %H:%M UTC"), "why": why}
+    write_text(paper / "summary.json", json.dumps(records, indent=1))
+    write_summary(paper, records)
+    return table
 
 
 def family_experiments(study: Study, family: Family) -> list[str]:
