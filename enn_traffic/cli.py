@@ -219,6 +219,7 @@ def _cmd_run(args) -> int:
         **({"seed": args.seed} if args.seed is not None else {}),
     )
     out = args.out or Path("results") / scenario.name
+    args.run_folder = out  # for the message of an interrupt (_interrupted_note)
     check_output_folder(out)  # before any world, nothing written yet
     check_unlocked(out)
     check_folder(scenario, out, resume=args.resume, force=args.force)
@@ -495,6 +496,17 @@ INTERRUPTED = {"run": "; finished generations are checkpointed (continue with --
                            "continues"}
 
 
+def _interrupted_note(args) -> str:
+    """What an interrupted command leaves: a run says whether a generation had finished."""
+    if args.command == "run":
+        from enn_traffic.runner import CHECKPOINT
+
+        folder = getattr(args, "run_folder", None)
+        if folder is None or not (folder / CHECKPOINT).exists():
+            return "; no generation had finished: nothing to resume"
+    return INTERRUPTED.get(args.command, "")
+
+
 def main(argv: list[str] | None = None) -> int:
     from enn_traffic.progress import show_messages
 
@@ -551,7 +563,7 @@ def _run_command(args) -> int:
             raise
         stopped = "terminated" if isinstance(cause, Terminated) else "interrupted"
         print(f"\nenn-traffic: {stopped} after {time.perf_counter() - started:.0f} s"
-              f"{INTERRUPTED.get(args.command, '')}", file=sys.stderr)
+              f"{_interrupted_note(args)}", file=sys.stderr)
         return 143 if isinstance(cause, Terminated) else 130
 
 

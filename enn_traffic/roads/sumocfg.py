@@ -188,17 +188,23 @@ def read_sumocfg(path: Path) -> SumoConfig:
 
 
 def departure_span(route_files: list[Path] | tuple[Path, ...]) -> tuple[float, float] | None:
-    """The earliest and latest departure (vehicles, trips, persons, flows' begin) in route
-    files, for error messages; None if they hold none."""
+    """The earliest and latest departure in route files: vehicles', trips' and persons'
+    ``depart``, flows' ``begin`` and ``end`` (inf for a flow without an ``end``, which SUMO
+    keeps sending); None if they hold none."""
     departures = []
     for file in route_files:
         try:
             for _, element in ElementTree.iterparse(file):
                 tag = element.tag
-                time = element.get("begin") if tag == "flow" else element.get("depart")
-                if tag in ("vehicle", "trip", "person", "flow") and time is not None:
+                if tag in ("flow", "personFlow"):
+                    times = [element.get("begin", "0"), element.get("end", "inf")]
+                elif tag in ("vehicle", "trip", "person"):
+                    times = [element.get("depart")]
+                else:
+                    times = []
+                for time in times:
                     # "triggered", "containerTriggered": no fixed time
-                    with contextlib.suppress(ValueError):
+                    with contextlib.suppress(ValueError, TypeError):
                         departures.append(parse_time(time))
                 element.clear()
         except (ElementTree.ParseError, OSError):

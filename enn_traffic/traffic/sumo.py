@@ -28,6 +28,7 @@ libsumo holds one simulation per process; every function here starts and closes 
 from __future__ import annotations
 
 import contextlib
+import functools
 import gzip
 import hashlib
 import math
@@ -474,6 +475,8 @@ def warm_up(simulation: Simulation) -> None:
     scenario = simulation.scenario
     steps, dt = warmup_steps(scenario), scenario.vehicle.dt
     chunk = max(1, round(10.0 / dt))  # the bar moves every 10 s of SUMO time
+    span = _departures(tuple(route_files(scenario)))
+    last = math.inf if span is None else span[1]
     with bar(round(steps * dt, 6), f"SUMO warm-up, seed {simulation.seed}", "SUMO s",
              bar_format="{desc}: {n:.0f}/{total:.0f} SUMO s [{elapsed}<{remaining}, "
                         "{rate_fmt}]") as progress:
@@ -483,6 +486,18 @@ def warm_up(simulation: Simulation) -> None:
             simulation.step(count)
             done += count
             progress.update(count * dt)
+            now = libsumo.simulation.getTime()
+            if now > last and libsumo.simulation.getMinExpectedNumber() == 0:
+                # nothing on the network, nothing left to depart: the learner's start would
+                # find no traffic, however long SUMO went on
+                raise no_traffic_error(scenario, 0, emptied=now)
+
+
+@functools.lru_cache(maxsize=8)
+def _departures(files: tuple[Path, ...]) -> tuple[float, float] | None:
+    """:func:`departure_span` of route files, read once per process (a warm-up runs per
+    situation)."""
+    return departure_span(files)
 
 
 STATE_FOLDER_VARIABLE = "ENN_TRAFFIC_SUMO_STATES"
@@ -577,9 +592,11 @@ def make_loadable(path: Path) -> None:
             file.write(repaired)
 
 
-def no_traffic_error(scenario: Scenario, steps: int) -> InputError:
+def no_traffic_error(scenario: Scenario, steps: int, emptied: float | None = None
+                     ) -> InputError:
     """Why a scenario's traffic never reached the learner's world: no SUMO vehicle on the
-    network from the learner's start to the end of its life."""
+    network from the learner's start to the end of its life, or (``emptied``) SUMO's network
+    emptied for good at that time, before the learner's start."""
     start = learner_start_time(scenario)
     end = start + steps * scenario.vehicle.dt
     config = sumo_config(scenario)
@@ -593,8 +610,10 @@ def no_traffic_error(scenario: Scenario, steps: int) -> InputError:
     span = departure_span(route_files(scenario))
     departures = ("the route files name no departure" if span is None else
                   f"the route files' departures span {span[0]:g}-{span[1]:g} s")
-    return InputError(f"no SUMO vehicle is on the network from {start:g} s to {end:g} s of "
-                      f"SUMO time, so the learner would drive without traffic ({begin}; "
+    what = (f"no SUMO vehicle is on the network from {start:g} s to {end:g} s of SUMO time"
+            if emptied is None else f"SUMO's last vehicle left the network at {emptied:g} s "
+            f"with none left to depart, before the learner's start")
+    return InputError(f"{what}, so the learner would drive without traffic ({begin}; "
                       f"{departures}); set traffic.begin_s or warmup_s", scenario.source,
                       _key(scenario))
 

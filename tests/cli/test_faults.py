@@ -92,7 +92,7 @@ def test_ctrl_c_ends_every_executor_with_one_line_130_and_the_checkpoint(tmp_pat
     assert process.wait(timeout=60) == 130
     message = process.stderr.read().strip().splitlines()
     assert len(message) == 1 and "interrupted" in message[0], message
-    assert "Traceback" not in message[0]
+    assert "Traceback" not in message[0] and "continue with --resume" in message[0]
     assert (out / "checkpoint.npz").is_file()
     assert _gone(workers, 30), "a worker outlived the run"
     if executor == "local":
@@ -208,7 +208,8 @@ def test_workers_end_with_a_killed_parent(tmp_path, when):
 
 
 def test_ctrl_c_while_the_pool_starts_is_one_line_too(tmp_path):
-    """Ctrl-C as the workers import (a worker printed its own traceback then)."""
+    """Ctrl-C as the workers import (a worker printed its own traceback then); no generation
+    has finished, and the message does not offer --resume."""
     out = tmp_path / "run"
     process = _start(out, *LONG, "--executor", "process", start_new_session=True)
     deadline = time.monotonic() + 120
@@ -221,6 +222,7 @@ def test_ctrl_c_while_the_pool_starts_is_one_line_too(tmp_path):
     assert process.wait(timeout=60) == 130
     message = process.stderr.read().strip().splitlines()
     assert len(message) == 1 and "interrupted" in message[0], message
+    assert "no generation had finished" in message[0]  # not "continue with --resume"
     assert _gone(workers, 30), "a worker outlived the run"
 
 

@@ -48,10 +48,25 @@ def test_traffic_that_never_reaches_the_network_is_refused(tmp_path, road_net, c
     assert code == 2
     assert str(path) in message and "traffic.sumocfg" in message
     assert "no SUMO vehicle is on the network from 10 s to 50 s" in message
-    assert "departures span 5000-5000 s" in message
+    assert "departures span 5000-5600 s" in message  # the flow's begin and end
     scenario = load_scenario(path).with_overrides(traffic={"mode": "closed-loop"})
     with pytest.raises(InputError, match="no SUMO vehicle"):
         make_world(scenario).evaluate(np.zeros((1, 19 * 3 + 3 + 3 * 2 + 2)))
+
+
+def test_a_warm_up_past_the_last_departure_stops_once_sumo_is_empty(tmp_path, road_net,
+                                                                   capsys):
+    """Buses depart from 1000 s to 1600 s and cross the 200 m road in under 20 s; a warm-up
+    of 20,000 s stops, exit status 2, once the last bus has left (SUMO time between 1600 s and
+    1700 s), not after 20,000 SUMO seconds, and says why."""
+    path = road_scenario(tmp_path, road_net, warmup=20000.0)
+    code = main(["run", str(path), "--out", str(tmp_path / "run"), "--generations", "1",
+                 "--population", "10"])
+    message = capsys.readouterr().err
+    assert code == 2
+    assert "departures span 1000-1600 s" in message
+    emptied = float(message.split("left the network at ")[1].split(" s")[0])
+    assert 1600.0 < emptied < 1700.0, message
 
 
 def test_an_output_in_a_missing_sub_folder_is_named_with_its_cause(tmp_path, road_net, capsys):
