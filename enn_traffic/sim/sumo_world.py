@@ -44,7 +44,7 @@ from enn_traffic.sim.rules import Physics
 from enn_traffic.sim.sumo_situations import WARMUP_STREAM, shared_warmup, situation_seed
 from enn_traffic.sim.world import CAPPED, SituationResults
 from enn_traffic.traffic import sumo
-from enn_traffic.traffic.fresh import fresh_map
+from enn_traffic.traffic.fresh import fresh_calls, fresh_map
 
 
 class ClosedLoopLife(NamedTuple):
@@ -146,13 +146,18 @@ class SumoWorld(LearnerWorld):
         """The SUMO state a situation of ``seed`` starts from: shared warm-up ``index`` (by
         default drawn by the seed, as a held-out situation's), or None for the situation's own
         warm-up (no shared warm-ups)."""
+        warm_seed = self._shared_warmup_seed(seed, index)
+        return None if warm_seed is None else sumo.warm_state(self.scenario, warm_seed,
+                                                              keep_rng=False)
+
+    def _shared_warmup_seed(self, seed: int, index: int | None) -> int | None:
+        """The SUMO seed of the shared warm-up :meth:`warm_state` loads (None: none)."""
         shared = self.scenario.traffic.warmup_states
         if not shared:
             return None
         index = seed % shared if index is None else index
-        warm_seed = int(np.random.SeedSequence(
+        return int(np.random.SeedSequence(
             [self.scenario.traffic.seed, WARMUP_STREAM, index]).generate_state(1)[0] % 2**31)
-        return sumo.warm_state(self.scenario, warm_seed, keep_rng=False)
 
     def situation_labels(self) -> list[str]:
         return [f"sumo ({self.scenario.traffic.mode})"] * self.scenario.traffic.episodes
@@ -216,6 +221,7 @@ class SumoWorld(LearnerWorld):
         situations = list(zip(self.seeds(key), self.situation_starts(key), self.warmups(key),
                               strict=True))
         if closed:  # in fresh processes, a share of the situations each
+            self._save_warm_ups(situations)
             shares = [situations[i::CLOSED_LOOP_WORKERS] for i in range(CLOSED_LOOP_WORKERS)]
             done = fresh_map(closed_loop_lives, [(self.scenario, genes, share)
                                                  for share in shares if share],
@@ -247,6 +253,25 @@ class SumoWorld(LearnerWorld):
                                             np.stack(safety, axis=1) if safety else None,
                                             np.stack(hit_vehicle, axis=1),
                                             np.stack(ends, axis=1))
+
+    def _save_warm_ups(self, situations: list[tuple[int, np.ndarray, int | None]]) -> None:
+        """Each closed-loop situation's warm-up saved before its lives run, each simulated
+        in a fresh process: a life's process then always loads its state. On an empty
+        cache the warm-up was simulated in the life's own process, just before it, and
+        libsumo's leftovers changed the life (docs/sumo.md, "One SUMO start, one
+        process"): 3 of 10 lifetimes of the crossing flows differed from a warm cache's."""
+        missing = {(seed, warmup) for seed, _, warmup in situations
+                   if not self._state_of(seed, warmup).is_file()}
+        fresh_calls([(situation_state, self.scenario, seed, warmup)
+                     for seed, warmup in sorted(missing, key=repr)],
+                    workers=CLOSED_LOOP_WORKERS)
+
+    def _state_of(self, seed: int, warmup: int | None) -> Path:
+        """Where the state a closed-loop situation loads is kept (:meth:`live`)."""
+        warm_seed = self._shared_warmup_seed(seed, warmup)
+        if warm_seed is None:
+            return sumo.state_path(self.scenario, seed, keep_rng=True)
+        return sumo.state_path(self.scenario, warm_seed, keep_rng=False)
 
     def live(self, seed: int, start: np.ndarray | None = None, warmup: int | None = None,
              max_steps: int | None = None) -> LiveTraffic:
@@ -346,6 +371,13 @@ class SumoWorld(LearnerWorld):
             body = corners[before, int(np.flatnonzero(ids[before] == hit)[0])].copy()
         return TracedLife(np.concatenate([learner[:, None, :], traffic], axis=1), int(outcome),
                           int(hit), hit_vehicle, body)
+
+
+def situation_state(scenario: Scenario, seed: int, warmup: int | None) -> Path:
+    """The saved warm-up a closed-loop situation loads (:meth:`SumoWorld.live`), simulated
+    if it is not on disk: what :meth:`SumoWorld._save_warm_ups` runs in a fresh process."""
+    world = SumoWorld(scenario)
+    return world.warm_state(seed, warmup) or sumo.warm_state(scenario, seed, keep_rng=True)
 
 
 def closed_loop_lives(scenario: Scenario, genes: np.ndarray,

@@ -526,6 +526,14 @@ def state_folder() -> Path:
     return Path(folder) if folder else cache_folder() / "sumo-states"
 
 
+def state_path(scenario: Scenario, seed: int, keep_rng: bool) -> Path:
+    """Where :func:`warm_state` keeps the state of ``seed`` (named by everything it depends
+    on), whether or not it is there yet."""
+    key = hashlib.sha256("\n".join([*_inputs_key(scenario), str(seed), str(keep_rng)])
+                         .encode()).hexdigest()[:24]
+    return state_folder() / f"{key}.xml.gz"
+
+
 def warm_state(scenario: Scenario, seed: int, keep_rng: bool) -> Path:
     """A SUMO state file of the scenario's traffic ``warmup_s`` after its begin, simulated with
     ``seed`` once and kept on disk (in :func:`state_folder`, named by everything it depends
@@ -533,13 +541,11 @@ def warm_state(scenario: Scenario, seed: int, keep_rng: bool) -> Path:
     ``keep_rng``: the state holds SUMO's random generators, so a run loading it goes on as the
     warm-up would have (one traffic situation's own warm-up); without, a run loading it goes
     on by its own seed (a warm-up shared by several situations)."""
-    key = hashlib.sha256("\n".join([*_inputs_key(scenario), str(seed), str(keep_rng)])
-                         .encode()).hexdigest()[:24]
-    path = state_folder() / f"{key}.xml.gz"
+    path = state_path(scenario, seed, keep_rng)
     if path.is_file():
         return path
     path.parent.mkdir(parents=True, exist_ok=True)
-    partial = path.with_name(f"{key}.{os.getpid()}.partial.xml.gz")
+    partial = path.with_name(f"{path.name.split('.')[0]}.{os.getpid()}.partial.xml.gz")
     simulation = Simulation(scenario, seed, save_rng=keep_rng)
     try:
         warm_up(simulation)
