@@ -501,7 +501,7 @@ def _departures(files: tuple[Path, ...]) -> tuple[float, float] | None:
 
 
 STATE_FOLDER_VARIABLE = "ENN_TRAFFIC_SUMO_STATES"
-STATE_VERSION = 5  # raised when the code that simulates and saves a warm-up changes
+STATE_VERSION = 6  # raised when the code that simulates and saves a warm-up changes
 
 
 def _inputs_key(scenario: Scenario) -> list[str]:
