@@ -62,6 +62,11 @@ def reproduce(out: Path, quick: bool = False, only: list[str] | None = None,
 def write_summary(out: Path, records: dict) -> None:
     """``summary.md`` from every experiment's record (``summary.json``) and the tables in
     ``out``."""
+    write_text(out / "summary.md", summary_text(out, records))
+
+
+def summary_text(out: Path, records: dict) -> str:
+    """What :func:`write_summary` writes."""
     done = [n for n in EXPERIMENTS if n in records]
     summary = ["# enn-traffic: reproduction of Eraqi et al. (2016)", ""]
     summary += [f"- {line}" for n in done for line in records[n]["lines"]]
@@ -80,4 +85,4 @@ def write_summary(out: Path, records: dict) -> None:
                 "far below the compute. From an empty folder, the wall times are the "
                 "compute.", ""]
     summary += paper_tables(out)
-    write_text(out / "summary.md", "\n".join(summary) + "\n")
+    return "\n".join(summary) + "\n"

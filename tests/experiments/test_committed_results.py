@@ -291,3 +291,22 @@ def test_a_committed_generalization_controller_drives_its_table_row(trained, tra
     world, poses, outcome = controller_trace(controller, shipped_scenario(track))
     assert (len(poses) - 1, OUTCOMES[outcome]) == (row["steps"], row["outcome"])
     assert round(world.track.coverage(poses[:, 0, :2]), 4) == row["coverage"]
+
+
+def test_summary_md_is_what_its_records_and_csvs_give(root):
+    """The committed summary.md is regenerated, byte for byte, from summary.json and the
+    tables beside it; the closed-loop and regime lines it carries are those their committed
+    CSVs give now (summary.md once said 1442 where closed_loop.csv gave 1386)."""
+    import json
+
+    from enn_traffic.experiments import regime
+    from enn_traffic.experiments.sumo_family import closed_loop_line
+    from enn_traffic.reproduce import summary_text
+
+    paper = root / "results" / "paper"
+    summary = (paper / "summary.md").read_text()
+    assert summary == summary_text(paper, json.loads((paper / "summary.json").read_text()))
+    for family in (SUMO, CITY):
+        table = pd.read_csv(paper / family.folder / "closed_loop.csv")
+        assert f"- {closed_loop_line(table, family)}\n" in summary
+    assert f"- {regime.summary_line(pd.read_csv(paper / 'regime.csv'))}\n" in summary
