@@ -11,6 +11,7 @@ import json
 import time
 from datetime import UTC, datetime
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from tqdm import tqdm
 
@@ -18,10 +19,15 @@ from enn_traffic.errors import InputError
 from enn_traffic.experiments import EXPERIMENTS
 from enn_traffic.experiments.common import executor as runs_on
 from enn_traffic.experiments.study import Study
-from enn_traffic.io import write_text
+from enn_traffic.io import write_csv, write_text
 from enn_traffic.progress import terminal
 from enn_traffic.provenance import code_version, commit
 from enn_traffic.report.paper_tables import paper_tables
+
+if TYPE_CHECKING:
+    import pandas as pd
+
+    from enn_traffic.experiments.protocol import Family
 
 
 def reproduce(out: Path, quick: bool = False, only: list[str] | None = None,
@@ -86,3 +92,29 @@ def summary_text(out: Path, records: dict) -> str:
                 "compute.", ""]
     summary += paper_tables(out)
     return "\n".join(summary) + "\n"
+
+
+def measure_closed_loop_again(paper: Path, family: Family, why: str) -> pd.DataFrame:
+    """``closed_loop.csv`` of a reproduce folder ``paper`` measured again from its committed
+    Table 1 controllers, when the simulation changed but the controllers did not; the
+    family's record in ``summary.json`` gets the new summary line and says when, at which
+    commit and ``why`` (:func:`write_summary` lists it)."""
+    from enn_traffic.controller import Controller
+    from enn_traffic.experiments.sumo_family import closed_loop_line, closed_loop_table
+
+    tree, code, started = commit(), code_version(), time.perf_counter()
+    folder = paper / "controllers" / family.folder / "table1"
+    controllers = {s: Controller.load(folder / f"strategy{s}.npz").chromosome
+                   for s in family.strategies}
+    table = closed_loop_table(family, controllers)
+    write_csv(paper / family.folder / "closed_loop.csv", table)
+    records = json.loads((paper / "summary.json").read_text())
+    record = records[family.folder]
+    record["lines"] = [closed_loop_line(table, family) if line.startswith(
+        f"{family.folder}/closed_loop:") else line for line in record["lines"]]
+    record.setdefault("measured_again", {})["closed_loop.csv"] = {
+        "commit": tree, "code": code, "seconds": round(time.perf_counter() - started, 1),
+        "date": datetime.now(UTC).strftime("%Y-%m-%d %H:%M UTC"), "why": why}
+    write_text(paper / "summary.json", json.dumps(records, indent=1))
+    write_summary(paper, records)
+    return table

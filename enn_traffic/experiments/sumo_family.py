@@ -5,11 +5,6 @@ with SUMO's drivers reacting to it (closed loop). ``sumo``: our ring and grid ne
 
 from __future__ import annotations
 
-import json
-import time
-from datetime import UTC, datetime
-from pathlib import Path
-
 import numpy as np
 import pandas as pd
 
@@ -21,7 +16,7 @@ from enn_traffic.experiments.study import Study
 from enn_traffic.experiments.sumo_crowds import sumo_tables
 from enn_traffic.experiments.table1 import table1
 from enn_traffic.experiments.table2 import table2
-from enn_traffic.io import write_csv, write_text
+from enn_traffic.io import write_csv
 from enn_traffic.worlds import make_world
 
 
@@ -58,33 +53,6 @@ def closed_loop_line(table: pd.DataFrame, family: Family) -> str:
                       for s, r in means.iterrows())
     return (f"{family.folder}/closed_loop: mean lifetime of each strategy's controller, "
             f"replayed vs closed loop: {pairs}")
-
-
-def measure_closed_loop_again(paper: Path, family: Family, why: str) -> pd.DataFrame:
-    """``closed_loop.csv`` of a reproduce folder ``paper`` measured again from its committed
-    Table 1 controllers, when the simulation changed but the controllers did not; the
-    family's record in ``summary.json`` gets the new summary line and says when, at which
-    commit and ``why`` (:func:`enn_traffic.reproduce.write_summary` lists it)."""
-    from enn_traffic.controller import Controller
-    from enn_traffic.provenance import code_version, commit
-    from enn_traffic.reproduce import write_summary
-
-    tree, code, started = commit(), code_version(), time.perf_counter()
-    folder = paper / "controllers" / family.folder / "table1"
-    controllers = {s: Controller.load(folder / f"strategy{s}.npz").chromosome
-                   for s in family.strategies}
-    table = closed_loop_table(family, controllers)
-    write_csv(paper / family.folder / "closed_loop.csv", table)
-    records = json.loads((paper / "summary.json").read_text())
-    record = records[family.folder]
-    record["lines"] = [closed_loop_line(table, family) if line.startswith(
-        f"{family.folder}/closed_loop:") else line for line in record["lines"]]
-    record.setdefault("measured_again", {})["closed_loop.csv"] = {
-        "commit": tree, "code": code, "seconds": round(time.perf_counter() - started, 1),
-        "date": datetime.now(UTC).strftime("%Y-%m-%d %H:%M UTC"), "why": why}
-    write_text(paper / "summary.json", json.dumps(records, indent=1))
-    write_summary(paper, records)
-    return table
 
 
 def family_experiments(study: Study, family: Family) -> list[str]:
