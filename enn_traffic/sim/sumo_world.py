@@ -280,8 +280,7 @@ class SumoWorld(LearnerWorld):
         is simulated once and loaded from a SUMO state file by every later call."""
         limit = self.max_steps if max_steps is None else max_steps
         if (seed, warmup) not in self._states:  # found (or simulated) once, not per chromosome
-            self._states[seed, warmup] = (self.warm_state(seed, warmup)
-                                          or sumo.warm_state(self.scenario, seed, keep_rng=True))
+            self._states[seed, warmup] = situation_state(self.scenario, seed, warmup, self)
         state = self._states[seed, warmup]
         if not self._checked:  # refuse traffic that never reaches the network
             sumo.first_traffic(self.scenario, seed, state, limit)
@@ -373,10 +372,12 @@ class SumoWorld(LearnerWorld):
                           int(hit), hit_vehicle, body)
 
 
-def situation_state(scenario: Scenario, seed: int, warmup: int | None) -> Path:
-    """The saved warm-up a closed-loop situation loads (:meth:`SumoWorld.live`), simulated
-    if it is not on disk: what :meth:`SumoWorld._save_warm_ups` runs in a fresh process."""
-    world = SumoWorld(scenario)
+def situation_state(scenario: Scenario, seed: int, warmup: int | None,
+                    world: SumoWorld | None = None) -> Path:
+    """The saved warm-up a closed-loop situation loads (:meth:`SumoWorld.live`; ``world``:
+    the scenario's, made if not given), simulated if it is not on disk: also what
+    :meth:`SumoWorld._save_warm_ups` runs in a fresh process."""
+    world = SumoWorld(scenario) if world is None else world
     return world.warm_state(seed, warmup) or sumo.warm_state(scenario, seed, keep_rng=True)
 
 
