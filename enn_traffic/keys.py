@@ -23,6 +23,9 @@ TEST = range(6 * SPAN, 7 * SPAN)
 # Table 4. A SUMO world's situations on it were never read before the SUMO crowds were
 # measured by today's method.
 CROWD_TEST = range(9 * SPAN, 10 * SPAN)
+# Table 4's ablation (issue 61; enn_traffic.experiments.ablation), the arena's: fresh and sealed,
+# read once, by the ablation's one configuration, after Tables 3–4 were measured.
+ABLATION_CROWD_TEST = range(10 * SPAN, 11 * SPAN)
 # Read twice by Tables 3–4 (the arena's, then the SUMO and city families' pooled and per-learner
 # Table 4): nothing reads it any more.
 SPENT_CROWD_TEST = range(7 * SPAN, 8 * SPAN)
@@ -35,7 +38,8 @@ DESIGN_TRIALS = range(8 * SPAN, 9 * SPAN)
 
 RANGES = {"training": TRAINING, "test": TEST, "validation": VALIDATION,
           "acceptance": ACCEPTANCE, "crowd validation": CROWD_VALIDATION,
-          "crowd test": CROWD_TEST, "spent crowd test": SPENT_CROWD_TEST,
+          "crowd test": CROWD_TEST, "ablation crowd test": ABLATION_CROWD_TEST,
+          "spent crowd test": SPENT_CROWD_TEST,
           "retired test": RETIRED_TEST,
           "retired crowd test": RETIRED_CROWD_TEST, "design trials": DESIGN_TRIALS}
 

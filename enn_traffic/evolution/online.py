@@ -23,7 +23,8 @@ class VehicleGA:
     """One vehicle's own population, evaluated a chromosome per life (reference §7.1): a
     chromosome's fitness is the steps its life lasted (0 for a spin), or the life cap when it
     reached it. ``lives`` counts the lives it lost, ``tried`` the chromosomes whose evaluation
-    ended (a lost life or the cap)."""
+    ended (a lost life or the cap). A ``finished`` vehicle has stopped learning and keeps its
+    current chromosome (the authors' finishing rule, reference §7.5)."""
 
     population: np.ndarray  # (P, G), the world's gene layout
     rng: np.random.Generator
@@ -33,6 +34,7 @@ class VehicleGA:
     lives: int = 0
     tried: int = 0
     bred_from: tuple[np.ndarray, np.ndarray] | None = None  # last whole generation, fitness
+    finished: bool = False
 
     def __post_init__(self):
         self.fitness = np.zeros(len(self.population))
@@ -46,6 +48,13 @@ class VehicleGA:
         self.fitness[self.index] = fitness
         self.index += 1
         self.tried += 1
+
+    def finish(self, fitness: float) -> None:
+        """The current chromosome lived long enough: the vehicle keeps it and stops learning
+        (reference §7.5)."""
+        self.fitness[self.index] = fitness
+        self.tried += 1
+        self.finished = True
 
     @property
     def exhausted(self) -> bool:
@@ -65,8 +74,11 @@ class VehicleGA:
 
     def evolved(self) -> np.ndarray:
         """What the vehicle drives once it stops learning, the authors' rule (reference §7.5):
-        the fittest chromosome of its last whole generation (the first of equals); before it
-        has finished one, the fittest it has tried of its first, or its first chromosome."""
+        the chromosome it finished with; else the fittest chromosome of its last whole
+        generation (the first of equals); before it has finished one, the fittest it has tried
+        of its first, or its first chromosome."""
+        if self.finished:
+            return self.current
         population, fitness = self.bred_from or (self.population[: max(self.index, 1)],
                                                  self.fitness[: max(self.index, 1)])
         return population[int(np.argmax(fitness))]
@@ -108,11 +120,13 @@ class OnlineLearning:
     (reference §7.4); every life goes into the pooled ``evidence`` and into the vehicle's own
     (``own[v]``). A chromosome whose life reaches ``life_cap`` steps (0: no cap) scores the
     cap and the vehicle drives on, from where it is, with its next chromosome
-    (docs/departures.md, "Learning while driving")."""
+    (docs/departures.md, "Learning while driving"). With ``finish_steps`` (the authors' rule,
+    reference §7.5; 0: never), a vehicle whose life lasted that long keeps its chromosome and
+    stops learning; it still loses lives and respawns."""
 
     def __init__(self, learners: list[VehicleGA | None], params: ga.GAParams,
                  share_elites: bool = False, elite_count: int = 0,
-                 evidence: Evidence | None = None, life_cap: int = 0):
+                 evidence: Evidence | None = None, life_cap: int = 0, finish_steps: int = 0):
         self.learners = learners
         self.params = params
         self.share_elites = share_elites
@@ -120,6 +134,7 @@ class OnlineLearning:
         self.evidence = Evidence() if evidence is None else evidence
         self.own = [Evidence() for _ in learners]
         self.life_cap = life_cap
+        self.finish_steps = finish_steps
 
     def learns(self, vehicle: int) -> bool:
         return self.learners[vehicle] is not None
@@ -136,6 +151,12 @@ class OnlineLearning:
         self.learners[vehicle].lives += 1
         return self._next(vehicle, 0.0 if spun else float(steps), unseen_steps, losses=1)
 
+    def _finishes(self, vehicle: int, fitness: float) -> bool:
+        learner = self.learners[vehicle]
+        if not learner.finished and self.finish_steps and fitness >= self.finish_steps:
+            learner.finish(fitness)
+        return learner.finished
+
     def life_capped(self, vehicle: int, unseen_steps: int) -> np.ndarray:
         """The vehicle's chromosome drove ``life_cap`` steps without losing its life: record
         it, and give the chromosome it drives on with."""
@@ -146,6 +167,8 @@ class OnlineLearning:
         learner = self.learners[vehicle]
         self.evidence.record(learner.current, unseen_steps, losses)
         self.own[vehicle].record(learner.current, unseen_steps, losses)
+        if self._finishes(vehicle, fitness):
+            return learner.current
         learner.record(fitness)
         if learner.exhausted:
             elites = (global_elites(self.learners, self.elite_count) if self.share_elites
@@ -153,10 +176,12 @@ class OnlineLearning:
             learner.advance(self.params, elites)
         return learner.current
 
-    def still_driving(self, vehicle: int, unseen_steps: int) -> None:
-        """The run ends with the vehicle's life going on: what it has shown counts."""
+    def still_driving(self, vehicle: int, unseen_steps: int, life_steps: int = 0) -> None:
+        """The run ends with the vehicle's life going on, ``life_steps`` long: what it has
+        shown counts, and a life long enough finishes the vehicle as its end would."""
         self.evidence.record(self.learners[vehicle].current, unseen_steps, losses=0)
         self.own[vehicle].record(self.learners[vehicle].current, unseen_steps, losses=0)
+        self._finishes(vehicle, float(life_steps))
 
     def own_controllers(self) -> np.ndarray:
         """Each learning vehicle's controller by re-ranking (V, G): of the chromosomes it drove
@@ -171,9 +196,11 @@ class OnlineLearning:
         return np.stack([learner.evolved() for learner in self.learners if learner is not None])
 
     def learner_rows(self) -> list[dict[str, int]]:
-        """Per learning vehicle: generations bred, lives lost, chromosomes tried."""
+        """Per learning vehicle: generations bred, lives lost, chromosomes tried, and whether
+        it finished (with ``finish_steps``)."""
         return [{"learner": k, "generations_bred": g.generation, "lives": g.lives,
-                 "chromosomes_tried": g.tried}
+                 "chromosomes_tried": g.tried} | ({"finished": int(g.finished)}
+                                                  if self.finish_steps else {})
                 for k, g in enumerate(g for g in self.learners if g is not None)]
 
 

@@ -21,6 +21,7 @@ EXPERIMENTS = Registry("experiment", {
     "table2": "enn_traffic.experiments.table2:table2",
     "table3": "enn_traffic.experiments.simultaneous:table3",
     "table4": "enn_traffic.experiments.simultaneous:table4",
+    "table4_ablation": "enn_traffic.experiments.ablation:table4_ablation",
     "regime": "enn_traffic.experiments.regime:regime",
     "sumo": "enn_traffic.experiments.sumo_family:sumo",
     "city": "enn_traffic.experiments.sumo_family:city",

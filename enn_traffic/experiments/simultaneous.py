@@ -52,6 +52,7 @@ from tqdm import tqdm
 
 from enn_traffic import keys
 from enn_traffic.controller import Controller
+from enn_traffic.evolution import ga
 from enn_traffic.evolution.online import Evidence, OnlineLearning, VehicleGA
 from enn_traffic.experiments.choosing import evolved_candidates, final_population
 from enn_traffic.experiments.common import distinct, save_arrays, save_controller
@@ -87,15 +88,19 @@ CONTRASTS = [("population", "initial_after"), ("population", "winner_after"),
 @dataclass(frozen=True)
 class CrowdLearning:
     """How long the vehicles learn together (simulated seconds, a multiple of ``SECONDS``),
-    the life cap of a chromosome's trial (steps), how many situations each strategy is
-    measured in, and what ``--quick`` changes of them. The learning time and the cap were
+    the life cap of a chromosome's trial (steps; 0: none), how many situations each strategy
+    is measured in, and what ``--quick`` changes of them. The learning time and the cap were
     chosen on the crowd validation situations so that every learner breeds at least 3
     generations (``table4_validation_learners.csv``; docs/results.md, "All vehicles at
-    once")."""
+    once"). The authors' procedure, which Table 4's ablation sets beside ours
+    (:mod:`enn_traffic.experiments.ablation`): every learner from a ``random`` population
+    (``start_population``), no cap, and ``finish_steps`` = 2000 (reference §7.5)."""
 
     seconds: float = 15000.0
     life_cap_steps: int = 300
     situations: int = 20
+    start_population: str = "evolved"  # or "random": the GA's first generation, per learner
+    finish_steps: int = 0
     quick: Mapping[str, object] = field(default_factory=dict)
 
 
@@ -167,8 +172,15 @@ def learn_together(world: ArenaWorld, situation: int, winner: np.ndarray, evolve
     arena, _ = situation_crowd(world, situation, np.full(world.vehicles, NETWORK), key)
     learners = [VehicleGA(evolved.copy(), np.random.default_rng([sc.seed, situation, v]))
                 for v in range(world.vehicles)]
+    if learning.start_population == "random":  # the authors' start (reference §7.1)
+        for learner in learners:
+            learner.population = world.spec.in_source_layout(ga.initial_population(
+                learner.rng, sc.ga.population_size, world.spec.chromosome_length,
+                sc.ga.init_range))
+            learner.fitness = np.zeros(len(learner.population))
     online = OnlineLearning(learners, ga_params(sc), share_elites=True,
-                            elite_count=sc.ga.elite_count, life_cap=learning.life_cap_steps)
+                            elite_count=sc.ga.elite_count, life_cap=learning.life_cap_steps,
+                            finish_steps=learning.finish_steps)
     genes = np.tile(winner, (world.vehicles, 1))
     spans = round(learning.seconds / SECONDS)
     return arena, online, [arena.run(SECONDS, genes, online) for _ in range(spans)]

@@ -72,8 +72,8 @@ class Learning(Protocol):
         """The vehicle's life reached the cap; the chromosome it drives on with."""
         ...
 
-    def still_driving(self, vehicle: int, unseen_steps: int) -> None:
-        """The run ends with the vehicle's life going on."""
+    def still_driving(self, vehicle: int, unseen_steps: int, life_steps: int) -> None:
+        """The run ends with the vehicle's life going on, ``life_steps`` long."""
         ...
 
 
@@ -274,5 +274,6 @@ class Crowd:
                 break
             drive_first = True
         for v in np.flatnonzero(learns):  # a life still going counts what it has shown
-            learning.still_driving(v, int(lives.life[v] - unseen_from[v]))
+            learning.still_driving(v, int(lives.life[v] - unseen_from[v]),
+                                  int(lives.life[v]))
         return CrowdRun(collisions, spins, steps * self.world.scenario.vehicle.dt, trace)

@@ -342,7 +342,8 @@ class SumoCrowd:
                   lives.vehicles, lives.learners, lives.work)
             self.advance()
         for k in np.flatnonzero(learns):  # a life still going counts what it has shown
-            learning.still_driving(k, int(learners.life[k] - unseen_from[k]))
+            learning.still_driving(k, int(learners.life[k] - unseen_from[k]),
+                                  int(learners.life[k]))
         run = SumoCrowdRun(outcomes[COLLIDED], outcomes[SPUN], steps * world.scenario.vehicle.dt,
                            trace, exits=outcomes[LEFT_NETWORK],
                            suffered=learners.suffered - suffered, begin=begin)

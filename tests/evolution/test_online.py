@@ -60,3 +60,39 @@ def test_after_learning_a_vehicle_drives_the_fittest_of_its_last_whole_generatio
     learner.record(100.0)  # the new generation's first: not whole yet
     np.testing.assert_array_equal(learner.evolved(), population[1])  # first of the two 9s
     assert (learner.generation, learner.tried) == (1, 5)
+
+
+def test_the_authors_finishing_rule_keeps_a_chromosome_that_lived_2000_steps(world):
+    """Reference §7.5: a life of ``finish_steps`` or more (not a spin) finishes the vehicle;
+    it keeps that chromosome through later lives, breeds no more, and drives it after
+    learning; a life still going that long at the end finishes it too."""
+    from enn_traffic.evolution.online import OnlineLearning
+
+    length = world.spec.chromosome_length
+    params = ga.GAParams(population_size=3, tournament_size=2)
+
+    def learning() -> OnlineLearning:
+        population = np.arange(3 * length, dtype=float).reshape(3, length)
+        return OnlineLearning([VehicleGA(population, np.random.default_rng(0))], params,
+                              finish_steps=2000)
+
+    online = learning()
+    np.testing.assert_array_equal(online.life_ended(0, 1999, 1999, spun=False),
+                                  online.learners[0].population[1])  # not yet: the next
+    np.testing.assert_array_equal(online.life_ended(0, 2600, 2600, spun=True),
+                                  online.learners[0].population[2])  # a spin scores 0
+    kept = online.life_ended(0, 2000, 2000, spun=False)
+    np.testing.assert_array_equal(kept, online.learners[0].population[2])
+    for _ in range(5):  # more lives than the population: no generation is bred
+        np.testing.assert_array_equal(online.life_ended(0, 10, 10, spun=False), kept)
+    learner = online.learners[0]
+    assert learner.finished and learner.generation == 0 and learner.lives == 8
+    np.testing.assert_array_equal(learner.evolved(), kept)
+    assert online.learner_rows()[0]["finished"] == 1
+
+    online = learning()
+    online.still_driving(0, 1500, life_steps=1500)
+    assert not online.learners[0].finished
+    online.still_driving(0, 600, life_steps=2100)
+    assert online.learners[0].finished
+    np.testing.assert_array_equal(online.learners[0].evolved(), online.learners[0].population[0])
