@@ -10,7 +10,9 @@ from the start poses in spans of ``SECONDS`` (100 s, the paper's):
   chromosome — of the controllers individual learning evolved on the strategy (every
   generation's best of every run, and the final elites), the one that loses fewest lives
   (collisions and spins) when it drives all 8 vehicles, judged on ``VALIDATION_SITUATIONS``
-  situations apart from the measured ones. Table 3 compares the first span;
+  situations apart from the measured ones. Table 3 compares the first span. Beside it, the
+  paper's way (``paper_winner``): the fittest chromosome individual learning found by its own
+  GA fitness (the best of the strategy's runs), with no ranking in the crowd;
 - Table 4 (§5.5.2, broadcasting the evolved population): every vehicle starts from a copy of the
   evolved population (the candidates, fewest broadcast lives lost first, then the rest of the
   winner's run's final population) and all learn at once, each its own GA a chromosome per
@@ -56,7 +58,7 @@ from enn_traffic.evolution import ga
 from enn_traffic.evolution.online import Evidence, OnlineLearning, VehicleGA
 from enn_traffic.experiments.choosing import evolved_candidates, final_population
 from enn_traffic.experiments.common import distinct, save_arrays, save_controller
-from enn_traffic.experiments.protocol import ARENA
+from enn_traffic.experiments.protocol import ARENA, run_dir
 from enn_traffic.experiments.study import Study
 from enn_traffic.io import write_csv
 from enn_traffic.kinds import STRATEGIES
@@ -74,6 +76,8 @@ SITUATION_KEY = keys.CROWD_TEST.start  # the situations whose rates are reported
 VALIDATION_KEY = keys.CROWD_VALIDATION.start  # the situations that choose the winner
 VALIDATION_SITUATIONS = 20
 DRAWN_SECONDS = 20.0
+# Table 3's paper-way winner against ours: 90% for the four strategies together (Bonferroni)
+PAPER_WAY_LEVEL = 1 - 0.1 / 4
 # Mean reduction of the collision rate over the four strategies in the paper's Tables 3 and 4.
 PAPER_REDUCTION = {name: float(np.mean([1 - after / before for before, after in table]))
                    for name, table in (("table3", PAPER_TABLE3), ("table4", PAPER_TABLE4))}
@@ -261,10 +265,13 @@ def validation_learners(inputs: dict[int, tuple[np.ndarray, np.ndarray]],
 
 
 def measure(out: Path, inputs: dict[int, tuple[np.ndarray, np.ndarray]],
-            learning: CrowdLearning, progress: bool = False) -> Measured:
+            learning: CrowdLearning, progress: bool = False,
+            paper_winners: Mapping[int, np.ndarray] | None = None) -> Measured:
     """Tables 3–4's every strategy from its winner and evolved population (``inputs``:
     strategy -> (winner, population), world layout), written under ``out``: the situations,
-    the learning windows, the learners and the first situation's controllers and paths."""
+    the learning windows, the learners and the first situation's controllers and paths; with
+    ``paper_winners`` (strategy -> chromosome, world layout), each situation's first span
+    with the paper's winner driving every vehicle too (column ``paper_winner``)."""
     write_csv(out / "table4_validation_learners.csv", validation_learners(inputs, learning))
     rows, windows, learners, paths, wall = [], [], [], {}, {}
     for strategy, (winner, population) in inputs.items():
@@ -272,6 +279,10 @@ def measure(out: Path, inputs: dict[int, tuple[np.ndarray, np.ndarray]],
         started = time.perf_counter()
         each, spans, counts, first = measure_strategy(world, strategy, winner, population,
                                                       learning, progress)
+        if paper_winners is not None:
+            genes = world.spec.in_source_layout(paper_winners[strategy])[0]
+            for row in each:
+                row["paper_winner"] = _broadcast(world, genes, row["situation"])[0].collision_rate
         wall[strategy] = round(time.perf_counter() - started, 1)
         rows += each
         windows += spans
@@ -354,16 +365,19 @@ def paired_interval(after: np.ndarray, before: np.ndarray, rng: np.random.Genera
 def table4_comparisons(situations: pd.DataFrame,
                        arms: tuple[str, ...] = ("initial_after", "population", "winner_after",
                                                 "reranked"),
-                       contrasts: list[tuple[str, str]] = CONTRASTS) -> pd.DataFrame:
+                       contrasts: list[tuple[str, str]] = CONTRASTS, level: float = 0.9
+                       ) -> pd.DataFrame:
     """Per strategy, Table 4's ``arms`` over the span after learning and the paired
-    differences of ``contrasts`` with their 90% bootstrap intervals over the situations."""
+    differences of ``contrasts`` with their ``level`` bootstrap intervals over the
+    situations."""
     rng = np.random.default_rng(0)
     rows = []
     for strategy, group in situations.groupby("strategy"):
         row = {"strategy": strategy}  # the initial drivers first, then after learning
         row |= {f"{arm}_collisions_per_s": round(group[arm].mean(), 4) for arm in arms}
         for after, before in contrasts:
-            low, high = paired_interval(group[after].to_numpy(), group[before].to_numpy(), rng)
+            low, high = paired_interval(group[after].to_numpy(), group[before].to_numpy(), rng,
+                                        level=level)
             name = f"{after}_minus_{before}"
             row |= {name: round((group[after] - group[before]).mean(), 4),
                     f"{name}_low": round(low, 4), f"{name}_high": round(high, 4)}
@@ -423,7 +437,27 @@ def draw_learning(curve: pd.DataFrame, situations: pd.DataFrame, path: Path,
 
 def _measured(study: Study) -> Measured:
     return study.shared("simultaneous", lambda: measure(
-        study.out, _inputs(study), study.settings(LEARNING), study.progress))
+        study.out, _inputs(study), study.settings(LEARNING), study.progress,
+        _paper_winners(study)))
+
+
+def paper_winner(out: Path, strategy: int, seeds: tuple[int, ...]) -> np.ndarray:
+    """§5.5.1 the paper's way: of the strategy's runs of individual learning (under ``out``,
+    one per seed), the best chromosome with the highest GA fitness (the first seed of
+    equals), chosen by nothing the crowd showed (world layout)."""
+    bests = [Controller.load(run_dir(ARENA, out, strategy, seed) / "best.npz")
+             for seed in seeds]
+    return max(bests, key=lambda best: best.fitness).chromosome
+
+
+def _paper_winners(study: Study) -> dict[int, np.ndarray]:
+    winners = {}
+    for strategy in ARENA.strategies:
+        best = paper_winner(study.out, strategy, study.settings(ARENA).seeds)
+        save_controller(study.out, f"table3/strategy{strategy}_paper_way",
+                        shipped_scenario(ARENA.name(strategy)), best, float("nan"))
+        winners[strategy] = best
+    return winners
 
 
 def rates_table(measured: pd.DataFrame, after: str, before: str = "initial") -> pd.DataFrame:
@@ -469,6 +503,21 @@ def _reduction(means: pd.DataFrame, situations: pd.DataFrame, after: str, before
             f"{low:.0%} to {high:.0%})")
 
 
+def _paper_way(situations: pd.DataFrame) -> str:
+    """Table 3's winner the paper's way beside ours, in words chosen from the intervals."""
+    means = strategy_means(situations)
+    contrast = table4_comparisons(situations, arms=(), contrasts=[("paper_winner", "winner")],
+                                  level=PAPER_WAY_LEVEL)
+    name = "paper_winner_minus_winner"
+    above, below = int((contrast[f"{name}_low"] > 0).sum()), int(
+        (contrast[f"{name}_high"] < 0).sum())
+    rates = ", ".join(f"strategy {s}: {a:.3f}" for s, a in zip(
+        means["strategy"], means["paper_winner"], strict=True))
+    return (f"the paper's winner (fittest by its GA fitness, no ranking in the crowd): {rates}"
+            f"; its rate above ours in {above} of {len(contrast)} strategies and below in "
+            f"{below} (paired {PAPER_WAY_LEVEL:.1%} intervals, 90% for the four together)")
+
+
 def summary_lines(situations: pd.DataFrame, learners: pd.DataFrame, name: str) -> list[str]:
     """The summary's line for Table 3 (the first span) or Table 4 (the span after learning,
     every arm paired by situation)."""
@@ -476,9 +525,12 @@ def summary_lines(situations: pd.DataFrame, learners: pd.DataFrame, name: str) -
     if name == "table3":
         rates = ", ".join(f"strategy {s}: {i:.3f} -> {a:.3f}" for s, i, a in zip(
             means["strategy"], means["initial"], means["winner"], strict=True))
-        return [f"table3 (winner): collisions per second per vehicle, initial -> after: "
+        line = (f"table3 (winner): collisions per second per vehicle, initial -> after: "
                 f"{rates}; mean reduction {_reduction(means, situations, 'winner', 'initial')}"
-                f"; paper: {PAPER_REDUCTION['table3']:.0%}"]
+                f"; paper: {PAPER_REDUCTION['table3']:.0%}")
+        if "paper_winner" in situations:
+            line += "; " + _paper_way(situations)
+        return [line]
     bred = learners.groupby("strategy")["generations_bred"].median()
     rates = ", ".join(f"strategy {s}: {i:.3f} -> {a:.3f}" for s, i, a in zip(
         means["strategy"], means["initial_after"], means["population"], strict=True))
@@ -505,6 +557,11 @@ def table3(study: Study) -> list[str]:
     measured = _measured(study)
     means = strategy_means(measured.situations)
     table = rates_table(means, "winner")
+    if "paper_winner" in measured.situations:
+        table["paper_winner_collisions_per_s"] = means["paper_winner"].round(4).to_numpy()
+        contrast = table4_comparisons(measured.situations, arms=(),
+                                      contrasts=[("paper_winner", "winner")], level=PAPER_WAY_LEVEL)
+        table = table.merge(contrast, on="strategy")
     write_csv(study.out / "table3.csv", table)
     return summary_lines(measured.situations, measured.learners, "table3")
 

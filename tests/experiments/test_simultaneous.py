@@ -138,3 +138,67 @@ def test_measure_writes_every_table_3_4_output_from_the_committed_inputs(tmp_pat
     assert len(pd.read_csv(tmp_path / "table4_learners.csv")) == 4 * 8  # 4 strategies x 8
     assert sorted(pd.read_csv(tmp_path / "table4_learning.csv")["window_start_s"].unique()
                   ) == [0.0, 100.0]
+
+
+def test_the_papers_winner_is_the_best_chromosome_of_highest_ga_fitness(tmp_path, root):
+    """§5.5.1 the paper's way: of the strategy's runs, the ``best.npz`` with the highest
+    fitness, the first seed of equals; nothing the crowd showed."""
+    from enn_traffic.controller import Controller
+    from enn_traffic.experiments.protocol import ARENA, run_dir
+    from enn_traffic.experiments.simultaneous import paper_winner
+    from enn_traffic.shipped import shipped_scenario
+
+    scenario = shipped_scenario(ARENA.name(2))
+    length = len(Controller.load(root / "results" / "paper" / "controllers" / "table3"
+                                 / "strategy2.npz").chromosome)
+    for seed, fitness in ((1, 500.0), (2, 900.0), (3, 900.0)):
+        folder = run_dir(ARENA, tmp_path, 2, seed)
+        folder.mkdir(parents=True)
+        Controller.from_scenario(scenario, np.full(length, float(seed)), fitness, 7).save(
+            folder / "best.npz")
+    np.testing.assert_array_equal(paper_winner(tmp_path, 2, (1, 2, 3)), np.full(length, 2.0))
+    np.testing.assert_array_equal(paper_winner(tmp_path, 2, (1,)), np.full(length, 1.0))
+
+
+def test_table3_says_where_the_papers_winner_differs_from_ours():
+    import pandas as pd
+
+    from enn_traffic.experiments.simultaneous import summary_lines
+
+    situations = pd.DataFrame({
+        "strategy": [1, 1, 2, 2], "situation": [0, 1, 0, 1],
+        "initial": [0.1] * 4, "winner": [0.02, 0.02, 0.01, 0.03],
+        "paper_winner": [0.05, 0.06, 0.02, 0.02]})
+    (line,) = summary_lines(situations, pd.DataFrame(), "table3")
+    # strategy 1: +0.03, +0.04 (above); strategy 2: +0.01, -0.01 (spans 0)
+    assert "strategy 1: 0.055, strategy 2: 0.020" in line
+    assert "its rate above ours in 1 of 2 strategies and below in 0" in line
+
+
+def test_the_ablation_table_pairs_each_arm_with_its_own_first_span_and_the_others():
+    import pandas as pd
+
+    from enn_traffic.experiments.ablation import ablation_table, carrier, factor_effects
+
+    rows = []
+    for situation, noise in enumerate((0.0, 0.002, -0.002)):
+        for start, stopping, after in (("random", "cap", 0.05), ("random", "finish", 0.05),
+                                       ("evolved", "cap", 0.01), ("evolved", "finish", 0.01)):
+            rows.append({"strategy": 1, "situation": situation, "start_population": start,
+                         "stopping": stopping, "first_span": 0.1 if start == "random" else 0.01,
+                         "after": after + noise, "initial_after": 0.08, "winner_after": 0.01,
+                         "generations_bred": 3, "finished_share": 0.5})
+    table = ablation_table(pd.DataFrame(rows))
+    random_cap = table[(table["start_population"] == "random") & (table["stopping"] == "cap")]
+    assert random_cap["after_minus_first_span"].iloc[0] == pytest.approx(-0.05)
+    assert random_cap["reduction_vs_first_span"].iloc[0] == pytest.approx(0.5)
+    assert random_cap["after_minus_winner_after"].iloc[0] == pytest.approx(0.04)
+    assert random_cap["after_minus_winner_after_low"].iloc[0] > 0
+    evolved = table[table["start_population"] == "evolved"]
+    assert (evolved["after_minus_winner_after_low"] <= 0).all()
+    assert (evolved["after_minus_winner_after_high"] >= 0).all()
+    factors = factor_effects(pd.DataFrame(rows))
+    words = carrier(factors)
+    assert "start_population random instead of evolved: +0.0400" in words
+    assert "raises the learners' rate against the winner" in words
+    assert "stopping finish instead of cap: +0.0000" in words
