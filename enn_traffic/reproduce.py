@@ -108,13 +108,44 @@ def measure_closed_loop_again(paper: Path, family: Family, why: str) -> pd.DataF
                    for s in family.strategies}
     table = closed_loop_table(family, controllers)
     write_csv(paper / family.folder / "closed_loop.csv", table)
+    _record_again(paper, family, "closed_loop.csv", [closed_loop_line(table, family)],
+                  (tree, code, started), why)
+    return table
+
+
+def measure_crowds_again(paper: Path, family: Family, why: str, progress: bool = True
+                         ) -> list[str]:
+    """A SUMO family's Tables 3–4 of a reproduce folder ``paper`` measured again from its
+    committed controllers (the Table 1 winners, the evolved populations), when the
+    simulation changed but the controllers did not; recorded as
+    :func:`measure_closed_loop_again` records. The summary's new lines."""
+    from enn_traffic.experiments.sumo_crowds import (
+        SUMO_LEARNING,
+        measure,
+        saved_crowd_inputs,
+        write_tables,
+    )
+
+    tree, code, started = commit(), code_version(), time.perf_counter()
+    measured = measure(Study(paper, progress=progress), family, SUMO_LEARNING,
+                       saved_crowd_inputs(paper, family))
+    lines = write_tables(paper / family.folder, measured.situations, measured.learners)
+    _record_again(paper, family, "table3.csv, table4.csv", lines, (tree, code, started), why)
+    return lines
+
+
+def _record_again(paper: Path, family: Family, tables: str, lines: list[str],
+                  made: tuple[str | None, str, float], why: str) -> None:
+    """The family's record in ``summary.json``: ``lines`` replace those of the same table
+    (``family/table:``), and ``tables`` measured again at ``made`` (commit, code, start
+    time) because ``why``; summary.md written again."""
+    tree, code, started = made
     records = json.loads((paper / "summary.json").read_text())
     record = records[family.folder]
-    record["lines"] = [closed_loop_line(table, family) if line.startswith(
-        f"{family.folder}/closed_loop:") else line for line in record["lines"]]
-    record.setdefault("measured_again", {})["closed_loop.csv"] = {
+    new = {line.split(":", 1)[0]: line for line in lines}
+    record["lines"] = [new.get(line.split(":", 1)[0], line) for line in record["lines"]]
+    record.setdefault("measured_again", {})[tables] = {
         "commit": tree, "code": code, "seconds": round(time.perf_counter() - started, 1),
         "date": datetime.now(UTC).strftime("%Y-%m-%d %H:%M UTC"), "why": why}
     write_text(paper / "summary.json", json.dumps(records, indent=1))
     write_summary(paper, records)
-    return table

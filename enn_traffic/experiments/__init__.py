@@ -25,5 +25,6 @@ EXPERIMENTS = Registry("experiment", {
     "regime": "enn_traffic.experiments.regime:regime",
     "sumo": "enn_traffic.experiments.sumo_family:sumo",
     "city": "enn_traffic.experiments.sumo_family:city",
+    "sumo_ablation": "enn_traffic.experiments.ablation:table4_ablation_sumo",
     "lane_keeping": "enn_traffic.experiments.lanekeeping:lane_keeping",
 })

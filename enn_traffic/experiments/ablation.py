@@ -32,7 +32,7 @@ from tqdm import tqdm
 
 from enn_traffic import keys
 from enn_traffic.errors import InputError
-from enn_traffic.experiments.protocol import ARENA
+from enn_traffic.experiments.protocol import ARENA, SUMO, Family
 from enn_traffic.experiments.simultaneous import (
     LEARNING,
     SECONDS,
@@ -42,6 +42,12 @@ from enn_traffic.experiments.simultaneous import (
     situation_crowd,
 )
 from enn_traffic.experiments.study import Study
+from enn_traffic.experiments.sumo_crowds import (
+    SUMO_LEARNING,
+    SumoLearning,
+    saved_crowd_inputs,
+    situation_result,
+)
 from enn_traffic.io import write_csv
 from enn_traffic.progress import terminal
 from enn_traffic.report.plots import save_figure
@@ -133,8 +139,9 @@ def ablation_table(situations: pd.DataFrame, level: float = LEVEL) -> pd.DataFra
                "situations": len(group)}
         row |= {column: round(group[column].mean(), 5)
                 for column in ("first_span", "after", "initial_after", "winner_after")}
-        row["reduction_vs_first_span"] = round(1 - group["after"].mean()
-                                               / group["first_span"].mean(), 3)
+        first = group["first_span"].mean()
+        row["reduction_vs_first_span"] = (round(1 - group["after"].mean() / first, 3)
+                                          if first > 0 else float("nan"))
         for contrast in CONTRASTS:
             name = f"after_minus_{contrast}"
             differences = (group["after"] - group[contrast]).to_numpy()
@@ -268,6 +275,71 @@ def carrier(factors: pd.DataFrame, contrast: str = "after_minus_winner_after") -
                      f"{row.effect:+.4f} per vehicle-second ({row.effect_low:+.4f} to "
                      f"{row.effect_high:+.4f}), {side}")
     return "; ".join(words)
+
+
+# One SUMO strategy: ours against the arm whose choice carries the arena's pattern (the
+# start population, table4_ablation_factors.csv), on keys of its own in the ablation range.
+SUMO_STRATEGY = 1
+SUMO_ARMS = (("evolved", "cap"), ("random", "cap"))
+SUMO_KEY = keys.ABLATION_CROWD_TEST.start + 1_000_000
+
+
+def sumo_situations(out: Path, family: Family, learning: SumoLearning,
+                    strategy: int = SUMO_STRATEGY, progress: bool = False) -> pd.DataFrame:
+    """``SUMO_ARMS`` among the SUMO traffic of ``family``'s ``strategy``, from the winner
+    and evolved population saved under ``out/controllers``: a row per situation and arm, the
+    columns of ``table4_ablation_situations.csv``."""
+    world, winner, evolved = saved_crowd_inputs(out, family)[strategy]
+    stopping = {"cap": {"life_cap_steps": learning.life_cap_steps, "finish_steps": 0},
+                "finish": {"life_cap_steps": 0, "finish_steps": FINISH_STEPS}}
+    rows = []
+    for situation in tqdm(range(learning.situations), desc=f"{family.folder} ablation",
+                          unit="situation", disable=not progress, file=terminal()):
+        for start, stop in SUMO_ARMS:
+            arm = replace(learning, start_population=start, **stopping[stop])
+            result = situation_result(world, winner, evolved, situation, arm, SUMO_KEY)
+            learners = pd.DataFrame(result.learners)
+            rows.append({"strategy": strategy, "situation": situation,
+                         "start_population": start, "stopping": stop,
+                         "first_span": result.windows[0]["learning"],
+                         "after": result.rates["population"], "after_spins": float("nan"),
+                         "initial_after": result.rates["initial_after"],
+                         "winner_after": result.rates["winner_after"],
+                         "generations_bred": float(learners["generations_bred"].median()),
+                         "finished_share": float(learners.get("finished",
+                                                              pd.Series([0])).mean())})
+    return pd.DataFrame(rows)
+
+
+def table4_ablation_sumo(study: Study) -> list[str]:
+    """The arena ablation's deciding choice on one strategy of the SUMO family, from the
+    controllers its Tables 3–4 saved: ``sumo/table4_ablation.csv`` and its situations."""
+    family = study.settings(SUMO)
+    try:
+        situations = sumo_situations(study.out, family, study.settings(SUMO_LEARNING),
+                                     progress=study.progress)
+    except FileNotFoundError as error:
+        raise InputError(f"{error.filename} is missing: the SUMO ablation starts from the "
+                         "controllers the SUMO family saved (run sumo first)",
+                         key="--only") from error
+    folder = study.out / family.folder
+    table = ablation_table(situations)
+    write_csv(folder / "table4_ablation_situations.csv", situations.round(5))
+    write_csv(folder / "table4_ablation.csv", table)
+    words = []
+    for row in table.to_dict("records"):
+        words.append(f"start {row['start_population']}, {row['stopping']}: "
+                     f"{row['first_span']:.3f} -> {row['after']:.3f}, against the winner "
+                     f"{_interval_words(row, 'after_minus_winner_after')}")
+    return [f"sumo/table4_ablation (strategy {SUMO_STRATEGY}, collisions per learner-second, "
+            "first window -> window after learning): " + "; ".join(words)]
+
+
+def _interval_words(row: dict, name: str) -> str:
+    word = ("above" if row[f"{name}_low"] > 0 else "below" if row[f"{name}_high"] < 0
+            else "not apart")
+    return (f"{word} ({row[name]:+.4f}, {row[f'{name}_low']:+.4f} to "
+            f"{row[f'{name}_high']:+.4f})")
 
 
 def table4_ablation(study: Study) -> list[str]:

@@ -18,8 +18,10 @@ from enn_traffic.experiments.protocol import ARENA
 from enn_traffic.experiments.simultaneous import (
     LEARNING,
     curve_ends,
+    direction,
     mean_reduction,
     reduction_interval,
+    trend,
 )
 from enn_traffic.experiments.table1 import diagonal_pattern
 from enn_traffic.shipped import shipped_scenario
@@ -144,6 +146,8 @@ def tables34(paper: Path) -> str:
     above = int((table4["population_minus_winner_after_low"] > 0).sum())
     first, last = curve_ends(pd.read_csv(paper / "table4_learning.csv"),
                              "collisions_per_vehicle_s")
+    _, low, high = trend(pd.read_csv(paper / "table4_learning_ends.csv"))
+    verb = direction(low, high, neither="goes, its interval spanning no change,")
     return (f"per vehicle-second: {_percent(mean_reduction(table, 'winner'))} by the winner; "
             f"after learning together for {LEARNING.seconds / 3600:.3g} h of simulated time "
             f"(median {learners['generations_bred'].median():g} generations bred per vehicle), "
@@ -154,7 +158,7 @@ def tables34(paper: Path) -> str:
             f"span, the paper's baseline), while the winner simply driving on reaches "
             f"{mean_reduction(table, 'winner_after', 'initial_after'):.1%}: above it in "
             f"{above} of {len(table4)} strategies, paired intervals apart (paper: Table 4 below "
-            f"Table 3 in 4 of 4). While they learn, their rate rises from {first:.3f} to "
+            f"Table 3 in 4 of 4). While they learn, their rate {verb} from {first:.3f} to "
             f"{last:.3f} (the first and last tenth of the learning). In the paper's unit (all 8 "
             f"vehicles) our initial drivers collide "
             f"{initial.min():.2f}–{initial.max():.2f} times per second, the paper's "

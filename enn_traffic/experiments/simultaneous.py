@@ -299,6 +299,7 @@ def measure(out: Path, inputs: dict[int, tuple[np.ndarray, np.ndarray]],
         wall_s=means["strategy"].map(wall)))
     write_csv(out / "table4_learners.csv", measured.learners)
     write_csv(out / "table4_learning.csv", curve)
+    write_csv(out / "table4_learning_ends.csv", learning_ends(measured.windows))
     _draw_crowds(paths, out / "simultaneous_paths.png")
     draw_learning(curve, measured.situations, out / "table4_learning.png", learning.seconds)
     return measured
@@ -342,6 +343,44 @@ def learning_curve(windows: pd.DataFrame) -> pd.DataFrame:
     curve = windows.groupby(["strategy", "window_start_s"], as_index=False)[
         ["learning", "initial_drivers", "winner_driving_on"]].mean()
     return curve.rename(columns={"learning": "collisions_per_vehicle_s"}).round(5)
+
+
+LEARNING_ARMS = ["learning", "initial_drivers", "winner_driving_on"]  # columns of the windows
+
+
+def learning_ends(windows: pd.DataFrame) -> pd.DataFrame:
+    """Per strategy and situation: each arm's mean rate over the first and over the last
+    tenth of the learning's spans (``ARM_first``, ``ARM_last``), so that whether the learning
+    curve rises can be read with an interval paired by situation
+    (``table4_learning_ends.csv``)."""
+    rows = []
+    for (strategy, situation), group in windows.groupby(["strategy", "situation"]):
+        spans = group.sort_values("window_start_s")
+        tenth = max(1, len(spans) // 10)
+        row = {"strategy": strategy, "situation": situation}
+        for arm in LEARNING_ARMS:
+            row |= {f"{arm}_first": spans[arm].head(tenth).mean(),
+                    f"{arm}_last": spans[arm].tail(tenth).mean()}
+        rows.append(row)
+    return pd.DataFrame(rows).round(6)
+
+
+def trend(ends: pd.DataFrame, arm: str = "learning", level: float = 0.9
+          ) -> tuple[float, float, float]:
+    """The mean change of ``arm``'s rate from the first to the last tenth of the learning
+    over every situation of ``ends`` (:func:`learning_ends`), with its ``level`` interval
+    (pairs drawn again)."""
+    change = (ends[f"{arm}_last"] - ends[f"{arm}_first"]).to_numpy()
+    low, high = paired_interval(change, np.zeros_like(change), np.random.default_rng(0),
+                                level=level)
+    return float(change.mean()), low, high
+
+
+def direction(low: float, high: float, up: str = "rises", down: str = "falls",
+              neither: str = "moves neither way (its interval spans 0)") -> str:
+    """The word an interval's sign allows: ``up`` above 0, ``down`` below, else
+    ``neither``."""
+    return up if low > 0 else down if high < 0 else neither
 
 
 def curve_ends(curve: pd.DataFrame, column: str) -> tuple[float, float]:

@@ -54,6 +54,7 @@ from tqdm import tqdm
 
 from enn_traffic import keys
 from enn_traffic.controller import Controller
+from enn_traffic.evolution import ga
 from enn_traffic.evolution.online import OnlineLearning, VehicleGA
 from enn_traffic.experiments.choosing import final_population, specialists
 from enn_traffic.experiments.common import save_arrays, save_controller
@@ -63,6 +64,7 @@ from enn_traffic.experiments.simultaneous import (
     SituationResult,
     draw_learning,
     learning_curve,
+    learning_ends,
     table4_comparisons,
 )
 from enn_traffic.experiments.study import Study
@@ -94,7 +96,10 @@ class SumoLearning:
     population each learner copies and how many of the best are elites (a learner's own
     breeding keeps that many, which the best of all learners then replace), the
     situations measured per strategy and the validation situations that chose these
-    settings, and what ``--quick`` changes of them."""
+    settings, and what ``--quick`` changes of them. Table 4's ablation
+    (:mod:`enn_traffic.experiments.ablation`) varies the start (``start_population``:
+    ``random`` populations of ``population_size`` instead of the evolved rows) and the
+    stopping (``finish_steps``: the authors' finishing rule, with ``life_cap_steps`` 0)."""
 
     seconds: float = 1000.0
     window_seconds: float = 100.0
@@ -103,6 +108,8 @@ class SumoLearning:
     elite_count: int = 4
     situations: int = 10
     validation_situations: int = 2
+    start_population: str = "evolved"
+    finish_steps: int = 0
     quick: Mapping[str, object] = field(default_factory=dict)
 
     @property
@@ -121,9 +128,16 @@ def _learning(world: SumoWorld, evolved: np.ndarray, situation: int, learning: S
     population = evolved[:learning.population_size]
     learners = [VehicleGA(population.copy(), np.random.default_rng([scenario.seed, situation, k]))
                 for k in range(scenario.traffic.learners)]
+    if learning.start_population == "random":  # the authors' start (reference §7.1)
+        for learner in learners:
+            learner.population = world.spec.in_source_layout(ga.initial_population(
+                learner.rng, learning.population_size, world.spec.chromosome_length,
+                scenario.ga.init_range))
+            learner.fitness = np.zeros(len(learner.population))
     params = replace(ga_params(scenario), elite_count=learning.elite_count)
     return OnlineLearning(learners, params, share_elites=True,
-                          elite_count=learning.elite_count, life_cap=learning.life_cap_steps)
+                          elite_count=learning.elite_count, life_cap=learning.life_cap_steps,
+                          finish_steps=learning.finish_steps)
 
 
 def learn_together(world: SumoWorld, winner: np.ndarray, evolved: np.ndarray, situation: int,
@@ -329,6 +343,7 @@ def measure(study: Study, family: Family, learning: SumoLearning,
     write_csv(folder / "crowd_situations.csv", measured.situations)
     write_csv(folder / "table4_learners.csv", measured.learners)
     write_csv(folder / "table4_learning.csv", curve)
+    write_csv(folder / "table4_learning_ends.csv", learning_ends(measured.windows))
     draw_learning(curve, measured.situations, folder / "table4_learning.png", learning.seconds,
                   f"{len(inputs)} strategies of {family.folder}: "
                   f"{family.scenario(family.strategies[0]).traffic.learners} learners among SUMO "

@@ -97,3 +97,32 @@ def test_regime_time_bases_and_the_words_they_choose():
                                **{k: v[:1] for k, v in time_bases(np.array([rate]), 0.1).items()}})
         text = " ".join(_time_bases(regime, (13.49, 20.05)))
         assert expected in text and "(13.49–20.05)" in text
+
+
+def test_the_learning_curves_verb_follows_its_paired_interval():
+    """Each situation's first and last tenth of the learning: a curve that climbs in every
+    situation "rises", one that falls in every situation "falls", and one that goes up in
+    half and down in the other half is said to move neither way; the learners' words follow
+    (``results_doc._trend``), with the why only where it rises."""
+    from enn_traffic.experiments.results_doc import _trend
+    from enn_traffic.experiments.simultaneous import learning_ends, trend
+
+    def windows(slopes):
+        rows = []
+        for situation, slope in enumerate(slopes):
+            for span in range(20):  # first and last tenth: 2 spans each
+                rate = 0.05 + slope * span
+                rows.append({"strategy": 1, "situation": situation,
+                             "window_start_s": 100.0 * span, "learning": rate,
+                             "initial_drivers": 0.1, "winner_driving_on": 0.01})
+        return pd.DataFrame(rows)
+
+    ends = learning_ends(windows([0.001] * 6))
+    assert ends["learning_first"].iloc[0] == pytest.approx(0.0505)  # spans 0, 1
+    assert ends["learning_last"].iloc[0] == pytest.approx(0.0685)  # spans 18, 19
+    change, low, high = trend(ends)
+    assert change == pytest.approx(0.018) and low > 0
+    assert "rate rises" in _trend(ends, "the vehicles", "vehicle-second")
+    assert "rate falls" in _trend(learning_ends(windows([-0.001] * 6)), "v", "s")
+    words = _trend(learning_ends(windows([0.001, -0.001] * 3)), "v", "s")
+    assert "moves neither way" in words and "children" not in words
