@@ -48,3 +48,11 @@ def test_no_experiment_reads_a_retired_test_range():
                     keys.SPENT_CROWD_TEST):
         assert not any(key in retired for key in used)
     assert lanekeeping.TEST_KEY in keys.TEST
+
+
+def test_the_ablation_reads_its_own_sealed_range():
+    from enn_traffic.experiments import ablation
+
+    assert ablation.ABLATION_KEY in keys.ABLATION_CROWD_TEST
+    assert ablation.SUMO_KEY in keys.ABLATION_CROWD_TEST
+    assert ablation.SUMO_KEY - ablation.ABLATION_KEY >= ablation.ABLATION.situations

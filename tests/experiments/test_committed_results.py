@@ -233,6 +233,28 @@ def test_committed_arena_crowd_files_drive_their_first_situation(strategy, root)
         np.testing.assert_array_equal(genes, committed.chromosome)
 
 
+@pytest.mark.parametrize("strategy", [1, full(2, id="2"), full(3, id="3"), full(4, id="4")])
+def test_committed_ablation_files_drive_their_first_situation(strategy, root):
+    """Table 4's ablation, a strategy's first situation driven again from the committed
+    winner and evolved population: every arm's row of ``table4_ablation_situations.csv``
+    (its first span, the span after learning, the other arms over it, the learners)."""
+    from enn_traffic.experiments.ablation import ABLATION, situation_arms
+    from enn_traffic.experiments.simultaneous import saved_inputs
+    from enn_traffic.sim.arena import ArenaWorld
+
+    paper = root / "results" / "paper"
+    committed = pd.read_csv(paper / "table4_ablation_situations.csv")
+    committed = committed[(committed["strategy"] == strategy) & (committed["situation"] == 0)]
+    world = ArenaWorld(shipped_scenario(ARENA.name(strategy)))
+    winner, evolved = saved_inputs(paper)[strategy]
+    rows, _ = situation_arms(world, 0, world.spec.in_source_layout(winner)[0],
+                             world.spec.in_source_layout(evolved), ABLATION)
+    driven = pd.DataFrame(rows).round(5)
+    columns = list(driven.columns)
+    pd.testing.assert_frame_equal(committed[columns].reset_index(drop=True), driven,
+                                  check_dtype=False)
+
+
 @pytest.mark.parametrize("family, strategy", [pytest.param(SUMO, 3, id="sumo"),
                                               full(CITY, 1, id="city")])
 def test_committed_sumo_crowd_files_drive_their_first_situation(family, strategy, root):
