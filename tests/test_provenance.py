@@ -69,3 +69,32 @@ def test_everything_the_rules_import_is_in_the_rules():
     outside = {target for module, path in known.items() if in_rules(module)
                for target in imported(module, path, known) if not in_rules(target)}
     assert outside <= DECIDES_NOTHING, sorted(outside - DECIDES_NOTHING)
+
+
+def test_a_table_measured_again_replaces_its_lines_and_says_when_and_at_which_commit(
+        tmp_path, root):
+    """``reproduce._record_again``: the family's lines of the re-measured tables are replaced
+    in place, the others kept; summary.md lists the re-measurement with its commit."""
+    import json
+    import shutil
+
+    from enn_traffic.experiments.protocol import SUMO
+    from enn_traffic.reproduce import _record_again
+
+    paper = tmp_path / "paper"
+    shutil.copytree(root / "results" / "paper", paper,
+                    ignore=shutil.ignore_patterns("controllers", "*.png", "runs", "crowds"))
+    before = json.loads((paper / "summary.json").read_text())["sumo"]["lines"]
+    _record_again(paper, SUMO, "table3.csv, table4.csv",
+                  ["sumo/table3: new three", "sumo/table4: new four"],
+                  ("abcdef1234", "0123456789ab", 0.0), "a test")
+    record = json.loads((paper / "summary.json").read_text())["sumo"]
+    tables34 = [line for line in record["lines"]
+                if line.startswith(("sumo/table3", "sumo/table4"))]
+    assert tables34 == ["sumo/table3: new three", "sumo/table4: new four"]
+    assert len(record["lines"]) == len(before)
+    assert [a for a, b in zip(record["lines"], before, strict=True) if a != b] == [
+        "sumo/table3: new three", "sumo/table4: new four"]
+    summary = (paper / "summary.md").read_text()
+    assert "| sumo/table3.csv, table4.csv (measured again: a test) | full | abcdef1234 |" \
+        in summary
