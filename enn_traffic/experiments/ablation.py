@@ -1,22 +1,31 @@
 """Table 4 as an ablation (paper §5.5.2; issue 61): which procedural choice carries the pattern.
 
-Table 4 differs from the authors' procedure in two choices (docs/departures.md, "Learning
-while driving"): our learners start from the evolved population, theirs from random populations
-(reference §7.1: their code cannot load an evolved one); our chromosome's trial ends at a
-300-step life cap, theirs has no cap and a vehicle keeps a chromosome for good once a life with
-it lasted 2000 steps (reference §7.5, ``GA.goodFitness``). This experiment crosses them —
-start population {random, evolved} × stopping {cap, finish} — on the arena's four strategies,
-on situations of their own (:data:`enn_traffic.keys.ABLATION_CROWD_TEST`, sealed, read once),
-from the winners and evolved populations Tables 3–4 saved under ``controllers/``.
+Table 4 differs from the authors' procedure (reference §7) in two choices that this experiment
+crosses (docs/departures.md, "Learning while driving"): our learners start from the evolved
+population, theirs from random populations (their code cannot load an evolved one); our
+chromosome's trial ends at a 300-step life cap, theirs has no cap and a vehicle keeps a
+chromosome for good once a life with it lasted 2000 steps (reference §7.5,
+``GA.goodFitness``). Every arm of that 2 × 2 keeps our respawn at a free spot, our spin rule and
+our blame rule. Two more arms: ``evolved, frozen`` — each vehicle a distinct chromosome of the
+evolved population, no learning (what mixing controllers does without learning) — and
+``authors`` — their whole set-up as far as it is measured here: random populations, the
+finishing rule, respawn at the car's own start, their 4.9 s spin rule, learning until every car
+has finished or bred 100 generations (at most ``authors_seconds``).
 
-For every arm, the collisions per vehicle-second of the span after learning (each vehicle its
-evolved controller) are set against (a) the arm's own first span of learning (the paper's
-baseline: its Table 4 reports the learning's start and end), (b) the initial drivers driving on
-and (c) the winner driving on, over the same span, paired by situation. The intervals are
-paired bootstrap intervals over the situations, simultaneous for the whole table (Bonferroni:
-90% for the family of every arm, strategy and contrast). ``table4_ablation_factors.csv`` gives
-each choice's effect, the mean over strategies and the other choice, with its interval: the
-choice whose effect is apart from 0 is the one that carries the pattern.
+Arms in which every vehicle learns from random populations do not depend on the strategy (the
+strategy decides the initial drivers and the evolved population only): they are driven once per
+situation and set against each strategy's other arms. For every arm, the collisions per
+vehicle-second of the span after learning are set against (a) the arm's own first span (the
+paper's baseline), (a') its spans 2–11 (the first span starts with the 8 vehicles close
+together at their start poses), (b) the initial drivers and (c) the winner driving on over the
+same span, and (d) the winner's first span (Table 3, as the paper sets its tables side by
+side); paired by situation, bootstrap intervals simultaneous over the whole table (Bonferroni:
+90% for the family). ``table4_ablation_factors.csv`` gives each choice's effect in the 2 × 2,
+the mean over strategies and the other choice, with its interval.
+
+A first reading on keys 10·10⁹ + 0…19 had only (a), (b) and (c), and no frozen and no authors'
+arm; a review of it found the winner driving on near 0 and the first span crowded, so the
+design changed and this one reads fresh keys (docs/results.md says what the first found).
 """
 
 from __future__ import annotations
@@ -32,7 +41,10 @@ from tqdm import tqdm
 
 from enn_traffic import keys
 from enn_traffic.errors import InputError
+from enn_traffic.evolution import ga
+from enn_traffic.evolution.online import OnlineLearning, VehicleGA
 from enn_traffic.experiments.protocol import ARENA, SUMO, Family
+from enn_traffic.experiments.regime import AUTHORS_SPIN
 from enn_traffic.experiments.simultaneous import (
     LEARNING,
     SECONDS,
@@ -51,29 +63,44 @@ from enn_traffic.experiments.sumo_crowds import (
 from enn_traffic.io import write_csv
 from enn_traffic.progress import terminal
 from enn_traffic.report.plots import save_figure
+from enn_traffic.runner import ga_params
 from enn_traffic.shipped import shipped_scenario
 from enn_traffic.sim.arena import ArenaWorld
+from enn_traffic.sim.crowd import Crowd
+from enn_traffic.sim.strategies import NETWORK
 
-ABLATION_KEY = keys.ABLATION_CROWD_TEST.start
+# Fresh keys: 10·10⁹ + 0…19 were read by the first design (module docstring)
+ABLATION_KEY = keys.ABLATION_CROWD_TEST.start + 2_000_000
 FINISH_STEPS = 2000  # reference §7.5: GA.goodFitness
+AUTHORS_GENERATIONS = 100  # reference §7.5: GA.nbrOfGenerations_max
 STARTS = ("random", "evolved")
 STOPPINGS = {"cap": {"life_cap_steps": LEARNING.life_cap_steps, "finish_steps": 0},
              "finish": {"life_cap_steps": 0, "finish_steps": FINISH_STEPS}}
-# the span after learning against: (a) its own first span, (b), (c) the other arms driving on
-CONTRASTS = {"first_span": "its own first span of learning",
+# (start population, stopping): the 2 × 2, then the frozen arm and the authors' set-up
+ARMS = [(start, stopping) for start in STARTS for stopping in STOPPINGS] + [
+    ("evolved", "frozen"), ("authors", "authors")]
+SHARED = {("random", "cap"), ("random", "finish"), ("authors", "authors")}  # any strategy
+EARLY_SPANS = slice(1, 11)  # spans 2–11 of the learning
+# the span after learning against: (a), (a') the arm's own spans, (b)-(d) the other arms
+CONTRASTS = {"first_span": "its own first span",
+             "early_spans": "its own spans 2–11",
              "initial_after": "the initial drivers driving on",
-             "winner_after": "the winner driving on"}
+             "winner_after": "the winner driving on",
+             "winner_first": "the winner's first span (Table 3)"}
 LEVEL = 0.9  # for the whole family of intervals of a table
 
 
 @dataclass(frozen=True)
 class Ablation:
-    """How long each arm learns, in how many situations per strategy, and what ``--quick``
-    changes of them; Table 4's learning time (``simultaneous.LEARNING``) by default."""
+    """How long each arm learns (the authors' set-up: until every car finished, at most
+    ``authors_seconds``), in how many situations per strategy, and what ``--quick`` changes
+    of them; Table 4's learning time (``simultaneous.LEARNING``) by default."""
 
     seconds: float = LEARNING.seconds
+    authors_seconds: float = 4 * LEARNING.seconds
     situations: int = LEARNING.situations
-    quick: dict = field(default_factory=lambda: {"seconds": 300.0, "situations": 2})
+    quick: dict = field(default_factory=lambda: {"seconds": 300.0, "authors_seconds": 600.0,
+                                                 "situations": 2})
 
 
 ABLATION = Ablation()
@@ -81,38 +108,105 @@ ABLATION = Ablation()
 
 def arms() -> list[tuple[str, str]]:
     """(start population, stopping) of every arm."""
-    return [(start, stopping) for start in STARTS for stopping in STOPPINGS]
+    return list(ARMS)
+
+
+def _row(start: str, stopping: str, learnt: list, after, online: OnlineLearning | None,
+         seconds: float) -> dict:
+    learners = pd.DataFrame(online.learner_rows()) if online is not None else pd.DataFrame()
+    return {"start_population": start, "stopping": stopping,
+            "first_span": learnt[0].collision_rate,
+            "early_spans": float(np.mean([run.collision_rate for run in learnt[EARLY_SPANS]])),
+            "after": after.collision_rate, "after_spins": after.spin_rate,
+            "learning_s": seconds,
+            "generations_bred": float(learners["generations_bred"].median())
+            if len(learners) else 0.0,
+            "finished_share": float(learners["finished"].mean())
+            if "finished" in learners else 0.0}
+
+
+def authors_arm(world: ArenaWorld, situation: int, ablation: Ablation, key: int
+                ) -> tuple[list, object, OnlineLearning, float]:
+    """The authors' set-up (reference §7): every car learning from a random population with
+    the finishing rule, respawning at its own start, held to their spin rule, until every car
+    finished or bred ``AUTHORS_GENERATIONS`` (at most ``ablation.authors_seconds``); the runs
+    of its spans, the span after it, the learning and its length (s)."""
+    sc = world.scenario.with_overrides(episode=AUTHORS_SPIN)
+    authors = ArenaWorld(sc)
+    chosen = authors.situations(key + situation)[0]
+    crowd = Crowd(authors, chosen.start, np.full(authors.vehicles, NETWORK), int(chosen.seed),
+                  respawn_at_start=True)
+    learners = []
+    for v in range(authors.vehicles):
+        rng = np.random.default_rng([sc.seed, situation, v])
+        population = authors.spec.in_source_layout(ga.initial_population(
+            rng, sc.ga.population_size, authors.spec.chromosome_length, sc.ga.init_range))
+        learners.append(VehicleGA(population, rng))
+    online = OnlineLearning(learners, ga_params(sc), share_elites=True,
+                            elite_count=sc.ga.elite_count, finish_steps=FINISH_STEPS)
+    genes = np.stack([learner.current for learner in learners])
+    learnt = []
+    while len(learnt) * SECONDS < ablation.authors_seconds:
+        learnt.append(crowd.run(SECONDS, genes, online))
+        if all(g.finished or g.generation >= AUTHORS_GENERATIONS for g in learners):
+            break
+    after = crowd.run(SECONDS, online.evolved_controllers(), check_spins=True)
+    return learnt, after, online, len(learnt) * SECONDS
+
+
+def frozen_arm(world: ArenaWorld, situation: int, evolved: np.ndarray, spans: int, key: int
+               ) -> tuple[list, object]:
+    """Each vehicle a distinct chromosome of the evolved population (vehicle v its row v), no
+    learning, over the learning's spans and the one after."""
+    crowd, _ = situation_crowd(world, situation, np.full(world.vehicles, NETWORK), key)
+    genes = evolved[np.arange(world.vehicles) % len(evolved)].copy()
+    runs = [crowd.run(SECONDS, genes, check_spins=True) for _ in range(spans + 1)]
+    return runs[:-1], runs[-1]
 
 
 def situation_arms(world: ArenaWorld, situation: int, winner: np.ndarray,
-                   evolved: np.ndarray, ablation: Ablation, key: int = ABLATION_KEY
-                   ) -> tuple[list[dict], list[dict]]:
-    """One situation's every arm: a row per arm (the rates of its first span, of the span
-    after learning and of the initial drivers and the winner over that span, and its learners'
-    medians) and a row per arm and span of the learning. ``winner`` (G,) and ``evolved``
-    (N, G) in the source layout."""
+                   evolved: np.ndarray, ablation: Ablation, key: int = ABLATION_KEY,
+                   shared: dict | None = None) -> tuple[list[dict], list[dict]]:
+    """One situation's every arm: a row per arm (its first span, spans 2–11 and the span
+    after learning; the initial drivers and the winner over their first span and that one;
+    its learners' medians) and a row per arm and span of the learning. ``winner`` (G,) and
+    ``evolved`` (N, G) in the source layout; ``shared`` keeps the strategy-free arms' results
+    (``SHARED``) for the situation's other strategies."""
+    shared = {} if shared is None else shared
     spans = round(ablation.seconds / SECONDS)
     crowd, genes = situation_crowd(world, situation, key=key)
-    initial = [crowd.run(SECONDS, genes) for _ in range(spans + 1)][-1]
-    winner_after = _broadcast(world, winner, situation, key, periods=spans + 1)[-1]
+    initial = [crowd.run(SECONDS, genes) for _ in range(spans + 1)]
+    broadcast = _broadcast(world, winner, situation, key, periods=spans + 1)
+    others = {"initial_first": initial[0].collision_rate,
+              "initial_after": initial[-1].collision_rate,
+              "winner_first": broadcast[0].collision_rate,
+              "winner_after": broadcast[-1].collision_rate,
+              "winner_after_spins": broadcast[-1].spin_rate}
     rows, windows = [], []
-    for start, stopping in arms():
-        learning = replace(LEARNING, seconds=ablation.seconds, start_population=start,
-                           **STOPPINGS[stopping])
-        arena, online, learnt = learn_together(world, situation, winner, evolved, learning,
-                                               key)
-        after = arena.run(SECONDS, online.evolved_controllers(), check_spins=True)
-        learners = pd.DataFrame(online.learner_rows())
-        label = {"start_population": start, "stopping": stopping}
-        rows.append(label | {
-            "first_span": learnt[0].collision_rate, "after": after.collision_rate,
-            "after_spins": after.spin_rate, "initial_after": initial.collision_rate,
-            "winner_after": winner_after.collision_rate,
-            "generations_bred": float(learners["generations_bred"].median()),
-            "finished_share": float(learners.get("finished", pd.Series([0])).mean())})
-        windows += [label | {"window_start_s": span * SECONDS,
-                             "collisions_per_vehicle_s": run.collision_rate}
-                    for span, run in enumerate(learnt)]
+    for start, stopping in ARMS:
+        if (start, stopping) in shared:
+            row, learnt_rates = shared[start, stopping]
+        else:
+            if start == "authors":
+                learnt, after, online, seconds = authors_arm(world, situation, ablation, key)
+            elif stopping == "frozen":
+                (learnt, after), online, seconds = (frozen_arm(world, situation, evolved, spans,
+                                                               key), None, ablation.seconds)
+            else:
+                learning = replace(LEARNING, seconds=ablation.seconds, start_population=start,
+                                   **STOPPINGS[stopping])
+                arena, online, learnt = learn_together(world, situation, winner, evolved,
+                                                       learning, key)
+                after = arena.run(SECONDS, online.evolved_controllers(), check_spins=True)
+                seconds = ablation.seconds
+            row = _row(start, stopping, learnt, after, online, seconds)
+            learnt_rates = [run.collision_rate for run in learnt]
+            if (start, stopping) in SHARED:
+                shared[start, stopping] = row, learnt_rates
+        rows.append(row | others)
+        windows += [{"start_population": start, "stopping": stopping,
+                     "window_start_s": span * SECONDS, "collisions_per_vehicle_s": rate}
+                    for span, rate in enumerate(learnt_rates)]
     return rows, windows
 
 
@@ -138,7 +232,7 @@ def ablation_table(situations: pd.DataFrame, level: float = LEVEL) -> pd.DataFra
         row = {"strategy": strategy, "start_population": start, "stopping": stopping,
                "situations": len(group)}
         row |= {column: round(group[column].mean(), 5)
-                for column in ("first_span", "after", "initial_after", "winner_after")}
+                for column in ("after", *CONTRASTS)}
         first = group["first_span"].mean()
         row["reduction_vs_first_span"] = (round(1 - group["after"].mean() / first, 3)
                                           if first > 0 else float("nan"))
@@ -149,60 +243,73 @@ def ablation_table(situations: pd.DataFrame, level: float = LEVEL) -> pd.DataFra
             row |= {name: round(differences.mean(), 5), f"{name}_low": round(low, 5),
                     f"{name}_high": round(high, 5)}
         row |= {"generations_bred": group["generations_bred"].median(),
-                "finished_share": round(group["finished_share"].mean(), 3)}
+                "finished_share": round(group["finished_share"].mean(), 3),
+                "learning_s": group["learning_s"].median()}
         rows.append(row)
     return pd.DataFrame(rows)
 
 
+FACTOR_OUTCOMES = {"after": "the rate after learning",
+                   "after_minus_first_span": "the change from the first span",
+                   "after_minus_early_spans": "the change from spans 2–11"}
+
+
 def factor_effects(situations: pd.DataFrame, level: float = LEVEL) -> pd.DataFrame:
-    """Each choice's effect on each contrast: the mean over strategies and the other choice
-    of (contrast with the authors' option) − (contrast with ours), paired by situation, with
-    its interval, simultaneous over the choices and contrasts (Bonferroni). Positive: the
-    authors' option makes learning look worse by that contrast."""
+    """Each choice's effect in the 2 × 2 (start population × cap or finishing rule) on each of
+    ``FACTOR_OUTCOMES``: the mean over strategies and the other choice of (outcome with the
+    authors' option) − (outcome with ours), paired by situation, with its interval,
+    simultaneous over the choices and outcomes (Bonferroni). Against the initial drivers or
+    the winner driving on, an effect is its effect on the rate after learning: those arms
+    are the same in every arm of a situation."""
     rng = np.random.default_rng(1)
     factors = {"start_population": ("random", "evolved"), "stopping": ("finish", "cap")}
-    family_level = 1 - (1 - level) / (len(factors) * len(CONTRASTS))
+    square = situations[situations["start_population"].isin(STARTS)
+                        & situations["stopping"].isin(list(STOPPINGS))]
+    square = square.assign(after_minus_first_span=square["after"] - square["first_span"],
+                           after_minus_early_spans=square["after"] - square["early_spans"])
+    family_level = 1 - (1 - level) / (len(factors) * len(FACTOR_OUTCOMES))
     rows = []
     for factor, (authors, ours) in factors.items():
         other = "stopping" if factor == "start_population" else "start_population"
-        keys_ = ["strategy", "situation", other]
-        for contrast in CONTRASTS:
-            value = situations.assign(d=situations["after"] - situations[contrast])
-            wide = value.pivot_table(index=keys_, columns=factor, values="d")
+        for outcome in FACTOR_OUTCOMES:
+            wide = square.pivot_table(index=["strategy", "situation", other], columns=factor,
+                                      values=outcome)
             effect = (wide[authors] - wide[ours]).groupby(level="situation").mean()
             low, high = bootstrap_interval(effect.to_numpy(), rng, family_level)
             rows.append({"factor": factor, "authors_option": authors, "our_option": ours,
-                         "contrast": f"after_minus_{contrast}",
-                         "effect": round(float(effect.mean()), 5), "effect_low": round(low, 5),
-                         "effect_high": round(high, 5)})
+                         "outcome": outcome, "effect": round(float(effect.mean()), 5),
+                         "effect_low": round(low, 5), "effect_high": round(high, 5)})
     return pd.DataFrame(rows)
 
 
 def draw(curve: pd.DataFrame, table: pd.DataFrame, path: Path) -> None:
     """Per strategy: every arm's learning curve, and the span after learning (dots) beside
-    the winner driving on (dashed)."""
+    the winner driving on and its first span (dashed and dotted)."""
     strategies = sorted(curve["strategy"].unique())
-    figure, axes = plt.subplots(1, len(strategies), figsize=(4 * len(strategies), 3.8),
+    figure, axes = plt.subplots(1, len(strategies), figsize=(4 * len(strategies), 4.2),
                                 sharey=True, squeeze=False)
     for ax, strategy in zip(axes[0], strategies, strict=True):
         rows = curve[curve["strategy"] == strategy]
-        end = rows["window_start_s"].max() / 60 + SECONDS / 60
-        for color, (start, stopping) in enumerate(arms()):
+        end = table["learning_s"].max() / 60 + SECONDS / 60
+        mine = table[table["strategy"] == strategy]
+        for color, (start, stopping) in enumerate(ARMS):
             arm = rows[(rows["start_population"] == start) & (rows["stopping"] == stopping)]
-            after = table[(table["strategy"] == strategy) & (table["start_population"] == start)
-                          & (table["stopping"] == stopping)]
+            after = mine[(mine["start_population"] == start) & (mine["stopping"] == stopping)]
             ax.plot(arm["window_start_s"] / 60, arm["collisions_per_vehicle_s"],
-                    color=f"C{color}", linewidth=1, label=f"start {start}, {stopping}")
+                    color=f"C{color}", linewidth=1, label=f"{start}, {stopping}")
             ax.plot([end], after["after"], "o", color=f"C{color}")
-        winner = table[table["strategy"] == strategy]["winner_after"].iloc[0]
-        ax.axhline(winner, color="k", linestyle="--", linewidth=1, label="winner driving on")
+        ax.axhline(mine["winner_after"].iloc[0], color="k", linestyle="--", linewidth=1,
+                   label="winner driving on")
+        ax.axhline(mine["winner_first"].iloc[0], color="k", linestyle=":", linewidth=1,
+                   label="winner, first span (Table 3)")
         ax.set_yscale("symlog", linthresh=0.01)
         ax.set_title(f"strategy {strategy}", fontsize=10)
         ax.set_xlabel("simulated minutes (dots: the span after learning)")
     axes[0, 0].set_ylabel("collisions per vehicle-second")
     axes[0, 0].legend(fontsize=7)
-    figure.suptitle("Table 4's ablation: start population × stopping rule, arena, mean of the "
-                    f"situations in {SECONDS:g} s spans")
+    figure.suptitle("Table 4's ablation: start population × stopping rule, frozen evolved "
+                    f"drivers, the authors' set-up; arena, mean of the situations, {SECONDS:g} s"
+                    " spans")
     figure.tight_layout()
     save_figure(figure, path)
 
@@ -218,6 +325,7 @@ def measure(out: Path, ablation: Ablation, progress: bool = False) -> pd.DataFra
                          "controllers Tables 3–4 saved (run table3,table4 first)",
                          key="--only") from error
     rows, windows = [], []
+    shared = {situation: {} for situation in range(ablation.situations)}
     for strategy, (winner, population) in inputs.items():
         world = ArenaWorld(shipped_scenario(ARENA.name(strategy)))
         winner_genes = world.spec.in_source_layout(winner)[0]
@@ -226,7 +334,8 @@ def measure(out: Path, ablation: Ablation, progress: bool = False) -> pd.DataFra
         for situation in tqdm(range(ablation.situations), desc=f"ablation strategy {strategy}",
                               unit="situation", disable=not progress, leave=False,
                               file=terminal()):
-            each, spans = situation_arms(world, situation, winner_genes, evolved, ablation)
+            each, spans = situation_arms(world, situation, winner_genes, evolved, ablation,
+                                         shared=shared[situation])
             label = {"strategy": strategy, "situation": situation}
             rows += [label | row for row in each]
             windows += [label | window for window in spans]
@@ -246,9 +355,9 @@ def measure(out: Path, ablation: Ablation, progress: bool = False) -> pd.DataFra
 
 
 def summary_lines(table: pd.DataFrame, factors: pd.DataFrame) -> list[str]:
-    """The summary's line: per arm, the strategies whose interval is below or above 0 for
-    each contrast, and the choice whose effect on the contrast with the winner is apart from
-    0."""
+    """The summary's line: per arm, its mean reduction against its first span and the
+    strategies whose interval is below or above 0 for each contrast; each choice's effect on
+    the rate after learning."""
     parts = []
     for (start, stopping), arm in table.groupby(["start_population", "stopping"], sort=False):
         counts = ", ".join(
@@ -256,21 +365,21 @@ def summary_lines(table: pd.DataFrame, factors: pd.DataFrame) -> list[str]:
             f"{int((arm[f'after_minus_{contrast}_high'] < 0).sum())} below / "
             f"{int((arm[f'after_minus_{contrast}_low'] > 0).sum())} above"
             for contrast in CONTRASTS)
-        parts.append(f"start {start}, {stopping}: mean reduction vs its first span "
+        parts.append(f"{start}, {stopping}: mean reduction vs its first span "
                      f"{arm['reduction_vs_first_span'].mean():.0%}; {counts}")
     return [f"table4_ablation (strategies of {len(table['strategy'].unique())} with the "
             f"simultaneous {LEVEL:.0%} interval below / above 0): " + "; ".join(parts)
             + "; " + carrier(factors)]
 
 
-def carrier(factors: pd.DataFrame, contrast: str = "after_minus_winner_after") -> str:
-    """Which choice's effect on ``contrast`` has its interval apart from 0, in words chosen
-    from the interval's sign."""
+def carrier(factors: pd.DataFrame, outcome: str = "after") -> str:
+    """Each choice's effect on ``outcome`` (:data:`FACTOR_OUTCOMES`), in words chosen from
+    its interval's sign."""
     words = []
-    for row in factors[factors["contrast"] == contrast].itertuples():
-        side = ("raises the learners' rate against the winner" if row.effect_low > 0
-                else "lowers the learners' rate against the winner" if row.effect_high < 0
-                else "its interval spans 0")
+    for row in factors[factors["outcome"] == outcome].itertuples():
+        what = FACTOR_OUTCOMES[outcome]
+        side = (f"raises {what}" if row.effect_low > 0 else f"lowers {what}"
+                if row.effect_high < 0 else "its interval spans 0")
         words.append(f"{row.factor} {row.authors_option} instead of {row.our_option}: "
                      f"{row.effect:+.4f} per vehicle-second ({row.effect_low:+.4f} to "
                      f"{row.effect_high:+.4f}), {side}")
@@ -302,8 +411,13 @@ def sumo_situations(out: Path, family: Family, learning: SumoLearning,
             rows.append({"strategy": strategy, "situation": situation,
                          "start_population": start, "stopping": stop,
                          "first_span": result.windows[0]["learning"],
+                         "early_spans": float(np.mean([w["learning"] for w in
+                                                       result.windows[EARLY_SPANS]])),
                          "after": result.rates["population"], "after_spins": float("nan"),
+                         "learning_s": learning.seconds,
+                         "initial_first": result.rates["initial"],
                          "initial_after": result.rates["initial_after"],
+                         "winner_first": result.rates["winner"],
                          "winner_after": result.rates["winner_after"],
                          "generations_bred": float(learners["generations_bred"].median()),
                          "finished_share": float(learners.get("finished",

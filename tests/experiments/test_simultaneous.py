@@ -183,22 +183,34 @@ def test_the_ablation_table_pairs_each_arm_with_its_own_first_span_and_the_other
     rows = []
     for situation, noise in enumerate((0.0, 0.002, -0.002)):
         for start, stopping, after in (("random", "cap", 0.05), ("random", "finish", 0.05),
-                                       ("evolved", "cap", 0.01), ("evolved", "finish", 0.01)):
+                                       ("evolved", "cap", 0.01), ("evolved", "finish", 0.01),
+                                       ("evolved", "frozen", 0.02)):
             rows.append({"strategy": 1, "situation": situation, "start_population": start,
                          "stopping": stopping, "first_span": 0.1 if start == "random" else 0.01,
+                         "early_spans": 0.08 if start == "random" else 0.01,
                          "after": after + noise, "initial_after": 0.08, "winner_after": 0.01,
-                         "generations_bred": 3, "finished_share": 0.5})
+                         "winner_first": 0.02, "generations_bred": 3, "finished_share": 0.5,
+                         "learning_s": 15000.0})
     table = ablation_table(pd.DataFrame(rows))
     random_cap = table[(table["start_population"] == "random") & (table["stopping"] == "cap")]
     assert random_cap["after_minus_first_span"].iloc[0] == pytest.approx(-0.05)
+    assert random_cap["after_minus_early_spans"].iloc[0] == pytest.approx(-0.03)
     assert random_cap["reduction_vs_first_span"].iloc[0] == pytest.approx(0.5)
     assert random_cap["after_minus_winner_after"].iloc[0] == pytest.approx(0.04)
+    assert random_cap["after_minus_winner_first"].iloc[0] == pytest.approx(0.03)
     assert random_cap["after_minus_winner_after_low"].iloc[0] > 0
     evolved = table[table["start_population"] == "evolved"]
-    assert (evolved["after_minus_winner_after_low"] <= 0).all()
-    assert (evolved["after_minus_winner_after_high"] >= 0).all()
-    factors = factor_effects(pd.DataFrame(rows))
+    assert len(evolved) == 3  # cap, finish, frozen
+    learnt = evolved[evolved["stopping"] != "frozen"]
+    assert (learnt["after_minus_winner_after_low"] <= 0).all()
+    assert (learnt["after_minus_winner_after_high"] >= 0).all()
+    factors = factor_effects(pd.DataFrame(rows))  # the 2 x 2 alone: not the frozen arm
+    assert set(factors["outcome"]) == {"after", "after_minus_first_span",
+                                       "after_minus_early_spans"}
     words = carrier(factors)
     assert "start_population random instead of evolved: +0.0400" in words
-    assert "raises the learners' rate against the winner" in words
+    assert "raises the rate after learning" in words
     assert "stopping finish instead of cap: +0.0000" in words
+    first = factors[(factors["factor"] == "start_population")
+                    & (factors["outcome"] == "after_minus_first_span")]
+    assert first["effect"].iloc[0] == pytest.approx(-0.05)  # -0.05 against 0.0
