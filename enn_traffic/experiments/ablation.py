@@ -309,21 +309,24 @@ def draw(curve: pd.DataFrame, table: pd.DataFrame, path: Path) -> None:
                                 sharey=True, squeeze=False)
     for ax, strategy in zip(axes[0], strategies, strict=True):
         rows = curve[curve["strategy"] == strategy]
-        end = table["learning_s"].max() / 60 + SECONDS / 60
         mine = table[table["strategy"] == strategy]
         for color, (start, stopping) in enumerate(ARMS):
             arm = rows[(rows["start_population"] == start) & (rows["stopping"] == stopping)]
             after = mine[(mine["start_population"] == start) & (mine["stopping"] == stopping)]
+            label = "the authors' set-up" if start == "authors" else f"{start}, {stopping}"
             ax.plot(arm["window_start_s"] / 60, arm["collisions_per_vehicle_s"],
-                    color=f"C{color}", linewidth=1, label=f"{start}, {stopping}")
-            ax.plot([end], after["after"], "o", color=f"C{color}")
+                    color=f"C{color}", linewidth=1, label=label)
+            # at the median end of its learning (the authors' set-up ends when all finish)
+            ax.plot((after["learning_s"] + SECONDS) / 60, after["after"], "o",
+                    color=f"C{color}")
         ax.axhline(mine["winner_after"].iloc[0], color="k", linestyle="--", linewidth=1,
                    label="winner driving on")
         ax.axhline(mine["winner_first"].iloc[0], color="k", linestyle=":", linewidth=1,
                    label="winner, first span (Table 3)")
         ax.set_yscale("symlog", linthresh=0.01)
         ax.set_title(f"strategy {strategy}", fontsize=10)
-        ax.set_xlabel("simulated minutes (dots: the span after learning)")
+        ax.set_xlabel("simulated minutes (dots: the span after learning,\nat the median "
+                      "end of the learning; later spans: fewer situations)", fontsize=8)
     axes[0, 0].set_ylabel("collisions per vehicle-second")
     axes[0, 0].legend(fontsize=7)
     figure.suptitle("Table 4's ablation: start population × stopping rule, frozen evolved "
