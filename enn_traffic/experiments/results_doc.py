@@ -647,13 +647,15 @@ def table4_ablation(paper: Path) -> str:
               "after learning, against " + ", ".join(f"{_g(w)}" for w in winners["winner_first"])
               + " in its first span (strategies "
               + ", ".join(f"{s:g}" for s in winners["strategy"]) + ").", ""]
-    counts = []
+    counts, apart = [], {}
     for (start, stopping), arm in table.groupby(["start_population", "stopping"], sort=False):
-        apart = {c: (int((arm[f"after_minus_{c}_high"] < 0).sum()),
-                     int((arm[f"after_minus_{c}_low"] > 0).sum())) for c in ablation.CONTRASTS}
-        counts.append(
-            f"| {start}, {stopping} | {arm['reduction_vs_first_span'].mean():.0%} | "
-            + " | ".join(f"{below} / {above}" for below, above in apart.values()) + " |")
+        name = "the authors' set-up" if start == "authors" else f"{start}, {stopping}"
+        apart[name] = {c: (int((arm[f"after_minus_{c}_high"] < 0).sum()),
+                           int((arm[f"after_minus_{c}_low"] > 0).sum()))
+                       for c in ablation.CONTRASTS} | {
+            "reduction": arm["reduction_vs_first_span"].mean()}
+        counts.append(f"| {name} | {apart[name]['reduction']:.0%} | " + " | ".join(
+            f"{apart[name][c][0]} / {apart[name][c][1]}" for c in ablation.CONTRASTS) + " |")
     lines += ["Per arm, strategies below / above 0 (interval apart) for each contrast (the "
               f"paper: {_reduction(PAPER_TABLE4):.0%} fewer collisions after learning than at "
               "its start, and Table 4 below Table 3 in 4 of 4):", "",
@@ -679,9 +681,41 @@ def table4_ablation(paper: Path) -> str:
     lines += ["", "Each choice's effect, in words chosen from its interval: "
               + "; ".join(ablation.carrier(factors, outcome)
                           for outcome in ablation.FACTOR_OUTCOMES) + ".", ""]
+    lines += _ablation_in_short(apart, factors, len(table["strategy"].unique()))
     lines += _first_reading(paper)
     lines += ["![Table 4's ablation](../results/paper/table4_ablation.png)"]
     return "\n".join(lines)
+
+
+def _ablation_in_short(apart: dict, factors: pd.DataFrame, strategies: int) -> list[str]:
+    """What the ablation's table says of the paper's two patterns, in words chosen from its
+    intervals: the fall from the learning's start, and Table 4 below Table 3."""
+    def fall(name: str) -> str:
+        below, above = apart[name]["first_span"]
+        return (f"{name} {apart[name]['reduction']:.0%} (below its first span in {below} of "
+                f"{strategies} strategies, above in {above})")
+
+    def beside(name: str) -> str:
+        below, above = apart[name]["winner_first"]
+        return f"{name}: below in {below}, above in {above}"
+
+    start = factors[(factors["factor"] == "start_population")
+                    & (factors["outcome"] == "after_minus_first_span")].iloc[0]
+    stop = factors[(factors["factor"] == "stopping")
+                   & (factors["outcome"] == "after_minus_first_span")].iloc[0]
+
+    def carries(row) -> str:
+        return direction(row.effect_low, row.effect_high, "shrinks it", "deepens it",
+                         "does not move it apart from 0")
+
+    return [f"**In short.** The paper's fall from the learning's start "
+            f"({_reduction(PAPER_TABLE4):.0%}): "
+            + "; ".join(fall(name) for name in apart) + ". In the 2 × 2, starting from random "
+            f"populations {carries(start)} ({start.effect:+.4f} per vehicle-second) and the "
+            f"finishing rule {carries(stop)} ({stop.effect:+.4f}); the frozen evolved drivers, "
+            "which do not learn, show how much of a fall the crowded first span gives alone. "
+            "The paper's Table 4 below its Table 3 (the winner's first span), per arm: "
+            + "; ".join(beside(name) for name in apart) + f" (of {strategies}).", ""]
 
 
 def _first_reading(paper: Path) -> list[str]:
