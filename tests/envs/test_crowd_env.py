@@ -44,7 +44,7 @@ class Lives:
         self.ended.append((vehicle, steps, spun))
         return self.genes
 
-    def still_driving(self, vehicle, unseen_steps):
+    def still_driving(self, vehicle, unseen_steps, life_steps):
         pass
 
 
