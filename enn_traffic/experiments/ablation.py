@@ -63,6 +63,7 @@ from enn_traffic.experiments.sumo_crowds import (
 from enn_traffic.io import write_csv
 from enn_traffic.progress import terminal
 from enn_traffic.report.plots import save_figure
+from enn_traffic.report.stats import bootstrap_interval, t_interval
 from enn_traffic.runner import ga_params
 from enn_traffic.shipped import shipped_scenario
 from enn_traffic.sim.arena import ArenaWorld
@@ -88,6 +89,7 @@ CONTRASTS = {"first_span": "its own first span",
              "winner_after": "the winner driving on",
              "winner_first": "the winner's first span (Table 3)"}
 LEVEL = 0.9  # for the whole family of intervals of a table
+DRAWS = 20000  # bootstrap draws: the family's level leaves about 0.1% in each tail
 
 
 @dataclass(frozen=True)
@@ -104,11 +106,6 @@ class Ablation:
 
 
 ABLATION = Ablation()
-
-
-def arms() -> list[tuple[str, str]]:
-    """(start population, stopping) of every arm."""
-    return list(ARMS)
 
 
 def _row(start: str, stopping: str, learnt: list, after, online: OnlineLearning | None,
@@ -210,16 +207,6 @@ def situation_arms(world: ArenaWorld, situation: int, winner: np.ndarray,
     return rows, windows
 
 
-def bootstrap_interval(differences: np.ndarray, rng: np.random.Generator, level: float,
-                       draws: int = 20000) -> tuple[float, float]:
-    """The central ``level`` interval of the mean of ``differences`` (pairs drawn again with
-    replacement)."""
-    differences = np.asarray(differences, dtype=np.float64)
-    means = differences[rng.integers(0, len(differences), (draws, len(differences)))].mean(1)
-    low, high = np.quantile(means, [(1 - level) / 2, (1 + level) / 2])
-    return float(low), float(high)
-
-
 def ablation_table(situations: pd.DataFrame, level: float = LEVEL) -> pd.DataFrame:
     """Per strategy and arm: the mean rates, each contrast's paired difference (``after``
     minus it) and its interval, simultaneous over every row and contrast (Bonferroni), and
@@ -239,7 +226,7 @@ def ablation_table(situations: pd.DataFrame, level: float = LEVEL) -> pd.DataFra
         for contrast in CONTRASTS:
             name = f"after_minus_{contrast}"
             differences = (group["after"] - group[contrast]).to_numpy()
-            low, high = bootstrap_interval(differences, rng, family_level)
+            low, high = bootstrap_interval(differences, rng, DRAWS, family_level)
             row |= {name: round(differences.mean(), 5), f"{name}_low": round(low, 5),
                     f"{name}_high": round(high, 5)}
         row |= {"generations_bred": group["generations_bred"].median(),
@@ -254,17 +241,13 @@ def t_interval_counts(situations: pd.DataFrame, contrast: str, level: float = LE
     """How many (strategy, arm) rows have the mean of ``after`` − ``contrast`` below and
     above 0 by Student-t intervals at the table's simultaneous level instead of the
     bootstrap's: a check on percentile intervals from 20 situations at a Bonferroni level."""
-    from scipy import stats
-
     groups = situations.groupby(["strategy", "start_population", "stopping"], sort=False)
     family_level = 1 - (1 - level) / (groups.ngroups * len(CONTRASTS))
     below = above = 0
     for _, group in groups:
-        differences = (group["after"] - group[contrast]).to_numpy()
-        spread = differences.std(ddof=1) / np.sqrt(len(differences))
-        half = stats.t.ppf((1 + family_level) / 2, len(differences) - 1) * spread
-        below += differences.mean() + half < 0
-        above += differences.mean() - half > 0
+        low, high = t_interval((group["after"] - group[contrast]).to_numpy(), family_level)
+        below += high < 0
+        above += low > 0
     return int(below), int(above)
 
 
@@ -294,7 +277,7 @@ def factor_effects(situations: pd.DataFrame, level: float = LEVEL) -> pd.DataFra
             wide = square.pivot_table(index=["strategy", "situation", other], columns=factor,
                                       values=outcome)
             effect = (wide[authors] - wide[ours]).groupby(level="situation").mean()
-            low, high = bootstrap_interval(effect.to_numpy(), rng, family_level)
+            low, high = bootstrap_interval(effect.to_numpy(), rng, DRAWS, family_level)
             rows.append({"factor": factor, "authors_option": authors, "our_option": ours,
                          "outcome": outcome, "effect": round(float(effect.mean()), 5),
                          "effect_low": round(low, 5), "effect_high": round(high, 5)})
