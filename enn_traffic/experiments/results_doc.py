@@ -236,16 +236,9 @@ def _side(situations: pd.DataFrame, after: str, before: str, below: str, above: 
     return direction(low, high, below, above, neither)
 
 
-def _trend(ends: pd.DataFrame | None, who: str, unit: str, curve: pd.DataFrame | None = None
-           ) -> str:
+def _trend(ends: pd.DataFrame, who: str, unit: str) -> str:
     """How the learners' rate moved from the first to the last tenth of the learning, the
-    verb chosen from the paired interval's sign, with why when it rises; without ``ends``
-    (tables measured before they were kept), the ends of ``curve`` and no verb."""
-    if ends is None:
-        first, last = curve_ends(curve, "collisions_per_vehicle_s")
-        return (f"From the first to the last tenth of the learning, {who}' mean rate goes "
-                f"from {_g(first)} to {_g(last)} per {unit} (no interval: these tables were "
-                "measured before `table4_learning_ends.csv` was kept).")
+    verb chosen from the paired interval's sign, with why when it rises."""
     change, low, high = trend(ends)
     verb = direction(low, high)
     words = (f"From the first to the last tenth of the learning, {who}' rate {verb}: "
@@ -415,8 +408,8 @@ def family_tables34(paper: Path, family: Family) -> str:
     lines += ["", f"While they learn, the learners collide {during / winner:.1f} times as often "
               f"as the winner driving on over the same windows ({_g(during)} against "
               f"{_g(winner)} per learner-second, all strategies). "
-              + _trend(pd.read_csv(ends) if (ends := folder / "table4_learning_ends.csv")
-                       .is_file() else None, "the learners", "learner-second", curve)
+              + _trend(pd.read_csv(folder / "table4_learning_ends.csv"), "the learners",
+                       "learner-second")
               + f" Children are {children:.0%} of every generation after the first.", "",
               f"![Learning while driving, {family.folder}](../results/paper/{family.folder}/"
               "table4_learning.png)"]
