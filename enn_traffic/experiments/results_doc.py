@@ -688,6 +688,7 @@ def table4_ablation(paper: Path) -> str:
               + "; ".join(ablation.carrier(factors, outcome)
                           for outcome in ablation.FACTOR_OUTCOMES) + ".", ""]
     lines += _ablation_in_short(apart, factors, len(table["strategy"].unique()))
+    lines += _sumo_ablation(paper)
     lines += _first_reading(paper)
     lines += ["![Table 4's ablation](../results/paper/table4_ablation.png)"]
     return "\n".join(lines)
@@ -722,6 +723,39 @@ def _ablation_in_short(apart: dict, factors: pd.DataFrame, strategies: int) -> l
             "which do not learn, show how much of a fall the crowded first span gives alone. "
             "The paper's Table 4 below its Table 3 (the winner's first span), per arm: "
             + "; ".join(beside(name) for name in apart) + f" (of {strategies}).", ""]
+
+
+def _sumo_ablation(paper: Path) -> list[str]:
+    """The start population's choice among SUMO traffic (``sumo/table4_ablation.csv``)."""
+    from enn_traffic.experiments import ablation
+
+    table = pd.read_csv(paper / SUMO.folder / "table4_ablation.csv")
+    learning = SUMO_LEARNING
+
+    def arm(row: dict) -> str:
+        fall = direction(row["after_minus_first_span_low"], row["after_minus_first_span_high"],
+                         "above", "below", "not apart from")
+        winner = direction(row["after_minus_winner_after_low"],
+                           row["after_minus_winner_after_high"], "above", "below",
+                           "not apart from")
+        start = ("random populations" if row["start_population"] == "random"
+                 else "the evolved population")
+        return (f"from {start}, {_g(row['first_span'])} in the first span "
+                f"and {_g(row['after'])} after learning ({row['reduction_vs_first_span']:.0%} "
+                f"fewer; {fall} its first span: {_interval(row, 'after_minus_first_span')}), "
+                f"{winner} the winner driving on ({_interval(row, 'after_minus_winner_after')})")
+
+    rows = table.to_dict("records")
+    return [f"**Among SUMO traffic** (`reproduce --only sumo_ablation`; the SUMO family's "
+            f"strategy {ablation.SUMO_STRATEGY}, {int(rows[0]['situations'])} situations on "
+            f"sealed keys {keys.ABLATION_CROWD_TEST.start // 10**9}·10⁹ + "
+            f"{ablation.SUMO_KEY - keys.ABLATION_CROWD_TEST.start:,} + 0…"
+            f"{int(rows[0]['situations']) - 1}, read once; {learning.seconds:g} SUMO seconds of "
+            f"learning with the {learning.life_cap_steps}-step cap, random populations of "
+            f"{learning.population_size}), collisions per learner-second: "
+            + "; ".join(arm(row) for row in rows)
+            + f" (`{SUMO.folder}/table4_ablation.csv`, intervals simultaneous at "
+            f"{ablation.LEVEL:.0%} for the table).", ""]
 
 
 def _first_reading(paper: Path) -> list[str]:
