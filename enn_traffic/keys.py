@@ -25,7 +25,8 @@ TEST = range(6 * SPAN, 7 * SPAN)
 CROWD_TEST = range(9 * SPAN, 10 * SPAN)
 # Table 4's ablation (issue 61; enn_traffic.experiments.ablation): fresh and sealed. Its first
 # design read + 0…19 once; a review of that reading changed the design, which reads the arena's
-# situations from + 2·10⁶ (once); the SUMO strategy's from + 10⁶.
+# situations from + 2·10⁶ (once); the SUMO strategy's from + 10⁶. The crowds' last departures
+# from the authors' rules (enn_traffic.experiments.departures) read + 3·10⁶ … (once).
 ABLATION_CROWD_TEST = range(10 * SPAN, 11 * SPAN)
 # Read twice by Tables 3–4 (the arena's, then the SUMO and city families' pooled and per-learner
 # Table 4): nothing reads it any more.

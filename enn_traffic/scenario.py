@@ -472,6 +472,17 @@ class TrafficConfig(_Section):
         return [self.strategy] if isinstance(self.strategy, str) else list(self.strategy)
 
 
+class CrowdConfig(_Section):
+    """Every vehicle driving by its own network at once (paper §5.5, Tables 3–4): how its
+    collisions are counted."""
+
+    counting: Literal["responsible", "authors"] = Field(
+        "responsible", description="the rates of Tables 3–4: `responsible` (responsible "
+        "collisions per vehicle-second) or `authors` (lives lost, responsible collisions and "
+        "spins, of all vehicles together per second: the authors' display's count, the "
+        "paper's unit, [results.md](results.md#all-vehicles-at-once-paper-55-tables-34))")
+
+
 Range = Annotated[tuple[Length, Length], Strict(False)]
 
 
@@ -554,6 +565,7 @@ class Scenario(_Section):
     ga: GAConfig = GAConfig()
     episode: EpisodeConfig = EpisodeConfig()
     traffic: TrafficConfig = TrafficConfig()
+    crowd: CrowdConfig = CrowdConfig()
     source: FilePath | None = Field(None, exclude=True)
     # Set by the command that runs the scenario, not by its file: where SUMO's console log and
     # kept outputs go (none: nowhere), and whether SUMO's console is shown instead.

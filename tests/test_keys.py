@@ -58,3 +58,13 @@ def test_the_ablation_reads_its_own_sealed_range():
     for key in (ablation.ABLATION_KEY, ablation.SUMO_KEY):
         assert key in keys.ABLATION_CROWD_TEST and key not in first_reading
     assert abs(ablation.SUMO_KEY - ablation.ABLATION_KEY) >= ablation.ABLATION.situations
+
+
+def test_the_departures_read_keys_no_other_measurement_read():
+    from enn_traffic.experiments import ablation, departures
+
+    key = departures.DEPARTURE_KEY
+    assert key in keys.ABLATION_CROWD_TEST
+    for other in (keys.ABLATION_CROWD_TEST.start, ablation.ABLATION_KEY, ablation.SUMO_KEY):
+        assert abs(key - other) >= max(departures.DEPARTURES.situations,
+                                       ablation.ABLATION.situations)

@@ -63,6 +63,7 @@ def test_network_path_resolves_relative_to_the_scenario_file(tmp_path, net):
         ("[vehicle]\nspeed = -1\n", "vehicle.speed", "greater than or equal to 0.1"),
         ("[ga]\nelite_count = 500\n", "ga", "elite_count"),
         ("colour = 'red'\n", "track.colour", "unknown key"),
+        ("[crowd]\ncounting = 'both'\n", "crowd.counting", "'responsible' or 'authors'"),
     ],
 )
 def test_bad_values_name_file_and_key(tmp_path, net, extra, key, message):

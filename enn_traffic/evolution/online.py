@@ -11,7 +11,7 @@ GA: it calls back :class:`OnlineLearning` when a learning vehicle's life ends.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -60,16 +60,25 @@ class VehicleGA:
     def exhausted(self) -> bool:
         return self.index >= len(self.population)
 
-    def advance(self, params: ga.GAParams, global_elites: np.ndarray | None = None) -> None:
+    def advance(self, params: ga.GAParams, global_elites: np.ndarray | None = None,
+                from_best: bool = False) -> None:
         """The next generation; ``global_elites`` (the best chromosomes of all vehicles,
-        reference §7.4) replace its own elites when given."""
+        reference §7.4) replace its own elites when given. ``from_best``: the authors'
+        breeding, the children of the population's best P − E only (reference §7.4), where
+        ours draws the tournaments from all P."""
         self.bred_from = (self.population.copy(), self.fitness.copy())
-        state = ga.tell(ga.GAState(self.generation, self.population, self.rng), self.fitness,
-                        params)
-        population = state.population
-        if global_elites is not None and len(global_elites):
-            population[: len(global_elites)] = global_elites
-        self.population, self.index, self.generation = population, 0, state.generation
+        elites = 0 if global_elites is None else len(global_elites)
+        if from_best and elites:
+            best = np.argsort(-self.fitness, kind="stable")[: len(self.population) - elites]
+            children = ga.next_generation(self.rng, self.population[best], self.fitness[best],
+                                          replace(params, elite_count=0))
+            population = np.concatenate([global_elites, children])
+        else:
+            population = ga.tell(ga.GAState(self.generation, self.population, self.rng),
+                                 self.fitness, params).population
+            if elites:
+                population[:elites] = global_elites
+        self.population, self.index, self.generation = population, 0, self.generation + 1
         self.fitness = np.zeros(len(population))
 
     def evolved(self) -> np.ndarray:
@@ -122,11 +131,13 @@ class OnlineLearning:
     cap and the vehicle drives on, from where it is, with its next chromosome
     (docs/departures.md, "Learning while driving"). With ``finish_steps`` (the authors' rule,
     reference §7.5; 0: never), a vehicle whose life lasted that long keeps its chromosome and
-    stops learning; it still loses lives and respawns."""
+    stops learning; it still loses lives and respawns. ``breed_from_best``: the authors'
+    breeding (:meth:`VehicleGA.advance`)."""
 
     def __init__(self, learners: list[VehicleGA | None], params: ga.GAParams,
                  share_elites: bool = False, elite_count: int = 0,
-                 evidence: Evidence | None = None, life_cap: int = 0, finish_steps: int = 0):
+                 evidence: Evidence | None = None, life_cap: int = 0, finish_steps: int = 0,
+                 breed_from_best: bool = False):
         self.learners = learners
         self.params = params
         self.share_elites = share_elites
@@ -135,6 +146,7 @@ class OnlineLearning:
         self.own = [Evidence() for _ in learners]
         self.life_cap = life_cap
         self.finish_steps = finish_steps
+        self.breed_from_best = breed_from_best
 
     def learns(self, vehicle: int) -> bool:
         return self.learners[vehicle] is not None
@@ -173,7 +185,7 @@ class OnlineLearning:
         if learner.exhausted:
             elites = (global_elites(self.learners, self.elite_count) if self.share_elites
                       else None)
-            learner.advance(self.params, elites)
+            learner.advance(self.params, elites, self.breed_from_best)
         return learner.current
 
     def still_driving(self, vehicle: int, unseen_steps: int, life_steps: int = 0) -> None:

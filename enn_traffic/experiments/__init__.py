@@ -23,6 +23,7 @@ EXPERIMENTS = Registry("experiment", {
     "table4": "enn_traffic.experiments.simultaneous:table4",
     "table4_ablation": "enn_traffic.experiments.ablation:table4_ablation",
     "regime": "enn_traffic.experiments.regime:regime",
+    "departures": "enn_traffic.experiments.departures:departures",
     "sumo": "enn_traffic.experiments.sumo_family:sumo",
     "city": "enn_traffic.experiments.sumo_family:city",
     "sumo_ablation": "enn_traffic.experiments.ablation:table4_ablation_sumo",

@@ -122,17 +122,44 @@ def _row(start: str, stopping: str, learnt: list, after, online: OnlineLearning 
             if "finished" in learners else 0.0}
 
 
-def authors_arm(world: ArenaWorld, situation: int, ablation: Ablation, key: int
+@dataclass(frozen=True)
+class AuthorsRules:
+    """The authors' rules where the crowds keep ours even in their set-up (docs/departures.md;
+    measured by :mod:`enn_traffic.experiments.departures`): blame against every car's current
+    body for the step after any respawn (reference §7.3), vehicle 0's start heading drawn like
+    every car's (reference §1.4), breeding from a car's best 180 (reference §7.4)."""
+
+    blame_all_after_respawn: bool = False
+    vehicle0_heading_drawn: bool = False
+    breed_from_best: bool = False
+
+
+def start_poses(world: ArenaWorld, key: int, rules: AuthorsRules = AuthorsRules()
+                ) -> np.ndarray:
+    """The situation's start poses (V, 3); with ``rules.vehicle0_heading_drawn`` vehicle 0's
+    heading drawn from the traffic's start headings, as every other's."""
+    start = world.situations(key)[0].start.copy()
+    if rules.vehicle0_heading_drawn:
+        traffic = world.scenario.traffic
+        low, high = np.radians(traffic.start_heading_deg)
+        start[0, 2] = np.random.default_rng([traffic.seed, key, 0]).uniform(low, high)
+    return start
+
+
+def authors_arm(world: ArenaWorld, situation: int, ablation: Ablation, key: int,
+                rules: AuthorsRules = AuthorsRules()
                 ) -> tuple[list, object, OnlineLearning, float]:
     """The authors' set-up (reference §7): every car learning from a random population with
     the finishing rule, respawning at its own start, held to their spin rule, until every car
     finished or bred ``AUTHORS_GENERATIONS`` (at most ``ablation.authors_seconds``); the runs
-    of its spans, the span after it, the learning and its length (s)."""
+    of its spans, the span after it, the learning and its length (s). ``rules``: which of the
+    authors' remaining rules it takes too."""
     sc = world.scenario.with_overrides(episode=AUTHORS_SPIN)
     authors = ArenaWorld(sc)
     chosen = authors.situations(key + situation)[0]
-    crowd = Crowd(authors, chosen.start, np.full(authors.vehicles, NETWORK), int(chosen.seed),
-                  respawn_at_start=True)
+    crowd = Crowd(authors, start_poses(authors, key + situation, rules),
+                  np.full(authors.vehicles, NETWORK), int(chosen.seed), respawn_at_start=True,
+                  blame_all_after_respawn=rules.blame_all_after_respawn)
     learners = []
     for v in range(authors.vehicles):
         rng = np.random.default_rng([sc.seed, situation, v])
@@ -140,7 +167,8 @@ def authors_arm(world: ArenaWorld, situation: int, ablation: Ablation, key: int
             rng, sc.ga.population_size, authors.spec.chromosome_length, sc.ga.init_range))
         learners.append(VehicleGA(population, rng))
     online = OnlineLearning(learners, ga_params(sc), share_elites=True,
-                            elite_count=sc.ga.elite_count, finish_steps=FINISH_STEPS)
+                            elite_count=sc.ga.elite_count, finish_steps=FINISH_STEPS,
+                            breed_from_best=rules.breed_from_best)
     genes = np.stack([learner.current for learner in learners])
     learnt = []
     while len(learnt) * SECONDS < ablation.authors_seconds:

@@ -27,8 +27,9 @@ from the start poses in spans of ``SECONDS`` (100 s, the paper's):
   alternative ``reranked`` (each vehicle the chromosome that lost fewest lives per step in
   its own lives) drives from the same state after learning.
 
-The metric is :attr:`enn_traffic.sim.crowd.CrowdRun.collision_rate` (per vehicle-second; the
-paper's unit, all vehicles together, is 8 times it: :mod:`enn_traffic.experiments.regime`).
+The metric is the scenario's ``[crowd] counting`` (:meth:`enn_traffic.sim.crowd.CrowdRun.rate`):
+by default responsible collisions per vehicle-second; the authors' count, lives lost of all
+vehicles together per second, is the paper's unit (:mod:`enn_traffic.experiments.regime`).
 Evolved drivers are held to §5.3's spin rule throughout: rotating in place ends a life (the
 vehicle respawns); their spins per second are recorded beside the collisions.
 
@@ -196,6 +197,7 @@ def situation_rates(world: ArenaWorld, situation: int, winner: np.ndarray, evolv
     """One situation's every arm. ``winner`` (G,) and ``evolved`` (N, G) in the source
     layout."""
     spans = round(learning.seconds / SECONDS)
+    counting = world.scenario.crowd.counting
     arena, genes = situation_crowd(world, situation, key=key)
     initial = [arena.run(SECONDS, genes) for _ in range(spans + 1)]
     broadcast = _broadcast(world, winner, situation, key, periods=spans + 1)
@@ -203,16 +205,16 @@ def situation_rates(world: ArenaWorld, situation: int, winner: np.ndarray, evolv
     reranked = arena.fork().run(SECONDS, online.own_controllers(), check_spins=True)
     own = online.evolved_controllers()
     after = arena.run(SECONDS, own.copy(), check_spins=True)
-    rates = {"initial": initial[0].collision_rate, "winner": broadcast[0].collision_rate,
+    rates = {"initial": initial[0].rate(counting), "winner": broadcast[0].rate(counting),
              "winner_spins": broadcast[0].spin_rate,
-             "learning": float(np.mean([run.collision_rate for run in learnt])),
-             "initial_after": initial[-1].collision_rate,
-             "winner_after": broadcast[-1].collision_rate,
-             "population": after.collision_rate, "population_spins": after.spin_rate,
-             "reranked": reranked.collision_rate, "reranked_spins": reranked.spin_rate}
-    windows = [{"window_start_s": span * SECONDS, "learning": learnt[span].collision_rate,
-                "initial_drivers": initial[span].collision_rate,
-                "winner_driving_on": broadcast[span].collision_rate}
+             "learning": float(np.mean([run.rate(counting) for run in learnt])),
+             "initial_after": initial[-1].rate(counting),
+             "winner_after": broadcast[-1].rate(counting),
+             "population": after.rate(counting), "population_spins": after.spin_rate,
+             "reranked": reranked.rate(counting), "reranked_spins": reranked.spin_rate}
+    windows = [{"window_start_s": span * SECONDS, "learning": learnt[span].rate(counting),
+                "initial_drivers": initial[span].rate(counting),
+                "winner_driving_on": broadcast[span].rate(counting)}
                for span in range(spans)]
     return SituationResult(rates, windows, online.learner_rows(),
                            world.spec.from_source_layout(own),

@@ -26,8 +26,9 @@ and population were chosen on crowd validation situations (``table4_validation_l
 so that every learner breeds 3 generations or more in SUMO time a 2-core machine affords
 (docs/departures.md).
 
-Rates are responsible collisions per learner-second (:attr:`SumoCrowdRun.collision_rate`) and
-SUMO's SSM conflicts, time-to-collision below 1.5 s, per learner-hour. The situations' SUMO
+Rates are by the scenario's ``[crowd] counting`` (by default responsible collisions per
+learner-second, :meth:`SumoCrowdRun.rate`) and SUMO's SSM conflicts, time-to-collision below
+1.5 s, per learner-hour. The situations' SUMO
 seeds come from the crowd test keys (:data:`enn_traffic.keys.CROWD_TEST`), which no choice
 looked at in a SUMO world. Each situation is kept under ``<family folder>/crowds/`` as it ends,
 so an interrupted family resumes where it stopped.
@@ -190,13 +191,14 @@ def situation_result(world: SumoWorld, winner: np.ndarray, evolved: np.ndarray, 
     measured = {"initial": arms["initial"][0], "winner": arms["winner"][0],
                 "initial_after": arms["initial"][-1], "winner_after": arms["winner"][-1],
                 "population": after}
-    rates = {arm: run.collision_rate for arm, run in measured.items()}
-    rates["learning"] = float(np.mean([run.collision_rate for run in learnt]))
+    counting = scenario.crowd.counting
+    rates = {arm: run.rate(counting) for arm, run in measured.items()}
+    rates["learning"] = float(np.mean([run.rate(counting) for run in learnt]))
     rates |= {f"{arm}_conflicts": measured[arm].conflict_rate for arm in CONFLICTS}
     window_rows = [{"window_start_s": w * learning.window_seconds,
-                    "learning": learnt[w].collision_rate,
-                    "initial_drivers": arms["initial"][w].collision_rate,
-                    "winner_driving_on": arms["winner"][w].collision_rate}
+                    "learning": learnt[w].rate(counting),
+                    "initial_drivers": arms["initial"][w].rate(counting),
+                    "winner_driving_on": arms["winner"][w].rate(counting)}
                    for w in range(windows)]
     return SituationResult(rates, window_rows, online.learner_rows(),
                            online.evolved_controllers(), ())

@@ -126,19 +126,28 @@ step_once = njit(cache=True)(step.py_func)
 
 
 @njit(cache=True)
-def advance(t, last, drive_first, kinds, genes, layer_sizes, physics, geometry, vehicles, lives,
-            rng, work, trace) -> int:
+def advance(t, last, drive_first, blame_current, kinds, genes, layer_sizes, physics, geometry,
+            vehicles, lives, rng, work, trace) -> int:
     """Run the steps from ``t`` (driving first when ``drive_first``: the lives that ended at
     ``t`` have been dealt with) until a life ends or step ``last`` is reached: each step,
     :func:`step` (without ``drive_first``, only :func:`crowd_events` at ``t``) and record the poses
-    in ``trace``. Returns the step it stopped at."""
+    in ``trace``. With ``blame_current``, the first step's blame tests every body against the
+    others' bodies after the move, not before it: the authors' code after a reset (reference
+    §7.3). Returns the step it stopped at."""
     while True:
-        if drive_first:
+        if drive_first and blame_current:
+            drive_all(kinds, genes, layer_sizes, physics, geometry, vehicles, rng, work)
+            vehicles.previous[:] = vehicles.corners
+            vehicles.previous_centres[:] = vehicles.centres
+            lives.life[:] += 1
+            ended = crowd_events(vehicles, lives, physics, geometry)
+            t += 1
+        elif drive_first:
             ended = step(kinds, genes, layer_sizes, physics, geometry, vehicles, lives, rng, work)
             t += 1
         else:
             ended = crowd_events(vehicles, lives, physics, geometry)
-        drive_first = True
+        drive_first, blame_current = True, False
         trace[t] = vehicles.pose
         if ended or t == last:
             return t
@@ -168,18 +177,30 @@ class CrowdRun:
         """Spins in place per second of simulated time, per vehicle."""
         return float(self.spins.sum()) / (len(self.spins) * self.seconds)
 
+    def rate(self, counting: str = "responsible") -> float:
+        """The rate of Tables 3–4 by the scenario's ``[crowd] counting``: ``responsible``,
+        :attr:`collision_rate`; ``authors``, lives lost (collisions and spins) of all
+        vehicles together per second, the authors' display's count."""
+        if counting == "authors":
+            return float(self.collisions.sum() + self.spins.sum()) / self.seconds
+        return self.collision_rate
+
 
 class Crowd:
     """V vehicles in one arena: the scenario's learner start and traffic starts, each vehicle
     driven by genes of its own or by a scripted strategy (``kinds``). A vehicle whose life
     ends respawns at a random free spot, or with ``respawn_at_start`` at its own start pose
-    with no check that it is free, as the authors' code does (reference §7.3)."""
+    with no check that it is free, as the authors' code does (reference §7.3). With
+    ``blame_all_after_respawn``, the step after any respawn tests every vehicle against the
+    others' current bodies, as the authors' code does (it clears every car's previous body,
+    reference §7.3); by default only the respawned vehicle starts with no earlier body."""
 
     def __init__(self, world: ArenaWorld, starts: np.ndarray, kinds: np.ndarray, seed: int,
-                 respawn_at_start: bool = False):
+                 respawn_at_start: bool = False, blame_all_after_respawn: bool = False):
         self.world = world
         self.starts = np.asarray(starts, dtype=np.float64)
         self.respawn_at_start = respawn_at_start
+        self.blame_all_after_respawn = blame_all_after_respawn
         self.kinds = np.asarray(kinds, dtype=np.int64)
         count = len(self.kinds)
         self.physics = p = world.physics
@@ -249,15 +270,16 @@ class Crowd:
         steps = round(seconds / self.world.scenario.vehicle.dt)
         collisions, spins = np.zeros(count, dtype=np.int64), np.zeros(count, dtype=np.int64)
         trace = np.empty((steps + 1, count, 3))
-        t, drive_first = 0, False
+        t, drive_first, respawned = 0, False, False
         learners = np.flatnonzero(learns)
         cap = learning.life_cap if learning is not None and len(learners) else 0
         while True:
             # stop too when the oldest learning life reaches the cap
             last = steps if not cap else min(steps, t + cap - int(lives.life[learners].max()))
-            t = advance(t, last, drive_first, self.kinds, genes, self.world.layer_sizes,
-                        self.physics, self.geometry, self.vehicles, lives, self.rng, self.work,
-                        trace)
+            t = advance(t, last, drive_first, respawned and self.blame_all_after_respawn,
+                        self.kinds, genes, self.world.layer_sizes, self.physics, self.geometry,
+                        self.vehicles, lives, self.rng, self.work, trace)
+            respawned = bool((lives.events != ALIVE).any())
             for v in np.flatnonzero(lives.events != ALIVE):
                 spun = bool(lives.events[v] == SPUN)
                 spins[v] += spun

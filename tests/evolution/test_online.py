@@ -96,3 +96,26 @@ def test_the_authors_finishing_rule_keeps_a_chromosome_that_lived_2000_steps(wor
     online.still_driving(0, 600, life_steps=2100)
     assert online.learners[0].finished
     np.testing.assert_array_equal(online.learners[0].evolved(), online.learners[0].population[0])
+
+
+def test_the_authors_breeding_never_takes_a_parent_from_the_worst(world):
+    """Breeding from the best P − E (reference §7.4): with tournaments of one (a parent drawn
+    at random) no child carries a gene of the worst E, whose genes are all 5 (a value that
+    mutation, drawing from [−1, 1], never writes); drawing from all P, children do."""
+    length = world.spec.chromosome_length
+    params = ga.GAParams(population_size=20, tournament_size=1, elite_count=4)
+    elites = np.full((4, length), 0.5)
+
+    def children(from_best: bool) -> np.ndarray:
+        learner = VehicleGA(np.random.default_rng(1).uniform(-1, 1, (20, length)),
+                            np.random.default_rng(2))
+        learner.population[16:] = 5.0
+        learner.fitness[:] = np.r_[np.arange(16) + 10.0, np.zeros(4)]
+        learner.index = 20
+        learner.advance(params, elites, from_best)
+        np.testing.assert_array_equal(learner.population[:4], elites)
+        assert len(learner.population) == 20 and learner.generation == 1
+        return learner.population[4:]
+
+    assert not (children(True) == 5.0).any()
+    assert (children(False) == 5.0).any()

@@ -129,3 +129,28 @@ def test_respawn_at_start_puts_the_vehicle_back_on_its_own_start_pose(world):
     run = arena.run(2.2, np.zeros((2, world.spec.chromosome_length)))
     assert run.collisions[0] == 1
     np.testing.assert_allclose(arena.pose[0], [80.0 + (22 - 20), 50.0, 0.0], atol=1.0)
+
+
+@pytest.mark.parametrize("blame_all, expected", [(False, [0, 0, 2]), (True, [1, 1, 2])])
+def test_the_authors_blame_after_a_respawn_tests_every_current_body(world, blame_all,
+                                                                    expected):
+    """Vehicles 0 and 1 nose to nose 3.5 m apart, closing 2 m per step: after step 2 their
+    bodies overlap by 0.5 m, but neither reaches the other's body of before the step, so our
+    rule blames neither. Vehicle 2 hits the east wall at steps 1 and 2 and respawns at its
+    start each time; the authors' code then tests every car against the others' current bodies
+    for a step (reference §7.3), which blames 0 and 1 at step 2."""
+    starts = np.array([[20.0, 50.0, 0.0], [23.5, 50.0, np.pi], [99.5, 20.0, 0.0]])
+    crowd = Crowd(world, starts, np.full(3, STRAIGHT), seed=3, respawn_at_start=True,
+                  blame_all_after_respawn=blame_all)
+    run = crowd.run(0.2, np.zeros((3, world.spec.chromosome_length)))
+    assert run.collisions.tolist() == expected
+
+
+def test_the_authors_counting_is_every_life_lost_of_all_vehicles_per_second():
+    """Two vehicles over 10 s: 1 + 2 responsible collisions and 1 spin. Ours: 3 collisions
+    per 20 vehicle-seconds; the authors' display: 4 lives lost per 10 s."""
+    from enn_traffic.sim.crowd import CrowdRun
+
+    run = CrowdRun(np.array([1, 2]), np.array([0, 1]), 10.0, np.zeros((101, 2, 3)))
+    assert run.rate() == run.rate("responsible") == pytest.approx(0.15)
+    assert run.rate("authors") == pytest.approx(0.4)
