@@ -255,6 +255,19 @@ def test_committed_ablation_files_drive_their_first_situation(strategy, root):
                                   check_dtype=False)
 
 
+@pytest.mark.full
+def test_committed_departures_drive_their_first_situation(root):
+    """The authors' last rules, situation 0 driven again under every variant: its rows of
+    ``departures_situations.csv`` (the learning's first span, spans 2–11, after learning, the
+    initial drivers' first span)."""
+    from enn_traffic.experiments.departures import situation_rows
+
+    committed = pd.read_csv(root / "results" / "paper" / "departures_situations.csv")
+    driven = pd.DataFrame(situation_rows(0)).round(5)
+    pd.testing.assert_frame_equal(committed[committed["situation"] == 0].reset_index(drop=True),
+                                  driven, check_dtype=False)
+
+
 @pytest.mark.parametrize("family, strategy", [pytest.param(SUMO, 3, id="sumo"),
                                               full(CITY, 1, id="city")])
 def test_committed_sumo_crowd_files_drive_their_first_situation(family, strategy, root):
