@@ -29,6 +29,7 @@ import sys
 import tempfile
 import time
 import tracemalloc
+from collections.abc import Callable
 from pathlib import Path
 
 import numba
@@ -157,6 +158,96 @@ def env_bench(steps: int = 200, sync_seconds: float = 5.0) -> pd.DataFrame:
     sync = table["vehicle_steps_per_s"].iloc[-1]
     table["speedup_vs_reference"] = table["vehicle_steps_per_s"] / sync
     return table
+
+
+def contention_rates(seconds: float, rounds: int) -> list[tuple[str, int, int, float]]:
+    """In this process, ``rounds`` times in turn with numba's default threads and with one:
+    the compiled vector environment (256 narrow-track worlds, zero actions) stepped for
+    ``seconds``, and the navigation batch (the first generations of a GA run, P = 200);
+    (workload, threads, env- or vehicle-steps, seconds) each."""
+    import gymnasium as gym
+
+    env = gym.make_vec(env_id("navigation_narrow"), num_envs=256,
+                       vectorization_mode="vector_entry_point")
+    env.reset(seed=0)
+    actions = np.zeros((256, 2), dtype=np.float32)
+    env.step(actions)  # compile outside the timing
+    world, params, rng, population = _workload("navigation_narrow")
+    populations = _ga_generations(world, params, rng, population, 3)
+    default = numba.get_num_threads()
+    rows = []
+    try:
+        for _ in range(rounds):
+            for threads in (default, 1):
+                numba.set_num_threads(threads)
+                done, started = 0, time.perf_counter()
+                while time.perf_counter() - started < seconds:
+                    env.step(actions)
+                    done += 256
+                rows.append(("vector env", threads, done, time.perf_counter() - started))
+                rows.append(("navigation batch", threads, *_timed_batches(world, populations)))
+    finally:
+        numba.set_num_threads(default)
+        env.close()
+    return rows
+
+
+# OpenMP wait policies (libgomp's environment): its default, spelt out (300,000 spins before
+# an idle thread sleeps; enn-traffic leaves it alone when GOMP_SPINCOUNT is set), and ours
+CONTENTION_POLICIES = {
+    "libgomp's default: idle threads spin, then sleep": {"GOMP_SPINCOUNT": "300000"},
+    "enn-traffic's: idle threads sleep (OMP_WAIT_POLICY=PASSIVE)": {
+        "OMP_WAIT_POLICY": "PASSIVE"}}
+
+
+def contention_bench(quick: bool = False, busy: int = 2) -> pd.DataFrame:
+    """The compiled kernels on a quiet machine and beside ``busy`` busy processes (issue 62:
+    as under ``pytest -n 2``, a process pool, or a second user): :func:`contention_rates` in
+    a fresh process for each OpenMP wait policy of :data:`CONTENTION_POLICIES`, the default
+    threads against one thread in the same process, alternating; the median of the rounds,
+    with the slowest and fastest."""
+    from enn_traffic.traffic.fresh import fresh_calls
+
+    seconds, rounds = (1.0, 3) if quick else (2.0, 5)
+    measured = []
+    saved = {name: os.environ.get(name) for name in ("OMP_WAIT_POLICY", "GOMP_SPINCOUNT")}
+    try:
+        for load in (0, busy):
+            spinners = [subprocess.Popen([sys.executable, "-c", "while True: pass"])
+                        for _ in range(load)]
+            try:
+                for policy, environment in CONTENTION_POLICIES.items():
+                    for name in saved:
+                        os.environ.pop(name, None)
+                    os.environ.update(environment)
+                    measured += [(load, policy, *row) for row in
+                                 fresh_calls([(contention_rates, seconds, rounds)])[0]]
+            finally:
+                for spinner in spinners:
+                    spinner.kill()
+                    spinner.wait()
+    finally:
+        for name, value in saved.items():
+            os.environ.pop(name, None)
+            if value is not None:
+                os.environ[name] = value
+    runs = pd.DataFrame(measured, columns=["load", "implementation", "workload", "threads",
+                                           "steps", "seconds"])
+    runs["rate"] = runs["steps"] / runs["seconds"]
+    keys = ["load", "workload", "implementation", "threads"]
+    table = runs.groupby(keys, sort=False).agg(
+        vehicle_steps=("steps", "sum"), seconds=("seconds", "sum"),
+        vehicle_steps_per_s=("rate", "median"), steps_per_s_min=("rate", "min"),
+        steps_per_s_max=("rate", "max"), runs=("rate", "size")).reset_index()
+    one = table[table["threads"] == 1].set_index(keys[:3])["vehicle_steps_per_s"]
+    table["vs_one_thread"] = [row.vehicle_steps_per_s / one[(row.load, row.workload,
+                                                             row.implementation)]
+                              for row in table.itertuples()]
+    table["speedup_vs_reference"] = np.nan
+    table["workload"] = [f"contention: {row.workload} (narrow track), "
+                         + (f"beside {row.load} busy processes" if row.load else "quiet")
+                         for row in table.itertuples()]
+    return table.drop(columns="load")
 
 
 def sb3_bench(learn_steps: int = 65_536, steps: int = 500) -> pd.DataFrame:
@@ -680,18 +771,29 @@ def network_bench(quick: bool = False) -> pd.DataFrame:
     return pd.DataFrame(rows)
 
 
-def run_bench(quick: bool = False) -> pd.DataFrame:
-    """Every workload's throughput table."""
-    return pd.concat([
-        network_bench(quick),
-        sumo_step_bench(quick),
-        navigation_bench(generations=10 if quick else 30,
-                         reference_seconds=3.0 if quick else 10.0),
-        arena_bench(generations=3 if quick else 10),
-        env_bench(steps=50 if quick else 200, sync_seconds=2.0 if quick else 5.0),
-        sb3_bench(learn_steps=16_384 if quick else 65_536, steps=100 if quick else 500),
-        sumo_bench(generations=3 if quick else 10, closed_loop_steps=2_000 if quick else 10_000),
-        recording_bench(generations=1 if quick else 2),
-        city_bench(generations=3 if quick else 20, closed_loop_steps=1_000 if quick else 5_000),
-        lane_keeping_bench(generations=2 if quick else 4),
-    ], ignore_index=True)
+def workloads(quick: bool = False) -> dict[str, Callable[[], pd.DataFrame]]:
+    """Every workload by the name ``bench --only`` takes, in the order the table shows them."""
+    return {
+        "contention": lambda: contention_bench(quick),
+        "network": lambda: network_bench(quick),
+        "sumo_step": lambda: sumo_step_bench(quick),
+        "navigation": lambda: navigation_bench(generations=10 if quick else 30,
+                                               reference_seconds=3.0 if quick else 10.0),
+        "arena": lambda: arena_bench(generations=3 if quick else 10),
+        "env": lambda: env_bench(steps=50 if quick else 200, sync_seconds=2.0 if quick else 5.0),
+        "sb3": lambda: sb3_bench(learn_steps=16_384 if quick else 65_536,
+                                 steps=100 if quick else 500),
+        "sumo": lambda: sumo_bench(generations=3 if quick else 10,
+                                   closed_loop_steps=2_000 if quick else 10_000),
+        "recording": lambda: recording_bench(generations=1 if quick else 2),
+        "city": lambda: city_bench(generations=3 if quick else 20,
+                                   closed_loop_steps=1_000 if quick else 5_000),
+        "lane_keeping": lambda: lane_keeping_bench(generations=2 if quick else 4),
+    }
+
+
+def run_bench(quick: bool = False, only: list[str] | None = None) -> pd.DataFrame:
+    """The throughput tables of every workload, or of the workloads ``only`` names."""
+    chosen = workloads(quick)
+    return pd.concat([work() for name, work in chosen.items() if only is None or name in only],
+                     ignore_index=True)

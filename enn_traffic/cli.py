@@ -170,6 +170,9 @@ def build_parser() -> argparse.ArgumentParser:
     bench = commands.add_parser("bench", help="throughput table (vehicle-steps per second)")
     bench.add_argument("--quick", action="store_true", help="shorter timing runs")
     bench.add_argument("--out", type=_path, metavar="FILE.csv", help="also write the table")
+    bench.add_argument("--only", help="comma-separated workloads (default: all): contention, "
+                       "network, sumo_step, navigation, arena, env, sb3, sumo, recording, city, "
+                       "lane_keeping")
     return parser
 
 
@@ -458,25 +461,29 @@ def _cmd_baseline(args) -> int:
 def _cmd_bench(args) -> int:
     import numpy as np
 
-    from enn_traffic.bench import run_bench
+    from enn_traffic.bench import run_bench, workloads
     from enn_traffic.io import check_output_file, write_csv
 
     if args.out:
         check_output_file(args.out, suffixes=(".csv",))
-    table = run_bench(quick=args.quick)
-    shown = table.copy()
-    for column in ("vehicle_steps_per_s", "learner_steps_per_s"):
-        shown[column] = shown[column].map(lambda v: "" if np.isnan(v) else f"{v:,.0f}")
-    shown = shown.drop(columns=["learner_steps"])
-    shown["speedup_vs_reference"] = shown["speedup_vs_reference"].map(
-        lambda ratio: "" if np.isnan(ratio) else f"{ratio:.1f}x")
-    shown["seconds"] = shown["seconds"].map("{:.2f}".format)
-    shown["peak_memory_mb"] = shown["peak_memory_mb"].map(
-        lambda mb: "" if np.isnan(mb) else f"{mb:,.0f}")
-    shown["vehicle_steps"] = shown["vehicle_steps"].map(
-        lambda v: "" if np.isnan(v) else f"{v:,.0f}")
-    shown["warmup_share"] = shown["warmup_share"].map(
-        lambda share: "" if np.isnan(share) else f"{share:.1%}")
+    only = None
+    if args.only is not None:
+        only = [n.strip() for n in args.only.split(",") if n.strip()]
+        unknown = sorted(set(only) - set(workloads()))
+        if not only or unknown:
+            raise InputError(f"names no workload: {', '.join(unknown) or repr(args.only)} "
+                             f"(workloads: {', '.join(workloads())})", key="--only")
+    table = run_bench(quick=args.quick, only=only)
+    shown = table.drop(columns=["learner_steps"], errors="ignore")
+    shapes = {"vehicle_steps_per_s": "{:,.0f}", "learner_steps_per_s": "{:,.0f}",
+              "speedup_vs_reference": "{:.1f}x", "vs_one_thread": "{:.2f}x",
+              "steps_per_s_min": "{:,.0f}", "steps_per_s_max": "{:,.0f}", "runs": "{:.0f}",
+              "seconds": "{:.2f}", "peak_memory_mb": "{:,.0f}", "vehicle_steps": "{:,.0f}",
+              "warmup_share": "{:.1%}"}
+    for column, shape in shapes.items():
+        if column in shown:
+            shown[column] = shown[column].map(
+                lambda v, f=shape: "" if isinstance(v, float) and np.isnan(v) else f.format(v))
     print(shown.to_string(index=False))
     if args.out:
         write_csv(args.out, table)

@@ -44,7 +44,22 @@ def published(folder: Path) -> str:
     return "\n".join(lines)
 
 
-SECTIONS: generated.Sections = {"sumo_step": sumo_step, "published": published}
+def contention(folder: Path) -> str:
+    """The compiled kernels beside busy processes under each OpenMP wait policy (issue 62),
+    from ``contention_issue62.csv`` (:func:`enn_traffic.bench.contention_bench`)."""
+    table = pd.read_csv(folder / "contention_issue62.csv")
+    lines = ["| workload | OpenMP wait policy | threads | steps/s, median (slowest–fastest "
+             "round) | × one thread |", "|---|---|---:|---:|---:|"]
+    for row in table.itertuples():
+        lines.append(f"| {row.workload.removeprefix('contention: ')} | {row.implementation} | "
+                     f"{row.threads} | {row.vehicle_steps_per_s:,.0f} "
+                     f"({row.steps_per_s_min:,.0f}–{row.steps_per_s_max:,.0f}) | "
+                     f"{row.vs_one_thread:.2f} |")
+    return "\n".join(lines)
+
+
+SECTIONS: generated.Sections = {"sumo_step": sumo_step, "published": published,
+                                "contention": contention}
 
 
 def section(name: str, folder: Path) -> str:

@@ -227,3 +227,27 @@ def test_the_command_lines_bounds_are_the_schemas():
         assert parse(str(bound)) == bound
         with pytest.raises(argparse.ArgumentTypeError):
             parse(str(bound + 1))
+
+
+def test_bench_only_refuses_a_workload_it_does_not_have():
+    result = cli("bench", "--only", "contention,warp")
+    assert result.returncode == 2
+    assert "--only" in result.stderr and "warp" in result.stderr
+    assert "contention" in result.stderr  # the workloads it has are listed
+    assert "Traceback" not in result.stderr
+
+
+@pytest.mark.parametrize("preset, expected", [
+    ({}, "PASSIVE"), ({"OMP_WAIT_POLICY": "ACTIVE"}, "ACTIVE"),
+    ({"GOMP_SPINCOUNT": "300000"}, "unset")])
+def test_idle_kernel_threads_sleep_unless_the_user_says_otherwise(preset, expected):
+    """OpenMP's wait policy is set on import, before a kernel loads libgomp (docs/bench.md,
+    "Sharing the cores"); a user's own setting of it, or of libgomp's spin count, stands."""
+    import os
+
+    env = {k: v for k, v in os.environ.items()
+           if k not in ("OMP_WAIT_POLICY", "GOMP_SPINCOUNT")} | preset
+    result = subprocess.run([sys.executable, "-c", "import os, enn_traffic; "
+                             "print(os.environ.get('OMP_WAIT_POLICY', 'unset'))"],
+                            capture_output=True, text=True, env=env)
+    assert result.stdout.strip() == expected
