@@ -55,6 +55,17 @@ def contention(folder: Path) -> str:
                      f"{row.threads} | {row.vehicle_steps_per_s:,.0f} "
                      f"({row.steps_per_s_min:,.0f}–{row.steps_per_s_max:,.0f}) | "
                      f"{row.vs_one_thread:.2f} |")
+    policies = list(dict.fromkeys(table["implementation"]))
+    several = table[table["threads"] > 1].set_index(["workload", "implementation"])
+
+    def rate(workload: str, policy: str) -> float:
+        return several.loc[(workload, policy), "vehicle_steps_per_s"]
+
+    ratios = [f"{workload.removeprefix('contention: ')}: "
+              f"{rate(workload, policies[1]) / rate(workload, policies[0]):.2f}"
+              for workload in dict.fromkeys(several.index.get_level_values(0))]
+    lines += ["", f"Sleeping idle threads against spinning ones, the default threads' medians "
+              f"({several['threads'].iloc[0]}): " + "; ".join(ratios) + "."]
     return "\n".join(lines)
 
 
