@@ -22,8 +22,6 @@ from enn_traffic.errors import InputError
 from enn_traffic.evolution.backends import connect_ray
 from enn_traffic.io import write_csv
 from enn_traffic.progress import slow_step, terminal
-from enn_traffic.report.animate import animate_run
-from enn_traffic.report.plots import heat_map, learner_among_traffic, trajectories
 from enn_traffic.roads.network import lanes_at
 from enn_traffic.scenario import Scenario, learner_start_time
 from enn_traffic.sim.world import (
@@ -211,6 +209,8 @@ def matrix_files(out: Path) -> tuple[Path, Path]:
 
 def write_batch(table: pd.DataFrame, out: Path) -> list[Path]:
     """``out`` (the tidy table) and the matrix files (:func:`matrix_files`)."""
+    from enn_traffic.report.plots import heat_map  # matplotlib only where it draws
+
     matrix = fitness_matrix(table)
     table_file, picture = matrix_files(out)
     write_csv(out, table)
@@ -243,6 +243,9 @@ def render(
 ) -> dict:
     """Draw the controller's path on the track (PNG) or animate it (GIF, its frames with a
     progress bar)."""
+    from enn_traffic.report.animate import animate_run
+    from enn_traffic.report.plots import trajectories
+
     out = Path(out)
     if scenario.traffic.is_sumo and not isinstance(scenario.track, list) \
             and out.suffix.lower() != ".gif":
@@ -268,6 +271,8 @@ def render(
 def _render_among_traffic(controller: Controller, scenario: Scenario, out: Path,
                           max_steps: int | None) -> dict:
     """A life among SUMO's traffic, cropped to the learner's path, with what it ran into."""
+    from enn_traffic.report.plots import learner_among_traffic
+
     world = make_world(evaluation_scenario(controller, scenario, 1))
     life = world.trace_life(controller.chromosome, EVALUATION_KEY, 0, max_steps)
     steps, outcome = len(life.poses) - 1, OUTCOMES[life.outcome]

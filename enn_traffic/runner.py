@@ -31,7 +31,6 @@ from enn_traffic.io import folder_lock, write_atomic, write_csv, write_text
 from enn_traffic.neural import NetworkSpec
 from enn_traffic.progress import slow_step, terminal
 from enn_traffic.provenance import rules_version, sources_of
-from enn_traffic.report.plots import learning_curve
 from enn_traffic.roads.sumocfg import read_sumocfg, with_includes
 from enn_traffic.scenario import Scenario
 
@@ -230,7 +229,7 @@ def restore_outputs(scenario: Scenario, out: Path, state: ga.GAState,
     if not same:
         outputs.save(out)
     if not (out / "learning_curve.png").is_file():
-        learning_curve(done, out / "learning_curve.png", title=scenario.name)
+        _draw_learning_curve(done, out, scenario.name)
 
 
 def _finished_rows(table_path: Path, generation: int) -> pd.DataFrame:
@@ -251,6 +250,14 @@ def _finished_rows(table_path: Path, generation: int) -> pd.DataFrame:
                          f"{generation} generations the checkpoint has done; --force starts over",
                          table_path)
     return rows.reset_index(drop=True)
+
+
+def _draw_learning_curve(table: pd.DataFrame, out: Path, name: str) -> None:
+    """``learning_curve.png``; matplotlib is imported here, not when a run starts (a bad
+    scenario is refused in a fraction of a second)."""
+    from enn_traffic.report.plots import learning_curve
+
+    learning_curve(table, out / "learning_curve.png", title=name)
 
 
 def evolve(
@@ -334,5 +341,5 @@ def _evolve(scenario: Scenario, out: Path, evaluator: Evaluator | None, resume: 
         if own_evaluator:
             evaluator.close()
     table = pd.read_csv(table_path)  # the same types whether the run was resumed or not
-    learning_curve(table, out / "learning_curve.png", title=scenario.name)
+    _draw_learning_curve(table, out, scenario.name)
     return table

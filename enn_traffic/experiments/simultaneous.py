@@ -48,7 +48,6 @@ from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
 
-import matplotlib.pyplot as plt
 import numpy as np
 import pandas as pd
 from tqdm import tqdm
@@ -65,7 +64,6 @@ from enn_traffic.io import write_csv
 from enn_traffic.kinds import STRATEGIES
 from enn_traffic.progress import terminal
 from enn_traffic.report.paper_tables import PAPER_TABLE3, PAPER_TABLE4
-from enn_traffic.report.plots import draw_paths, save_figure
 from enn_traffic.runner import ga_params
 from enn_traffic.shipped import shipped_scenario
 from enn_traffic.sim.arena import ArenaWorld
@@ -429,6 +427,10 @@ def table4_comparisons(situations: pd.DataFrame,
 def _draw_crowds(paths: dict, path: Path) -> None:
     """Each strategy: the first seconds of its initial drivers, the broadcast winner and the
     vehicles after simultaneous learning."""
+    import matplotlib.pyplot as plt  # here, not on import: the crowds' processes draw nothing
+
+    from enn_traffic.report.plots import draw_paths, save_figure
+
     figure, axes = plt.subplots(3, 4, figsize=(16, 12))
     steps = round(DRAWN_SECONDS * 10)
     titles = ["initial drivers", "winning chromosome (Table 3)", "after learning (Table 4)"]
@@ -454,6 +456,10 @@ def draw_learning(curve: pd.DataFrame, situations: pd.DataFrame, path: Path,
     """Per strategy: collisions per vehicle-second in each span while the vehicles learn,
     beside the initial drivers and the winner over the same spans, and each arm over the
     span after learning (the markers at its end: Table 4)."""
+    import matplotlib.pyplot as plt
+
+    from enn_traffic.report.plots import save_figure
+
     strategies = sorted(curve["strategy"].unique())
     figure, axes = plt.subplots(1, len(strategies), figsize=(4 * len(strategies), 3.6),
                                 sharey=True, squeeze=False)
