@@ -771,9 +771,33 @@ def network_bench(quick: bool = False) -> pd.DataFrame:
     return pd.DataFrame(rows)
 
 
+def first_run_bench(runs: int = 2) -> pd.DataFrame:
+    """The README's main command as a new user runs it (issue 62): ``enn-traffic run
+    navigation_narrow`` with an empty cache folder (numba compiles the kernels), then
+    ``runs - 1`` times more with the kernels it cached; each timed as a whole command."""
+    rows = []
+    with tempfile.TemporaryDirectory(prefix="enn-bench-first-") as folder:
+        env = {**os.environ, "ENN_TRAFFIC_CACHE": str(Path(folder) / "cache")}
+        env.pop("NUMBA_CACHE_DIR", None)  # derived from the empty cache folder
+        for run in range(runs):
+            started = time.perf_counter()
+            subprocess.run([sys.executable, "-m", "enn_traffic", "run", "navigation_narrow",
+                            "--out", str(Path(folder) / f"run{run}"), "--quiet"],
+                           env=env, check=True, capture_output=True)
+            rows.append({"workload": "first contact: enn-traffic run navigation_narrow "
+                         "(P=200, 50 generations)",
+                         "implementation": "empty cache: numba compiles" if run == 0
+                         else "kernels from the cache", "threads": numba.get_num_threads(),
+                         "seconds": time.perf_counter() - started})
+    table = pd.DataFrame(rows)
+    table["speedup_vs_reference"] = np.nan
+    return table
+
+
 def workloads(quick: bool = False) -> dict[str, Callable[[], pd.DataFrame]]:
     """Every workload by the name ``bench --only`` takes, in the order the table shows them."""
     return {
+        "first_run": lambda: first_run_bench(),
         "contention": lambda: contention_bench(quick),
         "network": lambda: network_bench(quick),
         "sumo_step": lambda: sumo_step_bench(quick),

@@ -170,9 +170,9 @@ def build_parser() -> argparse.ArgumentParser:
     bench = commands.add_parser("bench", help="throughput table (vehicle-steps per second)")
     bench.add_argument("--quick", action="store_true", help="shorter timing runs")
     bench.add_argument("--out", type=_path, metavar="FILE.csv", help="also write the table")
-    bench.add_argument("--only", help="comma-separated workloads (default: all): contention, "
-                       "network, sumo_step, navigation, arena, env, sb3, sumo, recording, city, "
-                       "lane_keeping")
+    bench.add_argument("--only", help="comma-separated workloads (default: all): first_run, "
+                       "contention, network, sumo_step, navigation, arena, env, sb3, sumo, "
+                       "recording, city, lane_keeping")
     return parser
 
 

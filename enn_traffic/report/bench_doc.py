@@ -69,8 +69,19 @@ def contention(folder: Path) -> str:
     return "\n".join(lines)
 
 
+def first_run(folder: Path) -> str:
+    """The README's main command timed as a whole, from an empty cache and again, from
+    ``first_run_issue62.csv`` (:func:`enn_traffic.bench.first_run_bench`)."""
+    table = pd.read_csv(folder / "first_run_issue62.csv")
+    lines = ["| command | cache | wall time |", "|---|---|---:|"]
+    for row in table.itertuples():
+        lines.append(f"| {row.workload.removeprefix('first contact: ')} | "
+                     f"{row.implementation} | {row.seconds:.1f} s |")
+    return "\n".join(lines)
+
+
 SECTIONS: generated.Sections = {"sumo_step": sumo_step, "published": published,
-                                "contention": contention}
+                                "contention": contention, "first_run": first_run}
 
 
 def section(name: str, folder: Path) -> str:
