@@ -1,3 +1,12 @@
+import os
+
+# Under `pytest -n N` each worker's compiled kernels, and the commands it starts, run cores ÷ N
+# threads: N workers of a thread per core each would put N threads on every core (docs/bench.md,
+# "Sharing the cores"). Set before anything imports numba, which reads it once.
+if int(os.environ.get("PYTEST_XDIST_WORKER_COUNT", "1")) > 1:
+    os.environ.setdefault("NUMBA_NUM_THREADS", str(max(
+        1, (os.cpu_count() or 1) // int(os.environ["PYTEST_XDIST_WORKER_COUNT"]))))
+
 from pathlib import Path
 
 import pytest
@@ -6,24 +15,6 @@ from enn_traffic.scenario import load_scenario
 from enn_traffic.sim.arena import ArenaWorld
 
 ROOT = Path(__file__).resolve().parents[1]
-
-
-def _threads_per_worker() -> None:
-    """Under ``pytest -n N`` each worker's compiled kernels, and the commands it starts, use
-    cores ÷ N threads: N workers of a thread per core each would put N threads on every core
-    (docs/bench.md, "Sharing the cores")."""
-    import os
-
-    import numba
-
-    workers = int(os.environ.get("PYTEST_XDIST_WORKER_COUNT", "1"))
-    if workers > 1:
-        threads = max(1, (os.cpu_count() or 1) // workers)
-        os.environ["NUMBA_NUM_THREADS"] = str(threads)
-        numba.set_num_threads(min(threads, numba.config.NUMBA_NUM_THREADS))
-
-
-_threads_per_worker()
 
 
 @pytest.fixture(scope="session", autouse=True)

@@ -25,7 +25,15 @@ from numba import njit, prange
 from enn_traffic.kinds import ACTION
 from enn_traffic.progress import slow_step
 from enn_traffic.sim.arena import ArenaWorld, settle, start_world
-from enn_traffic.sim.rules import Vehicles, Work, drive_all, sense, wall_arrays
+from enn_traffic.sim.rules import (
+    Vehicles,
+    Work,
+    copy_row,
+    copy_rows,
+    drive_all,
+    sense,
+    wall_arrays,
+)
 from enn_traffic.sim.world import RUNNING, SPUN
 
 
@@ -130,8 +138,8 @@ def begin(i, m, pool, worlds, physics, geometry, max_steps):
     not inlined, in the parallel loops: numba's parallel passes, given the inlined body of a
     world, compiled writes that were lost, or not, by the order the kernels compiled in.)"""
     vehicles = world_vehicles(worlds, i)
-    worlds.kinds[i] = pool.kinds[m]
-    worlds.drivers[i] = pool.genes[m]
+    copy_row(pool.kinds[m], worlds.kinds[i])
+    copy_rows(pool.genes[m], worlds.drivers[i])
     worlds.situation[i] = m
     worlds.steps[i] = 0
     start_world(pool.start[m], worlds.kinds[i], vehicles, worlds.rng[i], pool.seed[m], physics,
@@ -159,8 +167,8 @@ def step_world(i, action, autoreset, pool, worlds, layer_sizes, physics, geometr
     if outcome[i] == SPUN:
         worlds.reward[i] = 1.0 - steps[i]
     worlds.life[i] = steps[i]
-    worlds.final_observation[i] = worlds.observation[i]
-    worlds.final_tally[i] = worlds.tally[i]
+    copy_row(worlds.observation[i], worlds.final_observation[i])
+    copy_row(worlds.tally[i], worlds.final_tally[i])
     if autoreset:
         begin(i, (worlds.situation[i] + worlds.pose.shape[0]) % pool.seed.shape[0], pool, worlds,
               physics, geometry, max_steps)

@@ -35,9 +35,12 @@ from enn_traffic.sim.rules import (
     NO_HIT,
     Work,
     build_constants,
+    copy_row,
+    copy_rows,
     drive_all,
     life_columns,
     place,
+    remember_bodies,
     respawn,
     responsible,
     spun,
@@ -100,8 +103,7 @@ def start_world(start, kinds, vehicles, rng, seed, physics, tally) -> None:
         reset_memory(kinds[v], physics, rng, vehicles.memory[v])
         place(v, start[v, 0], start[v, 1], start[v, 2], physics, vehicles.pose,
               vehicles.corners, vehicles.centres)
-    vehicles.previous[:] = vehicles.corners
-    vehicles.previous_centres[:] = vehicles.centres
+    remember_bodies(vehicles)
     tally[:] = 0
     tally[HIT] = NO_HIT
 
@@ -120,7 +122,7 @@ def run_life(genes, layer_sizes, start, kinds, traffic_genes, physics, geometry,
     count = start.shape[0]
     vehicles = vehicles_at(count)
     drivers = traffic_genes.copy()
-    drivers[0] = genes
+    copy_row(genes, drivers[0])
     rng = np.empty(1, dtype=np.uint64)
     tally = np.empty(4, dtype=np.int64)
     activation, scratch = network_buffers(layer_sizes)
@@ -130,7 +132,7 @@ def run_life(genes, layer_sizes, start, kinds, traffic_genes, physics, geometry,
     steps = 0
     while True:
         if steps < trace.shape[0]:
-            trace[steps] = vehicles.pose
+            copy_rows(vehicles.pose, trace[steps])
         outcome = settle(steps, kinds, vehicles, rng, recent, physics, geometry, max_steps,
                          tally)
         if outcome != RUNNING:

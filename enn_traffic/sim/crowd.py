@@ -36,9 +36,11 @@ from enn_traffic.sim.arena import ArenaWorld
 from enn_traffic.sim.rules import (
     NO_HIT,
     Work,
+    copy_rows,
     drive_all,
     enter,
     place,
+    remember_bodies,
     respawn,
     responsible,
     spun,
@@ -137,8 +139,7 @@ def advance(t, last, drive_first, blame_current, kinds, genes, layer_sizes, phys
     while True:
         if drive_first and blame_current:
             drive_all(kinds, genes, layer_sizes, physics, geometry, vehicles, rng, work)
-            vehicles.previous[:] = vehicles.corners
-            vehicles.previous_centres[:] = vehicles.centres
+            remember_bodies(vehicles)
             lives.life[:] += 1
             ended = crowd_events(vehicles, lives, physics, geometry)
             t += 1
@@ -148,7 +149,7 @@ def advance(t, last, drive_first, blame_current, kinds, genes, layer_sizes, phys
         else:
             ended = crowd_events(vehicles, lives, physics, geometry)
         drive_first, blame_current = True, False
-        trace[t] = vehicles.pose
+        copy_rows(vehicles.pose, trace[t])
         if ended or t == last:
             return t
 

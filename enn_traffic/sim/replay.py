@@ -34,10 +34,12 @@ from enn_traffic.sim.rules import (
     Vehicles,
     Work,
     close,
+    copy_row,
     left_network,
     life_columns,
     move_all,
     place,
+    remember_bodies,
     responsible,
     sense,
     spun,
@@ -123,8 +125,7 @@ def learner_state(start, physics, beams, layer_sizes, slots) -> LearnerState:
     learner = vehicles_at(1)
     place(0, start[0], start[1], start[2], physics, learner.pose, learner.corners,
           learner.centres)
-    learner.previous[:] = learner.corners
-    learner.previous_centres[:] = learner.centres
+    remember_bodies(learner)
     activation, scratch = network_buffers(layer_sizes)
     return LearnerState(learner, Work(np.empty(beams), activation, scratch, np.zeros(1)),
                         np.empty((physics.spin_window, 2)), np.zeros(1, np.int64),
@@ -233,11 +234,11 @@ def run_replay_life(genes, layer_sizes, physics, geometry, start, ids, corners, 
     t = 0
     while True:
         if t < trace.shape[0]:
-            trace[t] = pose[0]
+            copy_row(pose[0], trace[t])
         outcome = learner_step(t, genes, layer_sizes, physics, geometry, ids, corners, centres,
                                max(t - 1, 0), t, max_steps, state)
         if outcome != RUNNING:
-            end[:] = pose[0]
+            copy_row(pose[0], end)
             return t, outcome, suffered[0], met[0], met[1], state.hit[0]
         t += 1
 

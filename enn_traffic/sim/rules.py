@@ -141,6 +141,41 @@ class Geometry(NamedTuple):
 
 
 @njit(cache=True, inline="always")
+def remember_body(v, vehicles) -> None:
+    """Vehicle ``v``'s body now becomes its body before the step. Element by element: an
+    array assignment (``previous[v] = corners[v]``) makes numba compile its shape check's
+    error message, seconds of every first compile (docs/bench.md, "First contact")."""
+    previous, corners = vehicles.previous, vehicles.corners
+    for c in range(corners.shape[1]):
+        previous[v, c, 0] = corners[v, c, 0]
+        previous[v, c, 1] = corners[v, c, 1]
+    vehicles.previous_centres[v, 0] = vehicles.centres[v, 0]
+    vehicles.previous_centres[v, 1] = vehicles.centres[v, 1]
+
+
+@njit(cache=True, inline="always")
+def remember_bodies(vehicles) -> None:
+    """Every body now becomes its body before the step (:func:`remember_body`)."""
+    for v in range(vehicles.corners.shape[0]):
+        remember_body(v, vehicles)
+
+
+@njit(cache=True, inline="always")
+def copy_row(source, out) -> None:
+    """``out[:] = source`` for 1-d arrays, element by element (:func:`remember_body`)."""
+    for k in range(source.shape[0]):
+        out[k] = source[k]
+
+
+@njit(cache=True, inline="always")
+def copy_rows(source, out) -> None:
+    """``out[:] = source`` for 2-d arrays, element by element (:func:`remember_body`)."""
+    for v in range(source.shape[0]):
+        for k in range(source.shape[1]):
+            out[v, k] = source[v, k]
+
+
+@njit(cache=True, inline="always")
 def wall_arrays(geometry):
     """The walls and the wall grid's arrays of ``geometry``, by name: what the per-vehicle
     rules (:func:`responsible`, :func:`sense`) take."""
@@ -382,8 +417,7 @@ def drive_all(kinds, genes, layer_sizes, physics, geometry, vehicles, rng, work)
 def move_all(steering, physics, vehicles):
     """Every vehicle moves one step by the bicycle model (paper §4)."""
     pose, corners, centres = vehicles.pose, vehicles.corners, vehicles.centres
-    vehicles.previous[:] = corners
-    vehicles.previous_centres[:] = centres
+    remember_bodies(vehicles)
     vehicles.fresh[:] = False
     for v in range(pose.shape[0]):
         x, y, heading = bicycle_step(pose[v, 0], pose[v, 1], pose[v, 2], steering[v],
@@ -446,8 +480,7 @@ def enter(v, x, y, heading, kind, physics, vehicles, rng) -> None:
     """Vehicle ``v`` starts a fresh life at (x, y, heading): no earlier body to blame against,
     its strategy's state reset."""
     place(v, x, y, heading, physics, vehicles.pose, vehicles.corners, vehicles.centres)
-    vehicles.previous[v] = vehicles.corners[v]
-    vehicles.previous_centres[v] = vehicles.centres[v]
+    remember_body(v, vehicles)
     vehicles.fresh[v] = True
     reset_memory(kind, physics, rng, vehicles.memory[v])
 
