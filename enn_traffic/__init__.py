@@ -19,7 +19,7 @@ def _numba_cache_dir() -> str:
 os.environ.setdefault("NUMBA_CACHE_DIR", _numba_cache_dir())
 # numba's parallel loops run on OpenMP (libgomp), whose idle threads spin by default: beside
 # other busy processes (pytest -n 2, a process pool, a second user) a parallel region then
-# waits for a descheduled spinner, and two threads ran 0.14x as fast as one. Idle threads
+# waits for a descheduled spinner, and two threads ran slower than one. Idle threads
 # that sleep cost little on a quiet machine (docs/bench.md, "Sharing the cores"; issue 62).
 # Read once, when libgomp loads, so before any kernel runs; a user's own setting of either
 # stands.

@@ -196,6 +196,9 @@ def _warn_unread(scenario, command: str) -> None:
         _note(f"{scenario.source}: traffic.learners = {traffic.learners} is read only by "
               f"'enn-traffic reproduce' (Tables 3-4, many learners in one SUMO); {command} "
               "drives one learner per chromosome and ignores it")
+    if "crowd" in scenario.model_fields_set:
+        _note(f"{scenario.source}: [crowd] is read only by 'enn-traffic reproduce' (the "
+              f"crowds of Tables 3-4, every vehicle driving at once); {command} ignores it")
 
 
 def _cmd_run(args) -> int:

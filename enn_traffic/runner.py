@@ -35,7 +35,8 @@ from enn_traffic.roads.sumocfg import read_sumocfg, with_includes
 from enn_traffic.scenario import Scenario
 
 # What a first generation may wait for when numba's cache folder has no kernels yet.
-COMPILING = " (numba compiles the kernels first, once per install or edit: a minute or two)"
+COMPILING = (" (numba compiles the kernels first, once per install or edit; docs/bench.md, "
+             "First contact)")
 
 
 def _kernels_cached() -> bool:

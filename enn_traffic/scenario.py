@@ -480,7 +480,9 @@ class CrowdConfig(_Section):
         "responsible", description="the rates of Tables 3–4: `responsible` (responsible "
         "collisions per vehicle-second) or `authors` (lives lost, responsible collisions and "
         "spins, of all vehicles together per second: the authors' display's count, the "
-        "paper's unit, [results.md](results.md#all-vehicles-at-once-paper-55-tables-34))")
+        "paper's unit, [results.md](results.md#all-vehicles-at-once-paper-55-tables-34)). "
+        "Read by `reproduce`'s crowds (`table3`, `table4`, `sumo`, `city`) from the shipped "
+        "arena and SUMO scenarios; `run` says it ignores it")
 
 
 Range = Annotated[tuple[Length, Length], Strict(False)]

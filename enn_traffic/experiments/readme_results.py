@@ -170,10 +170,12 @@ def ablation(paper: Path) -> str:
     from enn_traffic.experiments.ablation import carrier
 
     table = pd.read_csv(paper / "table4_ablation.csv")
-    arms = table.groupby(["start_population", "stopping"], sort=False)[
-        "reduction_vs_first_span"].mean()
+    arms = table.groupby(["start_population", "stopping"], sort=False).agg(
+        reduction=("reduction_vs_first_span", "mean"), bred=("generations_bred", "max"))
     listed = "; ".join(("the authors' set-up" if start == "authors" else f"{start}, {stop}")
-                       + f" {reduction:.0%}" for (start, stop), reduction in arms.items())
+                       + f" {arm.reduction:.0%}"
+                       + (" (no generation bred)" if arm.bred == 0 and stop != "frozen" else "")
+                       for (start, stop), arm in arms.iterrows())
     return (f"fewer collisions after learning than in the learning's own first span: {listed}. "
             f"{carrier(pd.read_csv(paper / 'table4_ablation_factors.csv'))} ([docs/results.md]"
             "(docs/results.md#table-4-as-an-ablation-which-choice-carries-the-pattern))")

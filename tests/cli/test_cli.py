@@ -251,3 +251,15 @@ def test_idle_kernel_threads_sleep_unless_the_user_says_otherwise(preset, expect
                              "print(os.environ.get('OMP_WAIT_POLICY', 'unset'))"],
                             capture_output=True, text=True, env=env)
     assert result.stdout.strip() == expected
+
+
+def test_run_says_it_ignores_the_crowd_section(tmp_path, root):
+    """``[crowd]`` is read by reproduce's crowds only: ``run`` says so, and runs."""
+    text = (root / "scenarios" / "navigation_narrow.toml").read_text().replace(
+        '"../sumo_nets/', f'"{root}/sumo_nets/')
+    scenario = tmp_path / "narrow_counted.toml"
+    scenario.write_text(text + '\n[crowd]\ncounting = "authors"\n')
+    result = cli("run", scenario, "--generations", 1, "--population", 10, "--out",
+                 tmp_path / "out", "--quiet")
+    assert result.returncode == 0, result.stderr
+    assert "[crowd] is read only by 'enn-traffic reproduce'" in result.stderr
