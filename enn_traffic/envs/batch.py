@@ -179,7 +179,8 @@ def begin_worlds(first, pool, worlds, physics, geometry, max_steps):
     """Every world ``i`` of ``worlds`` starts situation ``(first + i) % M`` of ``pool``."""
     count, size = worlds.pose.shape[0], pool.seed.shape[0]
     for i in prange(count):
-        begin(i, (first + i) % size, pool, worlds, physics, geometry, max_steps)
+        w = np.int64(i)  # one type for the callee (a parallel loop's index is unsigned)
+        begin(w, (first + w) % size, pool, worlds, physics, geometry, max_steps)
 
 
 @njit(cache=True, parallel=True)
@@ -191,7 +192,10 @@ def step_worlds(actions, autoreset, pool, worlds, layer_sizes, physics, geometry
     world whose life ended keeps its learner's last readings in ``final_observation`` and,
     with ``autoreset``, starts its next situation of ``pool``."""
     for i in prange(worlds.pose.shape[0]):
-        step_world(i, actions[i], autoreset, pool, worlds, layer_sizes, physics, geometry,
+        # numba types the loop once with a signed index and compiles it again with the
+        # parallel loop's unsigned one: as one type, the callee compiles once, not twice
+        w = np.int64(i)
+        step_world(w, actions[w], autoreset, pool, worlds, layer_sizes, physics, geometry,
                    max_steps)
 
 
