@@ -122,7 +122,7 @@ class ArenaCrowdEnv(ParallelEnv):
         for row, agent in enumerate(self.agents):
             steering[row] = steering_of(actions[agent], gain)
         args = (crowd.kinds, self.genes, self.world.layer_sizes, crowd.physics, crowd.geometry,
-                crowd.vehicles, crowd.lives, crowd.rng, crowd.work)
+                crowd.vehicles, crowd.lives, crowd.rng, crowd.work, False)
         if self._step is None:
             self._step = compiled(step_once, *args)
         self._step(*args)

@@ -113,11 +113,15 @@ def crowd_events(vehicles, lives, physics, geometry) -> bool:
 
 
 @njit(cache=True, inline="always")
-def step(kinds, genes, layer_sizes, physics, geometry, vehicles, lives, rng, work) -> bool:
+def step(kinds, genes, layer_sizes, physics, geometry, vehicles, lives, rng, work,
+         blame_current) -> bool:
     """One step of the crowd: every vehicle senses, decides (an ``ACTION`` vehicle keeps the
-    ``work.steering[v]`` it was given) and moves, then :func:`crowd_events`. Did any life
-    end?"""
+    ``work.steering[v]`` it was given) and moves, then :func:`crowd_events`; with
+    ``blame_current`` the blame tests every body against the others' bodies after the move,
+    not before it (the authors' code after a reset, reference §7.3). Did any life end?"""
     drive_all(kinds, genes, layer_sizes, physics, geometry, vehicles, rng, work)
+    if blame_current:
+        remember_bodies(vehicles)
     life = lives.life
     life += 1
     return crowd_events(vehicles, lives, physics, geometry)
@@ -133,18 +137,12 @@ def advance(t, last, drive_first, blame_current, kinds, genes, layer_sizes, phys
     """Run the steps from ``t`` (driving first when ``drive_first``: the lives that ended at
     ``t`` have been dealt with) until a life ends or step ``last`` is reached: each step,
     :func:`step` (without ``drive_first``, only :func:`crowd_events` at ``t``) and record the poses
-    in ``trace``. With ``blame_current``, the first step's blame tests every body against the
-    others' bodies after the move, not before it: the authors' code after a reset (reference
-    §7.3). Returns the step it stopped at."""
+    in ``trace``. ``blame_current``: the first step's (:func:`step`). Returns the step it
+    stopped at."""
     while True:
-        if drive_first and blame_current:
-            drive_all(kinds, genes, layer_sizes, physics, geometry, vehicles, rng, work)
-            remember_bodies(vehicles)
-            lives.life[:] += 1
-            ended = crowd_events(vehicles, lives, physics, geometry)
-            t += 1
-        elif drive_first:
-            ended = step(kinds, genes, layer_sizes, physics, geometry, vehicles, lives, rng, work)
+        if drive_first:
+            ended = step(kinds, genes, layer_sizes, physics, geometry, vehicles, lives, rng, work,
+                         blame_current)
             t += 1
         else:
             ended = crowd_events(vehicles, lives, physics, geometry)
@@ -280,8 +278,9 @@ class Crowd:
             t = advance(t, last, drive_first, respawned and self.blame_all_after_respawn,
                         self.kinds, genes, self.world.layer_sizes, self.physics, self.geometry,
                         self.vehicles, lives, self.rng, self.work, trace)
-            respawned = bool((lives.events != ALIVE).any())
-            for v in np.flatnonzero(lives.events != ALIVE):
+            ended = np.flatnonzero(lives.events != ALIVE)
+            respawned = len(ended) > 0
+            for v in ended:
                 spun = bool(lives.events[v] == SPUN)
                 spins[v] += spun
                 collisions[v] += not spun
