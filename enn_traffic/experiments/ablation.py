@@ -66,7 +66,7 @@ from enn_traffic.report.plots import save_figure
 from enn_traffic.report.stats import bootstrap_interval, t_interval
 from enn_traffic.runner import ga_params
 from enn_traffic.shipped import shipped_scenario
-from enn_traffic.sim.arena import ArenaWorld
+from enn_traffic.sim.arena import ArenaWorld, Situation
 from enn_traffic.sim.crowd import Crowd
 from enn_traffic.sim.strategies import NETWORK
 
@@ -134,11 +134,12 @@ class AuthorsRules:
     breed_from_best: bool = False
 
 
-def start_poses(world: ArenaWorld, key: int, rules: AuthorsRules = AuthorsRules()
-                ) -> np.ndarray:
-    """The situation's start poses (V, 3); with ``rules.vehicle0_heading_drawn`` vehicle 0's
-    heading drawn from the traffic's start headings, as every other's."""
-    start = world.situations(key)[0].start.copy()
+def start_poses(world: ArenaWorld, chosen: Situation, key: int,
+                rules: AuthorsRules = AuthorsRules()) -> np.ndarray:
+    """The start poses (V, 3) of situation ``chosen``, drawn from traffic key ``key``; with
+    ``rules.vehicle0_heading_drawn`` vehicle 0's heading drawn from the traffic's start
+    headings, as every other's."""
+    start = chosen.start.copy()
     if rules.vehicle0_heading_drawn:
         traffic = world.scenario.traffic
         low, high = np.radians(traffic.start_heading_deg)
@@ -157,7 +158,7 @@ def authors_arm(world: ArenaWorld, situation: int, ablation: Ablation, key: int,
     sc = world.scenario.with_overrides(episode=AUTHORS_SPIN)
     authors = ArenaWorld(sc)
     chosen = authors.situations(key + situation)[0]
-    crowd = Crowd(authors, start_poses(authors, key + situation, rules),
+    crowd = Crowd(authors, start_poses(authors, chosen, key + situation, rules),
                   np.full(authors.vehicles, NETWORK), int(chosen.seed), respawn_at_start=True,
                   blame_all_after_respawn=rules.blame_all_after_respawn)
     learners = []

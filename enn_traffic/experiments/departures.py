@@ -23,6 +23,7 @@ family). Written to ``departures.csv`` and ``departures_situations.csv``.
 from __future__ import annotations
 
 from dataclasses import dataclass, field, replace
+from functools import cache
 
 import numpy as np
 import pandas as pd
@@ -78,15 +79,21 @@ class Departures:
 DEPARTURES = Departures()
 
 
+@cache
+def strategy_world(strategy: int) -> ArenaWorld:
+    """The arena of ``strategy``'s shipped scenario, built once."""
+    return ArenaWorld(shipped_scenario(ARENA.name(strategy)))
+
+
 def initial_drivers(situation: int, rules: AuthorsRules, key: int = DEPARTURE_KEY) -> float:
     """Every strategy's initial drivers over one span of the situation (their mean rate), by
     ``rules``' blame and start heading."""
     rates = []
     for strategy in ARENA.strategies:
-        world = ArenaWorld(shipped_scenario(ARENA.name(strategy)))
+        world = strategy_world(strategy)
         chosen = world.situations(key + situation)[0]
         kind = STRATEGIES[world.scenario.traffic.strategy_list[0]]
-        crowd = Crowd(world, start_poses(world, key + situation, rules),
+        crowd = Crowd(world, start_poses(world, chosen, key + situation, rules),
                       np.full(world.vehicles, kind), int(chosen.seed),
                       blame_all_after_respawn=rules.blame_all_after_respawn)
         rates.append(crowd.run(SECONDS, chosen.traffic_genes.copy()).collision_rate)
@@ -101,7 +108,7 @@ def moves_initial(rules: AuthorsRules) -> bool:
 def situation_rows(situation: int, settings: Departures = DEPARTURES, key: int = DEPARTURE_KEY
                    ) -> list[dict]:
     """One situation under every variant: a row each, with its measures."""
-    world = ArenaWorld(shipped_scenario(ARENA.name(1)))  # the learning is strategy-free
+    world = strategy_world(1)  # the learning is strategy-free
     learning = replace(ABLATION, authors_seconds=settings.authors_seconds)
     rows = []
     for name, rules in VARIANTS.items():

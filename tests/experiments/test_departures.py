@@ -13,14 +13,18 @@ from enn_traffic.sim.arena import ArenaWorld
 
 def test_vehicle_0s_drawn_heading_is_the_only_change_to_the_start_poses():
     world = ArenaWorld(shipped_scenario(ARENA.name(1)))
-    ours, drawn = (start_poses(world, 123, AuthorsRules(vehicle0_heading_drawn=drawn))
-                   for drawn in (False, True))
+
+    def poses(key: int, drawn: bool) -> np.ndarray:
+        return start_poses(world, world.situations(key)[0], key,
+                           AuthorsRules(vehicle0_heading_drawn=drawn))
+
+    ours, drawn = poses(123, False), poses(123, True)
     assert ours[0, 2] == pytest.approx(np.pi / 2)
     low, high = np.radians(world.scenario.traffic.start_heading_deg)
     assert low <= drawn[0, 2] <= high and drawn[0, 2] != ours[0, 2]
     np.testing.assert_array_equal(drawn[0, :2], ours[0, :2])
     np.testing.assert_array_equal(drawn[1:], ours[1:])
-    again = start_poses(world, 124, AuthorsRules(vehicle0_heading_drawn=True))
+    again = poses(124, True)
     assert again[0, 2] != drawn[0, 2]  # drawn per situation
 
 
