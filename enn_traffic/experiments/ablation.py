@@ -406,6 +406,15 @@ def summary_lines(table: pd.DataFrame, factors: pd.DataFrame) -> list[str]:
             + "; " + carrier(factors)]
 
 
+def idle_arms(table: pd.DataFrame) -> list[tuple[str, str]]:
+    """The learning arms (start population, stopping) of ``table4_ablation.csv`` whose
+    learners bred no generation (median 0 in every strategy): their change from the first span
+    is not breeding's."""
+    learning = table[table["stopping"] != "frozen"]
+    bred = learning.groupby(["start_population", "stopping"], sort=False)["generations_bred"]
+    return [arm for arm, generations in bred if (generations == 0).all()]
+
+
 def carrier(factors: pd.DataFrame, outcome: str = "after") -> str:
     """Each choice's effect on ``outcome`` (:data:`FACTOR_OUTCOMES`), in words chosen from
     its interval's sign."""

@@ -729,21 +729,22 @@ def _ablation_in_short(apart: dict, factors: pd.DataFrame, strategies: int) -> l
 
 
 def _bred_nothing(table: pd.DataFrame) -> list[str]:
-    """The arms whose learners bred no generation (median 0 in every strategy): their change
-    from the first span is not breeding's."""
-    from enn_traffic.experiments.ablation import FINISH_STEPS
+    """The arms whose learners bred no generation (:func:`~enn_traffic.experiments.ablation.
+    idle_arms`), and why the finishing rule's still change."""
+    from enn_traffic.experiments.ablation import FINISH_STEPS, idle_arms
 
-    arms = table[table["stopping"] != "frozen"].groupby(["start_population", "stopping"],
-                                                          sort=False)
-    idle = [(name, arm) for name, arm in arms if (arm["generations_bred"] == 0).all()]
+    idle = idle_arms(table)
     if not idle:
         return []
-    words = [f"{start}, {stopping} ({arm['finished_share'].mean():.0%} of its learners "
-             "finished)" for (start, stopping), arm in idle]
+    finished = table.groupby(["start_population", "stopping"])["finished_share"].mean()
+    words = [f"{start}, {stopping} ({finished[(start, stopping)]:.0%} of its learners "
+             "finished)" for start, stopping in idle]
+    why = (": with the finishing rule a learner keeps the first chromosome whose life lasted "
+           f"{FINISH_STEPS} steps and stops learning" if any(stopping != "cap"
+                                                           for _, stopping in idle) else "")
     return ["Learners that bred no generation (median 0 in every strategy): "
-            + "; ".join(words) + ". Their change from the first span is not breeding's: with "
-            "the finishing rule a learner keeps the first chromosome whose life lasted "
-            f"{FINISH_STEPS} steps and stops learning.", ""]
+            + "; ".join(words) + ". Their change from the first span is not breeding's" + why
+            + ".", ""]
 
 
 def _sumo_ablation(paper: Path) -> list[str]:
