@@ -24,6 +24,7 @@ from __future__ import annotations
 import itertools
 import math
 import os
+import pickle
 import subprocess
 import sys
 import tempfile
@@ -794,11 +795,61 @@ def first_run_bench(runs: int = 2) -> pd.DataFrame:
     return table
 
 
+# A new interpreter that runs one pickled call from its standard input: how every fresh
+# process started before the zygote of :mod:`enn_traffic.traffic.fresh` (issue 62).
+_NEW_INTERPRETER = ("import pickle, sys; function, args = pickle.loads(sys.stdin.buffer.read()); "
+                    "function(*args)")
+
+
+def fresh_bench(calls: int = 4) -> pd.DataFrame:
+    """A fresh process (docs/sumo.md, "One SUMO start, one process") for one arm of a Table
+    3–4 situation (SUMO strategy 1, its learners driving random controllers for 10 s): forked
+    from the zygote against a new interpreter running the same call, ``calls`` times each in
+    turn; seconds per call, SUMO's start and the drive included. The zygote's own start
+    (once per calling process) is timed apart."""
+    from enn_traffic.experiments.sumo_crowds import _driving_arm
+    from enn_traffic.traffic import fresh
+
+    world = make_world(shipped_scenario("sumo_strategy1").with_overrides(
+        traffic={"mode": "closed-loop"}))
+    genes = world.spec.in_source_layout(np.random.default_rng(0).uniform(
+        -1, 1, (world.scenario.traffic.learners, world.spec.chromosome_length)))
+    call = (_driving_arm, world.scenario, world.seeds(1)[0], genes, 10.0, 1)
+    started = time.perf_counter()
+    fresh.fresh(os.getpid)
+    zygote_start = time.perf_counter() - started
+    env = {**os.environ, "PYTHONPATH": os.pathsep.join(
+        filter(None, [str(Path(__file__).resolve().parents[1]), os.environ.get("PYTHONPATH")]))}
+    job = pickle.dumps((call[0], call[1:]))
+    seconds: dict[str, list[float]] = {"forked from the zygote": [], "a new interpreter": []}
+    for _ in range(calls):
+        started = time.perf_counter()
+        fresh.fresh(*call)
+        seconds["forked from the zygote"].append(time.perf_counter() - started)
+        started = time.perf_counter()
+        subprocess.run([sys.executable, "-c", _NEW_INTERPRETER], input=job, env=env,
+                       check=True, capture_output=True)
+        seconds["a new interpreter"].append(time.perf_counter() - started)
+    workload = "fresh process: one Table 3-4 arm (sumo_strategy1, 8 learners, 10 s)"
+    rows = [{"workload": workload, "implementation": name, "threads": numba.get_num_threads(),
+             "calls": calls, "seconds": float(np.median(times)), "seconds_min": min(times),
+             "seconds_max": max(times)} for name, times in seconds.items()]
+    rows.append({"workload": "fresh process: the zygote's start, once per calling process",
+                 "implementation": "forked from the zygote", "threads": numba.get_num_threads(),
+                 "calls": 1, "seconds": zygote_start, "seconds_min": zygote_start,
+                 "seconds_max": zygote_start})
+    table = pd.DataFrame(rows)
+    table["speedup_vs_reference"] = np.nan
+    table.loc[0, "speedup_vs_reference"] = table.loc[1, "seconds"] / table.loc[0, "seconds"]
+    return table
+
+
 def workloads(quick: bool = False) -> dict[str, Callable[[], pd.DataFrame]]:
     """Every workload by the name ``bench --only`` takes, in the order the table shows them."""
     return {
         "first_run": lambda: first_run_bench(),
         "contention": lambda: contention_bench(quick),
+        "fresh": lambda: fresh_bench(calls=2 if quick else 4),
         "network": lambda: network_bench(quick),
         "sumo_step": lambda: sumo_step_bench(quick),
         "navigation": lambda: navigation_bench(generations=10 if quick else 30,

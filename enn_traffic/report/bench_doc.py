@@ -80,8 +80,25 @@ def first_run(folder: Path) -> str:
     return "\n".join(lines)
 
 
+def fresh(folder: Path) -> str:
+    """A fresh process forked from the zygote against a new interpreter (issue 62), from
+    ``fresh_issue62.csv`` (:func:`enn_traffic.bench.fresh_bench`)."""
+    table = pd.read_csv(folder / "fresh_issue62.csv")
+    lines = ["| what | how the process starts | calls | seconds per call, median "
+             "(fastest–slowest) |", "|---|---|---:|---:|"]
+    for row in table.itertuples():
+        lines.append(f"| {row.workload.removeprefix('fresh process: ')} | {row.implementation} "
+                     f"| {row.calls} | {row.seconds:.2f} ({row.seconds_min:.2f}–"
+                     f"{row.seconds_max:.2f}) |")
+    arm = table.iloc[0]
+    lines += ["", f"An arm in a forked process takes {1 / arm.speedup_vs_reference:.2f} of the "
+              f"time it took in a new interpreter ({arm.speedup_vs_reference:.1f}× faster)."]
+    return "\n".join(lines)
+
+
 SECTIONS: generated.Sections = {"sumo_step": sumo_step, "published": published,
-                                "contention": contention, "first_run": first_run}
+                                "contention": contention, "first_run": first_run,
+                                "fresh": fresh}
 
 
 def section(name: str, folder: Path) -> str:

@@ -23,6 +23,24 @@ def test_a_call_runs_in_a_new_process_and_its_error_is_raised_here():
         fresh(shipped_scenario, "no_such_scenario")
 
 
+def test_a_crash_is_reported_with_its_exit_status():
+    from enn_traffic.traffic.fresh import FreshProcessError
+
+    with pytest.raises(FreshProcessError, match="_exit ended with exit status 3"):
+        fresh(os._exit, 3)
+
+
+def test_a_call_sees_the_callers_environment_and_folder_as_they_are_now(monkeypatch, tmp_path):
+    """The processes are forked from a process started once: one started before the caller
+    changed its environment or folder must not answer for it."""
+    monkeypatch.setenv("ENN_TRAFFIC_PROBE", "one")
+    assert fresh(os.getenv, "ENN_TRAFFIC_PROBE") == "one"
+    monkeypatch.setenv("ENN_TRAFFIC_PROBE", "two")
+    monkeypatch.chdir(tmp_path)
+    assert fresh(os.getenv, "ENN_TRAFFIC_PROBE") == "two"
+    assert fresh(os.getcwd) == str(tmp_path)
+
+
 def test_a_script_without_a_main_guard_may_call_it(tmp_path):
     """multiprocessing's spawn would run the script again in the child; this does not."""
     script = tmp_path / "script.py"
