@@ -18,6 +18,7 @@ from hypothesis import strategies as st
 from enn_traffic.controller import Controller
 from enn_traffic.errors import InputError
 from enn_traffic.evolution.ga import GAState
+from enn_traffic.runner import CHECKPOINT
 from enn_traffic.scenario import load_scenario
 
 RUN = ("--population", 40, "--generations", 12, "--seed", 5, "--quiet")
@@ -275,7 +276,8 @@ def test_a_run_started_with_sigint_ignored_still_stops_on_kill_int(tmp_path, roo
                                stderr=subprocess.PIPE, text=True,
                                preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_IGN))
     deadline = time.monotonic() + 120
-    while _generation_done(tmp_path / "run") < 1:
+    # a generation's row is written just before its checkpoint: wait for both
+    while _generation_done(tmp_path / "run") < 1 or not (tmp_path / "run" / CHECKPOINT).exists():
         assert time.monotonic() < deadline and process.poll() is None, "it never got going"
         time.sleep(0.05)
     process.send_signal(signal.SIGINT)

@@ -1,5 +1,6 @@
 """Table 2's incremental evolution (paper §5.4.1)."""
 
+from dataclasses import replace
 from pathlib import Path
 
 import pandas as pd
@@ -23,14 +24,21 @@ def test_table2_evolves_a_wider_network_than_table1():
         20 * 3 + 4 * 2)
 
 
+# The arena family on a small budget: short lives, a small GA, few situations.
+SMALL_ARENA = replace(protocol.ARENA, quick={
+    **protocol.ARENA.quick, "test_situations": 4, "recheck_situations": 4,
+    "ga": {"population_size": 16, "generations": 4, "elite_count": 2},
+    "scenario_overrides": {"episode": {"max_steps": 300}}})
+
+
 def test_table2_reports_the_evolution_whose_last_controller_does_best_on_validation(tmp_path):
     """One incremental evolution per seed; table2.csv is the one whose last controller's worst
     strategy does best on validation traffic, table2_runs.csv holds them all."""
 
     study = Study(tmp_path, quick=True, progress=False)
-    table2.table2(study)
+    table2.table2(study, SMALL_ARENA)
     runs = pd.read_csv(tmp_path / "table2_runs.csv")
-    family = study.settings(protocol.ARENA).incremental()
+    family = study.settings(SMALL_ARENA).incremental()
     assert sorted(runs["seed"].unique()) == list(family.incremental_seeds) == [1, 2]
     worst = {}
     for seed in family.incremental_seeds:
