@@ -22,6 +22,7 @@ same run, with the peak memory of each.
 from __future__ import annotations
 
 import itertools
+import json
 import math
 import os
 import pickle
@@ -844,6 +845,29 @@ def fresh_bench(calls: int = 4) -> pd.DataFrame:
     return table
 
 
+def reproduce_quick_bench() -> pd.DataFrame:
+    """``enn-traffic reproduce --quick`` into an empty folder with an empty cache folder (SUMO's
+    warm-ups simulated again) and the kernels numba compiled before (once per install),
+    timed as a whole command; and each experiment's wall time from its ``summary.json``."""
+    with tempfile.TemporaryDirectory(prefix="enn-bench-reproduce-") as folder:
+        env = {**os.environ, "ENN_TRAFFIC_CACHE": str(Path(folder) / "cache"),
+               "NUMBA_CACHE_DIR": os.environ["NUMBA_CACHE_DIR"]}
+        out = Path(folder) / "out"
+        started = time.perf_counter()
+        subprocess.run([sys.executable, "-m", "enn_traffic", "reproduce", "--quick", "--out",
+                        str(out)], env=env, check=True, capture_output=True)
+        total = time.perf_counter() - started
+        records = json.loads((out / "summary.json").read_text())
+    rows = [{"workload": "reproduce --quick", "implementation": name,
+             "threads": numba.get_num_threads(), "seconds": record["seconds"]}
+            for name, record in records.items()]
+    rows.append({"workload": "reproduce --quick", "implementation": "the whole command",
+                 "threads": numba.get_num_threads(), "seconds": total})
+    table = pd.DataFrame(rows)
+    table["speedup_vs_reference"] = np.nan
+    return table
+
+
 def workloads(quick: bool = False) -> dict[str, Callable[[], pd.DataFrame]]:
     """Every workload by the name ``bench --only`` takes, in the order the table shows them."""
     return {
@@ -864,11 +888,18 @@ def workloads(quick: bool = False) -> dict[str, Callable[[], pd.DataFrame]]:
         "city": lambda: city_bench(generations=3 if quick else 20,
                                    closed_loop_steps=1_000 if quick else 5_000),
         "lane_keeping": lambda: lane_keeping_bench(generations=2 if quick else 4),
+        "reproduce_quick": reproduce_quick_bench,
     }
+
+
+# Workloads that take minutes whatever the settings (a compile from an empty cache, a whole
+# reproduction): ``bench --quick`` runs them only when ``--only`` names them.
+LONG = ("first_run", "reproduce_quick")
 
 
 def run_bench(quick: bool = False, only: list[str] | None = None) -> pd.DataFrame:
     """The throughput tables of every workload, or of the workloads ``only`` names."""
     chosen = workloads(quick)
-    return pd.concat([work() for name, work in chosen.items() if only is None or name in only],
+    names = only or [name for name in chosen if not (quick and name in LONG)]
+    return pd.concat([work() for name, work in chosen.items() if name in names],
                      ignore_index=True)

@@ -168,11 +168,13 @@ def build_parser() -> argparse.ArgumentParser:
     baseline.add_argument("--quiet", action="store_true", help="no progress bar or messages")
 
     bench = commands.add_parser("bench", help="throughput table (vehicle-steps per second)")
-    bench.add_argument("--quick", action="store_true", help="shorter timing runs")
+    bench.add_argument("--quick", action="store_true",
+                       help="shorter timing runs, without first_run and reproduce_quick "
+                       "(minutes each) unless --only names them")
     bench.add_argument("--out", type=_path, metavar="FILE.csv", help="also write the table")
     bench.add_argument("--only", help="comma-separated workloads (default: all): first_run, "
-                       "contention, network, sumo_step, navigation, arena, env, sb3, sumo, "
-                       "recording, city, lane_keeping")
+                       "contention, fresh, network, sumo_step, navigation, arena, env, sb3, "
+                       "sumo, recording, city, lane_keeping, reproduce_quick")
     return parser
 
 

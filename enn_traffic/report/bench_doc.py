@@ -96,9 +96,21 @@ def fresh(folder: Path) -> str:
     return "\n".join(lines)
 
 
+def reproduce_quick(folder: Path) -> str:
+    """``reproduce --quick`` timed as a whole and by experiment (issue 62), from
+    ``reproduce_quick_issue62.csv`` (:func:`enn_traffic.bench.reproduce_quick_bench`)."""
+    table = pd.read_csv(folder / "reproduce_quick_issue62.csv")
+    parts = table[table["implementation"] != "the whole command"]
+    whole = table[table["implementation"] == "the whole command"]["seconds"].iloc[0]
+    lines = ["| experiment | wall time |", "|---|---:|"]
+    lines += [f"| {row.implementation} | {row.seconds:.1f} s |" for row in parts.itertuples()]
+    lines += [f"| **the whole command** (imports and summary included) | **{whole:.0f} s** |"]
+    return "\n".join(lines)
+
+
 SECTIONS: generated.Sections = {"sumo_step": sumo_step, "published": published,
                                 "contention": contention, "first_run": first_run,
-                                "fresh": fresh}
+                                "fresh": fresh, "reproduce_quick": reproduce_quick}
 
 
 def section(name: str, folder: Path) -> str:

@@ -17,6 +17,8 @@ and differ by their own seed from the learner's start on (:func:`shared_warmup`)
 from __future__ import annotations
 
 import functools
+import hashlib
+import json
 import math
 import os
 from collections import OrderedDict
@@ -91,7 +93,23 @@ def named(hit: np.ndarray, names: tuple[str, ...], types: tuple[str, ...]) -> np
     return objects([(names[h], types[h]) if h >= 0 else None for h in hit.tolist()])
 
 
-RECORDINGS_KEPT = 24  # a test world holds 10 test and 10 validation situations
+# Replay recordings are kept in the process for every world of the same traffic: a family's
+# experiments meet the same situations again (Fig. 11's runs of every GA seed and Table 2's
+# iterations evolve on the same traffic keys; Table 1 measures on the same test keys), so a
+# situation is simulated once. At most this many bytes, the least recently used dropped first.
+RECORDINGS_BYTES = 1 << 30
+_recordings: OrderedDict[tuple, sumo.Recording] = OrderedDict()
+
+
+def _recording_bytes(record: sumo.Recording) -> int:
+    return record.ids.nbytes + record.corners.nbytes + record.centres.nbytes
+
+
+def forget_recordings() -> None:
+    """Drop every kept replay recording (SUMO records each situation again)."""
+    _recordings.clear()
+
+
 # Replay records SUMO as far as the lives reach: this many steps first, then this many times
 # longer while a life outlives the recording (SumoWorld.replay).
 FIRST_RECORDING, RECORDING_GROWTH = 256, 4
@@ -104,7 +122,6 @@ class SumoWorld(LearnerWorld):
 
     def __init__(self, scenario: Scenario, track: Track | None = None):
         super().__init__(scenario, track)
-        self._recordings: OrderedDict[tuple, sumo.Recording] = OrderedDict()
         self._traffic_seen: list[float] = []  # the last replay's mean SUMO vehicles
         self.max_steps = episode_steps(scenario)  # or where the .sumocfg ends
         self._checked = False  # closed loop: has some traffic been seen on the network?
@@ -170,7 +187,8 @@ class SumoWorld(LearnerWorld):
         way every time from the same seed and state, so a longer recording begins with the
         shorter one."""
         steps = self.max_steps if steps is None else min(steps, self.max_steps)
-        kept = self._recordings.get((seed, warmup))
+        key = (self._traffic, seed, warmup)
+        kept = _recordings.get(key)
         if kept is None or kept.ids.shape[0] - 1 < steps:
             state = self.warm_state(seed, warmup)
             own = "" if state else f"{self.scenario.traffic.warmup_s:g} s of warm-up, then "
@@ -180,11 +198,21 @@ class SumoWorld(LearnerWorld):
             if steps < self.max_steps and not (record.ids >= 0).any():
                 # no vehicle yet: refuse traffic that never reaches the network within the cap
                 sumo.first_traffic(self.scenario, seed, state, self.max_steps)
-            self._recordings[seed, warmup] = record
-            while len(self._recordings) > RECORDINGS_KEPT:
-                self._recordings.popitem(last=False)
-        self._recordings.move_to_end((seed, warmup))
-        return self._recordings[seed, warmup]
+            _recordings[key] = record
+            while (len(_recordings) > 1 and sum(map(_recording_bytes, _recordings.values()))
+                   > RECORDINGS_BYTES):
+                _recordings.popitem(last=False)
+        _recordings.move_to_end(key)
+        return _recordings[key]
+
+    @functools.cached_property
+    def _traffic(self) -> str:
+        """What a recording depends on: the road network, the traffic and the step length
+        (and, where SUMO writes outputs, the folder they go to)."""
+        scenario = self.scenario
+        decides = scenario.model_dump(mode="json", include={"track", "traffic", "vehicle"})
+        where = str(scenario.sumo_folder) if scenario.traffic.outputs else ""
+        return hashlib.sha256(json.dumps([decides, where], sort_keys=True).encode()).hexdigest()
 
     def replay(self, genes: np.ndarray, seed: int, start: np.ndarray, warmup: int | None,
                cap: int | None = None) -> tuple[tuple[np.ndarray, ...], sumo.Recording]:

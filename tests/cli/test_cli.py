@@ -237,6 +237,15 @@ def test_bench_only_refuses_a_workload_it_does_not_have():
     assert "Traceback" not in result.stderr
 
 
+def test_bench_help_lists_every_workload_and_quick_leaves_out_the_long_ones():
+    from enn_traffic.bench import LONG, workloads
+
+    result = cli("bench", "--help")
+    listed = " ".join(result.stdout.split())
+    assert all(name in listed for name in workloads()), listed
+    assert set(LONG) < set(workloads())
+
+
 @pytest.mark.parametrize("preset, expected", [
     ({}, "PASSIVE"), ({"OMP_WAIT_POLICY": "ACTIVE"}, "ACTIVE"),
     ({"GOMP_SPINCOUNT": "300000"}, "unset")])

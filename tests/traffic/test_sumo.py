@@ -166,11 +166,13 @@ def test_replay_records_sumo_only_as_far_as_the_lives_reach(tmp_path, root, monk
     from enn_traffic.sim import sumo_world
 
     scenario = sumo_scenario(tmp_path, root, CLOCKWISE, steps=2000)
+    sumo_world.forget_recordings()  # those of other tests in this process
     monkeypatch.setattr(sumo_world, "FIRST_RECORDING", 10**6)
     whole = make_world(scenario)
     population = np.random.default_rng(5).uniform(-1, 1, (30, whole.spec.chromosome_length))
     expected = whole.evaluate(population, key=3)
-    assert {r.ids.shape[0] for r in whole._recordings.values()} == {2001}
+    assert {r.ids.shape[0] for r in sumo_world._recordings.values()} == {2001}
+    sumo_world.forget_recordings()
     monkeypatch.setattr(sumo_world, "FIRST_RECORDING", 16)
     world = make_world(scenario)
     results = world.evaluate(population, key=3)
@@ -178,7 +180,8 @@ def test_replay_records_sumo_only_as_far_as_the_lives_reach(tmp_path, root, monk
         np.testing.assert_array_equal(getattr(results, column), getattr(expected, column))
     longest = results.steps.max(axis=0)
     assert 16 < longest.max() < 2000
-    recorded = [world._recordings[seed, None].ids.shape[0] - 1 for seed in world.seeds(3)]
+    recorded = [sumo_world._recordings[world._traffic, seed, None].ids.shape[0] - 1
+                for seed in world.seeds(3)]
     assert all(longest[e] <= recorded[e] < max(16, 4 * longest[e]) + 1 for e in range(2))
     best = int(np.argmax(results.steps[:, 0]))
     poses, outcome = make_world(scenario).trace(population[best], key=3)
