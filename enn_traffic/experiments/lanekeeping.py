@@ -24,8 +24,8 @@ from enn_traffic.shipped import shipped_scenario
 from enn_traffic.sim.world import CAPPED
 from enn_traffic.worlds import make_world
 
-RUNS = Runs(seeds=(1, 2, 3), quick={"seeds": (1,), "ga": {"population_size": 20,
-                                                           "generations": 6, "elite_count": 2}})
+RUNS = Runs(seeds=(1, 2, 3), quick={"seeds": (1,), "ga": {"population_size": 12,
+                                                           "generations": 5, "elite_count": 2}})
 DRAWN_STEPS = 400
 # Trained on highway-env's road alone, or on roads drawn per situation (issue 25).
 TRAININGS = ["lane_keeping", "lane_keeping_mixed"]

@@ -92,14 +92,14 @@ ARENA = Family(_numbered("arena_strategy"), "", (1, 2, 3, 4), test_situations=40
                recheck_situations=200, table_situations=200, accepted_fitness=750.0,
                incremental_max_generations=150,
                incremental_hidden=(6,), incremental_seeds=(1, 2, 3, 4),
-               quick={"seeds": (1, 2), "incremental_seeds": (1, 2), "test_situations": 10,
+               quick={"seeds": (1, 2), "incremental_seeds": (1,), "test_situations": 10,
                       "recheck_situations": 10, "table_situations": 10,
                       "ga": {"population_size": 40, "generations": 12, "elite_count": 4}})
 SUMO = Family(_numbered("sumo_strategy"), "sumo", (1, 2), test_situations=10, recheck_situations=30,
               table_situations=10, accepted_fitness=2000.0, incremental_max_generations=20,
               quick={"seeds": (1,), "incremental_seeds": (1,), "test_situations": 3,
                      "recheck_situations": 3, "table_situations": 3,
-                     "ga": {"population_size": 40, "generations": 6, "elite_count": 4},
+                     "ga": {"population_size": 40, "generations": 4, "elite_count": 4},
                      "scenario_overrides": {"episode": {"max_steps": 1000},
                                             "traffic": {"warmup_s": 20.0}}})
 # The Cologne morning (city_cologne3) and three SUMO driver models on it (docs/sumo.md, "City

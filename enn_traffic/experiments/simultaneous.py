@@ -107,7 +107,7 @@ class CrowdLearning:
     quick: Mapping[str, object] = field(default_factory=dict)
 
 
-LEARNING = CrowdLearning(quick={"seconds": 300.0, "situations": 2})
+LEARNING = CrowdLearning(quick={"seconds": 200.0, "situations": 2})
 
 
 def situation_crowd(world: ArenaWorld, situation: int, kinds=None, key: int = SITUATION_KEY

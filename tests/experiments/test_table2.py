@@ -26,7 +26,8 @@ def test_table2_evolves_a_wider_network_than_table1():
 
 # The arena family on a small budget: short lives, a small GA, few situations.
 SMALL_ARENA = replace(protocol.ARENA, quick={
-    **protocol.ARENA.quick, "test_situations": 4, "recheck_situations": 4,
+    **protocol.ARENA.quick, "incremental_seeds": (1, 2), "test_situations": 4,
+    "recheck_situations": 4,
     "ga": {"population_size": 16, "generations": 4, "elite_count": 2},
     "scenario_overrides": {"episode": {"max_steps": 300}}})
 
