@@ -97,8 +97,8 @@ ARENA = Family(_numbered("arena_strategy"), "", (1, 2, 3, 4), test_situations=40
                       "ga": {"population_size": 40, "generations": 12, "elite_count": 4}})
 SUMO = Family(_numbered("sumo_strategy"), "sumo", (1, 2), test_situations=10, recheck_situations=30,
               table_situations=10, accepted_fitness=2000.0, incremental_max_generations=20,
-              quick={"seeds": (1,), "incremental_seeds": (1,), "test_situations": 3,
-                     "recheck_situations": 3, "table_situations": 3,
+              quick={"seeds": (1,), "incremental_seeds": (1,), "test_situations": 2,
+                     "recheck_situations": 2, "table_situations": 2,
                      "ga": {"population_size": 40, "generations": 4, "elite_count": 4},
                      "scenario_overrides": {"episode": {"max_steps": 1000},
                                             "traffic": {"warmup_s": 20.0}}})
