@@ -566,7 +566,7 @@ def _city_with_lights(folder: Path, iterations: int, period_s: float) -> tuple[P
     subprocess.run([sys.executable, f"{sumo_wheel.SUMO_HOME}/tools/randomTrips.py", "-n",
                     str(net), "-o", str(trips), "--period", f"{period_s:g}", "--end", "3600",
                     "--seed", "7", "--fringe-factor", "10", "--min-distance", "500"],
-                   check=True, capture_output=True)
+                   check=True, capture_output=True, cwd=folder)  # its routes.rou.xml too
     return net, trips
 
 
