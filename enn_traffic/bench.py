@@ -819,8 +819,7 @@ def fresh_bench(calls: int = 4) -> pd.DataFrame:
     started = time.perf_counter()
     fresh.fresh(os.getpid)
     zygote_start = time.perf_counter() - started
-    env = {**os.environ, "PYTHONPATH": os.pathsep.join(
-        filter(None, [str(Path(__file__).resolve().parents[1]), os.environ.get("PYTHONPATH")]))}
+    env = fresh.child_environment()
     job = pickle.dumps((call[0], call[1:]))
     seconds: dict[str, list[float]] = {"forked from the zygote": [], "a new interpreter": []}
     for _ in range(calls):

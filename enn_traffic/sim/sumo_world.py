@@ -208,11 +208,13 @@ class SumoWorld(LearnerWorld):
     @functools.cached_property
     def _traffic(self) -> str:
         """What a recording depends on: the road network, the traffic and the step length
-        (and, where SUMO writes outputs, the folder they go to)."""
+        (and, where SUMO writes outputs, the folder they go to); and the step cap, within
+        which a recording of the first steps without a vehicle was checked for traffic."""
         scenario = self.scenario
         decides = scenario.model_dump(mode="json", include={"track", "traffic", "vehicle"})
         where = str(scenario.sumo_folder) if scenario.traffic.outputs else ""
-        return hashlib.sha256(json.dumps([decides, where], sort_keys=True).encode()).hexdigest()
+        return hashlib.sha256(json.dumps([decides, where, self.max_steps],
+                                         sort_keys=True).encode()).hexdigest()
 
     def replay(self, genes: np.ndarray, seed: int, start: np.ndarray, warmup: int | None,
                cap: int | None = None) -> tuple[tuple[np.ndarray, ...], sumo.Recording]:

@@ -9,8 +9,9 @@ process that ends with it, and gives the same result whatever ran before.
 The new processes are forked from a *zygote*: a plain ``python -m enn_traffic.traffic.fresh``
 started once per calling process (again when the caller's environment or working folder
 changed), which imports the package's SUMO modules and numba but never starts SUMO, and forks
-a child per call. A child so starts with a libsumo that never ran, in about 0.05 s instead of
-the 3–4 s a new interpreter spends importing and loading numba. The call and its result travel
+a child per call. A child so starts with a libsumo that never ran, without the imports and
+numba's set-up a new interpreter spends most of its time on (docs/bench.md, "A fresh process
+in a fraction of a second"). The call and its result travel
 pickled through a socket of the child's own; unlike multiprocessing's spawn or forkserver, the
 child never re-runs the caller's ``__main__``, so a script without an ``if __name__ ==
 "__main__"`` guard may call it.
@@ -40,6 +41,13 @@ class FreshProcessError(RuntimeError):
 # The zygote imports the same copy of the package as the caller, whatever its sys.path.
 _PACKAGE_ROOT = str(Path(__file__).resolve().parents[2])
 _NUMBER = struct.Struct("!q")
+
+
+def child_environment() -> dict[str, str]:
+    """The caller's environment with this copy of the package first on ``PYTHONPATH``: what a
+    process started for the caller runs with."""
+    path = os.environ.get("PYTHONPATH")
+    return {**os.environ, "PYTHONPATH": os.pathsep.join(filter(None, [_PACKAGE_ROOT, path]))}
 
 
 def end_with_parent(parent: int) -> None:
@@ -78,12 +86,10 @@ class _Zygote:
 
     def __init__(self) -> None:
         self.owner, self.environment, self.folder = os.getpid(), dict(os.environ), os.getcwd()
-        path = os.environ.get("PYTHONPATH")
-        env = {**os.environ, "PYTHONPATH": os.pathsep.join(filter(None, [_PACKAGE_ROOT, path]))}
         ours, theirs = socket.socketpair()
         self.process = subprocess.Popen(
             [sys.executable, "-m", __name__, str(theirs.fileno())], pass_fds=[theirs.fileno()],
-            stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL, env=env)
+            stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL, env=child_environment())
         theirs.close()
         self.control, self.lock = ours, threading.Lock()
 
@@ -289,7 +295,7 @@ def _zygote_main(control: socket.socket) -> None:
 
 def _preload() -> None:
     """What a SUMO start needs, imported (SUMO itself never started), and numba's compiler set
-    up (its registries, about 1 s), so that a child only loads its kernels from the cache.
+    up (its registries), so that a child only loads its kernels from the cache.
     Whatever fails here, the child meets again and reports."""
     with contextlib.suppress(Exception):
         import numba
