@@ -46,7 +46,7 @@ from enn_traffic.sim.rules import Physics
 from enn_traffic.sim.sumo_situations import WARMUP_STREAM, shared_warmup, situation_seed
 from enn_traffic.sim.world import CAPPED, SituationResults
 from enn_traffic.traffic import sumo
-from enn_traffic.traffic.fresh import fresh_calls, fresh_map
+from enn_traffic.traffic.fresh import fresh, fresh_calls, fresh_map
 
 
 class ClosedLoopLife(NamedTuple):
@@ -113,8 +113,9 @@ def forget_recordings() -> None:
 # Replay records SUMO as far as the lives reach: this many steps first, then this many times
 # longer while a life outlives the recording (SumoWorld.replay).
 FIRST_RECORDING, RECORDING_GROWTH = 256, 4
-# Closed-loop situations run in this many fresh processes at once (SumoWorld.evaluate).
-CLOSED_LOOP_WORKERS = max(1, min(4, os.cpu_count() or 1))
+# Replay recordings and closed-loop situations run in this many fresh processes at once
+# (SumoWorld.recordings, SumoWorld.evaluate).
+SUMO_WORKERS = max(1, min(4, os.cpu_count() or 1))
 
 
 class SumoWorld(LearnerWorld):
@@ -182,28 +183,56 @@ class SumoWorld(LearnerWorld):
     def recording(self, seed: int, warmup: int | None = None,
                   steps: int | None = None) -> sumo.Recording:
         """The SUMO run of ``seed`` without the learner, from shared warm-up ``warmup`` (see
-        :meth:`warm_state`), at least ``steps`` steps long (the step cap by default): recorded
-        once and kept, and recorded again, longer, when a life needs more. SUMO runs the same
-        way every time from the same seed and state, so a longer recording begins with the
-        shorter one."""
-        steps = self.max_steps if steps is None else min(steps, self.max_steps)
-        key = (self._traffic, seed, warmup)
-        kept = _recordings.get(key)
-        if kept is None or kept.ids.shape[0] - 1 < steps:
-            state = self.warm_state(seed, warmup)
-            own = "" if state else f"{self.scenario.traffic.warmup_s:g} s of warm-up, then "
-            with slow_step(f"simulating SUMO traffic ({own}{steps} steps, seed {seed})"):
-                record = sumo.record(self.scenario, seed, steps, state,
-                                     empty=steps < self.max_steps)
-            if steps < self.max_steps and not (record.ids >= 0).any():
-                # no vehicle yet: refuse traffic that never reaches the network within the cap
-                sumo.first_traffic(self.scenario, seed, state, self.max_steps)
-            _recordings[key] = record
+        :meth:`warm_state`), at least ``steps`` steps long (the step cap by default): one
+        situation of :meth:`recordings`."""
+        return self.recordings([(seed, warmup, steps)])[0]
+
+    def recordings(self, situations: list[tuple[int, int | None, int | None]]
+                   ) -> list[sumo.Recording]:
+        """The recording of each situation (SUMO seed, shared warm-up, at least this many
+        steps; None: the step cap): recorded once and kept, and recorded again, longer, when a
+        life needs more. SUMO runs the same way every time from the same seed and state, so a
+        longer recording begins with the shorter one. The missing ones are simulated side by
+        side, each in a fresh process (:data:`SUMO_WORKERS` at once): a recording never
+        depends on what this process simulated before (docs/sumo.md, "One SUMO start, one
+        process")."""
+        wanted = [(seed, warmup, self.max_steps if steps is None else min(steps, self.max_steps))
+                  for seed, warmup, steps in situations]
+        missing: dict[tuple, int] = {}
+        for seed, warmup, steps in wanted:
+            kept = _recordings.get((self._traffic, seed, warmup))
+            if kept is None or kept.ids.shape[0] - 1 < steps:
+                missing[seed, warmup] = max(steps, missing.get((seed, warmup), 0))
+        made = {}
+        if missing:
+            what = (f"{len(missing)} situations" if len(missing) > 1
+                    else f"seed {next(iter(missing))[0]}")
+            own = "" if self.scenario.traffic.warmup_states else (
+                f"{self.scenario.traffic.warmup_s:g} s of warm-up, then ")
+            with slow_step(f"simulating SUMO traffic ({own}{max(missing.values())} steps, "
+                           f"{what})"):
+                records = fresh_calls([(recorded, self.scenario, seed,
+                                        self._shared_warmup_seed(seed, warmup), steps,
+                                        steps < self.max_steps)
+                                       for (seed, warmup), steps in missing.items()],
+                                      workers=SUMO_WORKERS)
+            for ((seed, warmup), steps), record in zip(missing.items(), records, strict=True):
+                if steps < self.max_steps and not (record.ids >= 0).any():
+                    # no vehicle yet: refuse traffic that never reaches the network within
+                    # the cap
+                    fresh(sumo.first_traffic, self.scenario, seed,
+                          self.warm_state(seed, warmup), self.max_steps)
+                made[seed, warmup] = _recordings[self._traffic, seed, warmup] = record
             while (len(_recordings) > 1 and sum(map(_recording_bytes, _recordings.values()))
                    > RECORDINGS_BYTES):
                 _recordings.popitem(last=False)
-        _recordings.move_to_end(key)
-        return _recordings[key]
+        found = []
+        for seed, warmup, _ in wanted:
+            key = (self._traffic, seed, warmup)
+            if key in _recordings:
+                _recordings.move_to_end(key)
+            found.append(made.get((seed, warmup)) or _recordings[key])
+        return found
 
     @functools.cached_property
     def _traffic(self) -> str:
@@ -219,24 +248,39 @@ class SumoWorld(LearnerWorld):
     def replay(self, genes: np.ndarray, seed: int, start: np.ndarray, warmup: int | None,
                cap: int | None = None) -> tuple[tuple[np.ndarray, ...], sumo.Recording]:
         """Every chromosome (source-layout genes) through the recorded traffic of ``seed``:
-        the life columns of :func:`run_replay_population` and the recording. SUMO is recorded
-        only as far as the lives reach (docs/sumo.md, "Replay"): first
-        :data:`FIRST_RECORDING` steps, then :data:`RECORDING_GROWTH` times longer while a life
-        outlives the recording, up to the step cap (``cap``, at most the scenario's); a
-        life's result is the same as on a recording of the whole cap, which it never reads
-        past its end."""
+        one situation of :meth:`replays`."""
+        return self.replays(genes, [(seed, start, warmup)], cap)[0]
+
+    def replays(self, genes: np.ndarray, situations: list[tuple[int, np.ndarray, int | None]],
+                cap: int | None = None) -> list[tuple[tuple[np.ndarray, ...], sumo.Recording]]:
+        """Every chromosome (source-layout genes) through the recorded traffic of each
+        situation (SUMO seed, start, shared warm-up): the life columns of
+        :func:`run_replay_population` and the recording. SUMO is recorded only as far as the
+        lives reach (docs/sumo.md, "Replay"): first :data:`FIRST_RECORDING` steps, then
+        :data:`RECORDING_GROWTH` times longer while a life outlives the recording, up to the
+        step cap (``cap``, at most the scenario's), every situation's recordings of a round
+        side by side (:meth:`recordings`). A life's result is the same as on a recording of
+        the whole cap, which it never reads past its end."""
         cap = self.max_steps if cap is None else min(cap, self.max_steps)
-        steps = min(cap, FIRST_RECORDING)
-        while True:
-            record = self.recording(seed, warmup, steps)
-            steps = min(record.ids.shape[0] - 1, cap)
-            with numba.parallel_chunksize(1):
-                runs = run_replay_population(
-                    genes, self.layer_sizes, self._learner_physics(record.radius), self.geometry,
-                    start, record.ids, record.corners, record.centres, steps)
-            if steps >= cap or not (runs[1] == CAPPED).any():
-                return runs, record
-            steps *= RECORDING_GROWTH
+        steps = dict.fromkeys(range(len(situations)), min(cap, FIRST_RECORDING))
+        done = {}
+        while steps:
+            records = self.recordings([(situations[i][0], situations[i][2], reach)
+                                       for i, reach in steps.items()])
+            longer = {}
+            for i, record in zip(steps, records, strict=True):
+                reach = min(record.ids.shape[0] - 1, cap)
+                with numba.parallel_chunksize(1):
+                    runs = run_replay_population(
+                        genes, self.layer_sizes, self._learner_physics(record.radius),
+                        self.geometry, situations[i][1], record.ids, record.corners,
+                        record.centres, reach)
+                if reach >= cap or not (runs[1] == CAPPED).any():
+                    done[i] = (runs, record)
+                else:
+                    longer[i] = reach * RECORDING_GROWTH
+            steps = longer
+        return [done[i] for i in range(len(situations))]
 
     def _learner_physics(self, radius: float) -> Physics:
         """The constants, with bodies as large as the traffic's largest (``radius``)."""
@@ -250,16 +294,18 @@ class SumoWorld(LearnerWorld):
         runs, vehicles, at_start, safety, hit_vehicle, ends = [], [], [], [], [], []
         situations = list(zip(self.seeds(key), self.situation_starts(key), self.warmups(key),
                               strict=True))
-        if closed:  # in fresh processes, a share of the situations each
+        if not closed:  # every situation's recordings side by side
+            replayed = self.replays(genes, situations)
+        else:  # in fresh processes, a share of the situations each
             self._save_warm_ups(situations)
-            shares = [situations[i::CLOSED_LOOP_WORKERS] for i in range(CLOSED_LOOP_WORKERS)]
+            shares = [situations[i::SUMO_WORKERS] for i in range(SUMO_WORKERS)]
             done = fresh_map(closed_loop_lives, [(self.scenario, genes, share)
                                                  for share in shares if share],
-                             workers=CLOSED_LOOP_WORKERS)
+                             workers=SUMO_WORKERS)
             closed_lives = [None] * len(situations)
             for i, lives in enumerate(done):
-                closed_lives[i::CLOSED_LOOP_WORKERS] = lives
-        for index, (seed, start, warmup) in enumerate(situations):
+                closed_lives[i::SUMO_WORKERS] = lives
+        for index in range(len(situations)):
             if closed:
                 lives = closed_lives[index]
                 runs.append([np.array([life[i] for life in lives], dtype=np.int64)
@@ -271,7 +317,7 @@ class SumoWorld(LearnerWorld):
                 hit_vehicle.append(objects([life.hit_vehicle for life in lives]))
                 ends.append(np.array([life.end for life in lives], dtype=np.float64))
                 continue
-            (*lives, end), record = self.replay(genes, seed, start, warmup)
+            (*lives, end), record = replayed[index]
             runs.append(lives)
             ends.append(end)
             vehicles.append(record.mean_vehicles)
@@ -294,7 +340,7 @@ class SumoWorld(LearnerWorld):
                    if not self._state_of(seed, warmup).is_file()}
         fresh_calls([(situation_state, self.scenario, seed, warmup)
                      for seed, warmup in sorted(missing, key=repr)],
-                    workers=CLOSED_LOOP_WORKERS)
+                    workers=SUMO_WORKERS)
 
     def _state_of(self, seed: int, warmup: int | None) -> Path:
         """Where the state a closed-loop situation loads is kept (:meth:`live`)."""
@@ -400,6 +446,15 @@ class SumoWorld(LearnerWorld):
             body = corners[before, int(np.flatnonzero(ids[before] == hit)[0])].copy()
         return TracedLife(np.concatenate([learner[:, None, :], traffic], axis=1), int(outcome),
                           int(hit), hit_vehicle, body)
+
+
+def recorded(scenario: Scenario, seed: int, warm_seed: int | None, steps: int,
+             empty: bool) -> sumo.Recording:
+    """The SUMO run of ``seed`` from the shared warm-up of ``warm_seed`` (None: its own
+    warm-up), ``steps`` steps (:func:`~enn_traffic.traffic.sumo.record`): what
+    :meth:`SumoWorld.recordings` runs in a fresh process."""
+    state = None if warm_seed is None else sumo.warm_state(scenario, warm_seed, keep_rng=False)
+    return sumo.record(scenario, seed, steps, state, empty=empty)
 
 
 def situation_state(scenario: Scenario, seed: int, warmup: int | None,
