@@ -207,14 +207,15 @@ def contention_bench(quick: bool = False, busy: int = 2) -> pd.DataFrame:
     as under ``pytest -n 2``, a process pool, or a second user): :func:`contention_rates` in
     a fresh process for each OpenMP wait policy of :data:`CONTENTION_POLICIES`, the default
     threads against one thread in the same process, alternating; the median of the rounds,
-    with the slowest and fastest."""
+    with the slowest and fastest. ``quick``: beside the busy processes only, fewer and
+    shorter rounds."""
     from enn_traffic.traffic.fresh import fresh_calls
 
-    seconds, rounds = (1.0, 3) if quick else (2.0, 5)
+    seconds, rounds = (0.5, 2) if quick else (2.0, 5)
     measured = []
     saved = {name: os.environ.get(name) for name in ("OMP_WAIT_POLICY", "GOMP_SPINCOUNT")}
     try:
-        for load in (0, busy):
+        for load in (busy,) if quick else (0, busy):
             spinners = [subprocess.Popen([sys.executable, "-c", "while True: pass"])
                         for _ in range(load)]
             try:
@@ -321,24 +322,27 @@ def sumo_bench(generations: int = 10, closed_loop_steps: int = 10_000) -> pd.Dat
     return _rate_table(rows)
 
 
-def recording_bench(generations: int = 2) -> pd.DataFrame:
+def recording_bench(generations: int = 2, cap: int | None = None) -> pd.DataFrame:
     """A SUMO scenario as docs/sumo.md's template writes it, the step cap left at its default
-    (20,000 steps: 33 min of SUMO time) while lives last seconds (issue 50): Cologne, P = 20,
-    ``generations`` generations of a GA run, and a gymnasium environment's reset and
-    random-policy life, with the whole cap recorded first (before) and recorded only as far
-    as the lives reach (after), in the same run. The shared warm-ups are simulated before
-    the timing."""
+    (20,000 steps: 33 min of SUMO time; or ``cap``) while lives last seconds (issue 50):
+    Cologne, P = 20, ``generations`` generations of a GA run, and a gymnasium environment's
+    reset and random-policy life, with the whole cap recorded first (before) and recorded
+    only as far as the lives reach (after), in the same run, each arm from no kept
+    recording. The shared warm-ups are simulated before the timing."""
     from enn_traffic.envs.sumo import SumoEnv
     from enn_traffic.scenario import EpisodeConfig
     from enn_traffic.sim import sumo_world
 
-    cap = EpisodeConfig().max_steps
+    default = EpisodeConfig().max_steps
+    cap = default if cap is None else cap
+    what = "default cap" if cap == default else f"cap of {cap:,} steps"
     scenario = shipped_scenario("city_cologne3").with_overrides(
         episode={"max_steps": cap}, ga={"population_size": 20})
     rows, saved = [], sumo_world.FIRST_RECORDING
     for label, first in ((f"the whole cap recorded first ({cap:,} steps)", cap),
                          ("recorded as far as the lives reach", saved)):
         sumo_world.FIRST_RECORDING = first
+        sumo_world.forget_recordings()  # the other arm's would serve this one
         try:
             world = make_world(scenario)
             rng = np.random.default_rng(scenario.seed)
@@ -348,7 +352,7 @@ def recording_bench(generations: int = 2) -> pd.DataFrame:
             world.evaluate(population[:2], 0)  # compile and warm up outside the timing
             steps, learner_steps, seconds, _ = _timed_generations(
                 world, params, rng, population, range(1, generations + 1))
-            rows.append((f"sumo default cap: Cologne, P=20, {generations} generations", label,
+            rows.append((f"sumo {what}: Cologne, P=20, {generations} generations", label,
                          numba.get_num_threads(), steps, learner_steps, seconds))
             env = SumoEnv(scenario)
             actions = np.random.default_rng(1)
@@ -360,11 +364,12 @@ def recording_bench(generations: int = 2) -> pd.DataFrame:
                 *_, terminated, truncated, _ = env.step(actions.random(2))
                 if terminated or truncated:
                     break
-            rows.append(("sumo env: a reset and a random-policy life, Cologne, default cap",
+            rows.append((f"sumo env: a reset and a random-policy life, Cologne, {what}",
                          label, 1, lived, lived, time.perf_counter() - started))
             env.close()
         finally:
             sumo_world.FIRST_RECORDING = saved
+            sumo_world.forget_recordings()
     table = _rate_table(rows)
     for workload in table["workload"].unique():
         rows_of = table["workload"] == workload
@@ -659,10 +664,10 @@ def sumo_step_bench(quick: bool = False) -> pd.DataFrame:
     """SUMO's own step time on a city of thousands of lanes with actuated lights, without a
     learner, with one and with eight (issue 60: a learner once slowed SUMO 150-fold)."""
     with tempfile.TemporaryDirectory(prefix="enn-bench-lights-") as folder:
-        net, trips = _city_with_lights(Path(folder), 300 if quick else 1500, 0.5)
+        net, trips = _city_with_lights(Path(folder), 150 if quick else 1500, 0.5)
         return sumo_step_table(["-n", str(net), "-r", str(trips)],
-                               "random city with actuated lights", 100 if quick else 300,
-                               1200 if quick else 3000, 1 if quick else 3,
+                               "random city with actuated lights", 50 if quick else 300,
+                               600 if quick else 3000, 1 if quick else 3,
                                0 if quick else 3)
 
 
@@ -747,8 +752,8 @@ def network_bench(quick: bool = False) -> pd.DataFrame:
         environment = os.environ.get("ENN_TRAFFIC_CACHE")
         os.environ["ENN_TRAFFIC_CACHE"] = str(Path(folder) / "cache")  # cold, then warm
         try:
-            for iterations, with_reference in ((60 if quick else 100, True),
-                                               (300 if quick else 1500, False)):
+            for iterations, with_reference in ((40 if quick else 100, True),
+                                               (150 if quick else 1500, False)):
                 net = _random_city(Path(folder), iterations)
                 walls_s, _, track = _measured(lambda n=net: load_track(n, exits=True), False)
                 grid_s, grid_mb, grid = _measured(lambda t=track: WallGrid.cached(t.walls,
@@ -879,13 +884,14 @@ def workloads(quick: bool = False) -> dict[str, Callable[[], pd.DataFrame]]:
                                                reference_seconds=3.0 if quick else 10.0),
         "arena": lambda: arena_bench(generations=3 if quick else 10),
         "env": lambda: env_bench(steps=50 if quick else 200, sync_seconds=2.0 if quick else 5.0),
-        "sb3": lambda: sb3_bench(learn_steps=16_384 if quick else 65_536,
+        "sb3": lambda: sb3_bench(learn_steps=8_192 if quick else 65_536,
                                  steps=100 if quick else 500),
         "sumo": lambda: sumo_bench(generations=3 if quick else 10,
                                    closed_loop_steps=2_000 if quick else 10_000),
-        "recording": lambda: recording_bench(generations=1 if quick else 2),
-        "city": lambda: city_bench(generations=3 if quick else 20,
-                                   closed_loop_steps=1_000 if quick else 5_000),
+        "recording": lambda: recording_bench(generations=1 if quick else 2,
+                                             cap=3_000 if quick else None),
+        "city": lambda: city_bench(generations=1 if quick else 20,
+                                   closed_loop_steps=300 if quick else 5_000),
         "lane_keeping": lambda: lane_keeping_bench(generations=2 if quick else 4),
         "reproduce_quick": reproduce_quick_bench,
     }
