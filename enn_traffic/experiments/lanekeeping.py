@@ -3,6 +3,8 @@ road or on roads drawn per situation, and keeping the lane on roads never seen i
 
 from __future__ import annotations
 
+import os
+from dataclasses import dataclass
 from pathlib import Path
 
 import matplotlib.pyplot as plt
@@ -22,10 +24,21 @@ from enn_traffic.report.plots import draw_paths, learning_curves, save_figure
 from enn_traffic.scenario import Scenario
 from enn_traffic.shipped import shipped_scenario
 from enn_traffic.sim.world import CAPPED
+from enn_traffic.traffic.fresh import fresh_map
 from enn_traffic.worlds import make_world
 
-RUNS = Runs(seeds=(1, 2, 3), quick={"seeds": (1,), "ga": {"population_size": 12,
-                                                           "generations": 5, "elite_count": 2}})
+
+@dataclass(frozen=True)
+class LaneKeepingRuns(Runs):
+    """The runs, and on how many roads drawn from the validation key a drawn-road run's
+    controller is chosen (:func:`chosen`)."""
+
+    validation_roads: int = 20
+
+
+RUNS = LaneKeepingRuns(seeds=(1, 2, 3), quick={"seeds": (1,), "validation_roads": 5,
+                                               "ga": {"population_size": 12, "generations": 5,
+                                                      "elite_count": 2}})
 DRAWN_STEPS = 400
 # Trained on highway-env's road alone, or on roads drawn per situation (issue 25).
 TRAININGS = ["lane_keeping", "lane_keeping_mixed"]
@@ -68,8 +81,6 @@ FRESH = {
 ROADS = READ_BEFORE | FRESH
 # The camera's noise is drawn from a test key no earlier design read (the sealed test range).
 TEST_KEY = EVALUATION_KEY + 2
-# A drawn-road run's controller is chosen on this many roads drawn from the validation key.
-VALIDATION_ROADS = 20
 NOISES = [0.0, 0.1]  # the camera's noise when measured (m)
 # The keys of a road, which ROADS change from the one-road training's (highway-env's) road.
 ROAD_KEYS = ["road", "amplitude", "period", "radius", "mirrored", "draw"]
@@ -93,7 +104,7 @@ def lane_keeping(study: Study) -> list[str]:
                                                 evaluator=evaluator)
             finally:
                 evaluator.close()
-            best[name, seed] = chosen(sc, run_dir)
+            best[name, seed] = chosen(sc, run_dir, settings.validation_roads)
             save_controller(out, f"lane_keeping/{name}_seed{seed}", sc, best[name, seed],
                             runs[name, seed]["best_fitness"].max())
     cap = shipped_scenario(TRAININGS[0]).episode.max_steps
@@ -102,12 +113,13 @@ def lane_keeping(study: Study) -> list[str]:
                     title="Lane keeping (highway-env): best steps in lane per generation "
                     "(mixed: fresh roads every generation)", hline=cap)
     rows, paths = [], {}
+    measured = iter(test_lives([(name, road, noise, best[name, seed]) for name in TRAININGS
+                                for road in ROADS for noise in NOISES for seed in seeds]))
     for name in TRAININGS:
         for road in ROADS:
             for noise in NOISES:
-                world = road_world(name, road, noise)
                 for seed in seeds:
-                    steps, outcome, offset = world.offsets(best[name, seed], TEST_KEY)[0]
+                    steps, outcome, offset = next(measured)
                     rows.append({"trained_on": name, "road": road, "fresh": road in FRESH,
                                  "noise_m": noise,
                                  "seed": seed, "steps_in_lane": steps,
@@ -119,6 +131,7 @@ def lane_keeping(study: Study) -> list[str]:
                                  "training_wall_s": round(float(
                                      runs[name, seed]["elapsed_s"].iloc[-1]), 1)})
                 if name == TRAININGS[-1] and noise == NOISES[-1]:
+                    world = road_world(name, road, noise)
                     paths[road] = (world.track.walls,
                                    world.trace(best[name, seeds[0]], TEST_KEY)[0][:, 0])
     table = pd.DataFrame(rows)
@@ -143,10 +156,38 @@ def road_world(training: str, road: str, noise: float) -> LaneKeepingWorld:
         lane_keeping={**one_road, **ROADS[road], "noise_m": noise, "episodes": 1}))
 
 
-def chosen(scenario: Scenario, run_dir: Path) -> np.ndarray:
+# The test roads' lives run in this many fresh processes at once (test_lives).
+TEST_WORKERS = max(1, min(4, os.cpu_count() or 1))
+
+
+def test_lives(lives: list[tuple[str, str, float, np.ndarray]]) -> list[tuple[int, int, float]]:
+    """Each life (training, road of ``ROADS``, camera noise, chromosome) on the test key:
+    (steps kept in the lane, outcome, mean |lateral offset|), a share of the lives in each of
+    :data:`TEST_WORKERS` fresh processes; the same as one after another here (each life
+    resets its road and draws its noise from the test key)."""
+    shares = [lives[i::TEST_WORKERS] for i in range(TEST_WORKERS)]
+    done = fresh_map(road_lives, [(share,) for share in shares if share], workers=TEST_WORKERS)
+    results: list = [None] * len(lives)
+    for i, share in enumerate(done):
+        results[i::TEST_WORKERS] = share
+    return results
+
+
+def road_lives(lives: list[tuple[str, str, float, np.ndarray]]) -> list[tuple[int, int, float]]:
+    """Each life of :func:`test_lives`, one after another in this process."""
+    worlds: dict[tuple, LaneKeepingWorld] = {}
+    for name, road, noise, _ in lives:
+        if (name, road, noise) not in worlds:
+            worlds[name, road, noise] = road_world(name, road, noise)
+    return [worlds[name, road, noise].offsets(chromosome, TEST_KEY)[0]
+            for name, road, noise, chromosome in lives]
+
+
+def chosen(scenario: Scenario, run_dir: Path, roads: int = RUNS.validation_roads
+           ) -> np.ndarray:
     """A run's controller. On one road, its ``best.npz``: the road it will drive is the one it
     trained on. On drawn roads, the candidate (every generation's best and the whole final
-    population) that keeps the lane longest, on average, on ``VALIDATION_ROADS`` roads drawn
+    population) that keeps the lane longest, on average, on ``roads`` roads drawn
     from the validation key; the earliest of equals. (``best.npz`` is the first chromosome to
     reach the highest fitness on one generation's few roads, and the final elites are the
     fittest on the last generation's: measured on validation roads, both weak choices;
@@ -154,7 +195,7 @@ def chosen(scenario: Scenario, run_dir: Path) -> np.ndarray:
     if scenario.lane_keeping.draw is None:
         return Controller.load(run_dir / "best.npz").chromosome
     pool = candidates(run_dir, whole_population=True)
-    validation = scenario.with_overrides(lane_keeping={"episodes": VALIDATION_ROADS})
+    validation = scenario.with_overrides(lane_keeping={"episodes": roads})
     evaluator = ProcessEvaluator(validation)
     try:
         fitness = evaluator.evaluate(pool, keys.VALIDATION.start).fitness

@@ -180,7 +180,7 @@ def test_a_bad_draw_range_is_named(tmp_path):
     assert info.value.key == "lane_keeping.draw" and "period" in info.value.message
 
 
-def test_a_drawn_road_run_is_chosen_on_validation_roads(tmp_path, monkeypatch):
+def test_a_drawn_road_run_is_chosen_on_validation_roads(tmp_path):
     """Of a drawn-road run's candidates, the one kept is the best on validation roads: at
     least as good there as ``best.npz``, which only one generation's roads chose."""
     from enn_traffic import keys
@@ -195,8 +195,7 @@ def test_a_drawn_road_run_is_chosen_on_validation_roads(tmp_path, monkeypatch):
                     + "[lane_keeping.draw]\n")
     sc = load_scenario(path).with_overrides(lane_keeping={"episodes": 2})
     evolve(sc, tmp_path / "run", progress=False)
-    monkeypatch.setattr(lanekeeping, "VALIDATION_ROADS", 3)
-    chosen = lanekeeping.chosen(sc, tmp_path / "run")
+    chosen = lanekeeping.chosen(sc, tmp_path / "run", roads=3)
     pool = candidates(tmp_path / "run", whole_population=True)
     assert any(np.array_equal(chosen, row) for row in pool)
     final = RunOutputs.load(tmp_path / "run").population
