@@ -99,7 +99,7 @@ SUMO = Family(_numbered("sumo_strategy"), "sumo", (1, 2), test_situations=10, re
               table_situations=10, accepted_fitness=2000.0, incremental_max_generations=20,
               quick={"seeds": (1,), "incremental_seeds": (1,), "test_situations": 2,
                      "recheck_situations": 2, "table_situations": 2,
-                     "ga": {"population_size": 40, "generations": 4, "elite_count": 4},
+                     "ga": {"population_size": 40, "generations": 3, "elite_count": 4},
                      "scenario_overrides": {"episode": {"max_steps": 1000},
                                             "traffic": {"warmup_s": 20.0}}})
 # The Cologne morning (city_cologne3) and three SUMO driver models on it (docs/sumo.md, "City

@@ -43,6 +43,7 @@ with them, that situation's every span can be driven again.
 
 from __future__ import annotations
 
+import os
 import time
 from collections.abc import Mapping
 from dataclasses import dataclass, field
@@ -62,13 +63,15 @@ from enn_traffic.experiments.protocol import ARENA, run_dir
 from enn_traffic.experiments.study import Study
 from enn_traffic.io import write_csv
 from enn_traffic.kinds import STRATEGIES
-from enn_traffic.progress import terminal
+from enn_traffic.progress import slow_step, terminal
 from enn_traffic.report.paper_tables import PAPER_TABLE3, PAPER_TABLE4
 from enn_traffic.runner import ga_params
+from enn_traffic.scenario import Scenario
 from enn_traffic.shipped import shipped_scenario
 from enn_traffic.sim.arena import ArenaWorld
 from enn_traffic.sim.crowd import Crowd, CrowdRun
 from enn_traffic.sim.strategies import NETWORK
+from enn_traffic.traffic.fresh import fresh_map
 
 SECONDS = 100.0  # the paper's training time; each measured span and learning-curve window
 SITUATION_KEY = keys.CROWD_TEST.start  # the situations whose rates are reported
@@ -129,20 +132,41 @@ def _broadcast(world: ArenaWorld, genes: np.ndarray, situation: int, key: int = 
             for _ in range(periods)]
 
 
-def _ranked(world: ArenaWorld, candidates: np.ndarray, progress: bool = False) -> np.ndarray:
+def _ranked(world: ArenaWorld, candidates: np.ndarray) -> np.ndarray:
     """The candidates, fewest lives lost per step (collisions and spins) first when each
     drives every vehicle on validation situations: the first is §5.5.1's winning
-    chromosome."""
+    chromosome. A share of the candidates is driven in each of :data:`RANK_WORKERS` fresh
+    processes; every broadcast is the same wherever it runs."""
     evidence = Evidence()
     source = world.spec.in_source_layout(candidates)
-    for genes in tqdm(source, desc=f"ranking {world.scenario.name}", unit="candidate",
-                      disable=not progress, leave=False, file=terminal()):
-        for situation in range(VALIDATION_SITUATIONS):
-            run = _broadcast(world, genes, situation, VALIDATION_KEY)[0]
-            evidence.record(genes, run.vehicle_steps,
-                            int(run.collisions.sum() + run.spins.sum()))
+    shares = [source[i::RANK_WORKERS] for i in range(RANK_WORKERS)]
+    with slow_step(f"ranking {world.scenario.name}: {len(source)} candidates, each driving "
+                   f"every vehicle on {VALIDATION_SITUATIONS} situations"):
+        done = fresh_map(lives_lost, [(world.scenario, share) for share in shares if len(share)],
+                         workers=RANK_WORKERS)
+    lost: list = [None] * len(source)
+    for i, share in enumerate(done):
+        lost[i::RANK_WORKERS] = share
+    for genes, runs in zip(source, lost, strict=True):
+        for vehicle_steps, lives in runs:
+            evidence.record(genes, vehicle_steps, lives)
     rates = [evidence.loss_rate(genes.tobytes()) for genes in source]
     return candidates[np.argsort(rates, kind="stable")]
+
+
+# Candidates are ranked in this many fresh processes at once (_ranked).
+RANK_WORKERS = max(1, min(4, os.cpu_count() or 1))
+
+
+def lives_lost(scenario: Scenario, source: np.ndarray) -> list[list[tuple[int, int]]]:
+    """Each candidate (source layout) driving every vehicle of each validation situation:
+    (vehicle-steps, lives lost to collisions and spins) per situation; what :func:`_ranked`
+    runs in a fresh process."""
+    world = ArenaWorld(scenario)
+    return [[(run.vehicle_steps, int(run.collisions.sum() + run.spins.sum()))
+             for run in (_broadcast(world, genes, situation, VALIDATION_KEY)[0]
+                         for situation in range(VALIDATION_SITUATIONS))]
+            for genes in source]
 
 
 def _evolved_population(ranked: np.ndarray, run_population: np.ndarray, size: int
@@ -313,7 +337,7 @@ def _inputs(study: Study) -> dict[int, tuple[np.ndarray, np.ndarray]]:
     inputs = {}
     for strategy in ARENA.strategies:
         world = ArenaWorld(shipped_scenario(ARENA.name(strategy)))
-        ranked = _ranked(world, candidates[strategy], study.progress)
+        ranked = _ranked(world, candidates[strategy])
         winner = ranked[0]
         save_controller(out, f"table3/strategy{strategy}", world.scenario, winner,
                         float("nan"))  # chosen by lives lost, not by a fitness

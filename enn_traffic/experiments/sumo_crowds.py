@@ -118,7 +118,7 @@ class SumoLearning:
         return round(self.seconds / self.window_seconds)
 
 
-SUMO_LEARNING = SumoLearning(quick={"seconds": 30.0, "window_seconds": 10.0, "situations": 2,
+SUMO_LEARNING = SumoLearning(quick={"seconds": 20.0, "window_seconds": 10.0, "situations": 2,
                                     "validation_situations": 1})
 
 
