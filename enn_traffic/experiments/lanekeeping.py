@@ -113,13 +113,18 @@ def lane_keeping(study: Study) -> list[str]:
                     title="Lane keeping (highway-env): best steps in lane per generation "
                     "(mixed: fresh roads every generation)", hline=cap)
     rows, paths = [], {}
-    measured = iter(test_lives([(name, road, noise, best[name, seed]) for name in TRAININGS
+    # the paths drawn: the last training's first seed, with the last noise
+    drawn = (TRAININGS[-1], NOISES[-1], seeds[0])
+    measured = iter(test_lives([(name, road, noise, best[name, seed],
+                                 (name, noise, seed) == drawn) for name in TRAININGS
                                 for road in ROADS for noise in NOISES for seed in seeds]))
     for name in TRAININGS:
         for road in ROADS:
             for noise in NOISES:
                 for seed in seeds:
-                    steps, outcome, offset = next(measured)
+                    steps, outcome, offset, path = next(measured)
+                    if path is not None:
+                        paths[road] = path
                     rows.append({"trained_on": name, "road": road, "fresh": road in FRESH,
                                  "noise_m": noise,
                                  "seed": seed, "steps_in_lane": steps,
@@ -130,10 +135,6 @@ def lane_keeping(study: Study) -> list[str]:
                                  # that a reused or resumed run does not read 0
                                  "training_wall_s": round(float(
                                      runs[name, seed]["elapsed_s"].iloc[-1]), 1)})
-                if name == TRAININGS[-1] and noise == NOISES[-1]:
-                    world = road_world(name, road, noise)
-                    paths[road] = (world.track.walls,
-                                   world.trace(best[name, seeds[0]], TEST_KEY)[0][:, 0])
     table = pd.DataFrame(rows)
     write_csv(out / "lane_keeping.csv", table)
     _draw_roads(paths, out / "lane_keeping_paths.png", TRAININGS[-1], NOISES[-1])
@@ -160,11 +161,12 @@ def road_world(training: str, road: str, noise: float) -> LaneKeepingWorld:
 TEST_WORKERS = max(1, min(4, os.cpu_count() or 1))
 
 
-def test_lives(lives: list[tuple[str, str, float, np.ndarray]]) -> list[tuple[int, int, float]]:
-    """Each life (training, road of ``ROADS``, camera noise, chromosome) on the test key:
-    (steps kept in the lane, outcome, mean |lateral offset|), a share of the lives in each of
-    :data:`TEST_WORKERS` fresh processes; the same as one after another here (each life
-    resets its road and draws its noise from the test key)."""
+def test_lives(lives: list[tuple[str, str, float, np.ndarray, bool]]) -> list[tuple]:
+    """Each life (training, road of ``ROADS``, camera noise, chromosome, whether its path is
+    drawn) on the test key: (steps kept in the lane, outcome, mean |lateral offset|, and
+    the road's walls and the vehicle's positions (n, 3) where drawn, else None), a share of
+    the lives in each of :data:`TEST_WORKERS` fresh processes; the same as one after another
+    here (each life resets its road and draws its noise from the test key)."""
     shares = [lives[i::TEST_WORKERS] for i in range(TEST_WORKERS)]
     done = fresh_map(road_lives, [(share,) for share in shares if share], workers=TEST_WORKERS)
     results: list = [None] * len(lives)
@@ -173,14 +175,17 @@ def test_lives(lives: list[tuple[str, str, float, np.ndarray]]) -> list[tuple[in
     return results
 
 
-def road_lives(lives: list[tuple[str, str, float, np.ndarray]]) -> list[tuple[int, int, float]]:
+def road_lives(lives: list[tuple[str, str, float, np.ndarray, bool]]) -> list[tuple]:
     """Each life of :func:`test_lives`, one after another in this process."""
     worlds: dict[tuple, LaneKeepingWorld] = {}
-    for name, road, noise, _ in lives:
+    results = []
+    for name, road, noise, chromosome, drawn in lives:
         if (name, road, noise) not in worlds:
             worlds[name, road, noise] = road_world(name, road, noise)
-    return [worlds[name, road, noise].offsets(chromosome, TEST_KEY)[0]
-            for name, road, noise, chromosome in lives]
+        world = worlds[name, road, noise]
+        path = (world.track.walls, world.trace(chromosome, TEST_KEY)[0][:, 0]) if drawn else None
+        results.append((*world.offsets(chromosome, TEST_KEY)[0], path))
+    return results
 
 
 def chosen(scenario: Scenario, run_dir: Path, roads: int = RUNS.validation_roads
