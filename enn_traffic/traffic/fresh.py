@@ -81,11 +81,22 @@ def _receive_number(connection: socket.socket) -> int:
     return _NUMBER.unpack(data)[0]
 
 
+# Variables no child reads that change under a caller running: pytest rewrites this one at
+# every phase of every test, which restarted the zygote (its start: docs/bench.md) before
+# each test that starts a fresh process.
+UNREAD_VARIABLES = ("PYTEST_CURRENT_TEST",)
+
+
+def _environment() -> dict[str, str]:
+    """The caller's environment as far as a fresh process depends on it."""
+    return {name: value for name, value in os.environ.items() if name not in UNREAD_VARIABLES}
+
+
 class _Zygote:
     """The caller's side of a zygote: start a child for a call, end it, read how it ended."""
 
     def __init__(self) -> None:
-        self.owner, self.environment, self.folder = os.getpid(), dict(os.environ), os.getcwd()
+        self.owner, self.environment, self.folder = os.getpid(), _environment(), os.getcwd()
         ours, theirs = socket.socketpair()
         self.process = subprocess.Popen(
             [sys.executable, "-m", __name__, str(theirs.fileno())], pass_fds=[theirs.fileno()],
@@ -96,7 +107,7 @@ class _Zygote:
     def fits(self) -> bool:
         """Whether this zygote forks what a new process of the caller would start now."""
         return (self.owner == os.getpid() and self.process.poll() is None
-                and self.environment == os.environ and self.folder == os.getcwd())
+                and self.environment == _environment() and self.folder == os.getcwd())
 
     def start(self, job: bytes) -> tuple[int, socket.socket]:
         """A child running ``job``: its process id and the socket its result comes from."""

@@ -41,6 +41,16 @@ def test_a_call_sees_the_callers_environment_and_folder_as_they_are_now(monkeypa
     assert fresh(os.getcwd) == str(tmp_path)
 
 
+def test_the_zygote_outlives_a_change_no_child_reads(monkeypatch):
+    """pytest rewrites PYTEST_CURRENT_TEST at every test phase: the zygote (each child's
+    parent) stays; a variable a child may read starts another."""
+    zygote = fresh(os.getppid)
+    monkeypatch.setenv("PYTEST_CURRENT_TEST", "another test (call)")
+    assert fresh(os.getppid) == zygote
+    monkeypatch.setenv("ENN_TRAFFIC_PROBE", "three")
+    assert fresh(os.getppid) != zygote
+
+
 def test_a_script_without_a_main_guard_may_call_it(tmp_path):
     """multiprocessing's spawn would run the script again in the child; this does not."""
     script = tmp_path / "script.py"
