@@ -167,10 +167,12 @@ def build_parser() -> argparse.ArgumentParser:
     baseline.add_argument("--out", type=_path, help="folder (default: results/baseline)")
     baseline.add_argument("--quiet", action="store_true", help="no progress bar or messages")
 
-    bench = commands.add_parser("bench", help="throughput table (vehicle-steps per second)")
+    bench = commands.add_parser("bench", help="throughput and timing table (steps per second, "
+                                "seconds)")
     bench.add_argument("--quick", action="store_true",
                        help="shorter timing runs, without first_run and reproduce_quick "
-                       "(minutes each) unless --only names them")
+                       "(a whole command each, the same with or without --quick) unless "
+                       "--only names them")
     bench.add_argument("--out", type=_path, metavar="FILE.csv", help="also write the table")
     bench.add_argument("--only", help="comma-separated workloads (default: all): first_run, "
                        "contention, fresh, network, sumo_step, navigation, arena, env, sb3, "
