@@ -444,20 +444,23 @@ def _closed_loop(scenario, chromosome, generation: int, learner_steps: int,
     return steps, seconds
 
 
-def city_bench(generations: int = 10, closed_loop_steps: int = 5_000) -> pd.DataFrame:
+def city_bench(generations: int = 10, closed_loop_steps: int = 5_000,
+               own_warmups: bool = True) -> pd.DataFrame:
     """The shipped city scenario (Cologne, its .sumocfg as published, P = 100): replay over the
     generations of a GA run, warm-ups and recordings included, once with the scenario's shared
-    warm-ups (simulated in the timing, into an empty state folder) and once with each traffic
-    situation warming up itself; then the run's best controller in closed loop, SUMO's start
-    included. ``warmup_share``: the part of the wall time spent simulating warm-ups."""
+    warm-ups (simulated in the timing, into an empty state folder) and, with
+    ``own_warmups``, once with each traffic situation warming up itself; then the run's best
+    controller in closed loop, SUMO's start included. ``warmup_share``: the part of the wall
+    time spent simulating warm-ups."""
     scenario = shipped_scenario("city_cologne3")
     saved_folder = os.environ.get(sumo.STATE_FOLDER_VARIABLE)
     rows = []
     try:
         with tempfile.TemporaryDirectory(prefix="enn-bench-states-") as folder:
             os.environ[sumo.STATE_FOLDER_VARIABLE] = folder
-            for label, settings in (("shared warm-ups", {}),
-                                    ("each situation its own warm-up", {"warmup_states": 0})):
+            arms = [("shared warm-ups", {}),
+                    ("each situation its own warm-up", {"warmup_states": 0})]
+            for label, settings in arms if own_warmups else arms[:1]:
                 world = make_world(scenario.with_overrides(traffic=settings))
                 rows.append(_city_replay(world, label, generations))
             best = rows[0][-1]
@@ -889,9 +892,10 @@ def workloads(quick: bool = False) -> dict[str, Callable[[], pd.DataFrame]]:
         "sumo": lambda: sumo_bench(generations=3 if quick else 10,
                                    closed_loop_steps=2_000 if quick else 10_000),
         "recording": lambda: recording_bench(generations=1 if quick else 2,
-                                             cap=3_000 if quick else None),
+                                             cap=1_500 if quick else None),
         "city": lambda: city_bench(generations=1 if quick else 20,
-                                   closed_loop_steps=300 if quick else 5_000),
+                                   closed_loop_steps=300 if quick else 5_000,
+                                   own_warmups=not quick),
         "lane_keeping": lambda: lane_keeping_bench(generations=2 if quick else 4),
         "reproduce_quick": reproduce_quick_bench,
     }
