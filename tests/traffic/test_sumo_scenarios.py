@@ -54,6 +54,19 @@ def test_traffic_that_never_reaches_the_network_is_refused(tmp_path, road_net, c
         make_world(scenario).evaluate(np.zeros((1, 19 * 3 + 3 + 3 * 2 + 2)))
 
 
+def test_a_smaller_step_cap_still_refuses_traffic_a_longer_one_meets(tmp_path, road_net):
+    """Buses depart 30 s (300 steps) after the learner starts. A world capped at 400 steps
+    meets them and keeps its recording of the first 256 steps, which hold none yet; a world
+    of the same traffic capped at 280 steps must refuse, not reuse that recording (kept
+    recordings are keyed by the step cap too: docs/sumo.md, "Replay and closed loop")."""
+    scenario = load_scenario(road_scenario(tmp_path, road_net, begin=0.0, departs=40.0))
+    world = make_world(scenario)
+    world.evaluate(straight(world))
+    short = make_world(scenario.with_overrides(episode={"max_steps": 280}))
+    with pytest.raises(InputError, match="no SUMO vehicle"):
+        short.evaluate(straight(short))
+
+
 def test_a_warm_up_past_the_last_departure_stops_once_sumo_is_empty(tmp_path, road_net,
                                                                    capsys):
     """Buses depart from 1000 s to 1600 s and cross the 200 m road in under 20 s; a warm-up
