@@ -906,9 +906,17 @@ def workloads(quick: bool = False) -> dict[str, Callable[[], pd.DataFrame]]:
 LONG = ("first_run", "reproduce_quick")
 
 
+def chosen_workloads(quick: bool = False, only: list[str] | None = None) -> list[str]:
+    """The workloads ``only`` names, or every one (with ``quick``, but the :data:`LONG`
+    ones), in the order the table shows them."""
+    names = list(workloads(quick))
+    if only:
+        return [name for name in names if name in only]
+    return [name for name in names if not (quick and name in LONG)]
+
+
 def run_bench(quick: bool = False, only: list[str] | None = None) -> pd.DataFrame:
     """The throughput tables of every workload, or of the workloads ``only`` names."""
     chosen = workloads(quick)
-    names = only or [name for name in chosen if not (quick and name in LONG)]
-    return pd.concat([work() for name, work in chosen.items() if name in names],
+    return pd.concat([chosen[name]() for name in chosen_workloads(quick, only)],
                      ignore_index=True)

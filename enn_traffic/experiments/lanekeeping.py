@@ -3,7 +3,6 @@ road or on roads drawn per situation, and keeping the lane on roads never seen i
 
 from __future__ import annotations
 
-import os
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -24,7 +23,7 @@ from enn_traffic.report.plots import draw_paths, learning_curves, save_figure
 from enn_traffic.scenario import Scenario
 from enn_traffic.shipped import shipped_scenario
 from enn_traffic.sim.world import CAPPED
-from enn_traffic.traffic.fresh import fresh_map
+from enn_traffic.traffic.fresh import fresh_shares
 from enn_traffic.worlds import make_world
 
 
@@ -115,9 +114,12 @@ def lane_keeping(study: Study) -> list[str]:
     rows, paths = [], {}
     # the paths drawn: the last training's first seed, with the last noise
     drawn = (TRAININGS[-1], NOISES[-1], seeds[0])
-    measured = iter(test_lives([(name, road, noise, best[name, seed],
-                                 (name, noise, seed) == drawn) for name in TRAININGS
-                                for road in ROADS for noise in NOISES for seed in seeds]))
+    # the test lives in fresh processes, a share each (the same as one after another: each
+    # life resets its road and draws its noise from the test key)
+    measured = iter(fresh_shares(road_lives, [(name, road, noise, best[name, seed],
+                                               (name, noise, seed) == drawn)
+                                              for name in TRAININGS for road in ROADS
+                                              for noise in NOISES for seed in seeds]))
     for name in TRAININGS:
         for road in ROADS:
             for noise in NOISES:
@@ -157,26 +159,10 @@ def road_world(training: str, road: str, noise: float) -> LaneKeepingWorld:
         lane_keeping={**one_road, **ROADS[road], "noise_m": noise, "episodes": 1}))
 
 
-# The test roads' lives run in this many fresh processes at once (test_lives).
-TEST_WORKERS = max(1, min(4, os.cpu_count() or 1))
-
-
-def test_lives(lives: list[tuple[str, str, float, np.ndarray, bool]]) -> list[tuple]:
-    """Each life (training, road of ``ROADS``, camera noise, chromosome, whether its path is
-    drawn) on the test key: (steps kept in the lane, outcome, mean |lateral offset|, and
-    the road's walls and the vehicle's positions (n, 3) where drawn, else None), a share of
-    the lives in each of :data:`TEST_WORKERS` fresh processes; the same as one after another
-    here (each life resets its road and draws its noise from the test key)."""
-    shares = [lives[i::TEST_WORKERS] for i in range(TEST_WORKERS)]
-    done = fresh_map(road_lives, [(share,) for share in shares if share], workers=TEST_WORKERS)
-    results: list = [None] * len(lives)
-    for i, share in enumerate(done):
-        results[i::TEST_WORKERS] = share
-    return results
-
-
 def road_lives(lives: list[tuple[str, str, float, np.ndarray, bool]]) -> list[tuple]:
-    """Each life of :func:`test_lives`, one after another in this process."""
+    """Each life (training, road of ``ROADS``, camera noise, chromosome, whether its path is
+    drawn) on the test key: steps kept in the lane, outcome, mean |lateral offset|, and the
+    road's walls and the vehicle's positions (n, 3) where drawn (else None)."""
     worlds: dict[tuple, LaneKeepingWorld] = {}
     results = []
     for name, road, noise, chromosome, drawn in lives:

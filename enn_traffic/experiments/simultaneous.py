@@ -43,7 +43,6 @@ with them, that situation's every span can be driven again.
 
 from __future__ import annotations
 
-import os
 import time
 from collections.abc import Mapping
 from dataclasses import dataclass, field
@@ -71,7 +70,7 @@ from enn_traffic.shipped import shipped_scenario
 from enn_traffic.sim.arena import ArenaWorld
 from enn_traffic.sim.crowd import Crowd, CrowdRun
 from enn_traffic.sim.strategies import NETWORK
-from enn_traffic.traffic.fresh import fresh_map
+from enn_traffic.traffic.fresh import fresh_shares
 
 SECONDS = 100.0  # the paper's training time; each measured span and learning-curve window
 SITUATION_KEY = keys.CROWD_TEST.start  # the situations whose rates are reported
@@ -135,27 +134,19 @@ def _broadcast(world: ArenaWorld, genes: np.ndarray, situation: int, key: int = 
 def _ranked(world: ArenaWorld, candidates: np.ndarray) -> np.ndarray:
     """The candidates, fewest lives lost per step (collisions and spins) first when each
     drives every vehicle on validation situations: the first is §5.5.1's winning
-    chromosome. A share of the candidates is driven in each of :data:`RANK_WORKERS` fresh
-    processes; every broadcast is the same wherever it runs."""
+    chromosome. A share of the candidates is driven in each of several fresh processes
+    (:func:`~enn_traffic.traffic.fresh.fresh_shares`); every broadcast is the same wherever it
+    runs."""
     evidence = Evidence()
     source = world.spec.in_source_layout(candidates)
-    shares = [source[i::RANK_WORKERS] for i in range(RANK_WORKERS)]
     with slow_step(f"ranking {world.scenario.name}: {len(source)} candidates, each driving "
                    f"every vehicle on {VALIDATION_SITUATIONS} situations"):
-        done = fresh_map(lives_lost, [(world.scenario, share) for share in shares if len(share)],
-                         workers=RANK_WORKERS)
-    lost: list = [None] * len(source)
-    for i, share in enumerate(done):
-        lost[i::RANK_WORKERS] = share
+        lost = fresh_shares(lives_lost, source, world.scenario)
     for genes, runs in zip(source, lost, strict=True):
         for vehicle_steps, lives in runs:
             evidence.record(genes, vehicle_steps, lives)
     rates = [evidence.loss_rate(genes.tobytes()) for genes in source]
     return candidates[np.argsort(rates, kind="stable")]
-
-
-# Candidates are ranked in this many fresh processes at once (_ranked).
-RANK_WORKERS = max(1, min(4, os.cpu_count() or 1))
 
 
 def lives_lost(scenario: Scenario, source: np.ndarray) -> list[list[tuple[int, int]]]:

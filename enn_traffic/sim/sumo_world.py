@@ -20,7 +20,6 @@ import functools
 import hashlib
 import json
 import math
-import os
 from collections import OrderedDict
 from pathlib import Path
 from typing import NamedTuple
@@ -46,7 +45,7 @@ from enn_traffic.sim.rules import Physics
 from enn_traffic.sim.sumo_situations import WARMUP_STREAM, shared_warmup, situation_seed
 from enn_traffic.sim.world import CAPPED, SituationResults
 from enn_traffic.traffic import sumo
-from enn_traffic.traffic.fresh import fresh, fresh_calls, fresh_map
+from enn_traffic.traffic.fresh import WORKERS, fresh, fresh_calls, fresh_shares
 
 
 class ClosedLoopLife(NamedTuple):
@@ -113,9 +112,6 @@ def forget_recordings() -> None:
 # Replay records SUMO as far as the lives reach: this many steps first, then this many times
 # longer while a life outlives the recording (SumoWorld.replay).
 FIRST_RECORDING, RECORDING_GROWTH = 256, 4
-# Replay recordings and closed-loop situations run in this many fresh processes at once
-# (SumoWorld.recordings, SumoWorld.evaluate).
-SUMO_WORKERS = max(1, min(4, os.cpu_count() or 1))
 
 
 class SumoWorld(LearnerWorld):
@@ -193,9 +189,9 @@ class SumoWorld(LearnerWorld):
         steps; None: the step cap): recorded once and kept, and recorded again, longer, when a
         life needs more. SUMO runs the same way every time from the same seed and state, so a
         longer recording begins with the shorter one. The missing ones are simulated side by
-        side, each in a fresh process (:data:`SUMO_WORKERS` at once): a recording never
-        depends on what this process simulated before (docs/sumo.md, "One SUMO start, one
-        process")."""
+        side, each in a fresh process (:data:`~enn_traffic.traffic.fresh.WORKERS` at once):
+        a recording never depends on what this process simulated before (docs/sumo.md, "One
+        SUMO start, one process")."""
         wanted = [(seed, warmup, self.max_steps if steps is None else min(steps, self.max_steps))
                   for seed, warmup, steps in situations]
         missing: dict[tuple, int] = {}
@@ -203,7 +199,6 @@ class SumoWorld(LearnerWorld):
             kept = _recordings.get((self._traffic, seed, warmup))
             if kept is None or kept.ids.shape[0] - 1 < steps:
                 missing[seed, warmup] = max(steps, missing.get((seed, warmup), 0))
-        made = {}
         if missing:
             what = (f"{len(missing)} situations" if len(missing) > 1
                     else f"seed {next(iter(missing))[0]}")
@@ -215,23 +210,21 @@ class SumoWorld(LearnerWorld):
                                         self._shared_warmup_seed(seed, warmup), steps,
                                         steps < self.max_steps)
                                        for (seed, warmup), steps in missing.items()],
-                                      workers=SUMO_WORKERS)
+                                      workers=WORKERS)
             for ((seed, warmup), steps), record in zip(missing.items(), records, strict=True):
                 if steps < self.max_steps and not (record.ids >= 0).any():
                     # no vehicle yet: refuse traffic that never reaches the network within
                     # the cap
                     fresh(sumo.first_traffic, self.scenario, seed,
                           self.warm_state(seed, warmup), self.max_steps)
-                made[seed, warmup] = _recordings[self._traffic, seed, warmup] = record
-            while (len(_recordings) > 1 and sum(map(_recording_bytes, _recordings.values()))
-                   > RECORDINGS_BYTES):
-                _recordings.popitem(last=False)
+                _recordings[self._traffic, seed, warmup] = record
         found = []
-        for seed, warmup, _ in wanted:
-            key = (self._traffic, seed, warmup)
-            if key in _recordings:
-                _recordings.move_to_end(key)
-            found.append(made.get((seed, warmup)) or _recordings[key])
+        for seed, warmup, _ in wanted:  # the most recently used, so the last dropped
+            _recordings.move_to_end((self._traffic, seed, warmup))
+            found.append(_recordings[self._traffic, seed, warmup])
+        kept = sum(map(_recording_bytes, _recordings.values()))
+        while len(_recordings) > 1 and kept > RECORDINGS_BYTES:
+            kept -= _recording_bytes(_recordings.popitem(last=False)[1])
         return found
 
     @functools.cached_property
@@ -298,13 +291,7 @@ class SumoWorld(LearnerWorld):
             replayed = self.replays(genes, situations)
         else:  # in fresh processes, a share of the situations each
             self._save_warm_ups(situations)
-            shares = [situations[i::SUMO_WORKERS] for i in range(SUMO_WORKERS)]
-            done = fresh_map(closed_loop_lives, [(self.scenario, genes, share)
-                                                 for share in shares if share],
-                             workers=SUMO_WORKERS)
-            closed_lives = [None] * len(situations)
-            for i, lives in enumerate(done):
-                closed_lives[i::SUMO_WORKERS] = lives
+            closed_lives = fresh_shares(closed_loop_lives, situations, self.scenario, genes)
         for index in range(len(situations)):
             if closed:
                 lives = closed_lives[index]
@@ -340,7 +327,7 @@ class SumoWorld(LearnerWorld):
                    if not self._state_of(seed, warmup).is_file()}
         fresh_calls([(situation_state, self.scenario, seed, warmup)
                      for seed, warmup in sorted(missing, key=repr)],
-                    workers=SUMO_WORKERS)
+                    workers=WORKERS)
 
     def _state_of(self, seed: int, warmup: int | None) -> Path:
         """Where the state a closed-loop situation loads is kept (:meth:`live`)."""

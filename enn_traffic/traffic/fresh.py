@@ -221,6 +221,24 @@ def fresh_map(function: Callable, calls: Sequence[tuple], workers: int = 1) -> l
     return fresh_calls([(function, *args) for args in calls], workers)
 
 
+# How many fresh processes the package's callers run at once (SUMO recordings and closed-loop
+# situations, lane keeping's test roads, Table 3's ranking).
+WORKERS = max(1, min(4, os.cpu_count() or 1))
+
+
+def fresh_shares(function: Callable, items: Sequence, *args, workers: int = WORKERS) -> list:
+    """``function(*args, share)`` for ``workers`` shares of ``items`` (every ``workers``-th
+    item from the first, the second, ...), each in a new process (:func:`fresh_calls`);
+    ``function`` returns one result per item of its share, and these come back in the order
+    of ``items``."""
+    shares = [items[i::workers] for i in range(workers)]
+    done = fresh_map(function, [(*args, share) for share in shares if len(share)], workers)
+    results: list = [None] * len(items)
+    for i, share in enumerate(done):
+        results[i::workers] = share
+    return results
+
+
 def fresh(function: Callable, *args):
     """``function(*args)`` in a new process of its own."""
     return _run(function, args)

@@ -238,12 +238,15 @@ def test_bench_only_refuses_a_workload_it_does_not_have():
 
 
 def test_bench_help_lists_every_workload_and_quick_leaves_out_the_long_ones():
-    from enn_traffic.bench import LONG, workloads
+    from enn_traffic.bench import LONG, chosen_workloads, workloads
 
     result = cli("bench", "--help")
     listed = " ".join(result.stdout.split())
     assert all(name in listed for name in workloads()), listed
-    assert set(LONG) < set(workloads())
+    assert chosen_workloads() == list(workloads())
+    assert chosen_workloads(quick=True) == [name for name in workloads() if name not in LONG]
+    assert chosen_workloads(quick=True, only=["reproduce_quick", "fresh"]) == [
+        "fresh", "reproduce_quick"]
 
 
 @pytest.mark.parametrize("preset, expected", [
