@@ -38,6 +38,7 @@ from enn_traffic.sim.rules import (
     copy_row,
     copy_rows,
     drive_all,
+    drive_alone,
     life_columns,
     place,
     remember_bodies,
@@ -60,6 +61,23 @@ START_STREAM = 5  # the last key of the seed that draws a situation's start from
 SUFFERED, NEAR_STEPS, NEAR_MAX, HIT = range(4)
 
 
+@njit(cache=True)
+def blame_traffic(kinds, vehicles, rng, physics, geometry, tally) -> None:
+    """The blame rule for every uncontrolled vehicle: a responsible one respawns, and a
+    collision with the learner counts in ``tally[SUFFERED]``. (Compiled on its own, not
+    inlined: a kernel of the learner alone then never compiles it; :func:`alone`.)"""
+    pose, corners, centres = vehicles.pose, vehicles.corners, vehicles.centres
+    walls, cell_start, cell_walls, all_walls = wall_arrays(geometry)
+    for v in range(1, pose.shape[0]):
+        hit = responsible(v, pose, corners, centres, vehicles.previous,
+                          vehicles.previous_centres, vehicles.fresh, v, physics, walls,
+                          cell_start, cell_walls, all_walls)
+        if hit == 0:
+            tally[SUFFERED] += 1
+        if hit != NO_HIT:
+            respawn(v, kinds[v], physics, geometry, vehicles, rng)
+
+
 @njit(cache=True, inline="always")
 def settle(steps, kinds, vehicles, rng, recent, physics, geometry, max_steps, tally) -> int:
     """Steps 1–2 of the arena's step, after ``steps`` moves: the blame rule (the learner,
@@ -75,21 +93,17 @@ def settle(steps, kinds, vehicles, rng, recent, physics, geometry, max_steps, ta
     if hit != NO_HIT:
         tally[HIT] = hit
         return COLLIDED
-    for v in range(1, pose.shape[0]):
-        hit = responsible(v, pose, corners, centres, previous, previous_centres, fresh, v,
-                          physics, walls, cell_start, cell_walls, all_walls)
-        if hit == 0:
-            tally[SUFFERED] += 1
-        if hit != NO_HIT:
-            respawn(v, kinds[v], physics, geometry, vehicles, rng)
+    if kinds is not None and pose.shape[0] > 1:  # None: the learner alone (:func:`alone`)
+        blame_traffic(kinds, vehicles, rng, physics, geometry, tally)
     if spun(recent, steps, pose[0, 0], pose[0, 1], physics.spin_variance):
         return SPUN
     if steps >= max_steps:
         return CAPPED
-    within = within_range(pose[0, 0], pose[0, 1], centres, 1,
-                          physics.max_range + physics.radius)
-    tally[NEAR_STEPS] += within
-    tally[NEAR_MAX] = max(tally[NEAR_MAX], within)
+    if kinds is not None:
+        within = within_range(pose[0, 0], pose[0, 1], centres, 1,
+                              physics.max_range + physics.radius)
+        tally[NEAR_STEPS] += within
+        tally[NEAR_MAX] = max(tally[NEAR_MAX], within)
     return RUNNING
 
 
@@ -100,7 +114,8 @@ def start_world(start, kinds, vehicles, rng, seed, physics, tally) -> None:
     rng[0] = seed
     vehicles.fresh[:] = False
     for v in range(start.shape[0]):
-        reset_memory(kinds[v], physics, rng, vehicles.memory[v])
+        if kinds is not None:  # None: the learner alone, whose network keeps no memory
+            reset_memory(kinds[v], physics, rng, vehicles.memory[v])
         place(v, start[v, 0], start[v, 1], start[v, 2], physics, vehicles.pose,
               vehicles.corners, vehicles.centres)
     remember_bodies(vehicles)
@@ -108,11 +123,20 @@ def start_world(start, kinds, vehicles, rng, seed, physics, tally) -> None:
     tally[HIT] = NO_HIT
 
 
+def alone(kinds: np.ndarray) -> np.ndarray | None:
+    """What the kernels take as ``kinds``: None when vehicle 0, the learner, is the only
+    vehicle. numba then compiles them without the traffic's rules (its branches on ``kinds is
+    None`` are pruned by type), half the compile of the README's first run (docs/bench.md,
+    First contact); the rules and the results are the same."""
+    return None if len(kinds) == 1 else kinds
+
+
 @njit(cache=True)
 def run_life(genes, layer_sizes, start, kinds, traffic_genes, physics, geometry, seed, max_steps,
              trace):
     """Drive one chromosome (source layout) as vehicle 0 among ``start.shape[0] - 1``
-    uncontrolled vehicles (``kinds``; ``traffic_genes`` drive the network ones) for one life.
+    uncontrolled vehicles (``kinds``, None for none: :func:`alone`; ``traffic_genes`` drive the
+    network ones) for one life.
 
     Returns (steps moved, outcome, collisions suffered, vehicle-steps within the learner's
     sensor range, most vehicles within it at once, what the learner hit: ``NO_HIT``,
@@ -138,7 +162,10 @@ def run_life(genes, layer_sizes, start, kinds, traffic_genes, physics, geometry,
         if outcome != RUNNING:
             return steps, outcome, tally[SUFFERED], tally[NEAR_STEPS], tally[NEAR_MAX], tally[HIT]
         # 3. sense and decide, 4. move
-        drive_all(kinds, drivers, layer_sizes, physics, geometry, vehicles, rng, work)
+        if kinds is None:  # pruned by its type before the step's rules are inlined
+            drive_alone(drivers, layer_sizes, physics, geometry, vehicles, work)
+        else:
+            drive_all(kinds, drivers, layer_sizes, physics, geometry, vehicles, rng, work)
         steps += 1
 
 
@@ -272,7 +299,7 @@ class ArenaWorld(LearnerWorld):
         with numba.parallel_chunksize(1):
             for situation in self.situations(key):
                 runs.append(run_population(
-                    genes, self.layer_sizes, situation.start, situation.kinds,
+                    genes, self.layer_sizes, situation.start, alone(situation.kinds),
                     situation.traffic_genes, self.physics, self.geometry, situation.seed,
                     self.max_steps))
         return SituationResults.of_situations(runs, self.vehicles,
@@ -287,8 +314,8 @@ class ArenaWorld(LearnerWorld):
         trace = np.full((limit + 1, self.vehicles, 3), np.nan)
         steps, outcome, *_ = run_life(
             self.spec.in_source_layout(chromosome)[0], self.layer_sizes, chosen.start,
-            chosen.kinds, chosen.traffic_genes, self.physics, self.geometry, chosen.seed, limit,
-            trace)
+            alone(chosen.kinds), chosen.traffic_genes, self.physics, self.geometry, chosen.seed,
+            limit, trace)
         return trace[: steps + 1], int(outcome)
 
 

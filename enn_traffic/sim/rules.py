@@ -294,12 +294,21 @@ def sense(v, pose, physics, beams, walls, cell_start, cell_walls, all_walls, bod
     """Rangefinder readings of vehicle ``v`` (paper §3): the nearest wall along each beam and,
     when ``bodies``, the nearest edge of any other body (``corners``, ``centres``; ``me``, its
     own there, skipped)."""
+    x, y, cos_h, sin_h = sense_walls_of(v, pose, physics, beams, walls, cell_start, cell_walls,
+                                        all_walls, readings)
+    if bodies:
+        sense_bodies(me, x, y, cos_h, sin_h, beams, corners, centres, physics.radius, readings)
+
+
+@njit(cache=True, inline="always")
+def sense_walls_of(v, pose, physics, beams, walls, cell_start, cell_walls, all_walls, readings):
+    """The walls' half of :func:`sense`: vehicle ``v``'s readings of the nearest walls. Returns
+    its position and its heading's cosine and sine."""
     x, y, heading = pose[v, 0], pose[v, 1], pose[v, 2]
     cos_h, sin_h = math.cos(heading), math.sin(heading)
     candidates = nearby_walls(x, y, physics, cell_start, cell_walls, all_walls)
     sense_walls(x, y, cos_h, sin_h, beams, walls, candidates, readings)
-    if bodies:
-        sense_bodies(me, x, y, cos_h, sin_h, beams, corners, centres, physics.radius, readings)
+    return x, y, cos_h, sin_h
 
 
 @njit(cache=True, inline="always")
@@ -411,6 +420,19 @@ def drive_all(kinds, genes, layer_sizes, physics, geometry, vehicles, rng, work)
         steering[v] = decide(v, kind, genes, layer_sizes, readings, physics, beams, memory, rng,
                              activation, scratch)
     move_all(steering, physics, vehicles)
+
+
+@njit(cache=True, inline="always")
+def drive_alone(genes, layer_sizes, physics, geometry, vehicles, work):
+    """:func:`drive_all` for vehicle 0 alone, driven by its network (``genes[0]``): a kernel
+    that calls it in place of :func:`drive_all` compiles without the traffic's rules
+    (:func:`enn_traffic.sim.arena.alone`)."""
+    walls, cell_start, cell_walls, all_walls = wall_arrays(geometry)
+    sense_walls_of(0, vehicles.pose, physics, geometry.beams, walls, cell_start, cell_walls,
+                   all_walls, work.readings)
+    work.steering[0] = network_steering(genes[0], layer_sizes, work.readings, work.activation,
+                                        work.scratch, physics.gain)
+    move_all(work.steering, physics, vehicles)
 
 
 @njit(cache=True, inline="always")
