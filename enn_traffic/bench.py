@@ -162,11 +162,14 @@ def env_bench(steps: int = 200, sync_seconds: float = 5.0) -> pd.DataFrame:
     return table
 
 
-def contention_rates(seconds: float, rounds: int) -> list[tuple[str, int, int, float]]:
-    """In this process, ``rounds`` times in turn with numba's default threads and with one:
-    the compiled vector environment (256 narrow-track worlds, zero actions) stepped for
-    ``seconds``, and the navigation batch (the first generations of a GA run, P = 200);
-    (workload, threads, env- or vehicle-steps, seconds) each."""
+def contention_rates(seconds: float, rounds: int, loads: tuple[int, ...]
+                     ) -> list[tuple[int, str, int, int, float]]:
+    """In this process, for each number of busy processes in ``loads`` (started here once the
+    kernels are loaded and warm, so that their start is not slowed by them): ``rounds`` times
+    in turn with numba's default threads and with one, the compiled vector environment (256
+    narrow-track worlds, zero actions) stepped for ``seconds``, and the navigation batch (the
+    first generations of a GA run, P = 200); (load, workload, threads, env- or vehicle-steps,
+    seconds) each."""
     import gymnasium as gym
 
     env = gym.make_vec(env_id("navigation_narrow"), num_envs=256,
@@ -179,15 +182,25 @@ def contention_rates(seconds: float, rounds: int) -> list[tuple[str, int, int, f
     default = numba.get_num_threads()
     rows = []
     try:
-        for _ in range(rounds):
-            for threads in (default, 1):
-                numba.set_num_threads(threads)
-                done, started = 0, time.perf_counter()
-                while time.perf_counter() - started < seconds:
-                    env.step(actions)
-                    done += 256
-                rows.append(("vector env", threads, done, time.perf_counter() - started))
-                rows.append(("navigation batch", threads, *_timed_batches(world, populations)))
+        for load in loads:
+            spinners = [subprocess.Popen([sys.executable, "-c", "while True: pass"])
+                        for _ in range(load)]
+            try:
+                for _ in range(rounds):
+                    for threads in (default, 1):
+                        numba.set_num_threads(threads)
+                        done, started = 0, time.perf_counter()
+                        while time.perf_counter() - started < seconds:
+                            env.step(actions)
+                            done += 256
+                        rows.append((load, "vector env", threads, done,
+                                     time.perf_counter() - started))
+                        rows.append((load, "navigation batch", threads,
+                                     *_timed_batches(world, populations)))
+            finally:
+                for spinner in spinners:
+                    spinner.kill()
+                    spinner.wait()
     finally:
         numba.set_num_threads(default)
         env.close()
@@ -207,28 +220,22 @@ def contention_bench(quick: bool = False, busy: int = 2) -> pd.DataFrame:
     as under ``pytest -n 2``, a process pool, or a second user): :func:`contention_rates` in
     a fresh process for each OpenMP wait policy of :data:`CONTENTION_POLICIES`, the default
     threads against one thread in the same process, alternating; the median of the rounds,
-    with the slowest and fastest. ``quick``: beside the busy processes only, fewer and
-    shorter rounds."""
+    with the slowest and fastest. ``quick``: enn-traffic's policy beside the busy processes
+    only, fewer and shorter rounds."""
     from enn_traffic.traffic.fresh import fresh_calls
 
     seconds, rounds = (0.5, 2) if quick else (2.0, 5)
+    loads = (busy,) if quick else (0, busy)
+    policies = list(CONTENTION_POLICIES.items())
     measured = []
     saved = {name: os.environ.get(name) for name in ("OMP_WAIT_POLICY", "GOMP_SPINCOUNT")}
     try:
-        for load in (busy,) if quick else (0, busy):
-            spinners = [subprocess.Popen([sys.executable, "-c", "while True: pass"])
-                        for _ in range(load)]
-            try:
-                for policy, environment in CONTENTION_POLICIES.items():
-                    for name in saved:
-                        os.environ.pop(name, None)
-                    os.environ.update(environment)
-                    measured += [(load, policy, *row) for row in
-                                 fresh_calls([(contention_rates, seconds, rounds)])[0]]
-            finally:
-                for spinner in spinners:
-                    spinner.kill()
-                    spinner.wait()
+        for policy, environment in policies[-1:] if quick else policies:
+            for name in saved:
+                os.environ.pop(name, None)
+            os.environ.update(environment)
+            measured += [(load, policy, *row) for load, *row in
+                         fresh_calls([(contention_rates, seconds, rounds, loads)])[0]]
     finally:
         for name, value in saved.items():
             os.environ.pop(name, None)
@@ -322,13 +329,15 @@ def sumo_bench(generations: int = 10, closed_loop_steps: int = 10_000) -> pd.Dat
     return _rate_table(rows)
 
 
-def recording_bench(generations: int = 2, cap: int | None = None) -> pd.DataFrame:
+def recording_bench(generations: int = 2, cap: int | None = None,
+                    before: bool = True) -> pd.DataFrame:
     """A SUMO scenario as docs/sumo.md's template writes it, the step cap left at its default
     (20,000 steps: 33 min of SUMO time; or ``cap``) while lives last seconds (issue 50):
     Cologne, P = 20, ``generations`` generations of a GA run, and a gymnasium environment's
     reset and random-policy life, with the whole cap recorded first (before) and recorded
     only as far as the lives reach (after), in the same run, each arm from no kept
-    recording. The shared warm-ups are simulated before the timing."""
+    recording; the after arm alone without ``before``. The shared warm-ups are simulated
+    before the timing."""
     from enn_traffic.envs.sumo import SumoEnv
     from enn_traffic.scenario import EpisodeConfig
     from enn_traffic.sim import sumo_world
@@ -339,8 +348,9 @@ def recording_bench(generations: int = 2, cap: int | None = None) -> pd.DataFram
     scenario = shipped_scenario("city_cologne3").with_overrides(
         episode={"max_steps": cap}, ga={"population_size": 20})
     rows, saved = [], sumo_world.FIRST_RECORDING
-    for label, first in ((f"the whole cap recorded first ({cap:,} steps)", cap),
-                         ("recorded as far as the lives reach", saved)):
+    arms = [(f"the whole cap recorded first ({cap:,} steps)", cap),
+            ("recorded as far as the lives reach", saved)]
+    for label, first in arms if before else arms[1:]:
         sumo_world.FIRST_RECORDING = first
         sumo_world.forget_recordings()  # the other arm's would serve this one
         try:
@@ -371,10 +381,10 @@ def recording_bench(generations: int = 2, cap: int | None = None) -> pd.DataFram
             sumo_world.FIRST_RECORDING = saved
             sumo_world.forget_recordings()
     table = _rate_table(rows)
-    for workload in table["workload"].unique():
+    for workload in table["workload"].unique() if before else []:
         rows_of = table["workload"] == workload
-        before = table.loc[rows_of, "seconds"].iloc[0]
-        table.loc[rows_of, "speedup_vs_reference"] = before / table.loc[rows_of, "seconds"]
+        whole_cap = table.loc[rows_of, "seconds"].iloc[0]
+        table.loc[rows_of, "speedup_vs_reference"] = whole_cap / table.loc[rows_of, "seconds"]
     return table
 
 
@@ -487,20 +497,16 @@ def _city_replay(world, label: str, generations: int) -> tuple:
     params = ga_params(scenario)
     population = ga.initial_population(rng, params.population_size,
                                        world.spec.chromosome_length, params.init_range)
-    # One warm-up alone, timed, prices each situation's own warm-up.
     started = time.perf_counter()
-    simulation = sumo.Simulation(scenario, 1)
-    simulation.step(sumo.warmup_steps(scenario))
-    simulation.close()
-    one_warmup = time.perf_counter() - started
-    warmup = 0.0
     if scenario.traffic.warmup_states:
-        started = time.perf_counter()
         for seed in range(scenario.traffic.warmup_states):  # every shared warm-up, once
             world.warm_state(seed)
         warmup = time.perf_counter() - started
-    else:
-        warmup = one_warmup * scenario.traffic.episodes * generations
+    else:  # one warm-up alone, timed, prices each situation's own warm-up
+        simulation = sumo.Simulation(scenario, 1)
+        simulation.step(sumo.warmup_steps(scenario))
+        simulation.close()
+        warmup = (time.perf_counter() - started) * scenario.traffic.episodes * generations
     world.evaluate(population[:2], generations + 1)  # compile outside the timing
     steps, learner_steps, seconds, best = _timed_generations(world, params, rng, population,
                                                              range(generations))
@@ -545,37 +551,64 @@ def lane_keeping_bench(generations: int = 3) -> pd.DataFrame:
     return _rate_table(rows)
 
 
-def _random_city(folder: Path, iterations: int) -> Path:
+def _generated(name: str, make: Callable[[Path], None]) -> Path:
+    """The folder of a network the bench generates (netgenerate and randomTrips take seconds
+    each): ``make(folder)`` writes it once into the cache folder
+    (:func:`~enn_traffic.cache.cache_folder`), kept under ``name``, which holds every setting
+    it is made with, and SUMO's version; later benches read it from there."""
+    from importlib.metadata import version
+
+    from enn_traffic.cache import cache_folder
+
+    folder = cache_folder() / f"bench-nets-sumo{version('eclipse-sumo')}" / name
+    if not folder.is_dir():
+        folder.parent.mkdir(parents=True, exist_ok=True)
+        with tempfile.TemporaryDirectory(dir=folder.parent, prefix=".partial-",
+                                         ignore_cleanup_errors=True) as partial:
+            make(Path(partial))
+            try:
+                Path(partial).rename(folder)
+            except OSError:  # another bench made it meanwhile
+                if not folder.is_dir():
+                    raise
+    return folder
+
+
+def _random_city(iterations: int) -> Path:
     """A random road network of ``iterations`` growth steps (SUMO's netgenerate, two lanes
-    each way, roads of 80-200 m), built into ``folder``."""
+    each way, roads of 80-200 m; :func:`_generated`)."""
     import sumo as sumo_wheel  # netgenerate of the eclipse-sumo wheel
 
-    net = folder / f"random{iterations}.net.xml"
-    subprocess.run([f"{sumo_wheel.SUMO_HOME}/bin/netgenerate", "--rand",
-                    "--rand.iterations", str(iterations), "--rand.max-distance", "200",
-                    "--rand.min-distance", "80", "-L", "2", "--seed", "7", "-o", str(net)],
-                   check=True, capture_output=True)
-    return net
+    def make(folder: Path) -> None:
+        subprocess.run([f"{sumo_wheel.SUMO_HOME}/bin/netgenerate", "--rand",
+                        "--rand.iterations", str(iterations), "--rand.max-distance", "200",
+                        "--rand.min-distance", "80", "-L", "2", "--seed", "7", "-o",
+                        str(folder / "random.net.xml")], check=True, capture_output=True)
+
+    return _generated(f"random{iterations}", make) / "random.net.xml"
 
 
-def _city_with_lights(folder: Path, iterations: int, period_s: float) -> tuple[Path, Path]:
+def _city_with_lights(iterations: int, period_s: float) -> tuple[Path, Path]:
     """A random city (:func:`_random_city`'s roads) whose junctions have actuated traffic
     lights where netgenerate guesses them, as OSM-built cities do, and random car trips
-    departing every ``period_s`` seconds for an hour (SUMO's randomTrips)."""
+    departing every ``period_s`` seconds for an hour (SUMO's randomTrips;
+    :func:`_generated`)."""
     import sumo as sumo_wheel
 
-    net = folder / f"lights{iterations}.net.xml"
-    subprocess.run([f"{sumo_wheel.SUMO_HOME}/bin/netgenerate", "--rand",
-                    "--rand.iterations", str(iterations), "--rand.max-distance", "200",
-                    "--rand.min-distance", "80", "-L", "2", "--seed", "7", "--tls.guess",
-                    "--tls.default-type", "actuated", "-o", str(net)],
-                   check=True, capture_output=True)
-    trips = folder / f"lights{iterations}.trips.xml"
-    subprocess.run([sys.executable, f"{sumo_wheel.SUMO_HOME}/tools/randomTrips.py", "-n",
-                    str(net), "-o", str(trips), "--period", f"{period_s:g}", "--end", "3600",
-                    "--seed", "7", "--fringe-factor", "10", "--min-distance", "500"],
-                   check=True, capture_output=True, cwd=folder)  # its routes.rou.xml too
-    return net, trips
+    def make(folder: Path) -> None:
+        subprocess.run([f"{sumo_wheel.SUMO_HOME}/bin/netgenerate", "--rand",
+                        "--rand.iterations", str(iterations), "--rand.max-distance", "200",
+                        "--rand.min-distance", "80", "-L", "2", "--seed", "7", "--tls.guess",
+                        "--tls.default-type", "actuated", "-o", str(folder / "lights.net.xml")],
+                       check=True, capture_output=True)
+        subprocess.run([sys.executable, f"{sumo_wheel.SUMO_HOME}/tools/randomTrips.py", "-n",
+                        "lights.net.xml", "-o", "lights.trips.xml", "--period",
+                        f"{period_s:g}", "--end", "3600", "--seed", "7", "--fringe-factor",
+                        "10", "--min-distance", "500"],
+                       check=True, capture_output=True, cwd=folder)  # its routes.rou.xml too
+
+    folder = _generated(f"lights{iterations}-period{period_s:g}", make)
+    return folder / "lights.net.xml", folder / "lights.trips.xml"
 
 
 def sumo_step_seconds(source: list[str], learners: int, steps: int, warmup_steps: int,
@@ -666,12 +699,10 @@ def sumo_step_table(source: list[str], name: str, steps: int, warmup_steps: int,
 def sumo_step_bench(quick: bool = False) -> pd.DataFrame:
     """SUMO's own step time on a city of thousands of lanes with actuated lights, without a
     learner, with one and with eight (issue 60: a learner once slowed SUMO 150-fold)."""
-    with tempfile.TemporaryDirectory(prefix="enn-bench-lights-") as folder:
-        net, trips = _city_with_lights(Path(folder), 150 if quick else 1500, 0.5)
-        return sumo_step_table(["-n", str(net), "-r", str(trips)],
-                               "random city with actuated lights", 50 if quick else 300,
-                               600 if quick else 3000, 1 if quick else 3,
-                               0 if quick else 3)
+    net, trips = _city_with_lights(150 if quick else 1500, 0.5)
+    return sumo_step_table(["-n", str(net), "-r", str(trips)],
+                           "random city with actuated lights", 50 if quick else 300,
+                           600 if quick else 3000, 1 if quick else 3, 0 if quick else 3)
 
 
 def _folder_state(folder: Path) -> dict[str, tuple]:
@@ -740,7 +771,8 @@ def _measured(work, memory: bool = True) -> tuple[float, float, object]:
 def network_bench(quick: bool = False) -> pd.DataFrame:
     """Preparing a large network: its walls and the wall grid, built the first time and
     loaded from the cache after; the grid also as it was built until issue 39 (cells ×
-    walls), in the same run, on a network where that takes seconds."""
+    walls), in the same run, on a network where that takes seconds. ``quick``: a smaller
+    network, without the grid as it was built before issue 39."""
     reach = 29.5  # the default sensor's: 25 m range, a 4.3 m body, 1 m spare
     rows = []
 
@@ -751,13 +783,13 @@ def network_bench(quick: bool = False) -> pd.DataFrame:
                      "speedup_vs_reference": np.nan if reference is None
                      else reference / seconds})
 
+    sizes = ((150, False),) if quick else ((100, True), (1500, False))
+    nets = [_random_city(iterations) for iterations, _ in sizes]
     with tempfile.TemporaryDirectory(prefix="enn-bench-network-") as folder:
         environment = os.environ.get("ENN_TRAFFIC_CACHE")
         os.environ["ENN_TRAFFIC_CACHE"] = str(Path(folder) / "cache")  # cold, then warm
         try:
-            for iterations, with_reference in ((40 if quick else 100, True),
-                                               (150 if quick else 1500, False)):
-                net = _random_city(Path(folder), iterations)
+            for net, (_, with_reference) in zip(nets, sizes, strict=True):
                 walls_s, _, track = _measured(lambda n=net: load_track(n, exits=True), False)
                 grid_s, grid_mb, grid = _measured(lambda t=track: WallGrid.cached(t.walls,
                                                                                 reach))
@@ -875,35 +907,54 @@ def reproduce_quick_bench() -> pd.DataFrame:
     return table
 
 
+def bench_quick_bench() -> pd.DataFrame:
+    """``enn-traffic bench --quick`` timed as a whole command, as a user's second call meets
+    it (issue 62): the kernels numba compiled before and the networks the bench generates
+    already in the cache folder; each workload's rows as its table gives them."""
+    with tempfile.TemporaryDirectory(prefix="enn-bench-quick-") as folder:
+        table = Path(folder) / "quick.csv"
+        subprocess.run([sys.executable, "-m", "enn_traffic", "bench", "--quick", "--out",
+                        str(table)], check=True, capture_output=True)  # networks, kernels
+        started = time.perf_counter()
+        subprocess.run([sys.executable, "-m", "enn_traffic", "bench", "--quick", "--out",
+                        str(table)], check=True, capture_output=True)
+        total = time.perf_counter() - started
+        rows = len(pd.read_csv(table))
+    return pd.DataFrame([{"workload": "bench --quick", "implementation": "the whole command",
+                          "threads": numba.get_num_threads(), "rows": rows, "seconds": total,
+                          "speedup_vs_reference": np.nan}])
+
+
 def workloads(quick: bool = False) -> dict[str, Callable[[], pd.DataFrame]]:
     """Every workload by the name ``bench --only`` takes, in the order the table shows them."""
     return {
         "first_run": lambda: first_run_bench(),
         "contention": lambda: contention_bench(quick),
-        "fresh": lambda: fresh_bench(calls=2 if quick else 4),
+        "fresh": lambda: fresh_bench(calls=1 if quick else 4),
         "network": lambda: network_bench(quick),
         "sumo_step": lambda: sumo_step_bench(quick),
         "navigation": lambda: navigation_bench(generations=10 if quick else 30,
-                                               reference_seconds=3.0 if quick else 10.0),
+                                               reference_seconds=1.0 if quick else 10.0),
         "arena": lambda: arena_bench(generations=3 if quick else 10),
-        "env": lambda: env_bench(steps=50 if quick else 200, sync_seconds=2.0 if quick else 5.0),
+        "env": lambda: env_bench(steps=50 if quick else 200, sync_seconds=1.0 if quick else 5.0),
         "sb3": lambda: sb3_bench(learn_steps=8_192 if quick else 65_536,
                                  steps=100 if quick else 500),
-        "sumo": lambda: sumo_bench(generations=3 if quick else 10,
-                                   closed_loop_steps=2_000 if quick else 10_000),
+        "sumo": lambda: sumo_bench(generations=1 if quick else 10,
+                                   closed_loop_steps=1_000 if quick else 10_000),
         "recording": lambda: recording_bench(generations=1 if quick else 2,
-                                             cap=1_500 if quick else None),
+                                             cap=1_500 if quick else None, before=not quick),
         "city": lambda: city_bench(generations=1 if quick else 20,
                                    closed_loop_steps=300 if quick else 5_000,
                                    own_warmups=not quick),
         "lane_keeping": lambda: lane_keeping_bench(generations=2 if quick else 4),
         "reproduce_quick": reproduce_quick_bench,
+        "bench_quick": bench_quick_bench,
     }
 
 
 # Workloads that take minutes whatever the settings (a compile from an empty cache, a whole
 # reproduction): ``bench --quick`` runs them only when ``--only`` names them.
-LONG = ("first_run", "reproduce_quick")
+LONG = ("first_run", "reproduce_quick", "bench_quick")
 
 
 def chosen_workloads(quick: bool = False, only: list[str] | None = None) -> list[str]:

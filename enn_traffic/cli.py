@@ -170,13 +170,15 @@ def build_parser() -> argparse.ArgumentParser:
     bench = commands.add_parser("bench", help="throughput and timing table (steps per second, "
                                 "seconds)")
     bench.add_argument("--quick", action="store_true",
-                       help="shorter timing runs, without first_run and reproduce_quick "
-                       "(a whole command each, the same with or without --quick) unless "
-                       "--only names them")
+                       help="shorter timing runs on smaller inputs, without the arms that "
+                       "time a past change's before, and without first_run, "
+                       "reproduce_quick and bench_quick (a whole command each, the same "
+                       "with or without --quick) unless --only names them")
     bench.add_argument("--out", type=_path, metavar="FILE.csv", help="also write the table")
     bench.add_argument("--only", help="comma-separated workloads (default: all): first_run, "
                        "contention, fresh, network, sumo_step, navigation, arena, env, sb3, "
-                       "sumo, recording, city, lane_keeping, reproduce_quick")
+                       "sumo, recording, city, lane_keeping, reproduce_quick, "
+                       "bench_quick")
     return parser
 
 

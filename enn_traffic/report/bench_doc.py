@@ -108,9 +108,18 @@ def reproduce_quick(folder: Path) -> str:
     return "\n".join(lines)
 
 
+def bench_quick(folder: Path) -> str:
+    """``bench --quick`` timed as a whole command (issue 62), from ``bench_quick_issue62.csv``
+    (:func:`enn_traffic.bench.bench_quick_bench`)."""
+    row = pd.read_csv(folder / "bench_quick_issue62.csv").iloc[0]
+    return "\n".join(["| command | rows | wall time |", "|---|---:|---:|",
+                      f"| enn-traffic bench --quick | {row.rows} | {row.seconds:.0f} s |"])
+
+
 SECTIONS: generated.Sections = {"sumo_step": sumo_step, "published": published,
                                 "contention": contention, "first_run": first_run,
-                                "fresh": fresh, "reproduce_quick": reproduce_quick}
+                                "fresh": fresh, "reproduce_quick": reproduce_quick,
+                                "bench_quick": bench_quick}
 
 
 def section(name: str, folder: Path) -> str:

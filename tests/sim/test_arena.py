@@ -241,3 +241,28 @@ def test_a_controller_keeps_its_rings(root, tmp_path):
     assert fitted.beams == ringed.beams and len(fitted.beams) == 27
     assert ArenaWorld(fitted).evaluate(chromosome[None]).steps[0, 0] == world.evaluate(
         chromosome[None]).steps[0, 0]
+
+
+def test_the_learner_alone_kernel_drives_as_the_kernel_with_traffic_rules(small):
+    """With no traffic the kernels take ``kinds`` as None and compile without the traffic's
+    rules (``arena.alone``); every life of a random population, and a traced path, are the
+    same as the kernel with every rule gives them for a world of one vehicle."""
+    from enn_traffic.sim.arena import run_life, run_population
+
+    world = ArenaWorld(small)
+    situation = world.situations(0)[0]
+    assert situation.kinds.shape == (1,)
+    population = np.random.default_rng(3).uniform(-1, 1, (40, world.spec.chromosome_length))
+    genes = world.spec.in_source_layout(population)
+    args = (world.layer_sizes, situation.start)
+    rest = (situation.traffic_genes, world.physics, world.geometry, situation.seed, 2_000)
+    alone = run_population(genes, *args, None, *rest)
+    every_rule = run_population(genes, *args, situation.kinds, *rest)
+    for column, other in zip(alone, every_rule, strict=True):
+        np.testing.assert_array_equal(column, other)
+    assert len(set(alone[0])) > 5  # lives of many lengths, some of them long
+    best = int(np.argmax(alone[0]))
+    paths = [np.full((alone[0][best] + 1, 1, 3), np.nan) for _ in range(2)]
+    for kinds, path in zip((None, situation.kinds), paths, strict=True):
+        run_life(genes[best], *args, kinds, *rest, path)
+    np.testing.assert_array_equal(paths[0], paths[1])
