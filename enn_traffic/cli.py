@@ -170,10 +170,12 @@ def build_parser() -> argparse.ArgumentParser:
     bench = commands.add_parser("bench", help="throughput and timing table (steps per second, "
                                 "seconds)")
     bench.add_argument("--quick", action="store_true",
-                       help="shorter timing runs on smaller inputs, without the arms that "
-                       "time a past change's before, and without first_run, "
-                       "reproduce_quick and bench_quick (a whole command each, the same "
-                       "with or without --quick) unless --only names them")
+                       help="about a minute: shorter timings on smaller inputs, whose "
+                       "rates are not comparable with the full bench's; without the rows "
+                       "that compare with how things were before a change (docs/bench.md), "
+                       "and without first_run, reproduce_quick and bench_quick (a whole "
+                       "command each, the same with or without --quick) unless --only names "
+                       "them")
     bench.add_argument("--out", type=_path, metavar="FILE.csv", help="also write the table")
     bench.add_argument("--only", help="comma-separated workloads (default: all): first_run, "
                        "contention, fresh, network, sumo_step, navigation, arena, env, sb3, "
@@ -485,15 +487,25 @@ def _cmd_bench(args) -> int:
     table = run_bench(quick=args.quick, only=only)
     shown = table.drop(columns=["learner_steps"], errors="ignore")
     shapes = {"vehicle_steps_per_s": "{:,.0f}", "learner_steps_per_s": "{:,.0f}",
-              "speedup_vs_reference": "{:.1f}x", "vs_one_thread": "{:.2f}x",
+              "speedup_vs_reference": "{:.2f}x", "vs_one_thread": "{:.2f}x",
               "steps_per_s_min": "{:,.0f}", "steps_per_s_max": "{:,.0f}", "runs": "{:.0f}",
-              "seconds": "{:.2f}", "peak_memory_mb": "{:,.0f}", "vehicle_steps": "{:,.0f}",
-              "warmup_share": "{:.1%}"}
+              "seconds": "{:.2f}", "seconds_min": "{:.2f}", "seconds_max": "{:.2f}",
+              "peak_memory_mb": "{:,.0f}", "vehicle_steps": "{:,.0f}", "steps": "{:,.0f}",
+              "calls": "{:.0f}", "rows": "{:.0f}", "ms_per_step": "{:.2f}",
+              "ms_per_step_min": "{:.2f}", "ms_per_step_max": "{:.2f}",
+              "slowdown_vs_no_learner": "{:.2f}x", "warmup_share": "{:.1%}"}
     for column, shape in shapes.items():
         if column in shown:
             shown[column] = shown[column].map(
                 lambda v, f=shape: "" if isinstance(v, float) and np.isnan(v) else f.format(v))
-    print(shown.to_string(index=False))
+    # one block per kind of workload (the name before its colon), with its own columns only
+    kinds = shown["workload"].str.split(":").str[0]
+    blocks = []
+    for _, rows in shown.groupby(kinds, sort=False):
+        filled = [column for column in rows
+                  if not (rows[column].isna() | (rows[column] == "")).all()]
+        blocks.append(rows[filled].to_string(index=False))
+    print("\n\n".join(blocks))
     if args.out:
         write_csv(args.out, table)
     return 0
