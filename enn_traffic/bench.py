@@ -975,6 +975,32 @@ def workloads(quick: bool = False) -> dict[str, Callable[[], pd.DataFrame]]:
 LONG = ("first_run", "reproduce_quick", "bench_quick")
 
 
+def table_text(table: pd.DataFrame) -> str:
+    """The bench table as ``enn-traffic bench`` prints it: one block per kind of workload (the
+    name before its colon) with only the columns it fills, every number formatted."""
+    shown = table.drop(columns=["learner_steps"], errors="ignore")
+    shapes = {"vehicle_steps_per_s": "{:,.0f}", "learner_steps_per_s": "{:,.0f}",
+              "speedup_vs_reference": "{:.2f}x", "vs_one_thread": "{:.2f}x",
+              "steps_per_s_min": "{:,.0f}", "steps_per_s_max": "{:,.0f}", "runs": "{:.0f}",
+              "seconds": "{:.2f}", "seconds_min": "{:.2f}", "seconds_max": "{:.2f}",
+              "peak_memory_mb": "{:,.0f}", "vehicle_steps": "{:,.0f}", "steps": "{:,.0f}",
+              "calls": "{:.0f}", "rows": "{:.0f}", "ms_per_step": "{:.2f}",
+              "ms_per_step_min": "{:.2f}", "ms_per_step_max": "{:.2f}",
+              "slowdown_vs_no_learner": "{:.2f}x", "warmup_share": "{:.1%}"}
+    for column, shape in shapes.items():
+        if column in shown:
+            shown[column] = shown[column].map(
+                lambda v, f=shape: "" if isinstance(v, float) and np.isnan(v) else f.format(v))
+    # one block per kind of workload (the name before its colon), with its own columns only
+    kinds = shown["workload"].str.split(":").str[0]
+    blocks = []
+    for _, rows in shown.groupby(kinds, sort=False):
+        filled = [column for column in rows
+                  if not (rows[column].isna() | (rows[column] == "")).all()]
+        blocks.append(rows[filled].to_string(index=False))
+    return "\n\n".join(blocks)
+
+
 def chosen_workloads(quick: bool = False, only: list[str] | None = None) -> list[str]:
     """The workloads ``only`` names, or every one (with ``quick``, but the :data:`LONG`
     ones), in the order the table shows them."""

@@ -470,9 +470,7 @@ def _cmd_baseline(args) -> int:
 
 
 def _cmd_bench(args) -> int:
-    import numpy as np
-
-    from enn_traffic.bench import run_bench, workloads
+    from enn_traffic.bench import run_bench, table_text, workloads
     from enn_traffic.io import check_output_file, write_csv
 
     if args.out:
@@ -485,27 +483,7 @@ def _cmd_bench(args) -> int:
             raise InputError(f"names no workload: {', '.join(unknown) or repr(args.only)} "
                              f"(workloads: {', '.join(workloads())})", key="--only")
     table = run_bench(quick=args.quick, only=only)
-    shown = table.drop(columns=["learner_steps"], errors="ignore")
-    shapes = {"vehicle_steps_per_s": "{:,.0f}", "learner_steps_per_s": "{:,.0f}",
-              "speedup_vs_reference": "{:.2f}x", "vs_one_thread": "{:.2f}x",
-              "steps_per_s_min": "{:,.0f}", "steps_per_s_max": "{:,.0f}", "runs": "{:.0f}",
-              "seconds": "{:.2f}", "seconds_min": "{:.2f}", "seconds_max": "{:.2f}",
-              "peak_memory_mb": "{:,.0f}", "vehicle_steps": "{:,.0f}", "steps": "{:,.0f}",
-              "calls": "{:.0f}", "rows": "{:.0f}", "ms_per_step": "{:.2f}",
-              "ms_per_step_min": "{:.2f}", "ms_per_step_max": "{:.2f}",
-              "slowdown_vs_no_learner": "{:.2f}x", "warmup_share": "{:.1%}"}
-    for column, shape in shapes.items():
-        if column in shown:
-            shown[column] = shown[column].map(
-                lambda v, f=shape: "" if isinstance(v, float) and np.isnan(v) else f.format(v))
-    # one block per kind of workload (the name before its colon), with its own columns only
-    kinds = shown["workload"].str.split(":").str[0]
-    blocks = []
-    for _, rows in shown.groupby(kinds, sort=False):
-        filled = [column for column in rows
-                  if not (rows[column].isna() | (rows[column] == "")).all()]
-        blocks.append(rows[filled].to_string(index=False))
-    print("\n\n".join(blocks))
+    print(table_text(table))
     if args.out:
         write_csv(args.out, table)
     return 0

@@ -27,3 +27,20 @@ def test_a_generated_network_is_made_once_and_a_failed_one_leaves_nothing(tmp_pa
     with pytest.raises(subprocess.CalledProcessError):
         bench._generated("broken", broken)
     assert sorted(path.name for path in first.parent.iterdir()) == ["city"]
+
+
+def test_the_printed_table_has_a_block_per_workload_with_its_own_columns():
+    import numpy as np
+    import pandas as pd
+
+    table = pd.DataFrame([
+        {"workload": "navigation: narrow", "implementation": "compiled", "threads": 2,
+         "seconds": 0.0512, "vehicle_steps_per_s": 1_234_567.8, "calls": np.nan},
+        {"workload": "navigation: narrow", "implementation": "plain", "threads": 1,
+         "seconds": 1.0, "vehicle_steps_per_s": 1_500.0, "calls": np.nan},
+        {"workload": "fresh process: one arm", "implementation": "forked", "threads": 2,
+         "seconds": 0.4, "vehicle_steps_per_s": np.nan, "calls": 3.0}])
+    navigation, fresh = bench.table_text(table).split("\n\n")
+    assert "1,234,568" in navigation and "0.05" in navigation and "calls" not in navigation
+    assert "vehicle_steps_per_s" not in fresh and fresh.splitlines()[1].split()[-1] == "3"
+    assert "nan" not in (navigation + fresh).lower()
