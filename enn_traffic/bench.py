@@ -575,33 +575,33 @@ def _generated(name: str, make: Callable[[Path], None]) -> Path:
     return folder
 
 
+def _random_roads(net: Path, iterations: int, *options: str) -> None:
+    """SUMO's netgenerate (the eclipse-sumo wheel's) writes ``net``: a random road network of
+    ``iterations`` growth steps, two lanes each way, roads of 80-200 m; ``options`` add to
+    its command."""
+    import sumo as sumo_wheel
+
+    subprocess.run([f"{sumo_wheel.SUMO_HOME}/bin/netgenerate", "--rand",
+                    "--rand.iterations", str(iterations), "--rand.max-distance", "200",
+                    "--rand.min-distance", "80", "-L", "2", "--seed", "7", *options,
+                    "-o", str(net)], check=True, capture_output=True)
+
+
 def _random_city(iterations: int) -> Path:
-    """A random road network of ``iterations`` growth steps (SUMO's netgenerate, two lanes
-    each way, roads of 80-200 m; :func:`_generated`)."""
-    import sumo as sumo_wheel  # netgenerate of the eclipse-sumo wheel
-
-    def make(folder: Path) -> None:
-        subprocess.run([f"{sumo_wheel.SUMO_HOME}/bin/netgenerate", "--rand",
-                        "--rand.iterations", str(iterations), "--rand.max-distance", "200",
-                        "--rand.min-distance", "80", "-L", "2", "--seed", "7", "-o",
-                        str(folder / "random.net.xml")], check=True, capture_output=True)
-
-    return _generated(f"random{iterations}", make) / "random.net.xml"
+    """:func:`_random_roads` of ``iterations`` growth steps (:func:`_generated`)."""
+    return _generated(f"random{iterations}", lambda folder: _random_roads(
+        folder / "random.net.xml", iterations)) / "random.net.xml"
 
 
 def _city_with_lights(iterations: int, period_s: float) -> tuple[Path, Path]:
-    """A random city (:func:`_random_city`'s roads) whose junctions have actuated traffic
-    lights where netgenerate guesses them, as OSM-built cities do, and random car trips
-    departing every ``period_s`` seconds for an hour (SUMO's randomTrips;
-    :func:`_generated`)."""
+    """A random city (:func:`_random_roads`) whose junctions have actuated traffic lights
+    where netgenerate guesses them, as OSM-built cities do, and random car trips departing
+    every ``period_s`` seconds for an hour (SUMO's randomTrips; :func:`_generated`)."""
     import sumo as sumo_wheel
 
     def make(folder: Path) -> None:
-        subprocess.run([f"{sumo_wheel.SUMO_HOME}/bin/netgenerate", "--rand",
-                        "--rand.iterations", str(iterations), "--rand.max-distance", "200",
-                        "--rand.min-distance", "80", "-L", "2", "--seed", "7", "--tls.guess",
-                        "--tls.default-type", "actuated", "-o", str(folder / "lights.net.xml")],
-                       check=True, capture_output=True)
+        _random_roads(folder / "lights.net.xml", iterations, "--tls.guess",
+                      "--tls.default-type", "actuated")
         subprocess.run([sys.executable, f"{sumo_wheel.SUMO_HOME}/tools/randomTrips.py", "-n",
                         "lights.net.xml", "-o", "lights.trips.xml", "--period",
                         f"{period_s:g}", "--end", "3600", "--seed", "7", "--fringe-factor",
@@ -927,8 +927,9 @@ def reproduce_quick_bench() -> pd.DataFrame:
 
 def bench_quick_bench() -> pd.DataFrame:
     """``enn-traffic bench --quick`` timed as a whole command, as a user's second call meets
-    it (issue 62): the kernels numba compiled before and the networks the bench generates
-    already in the cache folder; each workload's rows as its table gives them."""
+    it (issue 62): a first call, untimed, leaves the kernels compiled and the networks the
+    bench generates in the cache folder. One row: the second call's seconds and how many rows
+    its table has."""
     with tempfile.TemporaryDirectory(prefix="enn-bench-quick-") as folder:
         table = Path(folder) / "quick.csv"
         subprocess.run([sys.executable, "-m", "enn_traffic", "bench", "--quick", "--out",

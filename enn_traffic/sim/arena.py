@@ -99,11 +99,10 @@ def settle(steps, kinds, vehicles, rng, recent, physics, geometry, max_steps, ta
         return SPUN
     if steps >= max_steps:
         return CAPPED
-    if kinds is not None:
-        within = within_range(pose[0, 0], pose[0, 1], centres, 1,
-                              physics.max_range + physics.radius)
-        tally[NEAR_STEPS] += within
-        tally[NEAR_MAX] = max(tally[NEAR_MAX], within)
+    within = within_range(pose[0, 0], pose[0, 1], centres, 1,
+                          physics.max_range + physics.radius)
+    tally[NEAR_STEPS] += within
+    tally[NEAR_MAX] = max(tally[NEAR_MAX], within)
     return RUNNING
 
 
