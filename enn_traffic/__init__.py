@@ -1,8 +1,9 @@
 """enn-traffic: evolve neural-network driving controllers in SUMO traffic (Eraqi et al., 2016)."""
 
 import os
+from pathlib import Path
 
-from enn_traffic.cache import cache_folder
+from enn_traffic.cache import cache_folder, prune_kernel_folders
 from enn_traffic.provenance import kernels_version
 
 __version__ = "0.1.0"
@@ -16,7 +17,10 @@ def _numba_cache_dir() -> str:
     return str(cache_folder() / f"numba-{kernels_version()}")
 
 
-os.environ.setdefault("NUMBA_CACHE_DIR", _numba_cache_dir())
+if "NUMBA_CACHE_DIR" not in os.environ:
+    os.environ["NUMBA_CACHE_DIR"] = _numba_cache_dir()
+    if not os.path.isdir(os.environ["NUMBA_CACHE_DIR"]):  # a new version: its kernels compile
+        prune_kernel_folders(Path(os.environ["NUMBA_CACHE_DIR"]))
 # numba's parallel loops run on OpenMP (libgomp), whose idle threads spin by default: beside
 # other busy processes (pytest -n 2, a process pool, a second user) a parallel region then
 # waits for a descheduled spinner, and two threads ran slower than one. Idle threads

@@ -706,6 +706,111 @@ def sumo_step_bench(quick: bool = False) -> pd.DataFrame:
                            600 if quick else 3000, 1 if quick else 3, 0 if quick else 3)
 
 
+def crowd_scale_seconds(net: Path, trips: Path, learners: int, steps: int) -> dict:
+    """``learners`` learners in one SUMO of the city ``net`` (its ``trips``; closed loop, after
+    300 s of warm-up), each driving a random network of its own for ``steps`` steps, SUMO's
+    start and the learners' entry not timed: the seconds, those inside SUMO's own step, and
+    the process's peak resident memory (libsumo runs in it). Run in a fresh process."""
+    import resource
+
+    from enn_traffic.scenario import load_scenario
+
+    with tempfile.TemporaryDirectory(prefix="enn-bench-crowd-") as folder:
+        path = Path(folder) / "city.toml"
+        path.write_text(f'name = "city"\n[track]\nnet = "{net}"\nstart_lane = "auto"\n'
+                        f'[traffic]\nstrategy = "sumo"\nroutes = ["{trips}"]\n'
+                        f'mode = "closed-loop"\nwarmup_s = 300.0\nwarmup_states = 1\n'
+                        f"learners = {learners}\n")
+        scenario = load_scenario(path)
+        world = make_world(scenario)
+        genes = world.spec.in_source_layout(np.random.default_rng(learners).uniform(
+            -1, 1, (learners, world.spec.chromosome_length)))
+        inside_sumo = 0.0
+        with SumoCrowd(world, world.seeds(1)[0]) as crowd:
+            crowd.run(scenario.vehicle.dt, genes)  # start SUMO, let the learners enter
+            simulation = crowd.simulation
+            sumo_step = simulation.step
+
+            def timed_step(*args):
+                nonlocal inside_sumo
+                started = time.perf_counter()
+                sumo_step(*args)
+                inside_sumo += time.perf_counter() - started
+
+            simulation.step = timed_step
+            vehicles = int((crowd.slots[0][crowd.now] >= 0).sum())  # SUMO's, when timed
+            started = time.perf_counter()
+            crowd.run(steps * scenario.vehicle.dt, genes)
+            seconds = time.perf_counter() - started
+    return {"seconds": seconds, "sumo_seconds": inside_sumo, "vehicles": vehicles,
+            "peak_mb": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024}
+
+
+def crowd_scale_bench(quick: bool = False) -> pd.DataFrame:
+    """Learners in one city SUMO (issue 63): learner-steps per second, SUMO's own share of the
+    time and the peak memory as the learners grow, each count in a fresh process, on the
+    random city with actuated lights of the SUMO step rows."""
+    from enn_traffic.traffic.fresh import fresh_calls
+
+    net, trips = _city_with_lights(150 if quick else 1500, 0.5)
+    counts = (8, 32, 100) if quick else (8, 32, 100, 300, 1000)
+    steps = 100 if quick else 600
+    measured = fresh_calls([(crowd_scale_seconds, net, trips, k, steps) for k in counts])
+    import sumolib
+
+    lanes = sum(not lane.getID().startswith(":") for edge in sumolib.net.readNet(
+        str(net)).getEdges() for lane in edge.getLanes())
+    return pd.DataFrame([{
+        "workload": f"learners in one city SUMO: random city with actuated lights, {lanes:,} "
+                    f"lanes, {m['vehicles']:,} vehicles",
+        "implementation": f"{k} learners", "threads": numba.get_num_threads(),
+        "seconds": m["seconds"], "steps": steps, "learner_steps": k * steps,
+        "learner_steps_per_s": k * steps / m["seconds"],
+        "ms_per_step": 1000 * m["seconds"] / steps,
+        "sumo_ms_per_step": 1000 * m["sumo_seconds"] / steps,
+        "peak_memory_mb": m["peak_mb"]} for k, m in zip(counts, measured, strict=True)])
+
+
+CROWD_TABLES = ("crowd_situations.csv", "table3.csv", "table4.csv", "table4_learners.csv",
+                "table4_learning.csv")
+
+
+def crowd_ray_bench(learners: int = 100, situations: int = 10) -> pd.DataFrame:
+    """``enn-traffic crowd`` with ``learners`` learners in each of ``situations`` situations
+    (one SUMO each, ``learners`` × ``situations`` in all) on the random city with actuated
+    lights, once with ``--executor local`` (the situations one after another) and once with
+    ``--executor ray`` (a local Ray, a worker per core), each a whole command into an empty
+    folder, timed; ``identical``: every table the same."""
+    net, trips = _city_with_lights(150, 0.5)
+    with tempfile.TemporaryDirectory(prefix="enn-bench-crowd-ray-") as folder:
+        scenario = Path(folder) / "city.toml"
+        scenario.write_text(
+            f'name = "random_city"\n[track]\nnet = "{net}"\nstart_lane = "auto"\n'
+            "[ga]\npopulation_size = 10\ngenerations = 1\nelite_count = 2\n"
+            "[episode]\nmax_steps = 600\n"
+            f'[traffic]\nstrategy = "sumo"\nroutes = ["{trips}"]\nwarmup_s = 300.0\n'
+            f"warmup_states = 2\nepisodes = 1\nlearners = {learners}\n"
+            "[crowd]\nlearning_s = 20.0\nwindow_s = 10.0\npopulation_size = 10\n"
+            f"elite_count = 2\nsituations = {situations}\nvalidation_situations = 0\n")
+        seconds = {}
+        for executor in ("local", "ray"):
+            started = time.perf_counter()
+            subprocess.run([sys.executable, "-m", "enn_traffic", "crowd", str(scenario),
+                            "--out", str(Path(folder) / executor), "--executor", executor,
+                            "--quiet"], check=True)
+            seconds[executor] = time.perf_counter() - started
+        identical = all(pd.read_csv(Path(folder) / "local" / name).equals(
+            pd.read_csv(Path(folder) / "ray" / name)) for name in CROWD_TABLES)
+    return pd.DataFrame([{
+        "workload": f"crowd across SUMOs: random city with actuated lights, {learners} learners "
+                    f"x {situations} situations ({learners * situations:,} learners)",
+        "implementation": label, "threads": numba.get_num_threads(),
+        "seconds": seconds[executor], "learners": learners * situations,
+        "identical": identical}
+        for executor, label in (("local", "--executor local (one after another)"),
+                                ("ray", f"--executor ray ({os.cpu_count()} workers)"))])
+
+
 def _folder_state(folder: Path) -> dict[str, tuple]:
     """Every file under ``folder``: its size, modification time and SHA-256."""
     from enn_traffic.cache import file_digest
@@ -962,10 +1067,12 @@ def workloads(quick: bool = False) -> dict[str, Callable[[], pd.DataFrame]]:
                                    closed_loop_steps=1_000 if quick else 10_000),
         "recording": lambda: recording_bench(generations=1 if quick else 2,
                                              cap=1_500 if quick else None, before=not quick),
+        "crowd_scale": lambda: crowd_scale_bench(quick),
         "city": lambda: city_bench(generations=1 if quick else 20,
                                    closed_loop_steps=300 if quick else 5_000,
                                    own_warmups=not quick),
         "lane_keeping": lambda: lane_keeping_bench(generations=2 if quick else 4),
+        "crowd_ray": crowd_ray_bench,
         "reproduce_quick": reproduce_quick_bench,
         "bench_quick": bench_quick_bench,
     }
@@ -973,7 +1080,7 @@ def workloads(quick: bool = False) -> dict[str, Callable[[], pd.DataFrame]]:
 
 # Workloads that take minutes whatever the settings (a compile from an empty cache, a whole
 # reproduction): ``bench --quick`` runs them only when ``--only`` names them.
-LONG = ("first_run", "reproduce_quick", "bench_quick")
+LONG = ("first_run", "crowd_ray", "reproduce_quick", "bench_quick")
 
 
 def table_text(table: pd.DataFrame) -> str:
@@ -987,6 +1094,7 @@ def table_text(table: pd.DataFrame) -> str:
               "peak_memory_mb": "{:,.0f}", "vehicle_steps": "{:,.0f}", "steps": "{:,.0f}",
               "calls": "{:.0f}", "rows": "{:.0f}", "ms_per_step": "{:.2f}",
               "ms_per_step_min": "{:.2f}", "ms_per_step_max": "{:.2f}",
+              "sumo_ms_per_step": "{:.2f}",
               "slowdown_vs_no_learner": "{:.2f}x", "warmup_share": "{:.1%}"}
     for column, shape in shapes.items():
         if column in shown:

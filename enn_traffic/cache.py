@@ -87,3 +87,32 @@ def cached_arrays(kind: str, key: str, build: Callable[[], dict[str, np.ndarray]
     except OSError:  # a read-only or full disk: the entry is simply not kept
         pass
     return arrays
+
+
+def prune_kernel_folders(current: Path, keep: int = 3, grace_s: float = 3600.0) -> list[Path]:
+    """Removes the compiled kernels of older versions (``numba-*`` beside ``current``) but the
+    ``keep`` most recently used, and any used in the last ``grace_s`` seconds (another checkout
+    may be running them). Each edit of the kernels' sources starts a new folder of 2–25 MB;
+    without this they pile up. Returns the folders removed; errors leave a folder in place."""
+    import shutil
+    import time
+
+    def last_used(folder: Path) -> float:
+        return max([folder.stat().st_mtime]
+                   + [sub.stat().st_mtime for sub in folder.iterdir() if sub.is_dir()])
+
+    others = []
+    for folder in current.parent.glob("numba-*"):
+        if folder == current or not folder.is_dir() or folder.is_symlink():
+            continue
+        try:
+            others.append((last_used(folder), folder))
+        except OSError:
+            continue
+    others.sort(reverse=True)
+    removed = []
+    for used, folder in others[keep:]:
+        if time.time() - used > grace_s:
+            shutil.rmtree(folder, ignore_errors=True)
+            removed.append(folder)
+    return removed

@@ -48,6 +48,16 @@ _positive, _non_negative = _int_in(1), _int_in(0)
 _count, _steps, _episodes = _int_in(1, 100_000), _int_in(1, 10_000_000), _int_in(1, 1000)
 
 
+def _run_folder_options(command: argparse.ArgumentParser, resume: str, force: str) -> None:
+    """--resume or --force, --quiet and --verbose: a command that writes a run folder."""
+    again = command.add_mutually_exclusive_group()
+    again.add_argument("--resume", action="store_true", help=resume)
+    again.add_argument("--force", action="store_true", help=force)
+    command.add_argument("--quiet", action="store_true", help="no progress bar or messages")
+    command.add_argument("--verbose", action="store_true",
+                         help="show SUMO's console instead of logging it to OUT/sumo/sumo.log")
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="enn-traffic",
@@ -71,14 +81,8 @@ def build_parser() -> argparse.ArgumentParser:
     run.add_argument("--executor", choices=["local", "process", "ray"], default="local",
                      help="where fitness is evaluated (default: local, in-process)")
     run.add_argument("--address", help="Ray cluster address (with --executor ray)")
-    again = run.add_mutually_exclusive_group()
-    again.add_argument("--resume", action="store_true",
-                       help="continue the run in the folder from its checkpoint")
-    again.add_argument("--force", action="store_true",
-                       help="start over even if the folder holds another run")
-    run.add_argument("--quiet", action="store_true", help="no progress bar or messages")
-    run.add_argument("--verbose", action="store_true",
-                     help="show SUMO's console instead of logging it to OUT/sumo/sumo.log")
+    _run_folder_options(run, "continue the run in the folder from its checkpoint",
+                        "start over even if the folder holds another run")
 
     evaluate = commands.add_parser(
         "evaluate", help="run saved controllers on scenarios", epilog=EPILOG,
@@ -132,6 +136,32 @@ def build_parser() -> argparse.ArgumentParser:
                                              "default: start a local Ray)")
     reproduce.add_argument("--quiet", action="store_true", help="no progress bars or messages")
 
+    crowd = commands.add_parser(
+        "crowd", help="every vehicle learning at once in a SUMO scenario (Tables 3-4)",
+        epilog=EPILOG, description="Tables 3-4 of the paper on your SUMO scenario: the "
+        "scenario's GA evolves a winner among SUMO's traffic (OUT/individual/, as run writes "
+        "it), then traffic.learners vehicles drive at once in one SUMO, closed loop, in each "
+        "of crowd.situations test situations: initial drivers, the winner for all, and every "
+        "vehicle evolving on. Writes OUT/table3.csv, table4.csv, table4_learners.csv, "
+        "table4_learning.csv and .png, crowd_situations.csv, "
+        "table4_validation_learners.csv, controllers/ and crowd.gif (docs/sumo.md, 'Every car "
+        "learning in your city').")
+    crowd.add_argument("scenario", type=_path, metavar="SCENARIO.toml",
+                       help="a SUMO scenario file, or a shipped one's name (sumo_strategy1)")
+    crowd.add_argument("--out", type=_path,
+                       help="folder (default: results/<scenario name>_crowd)")
+    crowd.add_argument("--learners", type=_int_in(1, 1000),
+                       help="override traffic.learners (vehicles learning in one SUMO)")
+    crowd.add_argument("--quick", action="store_true",
+                       help="minutes: 2 generations of the GA, 20 s of learning in 10 s "
+                            "windows, 2 situations")
+    crowd.add_argument("--executor", choices=["local", "process", "ray"], default="local",
+                       help="where the GA's fitness is evaluated and, with ray, the "
+                            "situations run side by side (default: local)")
+    crowd.add_argument("--address", help="Ray cluster address (with --executor ray)")
+    _run_folder_options(crowd, "continue the crowd run in the folder",
+                        "start over even if the folder holds other files")
+
     lanes = commands.add_parser(
         "lanes", help="the lanes a learner may start on, ranked by the traffic demand",
         epilog=EPILOG, description="List the lanes of a scenario's network that allow passenger "
@@ -173,14 +203,14 @@ def build_parser() -> argparse.ArgumentParser:
                        help="about a minute: shorter timings on smaller inputs, whose "
                        "rates are not comparable with the full bench's; without the rows "
                        "that compare with how things were before a change (docs/bench.md), "
-                       "and without first_run, reproduce_quick and bench_quick (a whole "
-                       "command each, the same with or without --quick) unless --only names "
-                       "them")
+                       "and without first_run, crowd_ray, reproduce_quick and bench_quick (a "
+                       "whole command each, the same with or without --quick) unless --only "
+                       "names them")
     bench.add_argument("--out", type=_path, metavar="FILE.csv", help="also write the table")
     bench.add_argument("--only", help="comma-separated workloads (default: all): first_run, "
                        "contention, fresh, network, sumo_step, navigation, arena, env, sb3, "
-                       "sumo, recording, city, lane_keeping, reproduce_quick, "
-                       "bench_quick")
+                       "sumo, recording, crowd_scale, city, lane_keeping, crowd_ray, "
+                       "reproduce_quick, bench_quick")
     return parser
 
 
@@ -202,11 +232,12 @@ def _warn_unread(scenario, command: str) -> None:
     traffic = scenario.traffic
     if traffic is not None and "learners" in traffic.model_fields_set:
         _note(f"{scenario.source}: traffic.learners = {traffic.learners} is read only by "
-              f"'enn-traffic reproduce' (Tables 3-4, many learners in one SUMO); {command} "
+              f"'enn-traffic crowd' and 'reproduce' (Tables 3-4, many learners in one SUMO); "
+              f"{command} "
               "drives one learner per chromosome and ignores it")
     if "crowd" in scenario.model_fields_set:
-        _note(f"{scenario.source}: [crowd] is read only by 'enn-traffic reproduce' (the "
-              f"crowds of Tables 3-4, every vehicle driving at once); {command} ignores it")
+        _note(f"{scenario.source}: [crowd] is read only by 'enn-traffic crowd' and 'reproduce' "
+              f"(the crowds of Tables 3-4, every vehicle driving at once); {command} ignores it")
 
 
 def _cmd_run(args) -> int:
@@ -250,6 +281,27 @@ def _cmd_run(args) -> int:
     print(f"{scenario.name}: {len(table)} generations, best fitness {best:.0f} steps "
           f"(last generation: best {last['best_fitness']:.0f}, mean {last['mean_fitness']:.1f}); "
           f"{table['vehicle_steps'].sum():,} vehicle-steps in {last['elapsed_s']:.1f} s")
+    print(f"results in {out}/")
+    return 0
+
+
+def _cmd_crowd(args) -> int:
+    from enn_traffic.crowd import check_folder, check_room, crowd_scenario, run_crowd
+    from enn_traffic.io import check_output_folder, check_unlocked
+    from enn_traffic.scenario import load_scenario
+    from enn_traffic.shipped import scenario_path
+
+    scenario = crowd_scenario(load_scenario(scenario_path(args.scenario)), args.learners,
+                              args.quick)
+    out = args.out or Path("results") / f"{scenario.name}_crowd"
+    check_output_folder(out)  # before any world, nothing written yet
+    check_unlocked(out)
+    check_folder(out, resume=args.resume, force=args.force)
+    check_room(scenario)
+    scenario = scenario.with_sumo_output(out / "sumo", console=args.verbose)
+    lines = run_crowd(scenario, out, args.executor, args.address,
+                      resume=args.resume, force=args.force, progress=not args.quiet)
+    print("\n".join(lines))
     print(f"results in {out}/")
     return 0
 
@@ -489,7 +541,8 @@ def _cmd_bench(args) -> int:
     return 0
 
 
-COMMANDS = {"run": _cmd_run, "evaluate": _cmd_evaluate, "render": _cmd_render,
+COMMANDS = {"run": _cmd_run, "crowd": _cmd_crowd, "evaluate": _cmd_evaluate,
+            "render": _cmd_render,
             "reproduce": _cmd_reproduce, "lanes": _cmd_lanes, "baseline": _cmd_baseline,
             "bench": _cmd_bench}
 
@@ -498,6 +551,8 @@ COMMANDS = {"run": _cmd_run, "evaluate": _cmd_evaluate, "render": _cmd_render,
 INTERRUPTED = {"run": "; finished generations are checkpointed (continue with --resume)",
                "reproduce": "; finished runs and experiments are kept: the same command "
                             "continues",
+               "crowd": "; the individual run's generations and finished situations are "
+                        "kept (continue with --resume)",
                "baseline": "; finished runs are kept in OUT/comparison.csv: the same command "
                            "continues"}
 

@@ -35,8 +35,8 @@ from enn_traffic.roads.sumocfg import read_sumocfg, with_includes
 from enn_traffic.scenario import Scenario
 
 # What a first generation may wait for when numba's cache folder has no kernels yet.
-COMPILING = (" (numba compiles the kernels first, once per install or edit; docs/bench.md, "
-             "First contact)")
+COMPILING = (" (numba compiles the kernels first, once per install, edit of the kernels or "
+             "new cache folder; docs/bench.md, First contact)")
 
 
 def _kernels_cached() -> bool:
@@ -305,8 +305,9 @@ def _evolve(scenario: Scenario, out: Path, evaluator: Evaluator | None, resume: 
     params = ga_params(scenario)
     own_evaluator = evaluator is None
     evaluator = evaluator or make_evaluator(scenario)
-    bar = tqdm(total=total, initial=min(state.generation, total), desc=scenario.name,
-               unit="gen", disable=not progress, leave=False, file=terminal())
+    # The bar opens after this process's first generation, which may compile the kernels:
+    # counted in, its minutes would set the remaining time's estimate for the whole run.
+    bar = tqdm(disable=True)
     try:
         run = ga.generations(state, evaluator.evaluate, params)
         while state.generation < total and not state.extra.get("target_reached", False):
@@ -329,7 +330,11 @@ def _evolve(scenario: Scenario, out: Path, evaluator: Evaluator | None, resume: 
             write_csv(table_path, pd.DataFrame(rows, columns=list(generations.COLUMNS)))
             state.save(out / CHECKPOINT)
             RunOutputs.of(state, scenario).save(out)
-            bar.update(1)
+            if first:
+                bar = tqdm(total=total, initial=min(state.generation, total), desc=scenario.name,
+                           unit="gen", disable=not progress, leave=False, file=terminal())
+            else:
+                bar.update(1)
             bar.set_postfix(best=int(fitness.max()), mean=round(float(fitness.mean()), 1))
             target = scenario.ga.target_fitness
             if (target is not None and fitness.max() >= target) or (

@@ -43,6 +43,9 @@ Heading = Annotated[float, Field(ge=-360, le=360)]
 Radius = Annotated[float, Field(gt=0, le=10_000)]
 Length = Annotated[float, Field(gt=0, le=100_000)]
 MAX_POPULATION_GENES = 50_000_000  # 0.4 GB a copy of the population; the GA holds a few
+# learners in one SUMO: each senses the others through a grid, but moving one is a libsumo call
+# and SUMO's own step grows with them (docs/bench.md, "Learners in one city SUMO")
+MAX_LEARNERS = 1000
 # TOML has no tuples and no paths: these two take a list and a string (their items stay strict)
 XY = Annotated[tuple[float, float], Strict(False)]
 FilePath = Annotated[Path, Strict(False)]
@@ -400,8 +403,10 @@ class TrafficConfig(_Section):
         "its route files) a SUMO `.sumocfg`, run as SUMO runs it — its begin and end, route and "
         "additional files; `[track] net`, when given, replaces its `net-file`")
     learners: int = Field(
-        8, ge=1, le=64, description="`strategy = \"sumo\"`: learners that drive at once in one "
-        "SUMO, every vehicle a learner (Tables 3–4, paper §5.5)")
+        8, ge=1, le=MAX_LEARNERS, description="`strategy = \"sumo\"`: learners that drive at "
+        "once in one SUMO, every vehicle a learner (Tables 3–4, paper §5.5; `enn-traffic "
+        "crowd`); at most 1,000 in one SUMO, [bench.md](bench.md#learners-in-one-city-sumo) "
+        "(more: `crowd --executor ray` runs the situations side by side)")
     mode: Literal["replay", "closed-loop"] = Field(
         "replay", description="SUMO traffic: `replay` (SUMO runs once per traffic situation "
         "without the learner; every chromosome meets the recording) or `closed-loop` (the learner "
@@ -482,7 +487,41 @@ class CrowdConfig(_Section):
         "spins, of all vehicles together per second: the authors' display's count, the "
         "paper's unit, [results.md](results.md#all-vehicles-at-once-paper-55-tables-34)). "
         "Read by `reproduce`'s crowds (`table3`, `table4`, `sumo`, `city`) from the shipped "
-        "arena and SUMO scenarios; `run` says it ignores it")
+        "arena and SUMO scenarios, and by `enn-traffic crowd`; `run` says it ignores it")
+    learning_s: float = Field(
+        1000.0, gt=0, le=100_000, description="`enn-traffic crowd`: SUMO seconds every vehicle "
+        "learns together (Table 4), a multiple of `window_s`")
+    window_s: float = Field(
+        100.0, gt=0, le=10_000, description="`enn-traffic crowd`: the span each rate is "
+        "measured over (Table 3 the first, Table 4 the one after learning) and the learning "
+        "curve's step (SUMO seconds)")
+    life_cap_steps: int = Field(
+        150, ge=0, le=1_000_000, description="`enn-traffic crowd`: a life that reaches this "
+        "many steps ends its chromosome's trial without a respawn (0: no cap)")
+    population_size: int = Field(
+        20, ge=2, le=100_000, description="`enn-traffic crowd`: rows of the evolved population "
+        "(the individual run's last, its elites first) each vehicle copies and evolves; at "
+        "most `ga.population_size`")
+    elite_count: int = Field(
+        4, ge=0, le=100_000, description="`enn-traffic crowd`: the best chromosomes of all "
+        "vehicles, the elites of each vehicle's next generation")
+    situations: int = Field(
+        10, ge=1, le=10_000, description="`enn-traffic crowd`: traffic situations measured (the "
+        "crowd test keys), each arm paired by situation")
+    validation_situations: int = Field(
+        2, ge=0, le=1_000, description="`enn-traffic crowd`: validation situations whose "
+        "learners' counts are written (`table4_validation_learners.csv`: do they breed?)")
+
+    @model_validator(mode="after")
+    def _whole_windows(self) -> CrowdConfig:
+        windows = self.learning_s / self.window_s
+        if abs(windows - round(windows)) > 1e-9:
+            raise ValueError(f"learning_s ({self.learning_s:g}) must be a multiple of "
+                             f"window_s ({self.window_s:g})")
+        if self.elite_count >= self.population_size:
+            raise ValueError(f"elite_count ({self.elite_count}) must be less than "
+                             f"population_size ({self.population_size})")
+        return self
 
 
 Range = Annotated[tuple[Length, Length], Strict(False)]

@@ -23,7 +23,7 @@ LAYERS = {
     "learning": ["evolution", "envs"],
     "runs": ["runner", "deploy", "baseline"],
     "experiments": ["experiments"],
-    "commands": ["bench", "reproduce", "cli", "__main__"],
+    "commands": ["bench", "reproduce", "crowd", "cli", "__main__"],
 }
 ORDER = [part for parts in LAYERS.values() for part in parts]
 

@@ -98,3 +98,28 @@ def test_a_table_measured_again_replaces_its_lines_and_says_when_and_at_which_co
     summary = (paper / "summary.md").read_text()
     assert "| sumo/table3.csv, table4.csv (measured again: a test) | full | abcdef1234 |" \
         in summary
+
+
+def test_old_kernel_folders_are_pruned_but_the_recent_ones(tmp_path):
+    """A new kernels' version removes the folders of older versions but the three most recently
+    used and any used within the hour (another checkout may be running them)."""
+    import os
+    import time
+
+    from enn_traffic.cache import prune_kernel_folders
+
+    now = time.time()
+    ages_h = {"a": 100, "b": 50, "c": 40, "d": 30, "e": 20, "recent": 0.1}
+    for name, hours in ages_h.items():
+        folder = tmp_path / f"numba-{name}"
+        (folder / "sub").mkdir(parents=True)
+        for path in (folder / "sub", folder):
+            os.utime(path, (now - hours * 3600, now - hours * 3600))
+    os.utime(tmp_path / "numba-a" / "sub", (now, now))  # used now, through its subfolder
+    (tmp_path / "grids").mkdir()
+    removed = prune_kernel_folders(tmp_path / "numba-new")
+    assert sorted(p.name for p in removed) == ["numba-b", "numba-c", "numba-d"]
+    assert sorted(p.name for p in tmp_path.iterdir()) == [
+        "grids", "numba-a", "numba-e", "numba-recent"]
+    removed = prune_kernel_folders(tmp_path / "numba-new", keep=0)
+    assert [p.name for p in removed] == ["numba-e"]  # a and recent were used within the hour

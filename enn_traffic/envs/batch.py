@@ -209,8 +209,8 @@ def compiled(function, *args):
     """``function`` compiled for the types of ``args``, called directly: through numba's
     dispatcher a call that takes :class:`~enn_traffic.sim.rules.Physics` (a NamedTuple of
     more than 10 fields) is typed on its slow path every time (numba issue 6144)."""
-    with slow_step("compiling the environment's kernels (once per install or edit of the "
-                   "kernels; kept in numba's cache folder)"):
+    with slow_step("compiling the environment's kernels (once per install, edit of the kernels or "
+                   "new cache folder; kept in numba's cache folder)"):
         return function.compile(tuple(numba.typeof(value) for value in args))
 
 

@@ -43,6 +43,7 @@ with them, that situation's every span can be driven again.
 
 from __future__ import annotations
 
+import textwrap
 import time
 from collections.abc import Mapping
 from dataclasses import dataclass, field
@@ -476,8 +477,9 @@ def draw_learning(curve: pd.DataFrame, situations: pd.DataFrame, path: Path,
     from enn_traffic.report.plots import save_figure
 
     strategies = sorted(curve["strategy"].unique())
-    figure, axes = plt.subplots(1, len(strategies), figsize=(4 * len(strategies), 3.6),
-                                sharey=True, squeeze=False)
+    width = max(6, 4 * len(strategies))  # one panel (a user's crowd) holds its labels
+    figure, axes = plt.subplots(1, len(strategies), figsize=(width, 3.8), sharey=True,
+                                squeeze=False)
     arms = [("collisions_per_vehicle_s", "learning together", "C3", "population"),
             ("initial_drivers", "initial drivers", "C0", "initial_after"),
             ("winner_driving_on", "winner driving on", "C2", "winner_after")]
@@ -488,11 +490,13 @@ def draw_learning(curve: pd.DataFrame, situations: pd.DataFrame, path: Path,
             ax.plot(rows["window_start_s"] / 60, rows[column], color=color, label=label,
                     linewidth=1)
             ax.plot([seconds / 60], [after[arm].mean()], "o", color=color)
-        ax.set_title(f"strategy {strategy}", fontsize=10)
+        if len(strategies) > 1:
+            ax.set_title(f"strategy {strategy}", fontsize=10)
         ax.set_xlabel("simulated minutes (dots: the span after learning)")
     axes[0, 0].set_ylabel(unit)
     axes[0, 0].legend(fontsize=8)
-    figure.suptitle(f"Learning while driving (paper §5.5.2): {title}")
+    figure.suptitle("\n".join(textwrap.wrap(f"Learning while driving (paper §5.5.2): {title}",
+                                           round(width * 11))), fontsize=10)
     figure.tight_layout()
     save_figure(figure, path)
 

@@ -70,7 +70,7 @@ from enn_traffic.experiments.simultaneous import (
 )
 from enn_traffic.experiments.study import Study
 from enn_traffic.io import write_csv, write_text
-from enn_traffic.progress import terminal
+from enn_traffic.progress import slow_step, terminal
 from enn_traffic.provenance import rules_version, sources_of
 from enn_traffic.report.stats import bootstrap_interval
 from enn_traffic.runner import ga_params
@@ -289,13 +289,14 @@ def _settings(learning: SumoLearning) -> dict:
 
 
 def validation(folder: Path, inputs: dict[int, tuple[SumoWorld, np.ndarray, np.ndarray]],
-               learning: SumoLearning) -> pd.DataFrame:
+               learning: SumoLearning, identity: dict | None = None) -> pd.DataFrame:
     """Every strategy's learners in its validation situations, written to
-    ``table4_validation_learners.csv`` (kept under ``crowds/`` like the situations)."""
+    ``table4_validation_learners.csv`` (kept under ``crowds/`` like the situations, with
+    ``identity`` among their settings)."""
     rows = []
     for strategy, (world, winner, evolved) in inputs.items():
-        settings = _settings(learning) | {"strategy": strategy,
-                                          "inputs": _digest(winner, evolved)}
+        settings = _settings(learning) | (identity or {}) | {
+            "strategy": strategy, "inputs": _digest(winner, evolved)}
         path = folder / "crowds" / f"validation_strategy{strategy}.json"
         kept = _kept(path, settings) or _keep(path, settings, {"learners": validation_learners(
             world, winner, evolved, learning)})
@@ -311,35 +312,84 @@ def measure(study: Study, family: Family, learning: SumoLearning,
     """Every strategy's situations, their learning windows and learners, written under the
     family's folder (the module's list); ``inputs`` (:func:`saved_crowd_inputs`) instead of
     the study's runs."""
-    folder = study.out / family.folder
     inputs = inputs or crowd_inputs(study, family)
-    validation(folder, inputs, learning)
-    settings = _settings(learning)
+
+    def save_learner(strategy: int, k: int, scenario, genes: np.ndarray) -> None:
+        save_controller(study.out, f"{family.folder}/table4/strategy{strategy}_learner{k}",
+                        scenario, genes, float("nan"))
+
+    learners = family.scenario(family.strategies[0]).traffic.learners
+    return measure_situations(
+        study.out / family.folder, inputs, learning, study.progress,
+        f"{len(inputs)} strategies of {family.folder}: {learners} learners among SUMO traffic",
+        save_learner)
+
+
+def _situation_task(scenario, winner, evolved, situation, learning) -> SituationResult:
+    """A Ray task: one situation's every arm (:func:`situation_result`), from its scenario."""
+    return situation_result(make_world(scenario), winner, evolved, situation, learning)
+
+
+def measure_situations(folder: Path, inputs: dict[int, tuple[SumoWorld, np.ndarray, np.ndarray]],
+                       learning: SumoLearning, progress: bool, title: str,
+                       save_learner=None, ray=None, identity: dict | None = None) -> Measured:
+    """Each input's validation (:func:`validation`) and situations, their learning windows and
+    learners, written into ``folder`` (the module's list): each situation kept under
+    ``crowds/`` as it ends, so that an interrupted measurement resumes where it stopped.
+    ``save_learner(strategy, k, scenario, genes)`` keeps each learner's controller after
+    learning in the first situation. With ``ray`` (:func:`~enn_traffic.evolution.backends.
+    connect_ray`'s module) the situations run side by side as Ray tasks; a situation's result
+    depends on its seed alone, so it is the same wherever it ran. ``identity``: what else a
+    kept situation must have been measured with (a user's scenario: its fingerprint)."""
+    with slow_step(f"{folder.name}: the crowd's validation situations ({learning.seconds:g} s "
+                   "of SUMO time learning in each)"):
+        validation(folder, inputs, learning, identity)
+    settings = _settings(learning) | (identity or {})
     settings["key"] = SITUATION_KEY
-    rows, windows, learners = [], [], []
-    with tqdm(file=terminal(), total=len(inputs) * learning.situations, unit="situation",
-              desc=f"{family.folder} crowds", disable=not study.progress, leave=False) as bar:
-        for strategy, (world, winner, evolved) in inputs.items():
-            for situation in range(learning.situations):
-                path = folder / "crowds" / f"strategy{strategy}_situation{situation}.json"
-                label = {"strategy": strategy, "situation": situation}
-                measured_as = settings | label | {"inputs": _digest(winner, evolved)}
-                kept = _kept(path, measured_as)
-                if kept is None:
-                    result = situation_result(world, winner, evolved, situation, learning)
-                    kept = _keep(path, measured_as, {"rates": result.rates,
-                                                     "windows": result.windows,
-                                                     "learners": result.learners})
-                    if situation == 0:  # each learner's controller, committed with the tables
-                        for k, genes in enumerate(world.spec.from_source_layout(
-                                result.controllers)):
-                            save_controller(study.out, f"{family.folder}/table4/strategy"
-                                            f"{strategy}_learner{k}", world.scenario, genes,
-                                            float("nan"))
-                rows.append(label | kept["rates"])
-                windows += [label | window for window in kept["windows"]]
-                learners += [label | learner for learner in kept["learners"]]
+    jobs, kept = {}, {}
+    for strategy, (_, winner, evolved) in inputs.items():
+        for situation in range(learning.situations):
+            label = (strategy, situation)
+            path = folder / "crowds" / f"strategy{strategy}_situation{situation}.json"
+            measured_as = settings | {"strategy": strategy, "situation": situation,
+                                      "inputs": _digest(winner, evolved)}
+            kept[label] = _kept(path, measured_as)
+            if kept[label] is None:
+                jobs[label] = (path, measured_as)
+
+    def keep(label, result: SituationResult) -> None:
+        strategy, situation = label
+        path, measured_as = jobs[label]
+        kept[label] = _keep(path, measured_as, {"rates": result.rates,
+                                                "windows": result.windows,
+                                                "learners": result.learners})
+        world = inputs[strategy][0]
+        if situation == 0 and save_learner is not None:  # committed with the tables
+            for k, genes in enumerate(world.spec.from_source_layout(result.controllers)):
+                save_learner(strategy, k, world.scenario, genes)
+
+    with tqdm(file=terminal(), total=len(kept), initial=len(kept) - len(jobs), unit="situation",
+              desc=f"{folder.name} crowds", disable=not progress, leave=False) as bar:
+        if ray is None:
+            for label in list(jobs):
+                world, winner, evolved = inputs[label[0]]
+                keep(label, situation_result(world, winner, evolved, label[1], learning))
                 bar.update(1)
+        else:
+            task = ray.remote(num_cpus=1)(_situation_task)
+            pending = {task.remote(inputs[strategy][0].scenario, *inputs[strategy][1:],
+                                   situation, learning): (strategy, situation)
+                       for strategy, situation in jobs}
+            while pending:
+                [done], _ = ray.wait(list(pending))
+                keep(pending.pop(done), ray.get(done))
+                bar.update(1)
+    rows, windows, learners = [], [], []
+    for (strategy, situation), result in kept.items():
+        label = {"strategy": strategy, "situation": situation}
+        rows.append(label | result["rates"])
+        windows += [label | window for window in result["windows"]]
+        learners += [label | learner for learner in result["learners"]]
     measured = Measured(pd.DataFrame(rows), pd.DataFrame(windows), pd.DataFrame(learners))
     curve = learning_curve(measured.windows)
     write_csv(folder / "crowd_situations.csv", measured.situations)
@@ -347,9 +397,7 @@ def measure(study: Study, family: Family, learning: SumoLearning,
     write_csv(folder / "table4_learning.csv", curve)
     write_csv(folder / "table4_learning_ends.csv", learning_ends(measured.windows))
     draw_learning(curve, measured.situations, folder / "table4_learning.png", learning.seconds,
-                  f"{len(inputs)} strategies of {family.folder}: "
-                  f"{family.scenario(family.strategies[0]).traffic.learners} learners among SUMO "
-                  f"traffic, mean of the situations in {learning.window_seconds:g} s windows",
+                  f"{title}, mean of the situations in {learning.window_seconds:g} s windows",
                   "collisions per learner-second")
     return measured
 

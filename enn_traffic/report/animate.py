@@ -1,4 +1,5 @@
-"""A GIF of one life: the roads around the learner, its path so far, and every vehicle's body.
+"""A GIF of one life: the roads around the learner, its path so far, and every vehicle's body;
+or of a crowd, every learner at once among SUMO's vehicles (:func:`animate_crowd`).
 
 A track that fits in :data:`FOLLOW_M` metres is shown whole and still. On a larger map (a
 city) the view is :data:`FOLLOW_M` metres wide and follows the learner, so that it and the
@@ -26,6 +27,7 @@ from enn_traffic.progress import terminal  # noqa: E402
 from enn_traffic.report.plots import segments_within, square_view  # noqa: E402
 
 FRAMES = 150  # at most, spread evenly over the life
+CROWD_FRAMES = 100  # a crowd's frames draw every learner and vehicle: fewer, to write in seconds
 FPS = 15
 FOLLOW_M = 150.0  # a larger map is shown this wide around the learner
 
@@ -86,11 +88,17 @@ def animate_run(world, poses: np.ndarray, out: str | Path, title: str = "",
         return line, traffic, learner, clock
 
     animation = FuncAnimation(figure, draw, frames=len(indices), blit=not follow)
+    _save(animation, figure, out, len(indices), progress)
+
+
+def _save(animation: FuncAnimation, figure, out: str | Path, frames: int,
+          progress: bool) -> None:
+    """Write ``animation``'s ``frames`` as the GIF ``out``, whole or not at all."""
     out = Path(out)
     partial = out.with_name(f".{out.stem}.tmp{out.suffix}")  # whole or not at all, as write_atomic
     try:
         out.parent.mkdir(parents=True, exist_ok=True)
-        with tqdm(file=terminal(), total=len(indices), desc=f"{out.name}: frames", unit="frame",
+        with tqdm(file=terminal(), total=frames, desc=f"{out.name}: frames", unit="frame",
                   disable=not progress, leave=False) as bar:
             animation.save(str(partial), writer=PillowWriter(fps=FPS),
                            progress_callback=lambda *_: bar.update(1))
@@ -100,3 +108,43 @@ def animate_run(world, poses: np.ndarray, out: str | Path, title: str = "",
         raise InputError(f"cannot write: {exc.strerror or exc}", out) from None
     finally:
         plt.close(figure)
+
+
+def animate_crowd(walls: np.ndarray, learners: np.ndarray, traffic: list[np.ndarray],
+                  out: str | Path, title: str, dt: float, frames: int = CROWD_FRAMES,
+                  progress: bool = True) -> None:
+    """Every learner at once (red dots) among SUMO's vehicles (grey dots): ``learners``
+    (n, K, 2) their centres at each step (NaN: not on the network), ``traffic`` the SUMO
+    vehicles' centres (m, 2) at each step. The view holds every learner's path; only the
+    walls in it are drawn."""
+    seen = learners[np.isfinite(learners).all(axis=2)]
+    if not len(seen):
+        raise ValueError("no learner was on the network")
+    margin = 20.0
+    low, high = seen.min(axis=0) - margin, seen.max(axis=0) + margin
+    figure, axes = plt.subplots(figsize=(5, 5))
+    axes.add_collection(LineCollection(segments_within(walls, low, high), colors="0.3",
+                                       linewidths=0.3))
+    axes.set_xlim(low[0], high[0])
+    axes.set_ylim(low[1], high[1])
+    axes.set_aspect("equal")
+    axes.set_xticks([])
+    axes.set_yticks([])
+    axes.set_title("\n".join(textwrap.wrap(title, 70)), fontsize=9)
+    figure.tight_layout()
+    others = axes.scatter([], [], s=4, color="0.45", zorder=2, label="SUMO's vehicles")
+    own = axes.scatter([], [], s=7, color="C3", zorder=3, label="learners")
+    axes.legend(loc="lower right", fontsize=7)
+    clock = axes.text(0.02, 0.98, "", transform=axes.transAxes, va="top", fontsize=8, zorder=5,
+                      bbox={"boxstyle": "round,pad=0.2", "fc": "white", "ec": "0.6"})
+    indices = np.unique(np.linspace(0, len(learners) - 1, min(frames, len(learners))).astype(int))
+
+    def draw(k):
+        i = indices[k]
+        own.set_offsets(learners[i][np.isfinite(learners[i]).all(axis=1)])
+        others.set_offsets(traffic[i].reshape(-1, 2))
+        clock.set_text(f"t = {i * dt:.1f} s")
+        return others, own, clock
+
+    animation = FuncAnimation(figure, draw, frames=len(indices), blit=True)
+    _save(animation, figure, out, len(indices), progress)

@@ -116,10 +116,39 @@ def bench_quick(folder: Path) -> str:
                       f"| enn-traffic bench --quick | {row.rows} | {row.seconds:.0f} s |"])
 
 
+def crowd_scale(folder: Path) -> str:
+    """Learners in one city SUMO (issue 63), from ``crowd_scale_issue63.csv``
+    (:func:`enn_traffic.bench.crowd_scale_bench`)."""
+    table = pd.read_csv(folder / "crowd_scale_issue63.csv")
+    lines = [f"{table['workload'].iloc[0].split(': ', 1)[1]}, {table['steps'].iloc[0]} steps "
+             "each:", "",
+             "| learners | learner-steps/s | ms per step | of which SUMO's own step | "
+             "the rest per learner | peak memory |", "|---:|---:|---:|---:|---:|---:|"]
+    for row in table.itertuples():
+        learners = int(row.learner_steps / row.steps)
+        rest = (row.ms_per_step - row.sumo_ms_per_step) / learners
+        lines.append(f"| {learners} | {row.learner_steps_per_s:,.0f} | {row.ms_per_step:.1f} | "
+                     f"{row.sumo_ms_per_step:.1f} | {1000 * rest:.0f} µs | "
+                     f"{row.peak_memory_mb:,.0f} MB |")
+    return "\n".join(lines)
+
+
+def crowd_ray(folder: Path) -> str:
+    """``crowd`` across SUMOs, one after another and on Ray (issue 63), from
+    ``crowd_ray_issue63.csv`` (:func:`enn_traffic.bench.crowd_ray_bench`)."""
+    table = pd.read_csv(folder / "crowd_ray_issue63.csv")
+    lines = ["| workload | executor | wall time | tables |", "|---|---|---:|---|"]
+    for row in table.itertuples():
+        lines.append(f"| {row.workload.split(': ', 1)[1]} | {row.implementation} | "
+                     f"{row.seconds:.0f} s | {'identical' if row.identical else 'DIFFER'} |")
+    return "\n".join(lines)
+
+
 SECTIONS: generated.Sections = {"sumo_step": sumo_step, "published": published,
                                 "contention": contention, "first_run": first_run,
                                 "fresh": fresh, "reproduce_quick": reproduce_quick,
-                                "bench_quick": bench_quick}
+                                "bench_quick": bench_quick, "crowd_scale": crowd_scale,
+                                "crowd_ray": crowd_ray}
 
 
 def section(name: str, folder: Path) -> str:

@@ -274,4 +274,4 @@ def test_run_says_it_ignores_the_crowd_section(tmp_path, root):
     result = cli("run", scenario, "--generations", 1, "--population", 10, "--out",
                  tmp_path / "out", "--quiet")
     assert result.returncode == 0, result.stderr
-    assert "[crowd] is read only by 'enn-traffic reproduce'" in result.stderr
+    assert "[crowd] is read only by 'enn-traffic crowd' and 'reproduce'" in result.stderr

@@ -1,0 +1,153 @@
+"""``enn-traffic crowd``: Tables 3–4 on a user's SUMO scenario, with a real SUMO (the shipped
+ring road), its individual GA, its crowds and its files; resumed, refused, and on a local Ray."""
+
+import json
+import shutil
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from enn_traffic.cli import main
+
+CROWD = """
+[crowd]
+learning_s = 10.0
+window_s = 5.0
+life_cap_steps = 30
+population_size = 6
+elite_count = 2
+situations = 2
+validation_situations = 1
+"""
+
+
+def ring_scenario(root, folder, learners: int = 4, extra: str = CROWD, name: str = "ring"):
+    """The shipped ring road of SUMO strategy 1 as a user's file: a tiny GA, a short crowd."""
+    text = (root / "scenarios" / "sumo_strategy1.toml").read_text()
+    text = text.replace('"../sumo_nets/', f'"{root}/sumo_nets/').replace(
+        '"routes/', f'"{root}/scenarios/routes/').replace(
+        "population_size = 200", "population_size = 8").replace(
+        "generations = 20", "generations = 1").replace("elite_count = 20", "elite_count = 2")
+    text = text.replace('name = "sumo_strategy1"', f'name = "{name}"').replace(
+        "episodes = 2", f"episodes = 1\nlearners = {learners}")
+    path = folder / f"{name}.toml"
+    path.write_text(text + extra)
+    return path
+
+
+@pytest.fixture(scope="module")
+def crowd_run(tmp_path_factory, request):
+    root = request.config.rootpath
+    folder = tmp_path_factory.mktemp("crowd")
+    scenario = ring_scenario(root, folder)
+    assert main(["crowd", str(scenario), "--out", str(folder / "out"), "--quiet"]) == 0
+    return scenario, folder / "out"
+
+
+def test_crowd_writes_tables_3_and_4_the_curve_the_controllers_and_the_gif(crowd_run):
+    _, out = crowd_run
+    for name in ["table3.csv", "table4.csv", "table4_learners.csv", "table4_learning.csv",
+                 "table4_learning.png", "crowd_situations.csv", "crowd.gif", "crowd.toml",
+                 "table4_validation_learners.csv", "individual/best.npz",
+                 "individual/generations.csv"]:
+        assert (out / name).is_file(), name
+    assert sorted(p.name for p in (out / "controllers").iterdir()) == [
+        f"learner{k}.npz" for k in range(4)]
+    situations = pd.read_csv(out / "crowd_situations.csv")
+    assert list(situations["situation"]) == [0, 1]
+    for arm in ["initial", "winner", "initial_after", "winner_after", "population"]:
+        assert situations[arm].between(0, 10).all(), arm  # collisions per learner-second
+    learners = pd.read_csv(out / "table4_learners.csv")
+    assert len(learners) == 2 * 4  # every learner of every situation
+    table4 = pd.read_csv(out / "table4.csv")
+    assert {"population_minus_initial_after_low", "population_minus_initial_after_high"} <= set(
+        table4.columns)
+    curve = pd.read_csv(out / "table4_learning.csv")
+    assert len(curve) == 2  # the 10 s of learning in windows of 5 s
+
+
+def test_a_resumed_crowd_measures_nothing_again_and_another_folder_is_refused(crowd_run, capsys):
+    scenario, out = crowd_run
+    kept = {p: p.stat().st_mtime_ns for p in [*(out / "crowds").iterdir(), out / "crowd.gif"]}
+    assert main(["crowd", str(scenario), "--out", str(out), "--quiet"]) == 2
+    assert "holds a crowd run; --resume continues it" in capsys.readouterr().err
+    assert main(["crowd", str(scenario), "--out", str(out), "--resume", "--quiet"]) == 0
+    assert {p: p.stat().st_mtime_ns for p in kept} == kept
+    situation = json.loads((out / "crowds" / "strategy1_situation0.json").read_text())
+    assert situation["settings"]["seconds"] == 10.0
+
+
+def test_a_scenario_without_sumo_traffic_is_refused(root, tmp_path, capsys):
+    path = root / "scenarios" / "arena_strategy1.toml"
+    assert main(["crowd", str(path), "--out", str(tmp_path / "out"), "--quiet"]) == 2
+    error = capsys.readouterr().err
+    assert f"{path}: traffic.strategy" in error and 'strategy = "sumo"' in error, error
+
+
+def test_a_crowd_resumed_with_other_learners_measures_again_but_not_its_ga(crowd_run,
+                                                                          tmp_path):
+    """Kept situations are keyed by the scenario (its learners); the individual run by what
+    it learnt on, which the crowd's keys leave alone."""
+    scenario, out = crowd_run
+    copy = tmp_path / "out"
+    shutil.copytree(out, copy)
+    assert main(["crowd", str(scenario), "--out", str(copy), "--resume", "--learners", "3",
+                 "--quiet"]) == 0
+    assert len(pd.read_csv(copy / "table4_learners.csv")) == 2 * 3
+    assert sorted(p.name for p in (copy / "controllers").iterdir()) == [
+        f"learner{k}.npz" for k in range(3)]
+    for name in ["checkpoint.npz", "generations.csv", "best.npz"]:
+        assert (copy / "individual" / name).read_bytes() == (
+            out / "individual" / name).read_bytes()
+
+
+@pytest.mark.parametrize("change, key", [
+    ("learners = 4", "traffic.learners"),
+    ("population_size = 6", "crowd.population_size"),
+    ("learning_s = 10.0", "crowd"),
+])
+def test_a_crowd_that_cannot_run_is_refused_naming_the_key(root, tmp_path, capsys, change,
+                                                           key):
+    replacement = {"traffic.learners": "learners = 900",
+                   "crowd.population_size": "population_size = 9",
+                   "crowd": "learning_s = 12.0"}[key]
+    path = ring_scenario(root, tmp_path)
+    path.write_text(path.read_text().replace(change, replacement))
+    assert main(["crowd", str(path), "--out", str(tmp_path / "out"), "--quiet"]) == 2
+    error = capsys.readouterr().err
+    assert f"{path}" in error and key in error, error
+    assert not (tmp_path / "out").exists()
+
+
+def test_a_folder_of_other_files_is_refused_without_force(root, tmp_path, capsys):
+    (tmp_path / "out").mkdir()
+    (tmp_path / "out" / "mine.csv").write_text("a,b\n")
+    path = ring_scenario(root, tmp_path)
+    assert main(["crowd", str(path), "--out", str(tmp_path / "out"), "--quiet"]) == 2
+    assert "holds files but no crowd run" in capsys.readouterr().err
+    assert (tmp_path / "out" / "mine.csv").read_text() == "a,b\n"
+
+
+@pytest.mark.full
+def test_crowd_situations_on_ray_are_the_local_ones(crowd_run, tmp_path):
+    """Each situation a Ray task of a local Ray (2 workers): the same table."""
+    import ray
+
+    from enn_traffic.crowd import run_crowd
+    from enn_traffic.scenario import load_scenario
+
+    scenario, out = crowd_run
+    ray.init(num_cpus=2, include_dashboard=False, log_to_driver=False,
+             configure_logging=False)
+    try:
+        run_crowd(load_scenario(scenario), tmp_path / "ray", executor="ray", progress=False)
+    finally:
+        ray.shutdown()
+    for name in ["crowd_situations.csv", "table4_learners.csv", "table3.csv", "table4.csv"]:
+        pd.testing.assert_frame_equal(pd.read_csv(tmp_path / "ray" / name),
+                                      pd.read_csv(out / name))
+    for k in range(4):
+        with np.load(out / "controllers" / f"learner{k}.npz") as local, \
+                np.load(tmp_path / "ray" / "controllers" / f"learner{k}.npz") as spread:
+            np.testing.assert_array_equal(local["chromosome"], spread["chromosome"])
