@@ -143,7 +143,7 @@ def build_parser() -> argparse.ArgumentParser:
         "it), then traffic.learners vehicles drive at once in one SUMO, closed loop, in each "
         "of crowd.situations test situations: initial drivers, the winner for all, and every "
         "vehicle evolving on. Writes OUT/table3.csv, table4.csv, table4_learners.csv, "
-        "table4_learning.csv and .png, crowd_situations.csv, "
+        "table4_learning.csv and .png, table4_learning_ends.csv, crowd_situations.csv, "
         "table4_validation_learners.csv, controllers/ and crowd.gif (docs/sumo.md, 'Every car "
         "learning in your city').")
     crowd.add_argument("scenario", type=_path, metavar="SCENARIO.toml",
@@ -154,13 +154,15 @@ def build_parser() -> argparse.ArgumentParser:
                        help="override traffic.learners (vehicles learning in one SUMO)")
     crowd.add_argument("--quick", action="store_true",
                        help="minutes: 2 generations of the GA, 20 s of learning in 10 s "
-                            "windows, 2 situations")
+                            "windows, 2 situations, 1 validation situation (too short to "
+                            "breed: a check that it runs)")
     crowd.add_argument("--executor", choices=["local", "process", "ray"], default="local",
                        help="where the GA's fitness is evaluated and, with ray, the "
                             "situations run side by side (default: local)")
     crowd.add_argument("--address", help="Ray cluster address (with --executor ray)")
     _run_folder_options(crowd, "continue the crowd run in the folder",
-                        "start over even if the folder holds other files")
+                        "start over, even in a folder of other files (those of the names it "
+                        "writes are replaced)")
 
     lanes = commands.add_parser(
         "lanes", help="the lanes a learner may start on, ranked by the traffic demand",
@@ -297,7 +299,7 @@ def _cmd_crowd(args) -> int:
     check_output_folder(out)  # before any world, nothing written yet
     check_unlocked(out)
     check_folder(out, resume=args.resume, force=args.force)
-    check_room(scenario)
+    check_room(scenario, "--learners" if args.learners else "traffic.learners")
     scenario = scenario.with_sumo_output(out / "sumo", console=args.verbose)
     lines = run_crowd(scenario, out, args.executor, args.address,
                       resume=args.resume, force=args.force, progress=not args.quiet)

@@ -13,7 +13,7 @@ scenario, in three steps that each resume after an interrupt:
    evolving on (Table 4). Each situation is kept under ``OUT/crowds/`` as it ends; with
    ``--executor ray`` the situations run side by side as Ray tasks, the same results;
 3. **the tables**: ``table3.csv``, ``table4.csv`` (paired intervals), ``table4_learners.csv``,
-   ``table4_learning.csv`` and ``.png``, ``crowd_situations.csv``,
+   ``table4_learning.csv`` and ``.png``, ``table4_learning_ends.csv``, ``crowd_situations.csv``,
    ``table4_validation_learners.csv``, each learner's controller after learning in the first
    situation (``controllers/learnerK.npz``) and ``crowd.gif``: those controllers driving
    together.
@@ -97,9 +97,9 @@ def individual_scenario(scenario: Scenario) -> Scenario:
                                    traffic={"learners": learners})
 
 
-def check_room(scenario: Scenario) -> None:
+def check_room(scenario: Scenario, key: str = "traffic.learners") -> None:
     """Refuse, in seconds, more learners than the network's lanes can take in at
-    ``traffic.respawn_clearance`` apart."""
+    ``traffic.respawn_clearance`` apart; ``key``: where the count came from."""
     world = make_world(scenario.with_overrides(traffic={"mode": "closed-loop"}))
     spots = world.lane_spots
     spacing = max(scenario.traffic.respawn_clearance, scenario.vehicle.length)
@@ -108,7 +108,7 @@ def check_room(scenario: Scenario) -> None:
         raise InputError(f"{scenario.traffic.learners} learners do not fit: the lanes learners "
                          f"enter on ({len(spots) * 5.0 / 1000:.1f} km) take about {room} at "
                          f"traffic.respawn_clearance = {scenario.traffic.respawn_clearance:g} m "
-                         "apart", scenario.source, "traffic.learners")
+                         "apart", None if key.startswith("--") else scenario.source, key)
 
 
 def check_folder(out: Path, resume: bool, force: bool) -> None:
@@ -164,9 +164,41 @@ def run_crowd(scenario: Scenario, out: Path, executor: str = "local",
             index = kept.stem.removeprefix("learner")
             if index.isdigit() and int(index) >= scenario.traffic.learners:
                 kept.unlink()
-        lines = write_tables(out, measured.situations, measured.learners)
+        write_tables(out, measured.situations, measured.learners)
         draw_crowd(world.scenario, out, progress)
-    return [line.replace(f"{out.name}/", "", 1) for line in lines]
+    return summary(out)
+
+
+def summary(out: Path) -> list[str]:
+    """What the command prints: each table's rates and paired difference, and whether the
+    learners bred (a learning span too short for their populations leaves Table 4's
+    "after learning" the copied start population)."""
+    import pandas as pd
+
+    table3 = pd.read_csv(out / "table3.csv").iloc[0]
+    table4 = pd.read_csv(out / "table4.csv").iloc[0]
+    bred = pd.read_csv(out / "table4_learners.csv")["generations_bred"]
+
+    def difference(row, name: str) -> str:
+        return (f"{row[name]:+.4f}, 90% interval {row[name + '_low']:+.4f} to "
+                f"{row[name + '_high']:+.4f}")
+
+    lines = [f"Table 3, collisions per learner-second over the first window: initial drivers "
+             f"{table3.initial_collisions_per_s:.4f}, the winner for all "
+             f"{table3.winner_collisions_per_s:.4f} "
+             f"({difference(table3, 'winner_minus_initial')})",
+             f"Table 4, over the window after learning: initial drivers "
+             f"{table4.initial_after_collisions_per_s:.4f}, after learning together "
+             f"{table4.population_collisions_per_s:.4f} "
+             f"({difference(table4, 'population_minus_initial_after')}), the winner driving "
+             f"on {table4.winner_after_collisions_per_s:.4f} "
+             f"({difference(table4, 'population_minus_winner_after')}); generations bred per "
+             f"learner: median {bred.median():g}, {bred.min()}-{bred.max()}"]
+    if bred.max() == 0:
+        lines.append("note: no learner bred a generation, so 'after learning together' is the "
+                     "copied start population; give crowd.learning_s more time than "
+                     "crowd.population_size lives of crowd.life_cap_steps steps")
+    return lines
 
 
 def record_crowd(scenario: Scenario, genes: np.ndarray, seed: int, seconds: float

@@ -120,6 +120,14 @@ def test_a_crowd_that_cannot_run_is_refused_naming_the_key(root, tmp_path, capsy
     assert not (tmp_path / "out").exists()
 
 
+def test_too_many_learners_from_the_command_line_name_the_option(root, tmp_path, capsys):
+    path = ring_scenario(root, tmp_path)
+    assert main(["crowd", str(path), "--learners", "900", "--out", str(tmp_path / "out"),
+                 "--quiet"]) == 2
+    error = capsys.readouterr().err
+    assert "--learners: 900 learners do not fit" in error and str(path) not in error, error
+
+
 def test_a_folder_of_other_files_is_refused_without_force(root, tmp_path, capsys):
     (tmp_path / "out").mkdir()
     (tmp_path / "out" / "mine.csv").write_text("a,b\n")

@@ -373,7 +373,10 @@ def measure_situations(folder: Path, inputs: dict[int, tuple[SumoWorld, np.ndarr
         if ray is None:
             for label in list(jobs):
                 world, winner, evolved = inputs[label[0]]
-                keep(label, situation_result(world, winner, evolved, label[1], learning))
+                with slow_step(f"situation {label[1] + 1} of {learning.situations}: three "
+                               f"arms of {learning.seconds + learning.window_seconds:g} s of "
+                               "SUMO time each, side by side"):
+                    keep(label, situation_result(world, winner, evolved, label[1], learning))
                 bar.update(1)
         else:
             task = ray.remote(num_cpus=1)(_situation_task)
