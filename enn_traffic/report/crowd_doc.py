@@ -37,8 +37,10 @@ def crowd_tables(folder: Path) -> str:
     lines = [
         f"{learners} learners at once in one SUMO, {len(situations)} test situations; the "
         f"winner from {len(generations)} generations of the scenario's GA (population "
-        f"{scenario['ga']['population_size']}, best training fitness "
-        f"{generations['best_fitness'].max():.0f} steps); {crowd['learning_s']:g} s of SUMO "
+        f"{scenario['ga']['population_size']}; its best training fitness, "
+        f"{generations['best_fitness'].max():.0f} steps, in generation "
+        f"{generations['generation'][generations['best_fitness'].idxmax()]}); "
+        f"{crowd['learning_s']:g} s of SUMO "
         f"time learning together, rates over windows of {crowd['window_s']:g} s. Collisions "
         "per learner-second (responsible collisions), SSM conflicts (TTC < 1.5 s) per "
         "learner-hour; differences paired by situation, with their 90% bootstrap interval:",
