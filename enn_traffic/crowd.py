@@ -51,21 +51,19 @@ INDIVIDUAL = "individual"
 PACKING = 0.5
 
 
+# Each [crowd] key and the SumoLearning field it sets
+FIELDS = {"learning_s": "seconds", "window_s": "window_seconds",
+          "life_cap_steps": "life_cap_steps", "population_size": "population_size",
+          "elite_count": "elite_count", "situations": "situations",
+          "validation_situations": "validation_situations"}
 # --quick: the shipped families' quick spans and situations (SUMO_LEARNING.quick), as keys
-QUICK = {"learning_s": SUMO_LEARNING.quick["seconds"],
-         "window_s": SUMO_LEARNING.quick["window_seconds"],
-         "situations": SUMO_LEARNING.quick["situations"],
-         "validation_situations": SUMO_LEARNING.quick["validation_situations"]}
+QUICK = {key: SUMO_LEARNING.quick[field] for key, field in FIELDS.items()
+         if field in SUMO_LEARNING.quick}
 
 
 def learning_settings(scenario: Scenario) -> SumoLearning:
     """The scenario's ``[crowd]`` keys as the families' settings."""
-    crowd = scenario.crowd
-    return SumoLearning(seconds=crowd.learning_s, window_seconds=crowd.window_s,
-                        life_cap_steps=crowd.life_cap_steps,
-                        population_size=crowd.population_size, elite_count=crowd.elite_count,
-                        situations=crowd.situations,
-                        validation_situations=crowd.validation_situations)
+    return SumoLearning(**{field: getattr(scenario.crowd, key) for key, field in FIELDS.items()})
 
 
 def crowd_scenario(scenario: Scenario, learners: int | None = None, quick: bool = False
@@ -165,7 +163,7 @@ def run_crowd(scenario: Scenario, out: Path, executor: str = "local",
             if index.isdigit() and int(index) >= scenario.traffic.learners:
                 kept.unlink()
         write_tables(out, measured.situations, measured.learners)
-        draw_crowd(world.scenario, out, progress)
+        draw_crowd(world, out, progress)
     return summary(out)
 
 
@@ -223,18 +221,19 @@ def record_crowd(scenario: Scenario, genes: np.ndarray, seed: int, seconds: floa
     return np.array(learners), traffic
 
 
-def draw_crowd(scenario: Scenario, out: Path, progress: bool) -> Path:
+def draw_crowd(world, out: Path, progress: bool) -> Path:
     """``crowd.gif``: the learners' controllers after learning in the first situation driving
-    together for :data:`GIF_SECONDS` in that situation's SUMO (a fresh process)."""
+    together for :data:`GIF_SECONDS` in that situation's SUMO (a fresh process); ``world``:
+    the crowd's closed-loop SUMO world."""
     from enn_traffic.report.animate import animate_crowd
     from enn_traffic.traffic.fresh import fresh
 
+    scenario = world.scenario
     path, stamp = out / "crowd.gif", out / "crowds" / "gif.json"
     files = [out / "controllers" / f"learner{k}.npz" for k in range(scenario.traffic.learners)]
     drawn_from = key_of(scenario.to_toml(), GIF_SECONDS, *(file.read_bytes() for file in files))
     if path.is_file() and stamp.is_file() and json.loads(stamp.read_text()) == drawn_from:
         return path  # a resumed run: drawn from these controllers already
-    world = make_world(scenario)
     genes = np.array([Controller.load(file).chromosome for file in files])
     seed = world.seeds(SITUATION_KEY)[0]
     with slow_step(f"driving the learners for the GIF ({GIF_SECONDS:g} s of SUMO time)"):

@@ -43,8 +43,8 @@ Heading = Annotated[float, Field(ge=-360, le=360)]
 Radius = Annotated[float, Field(gt=0, le=10_000)]
 Length = Annotated[float, Field(gt=0, le=100_000)]
 MAX_POPULATION_GENES = 50_000_000  # 0.4 GB a copy of the population; the GA holds a few
-# learners in one SUMO: each senses the others through a grid, but moving one is a libsumo call
-# and SUMO's own step grows with them (docs/bench.md, "Learners in one city SUMO")
+# learners in one SUMO: the largest count measured, each learner's own cost flat per learner
+# there while SUMO's step grows with them (docs/bench.md, "Learners in one city SUMO")
 MAX_LEARNERS = 1000
 # TOML has no tuples and no paths: these two take a list and a string (their items stay strict)
 XY = Annotated[tuple[float, float], Strict(False)]
