@@ -709,11 +709,23 @@ def sumo_step_bench(quick: bool = False) -> pd.DataFrame:
 def crowd_scale_seconds(net: Path, trips: Path, learners: int, steps: int) -> dict:
     """``learners`` learners in one SUMO of the city ``net`` (its ``trips``; closed loop, after
     300 s of warm-up), each driving a random network of its own for ``steps`` steps, SUMO's
-    start and the learners' entry not timed: the seconds, those inside SUMO's own step, and
-    the process's peak resident memory (libsumo runs in it). Run in a fresh process."""
+    start and the learners' entry not timed: the seconds, those inside SUMO's own step, those
+    inside the learners' two compiled calls (blame and sensing, :mod:`enn_traffic.sim.sumo_crowd`),
+    and the process's peak resident memory (libsumo runs in it). Run in a fresh process."""
     import resource
 
     from enn_traffic.scenario import load_scenario
+    from enn_traffic.sim import sumo_crowd
+
+    inside = {"sumo": 0.0, "kernels": 0.0}
+
+    def timed(call, part):
+        def wrapped(*args):
+            started = time.perf_counter()
+            result = call(*args)
+            inside[part] += time.perf_counter() - started
+            return result
+        return wrapped
 
     with tempfile.TemporaryDirectory(prefix="enn-bench-crowd-") as folder:
         path = Path(folder) / "city.toml"
@@ -725,31 +737,29 @@ def crowd_scale_seconds(net: Path, trips: Path, learners: int, steps: int) -> di
         world = make_world(scenario)
         genes = world.spec.in_source_layout(np.random.default_rng(learners).uniform(
             -1, 1, (learners, world.spec.chromosome_length)))
-        inside_sumo = 0.0
         with SumoCrowd(world, world.seeds(1)[0]) as crowd:
             crowd.run(scenario.vehicle.dt, genes)  # start SUMO, let the learners enter
-            simulation = crowd.simulation
-            sumo_step = simulation.step
-
-            def timed_step(*args):
-                nonlocal inside_sumo
-                started = time.perf_counter()
-                sumo_step(*args)
-                inside_sumo += time.perf_counter() - started
-
-            simulation.step = timed_step
+            crowd.simulation.step = timed(crowd.simulation.step, "sumo")
+            kernels = sumo_crowd.learner_events, sumo_crowd.drive
+            sumo_crowd.learner_events = timed(kernels[0], "kernels")
+            sumo_crowd.drive = timed(kernels[1], "kernels")
             vehicles = int((crowd.slots[0][crowd.now] >= 0).sum())  # SUMO's, when timed
             started = time.perf_counter()
-            crowd.run(steps * scenario.vehicle.dt, genes)
+            try:
+                crowd.run(steps * scenario.vehicle.dt, genes)
+            finally:
+                sumo_crowd.learner_events, sumo_crowd.drive = kernels
             seconds = time.perf_counter() - started
-    return {"seconds": seconds, "sumo_seconds": inside_sumo, "vehicles": vehicles,
+    return {"seconds": seconds, "sumo_seconds": inside["sumo"],
+            "kernel_seconds": inside["kernels"], "vehicles": vehicles,
             "peak_mb": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024}
 
 
 def crowd_scale_bench(quick: bool = False) -> pd.DataFrame:
     """Learners in one city SUMO (issue 63): learner-steps per second, SUMO's own share of the
-    time and the peak memory as the learners grow, each count in a fresh process, on the
-    random city with actuated lights of the SUMO step rows."""
+    time, the learners' compiled calls per learner-step and the peak memory as the learners
+    grow, each count in a fresh process, on the random city with actuated lights of the SUMO
+    step rows."""
     from enn_traffic.traffic.fresh import fresh_calls
 
     net, trips = _city_with_lights(150 if quick else 1500, 0.5)
@@ -768,6 +778,7 @@ def crowd_scale_bench(quick: bool = False) -> pd.DataFrame:
         "learner_steps_per_s": k * steps / m["seconds"],
         "ms_per_step": 1000 * m["seconds"] / steps,
         "sumo_ms_per_step": 1000 * m["sumo_seconds"] / steps,
+        "kernel_us_per_learner_step": 1e6 * m["kernel_seconds"] / (k * steps),
         "peak_memory_mb": m["peak_mb"]} for k, m in zip(counts, measured, strict=True)])
 
 

@@ -114,7 +114,7 @@ class TrackConfig(_Section):
                              "start_edge or start_anywhere = true")
         for name in ("start_lane", "start_edge"):
             if getattr(self, name) == []:
-                raise ValueError(f"{name} must name at least one {name.removeprefix('start_')}")
+                raise ValueError(f"{name}: must name at least one {name.removeprefix('start_')}")
         return self
 
     @property
@@ -148,12 +148,12 @@ class VehicleConfig(_Section):
     @model_validator(mode="after")
     def _physical(self) -> VehicleConfig:
         if self.wheelbase > self.length:
-            raise ValueError(f"wheelbase ({self.wheelbase:g} m) must not exceed length "
+            raise ValueError(f"wheelbase: {self.wheelbase:g} m must not exceed length "
                              f"({self.length:g} m)")
         if self.speed * self.dt > self.length:
-            raise ValueError(f"speed × dt = {self.speed * self.dt:g} m a step, farther than the "
-                             f"body's length ({self.length:g} m): the vehicle could jump a wall; "
-                             "lower speed or dt")
+            raise ValueError(f"speed: speed × dt = {self.speed * self.dt:g} m a step, farther "
+                             f"than the body's length ({self.length:g} m): the vehicle could jump "
+                             "a wall; lower speed or dt")
         return self
 
 
@@ -268,9 +268,9 @@ class GAConfig(_Section):
     @model_validator(mode="after")
     def _fits_population(self) -> GAConfig:
         if self.elite_count >= self.population_size:
-            raise ValueError("elite_count must be smaller than population_size")
+            raise ValueError("elite_count: must be smaller than population_size")
         if self.tournament_size > self.population_size:
-            raise ValueError("tournament_size must not exceed population_size")
+            raise ValueError("tournament_size: must not exceed population_size")
         return self
 
 
@@ -462,9 +462,9 @@ class TrafficConfig(_Section):
     @model_validator(mode="after")
     def _ordered_ranges(self) -> TrafficConfig:
         if self.circle_radius[0] > self.circle_radius[1]:
-            raise ValueError("circle_radius must be [smallest, largest]")
+            raise ValueError("circle_radius: must be [smallest, largest]")
         if self.start_heading_deg[0] > self.start_heading_deg[1]:
-            raise ValueError("start_heading_deg must be [lowest, highest]")
+            raise ValueError("start_heading_deg: must be [lowest, highest]")
         return self
 
     @property
@@ -516,10 +516,10 @@ class CrowdConfig(_Section):
     def _whole_windows(self) -> CrowdConfig:
         windows = self.learning_s / self.window_s
         if abs(windows - round(windows)) > 1e-9:
-            raise ValueError(f"learning_s ({self.learning_s:g}) must be a multiple of "
+            raise ValueError(f"learning_s: {self.learning_s:g} must be a multiple of "
                              f"window_s ({self.window_s:g})")
         if self.elite_count >= self.population_size:
-            raise ValueError(f"elite_count ({self.elite_count}) must be less than "
+            raise ValueError(f"elite_count: {self.elite_count} must be less than "
                              f"population_size ({self.population_size})")
         return self
 
@@ -544,7 +544,7 @@ class RoadDraw(_Section):
         for name in ("amplitude", "period", "radius"):
             low, high = getattr(self, name)
             if low > high:
-                raise ValueError(f"{name} must be [smallest, largest]")
+                raise ValueError(f"{name}: must be [smallest, largest]")
         return self
 
 
@@ -837,15 +837,16 @@ class Scenario(_Section):
 
 
 def _key_of(error: dict) -> tuple[str, str]:
-    """The key an error names, and its message. A whole-scenario check names its key as the
-    message's prefix (``"track.net: required ..."``)."""
+    """The key an error names, and its message. A check of several keys names its key as the
+    message's prefix: ``"track.net: required ..."`` of the whole scenario, ``"learning_s:
+    must be ..."`` of a section (the section's key then)."""
     parts = [part for part in error["loc"] if part not in ("one", "several")]
     key = "".join(f"[{part}]" if isinstance(part, int) else f".{part}" for part in parts)
     key = key.removeprefix(".")
     message = error["msg"].removeprefix("Value error, ")
     prefix, _, rest = message.partition(": ")
-    if not key and rest and re.fullmatch(r"[a-z_]+(\[\d+\])?(\.[a-z_]+(\[\d+\])?)*", prefix):
-        return prefix, rest
+    if rest and re.fullmatch(r"[a-z_]+(\[\d+\])?(\.[a-z_]+(\[\d+\])?)*", prefix):
+        return f"{key}.{prefix}" if key else prefix, rest
     return key or "(top level)", message
 
 

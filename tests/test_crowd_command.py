@@ -105,13 +105,13 @@ def test_a_crowd_resumed_with_other_learners_measures_again_but_not_its_ga(crowd
 @pytest.mark.parametrize("change, key", [
     ("learners = 4", "traffic.learners"),
     ("population_size = 6", "crowd.population_size"),
-    ("learning_s = 10.0", "crowd"),
+    ("learning_s = 10.0", "crowd.learning_s"),
 ])
 def test_a_crowd_that_cannot_run_is_refused_naming_the_key(root, tmp_path, capsys, change,
                                                            key):
     replacement = {"traffic.learners": "learners = 900",
                    "crowd.population_size": "population_size = 9",
-                   "crowd": "learning_s = 12.0"}[key]
+                   "crowd.learning_s": "learning_s = 12.0"}[key]
     path = ring_scenario(root, tmp_path)
     path.write_text(path.read_text().replace(change, replacement))
     assert main(["crowd", str(path), "--out", str(tmp_path / "out"), "--quiet"]) == 2

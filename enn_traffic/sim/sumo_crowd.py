@@ -15,9 +15,11 @@ learners. The blame rule is the arena's and the closed loop's (:mod:`enn_traffic
   collision; learners are held to §5.3's spin test.
 
 Each SUMO step makes two compiled calls, whatever K: :func:`learner_events` (blame, exits, spins of
-all learners) and :func:`drive` (all learners sense, decide and move). Python respawns the
-learners whose lives ended, calls their learning back (:class:`~enn_traffic.sim.crowd.Learning`),
-moves them in SUMO and steps SUMO.
+all learners) and :func:`drive` (all learners sense, decide and move). Each learner looks only
+at the bodies in the cells around it (:mod:`enn_traffic.sim.buckets`), so a step costs
+learners + vehicles, not learners × vehicles. Python respawns the learners whose lives ended,
+calls their learning back (:class:`~enn_traffic.sim.crowd.Learning`), moves them in SUMO and
+steps SUMO.
 """
 
 from __future__ import annotations
@@ -32,6 +34,7 @@ from numba import njit
 from enn_traffic.errors import InputError
 from enn_traffic.neural import network_buffers
 from enn_traffic.neural import steering as network_steering
+from enn_traffic.sim.buckets import Buckets, buckets_for, fill, nearby
 from enn_traffic.sim.crowd import ALIVE, CrowdRun, Learning
 from enn_traffic.sim.replay import mark_absent, struck_by_traffic, visible_centres
 from enn_traffic.sim.rules import (
@@ -58,8 +61,28 @@ from enn_traffic.traffic.sumo import FAR
 RESPAWN_TRIES = 50  # free spots drawn before a learner re-enters beside SUMO's vehicles anyway
 
 
+class Near(NamedTuple):
+    """Work arrays: the bodies near one learner, gathered from their buckets (N rows)."""
+
+    index: np.ndarray  # (N,) int64 their rows in the whole arrays
+    ids: np.ndarray  # (N,) int64 SUMO's ids (slots)
+    corners: np.ndarray  # (N, 4, 2)
+    centres: np.ndarray  # (N, 2)
+    gone: np.ndarray  # (N,) int64 the learner's ``gone`` (slots)
+    absent: np.ndarray  # (N,) bool not in the learner's world before the step
+    visible: np.ndarray  # (N, 2) the centres the learner sees (slots)
+
+
+def near_for(rows: int) -> Near:
+    """Room for ``rows`` bodies."""
+    return Near(np.zeros(rows, dtype=np.int64), np.zeros(rows, dtype=np.int64),
+                np.zeros((rows, 4, 2)), np.zeros((rows, 2)), np.zeros(rows, dtype=np.int64),
+                np.zeros(rows, dtype=np.bool_), np.zeros((rows, 2)))
+
+
 class Learners(NamedTuple):
-    """The learners' lives, one row each (K), and their worlds, one entry per SUMO slot (S)."""
+    """The learners' lives, one row each (K), their worlds, one entry per SUMO slot (S), and
+    the buckets of the bodies around them."""
 
     life: np.ndarray  # (K,) steps lived
     recent: np.ndarray  # (K, spin_window, 2) positions for the spin test
@@ -68,8 +91,72 @@ class Learners(NamedTuple):
     suffered: np.ndarray  # (K,) collisions SUMO vehicles caused
     events: np.ndarray  # (K,) ALIVE, or what ended the life at this step
     gone: np.ndarray  # (K, S) the id a slot held when it left learner k's world, or -1
-    absent: np.ndarray  # (S,) work array: not in a learner's world before the step
-    visible: np.ndarray  # (S, 2) work array: the centres a learner sees
+    slot_buckets: tuple[Buckets, Buckets]  # SUMO's bodies, one per row of the slot arrays
+    learner_buckets: Buckets  # the learners' bodies
+    near_slots: Near  # (S rows) work arrays
+    near_learners: Near  # (K rows) work arrays
+
+
+def learners_for(count: int, spin_window: int, slots: int) -> Learners:
+    """``count`` learners at the start of their lives, alive and active, with room for
+    ``slots`` SUMO slots."""
+    return Learners(
+        np.zeros(count, dtype=np.int64), np.zeros((count, spin_window, 2)),
+        np.ones(count, dtype=np.bool_), np.ones(count, dtype=np.bool_),
+        np.zeros(count, dtype=np.int64), np.full(count, ALIVE, dtype=np.int64),
+        np.full((count, slots), -1, dtype=np.int64), (buckets_for(slots), buckets_for(slots)),
+        buckets_for(count), near_for(slots), near_for(count))
+
+
+@njit(cache=True, inline="always")
+def reach(physics) -> float:
+    """The side of the buckets' cells: at least as far as a learner senses a body (its longest
+    beam and a body's bounding radius) and as bodies that touch lie apart."""
+    farthest = max(physics.max_range + physics.radius, 2.0 * physics.radius)
+    return farthest * (1.0 + 1e-9) + 1e-6
+
+
+@njit(cache=True)
+def fill_slots(learners, physics, slots, row) -> None:
+    """Bucket SUMO's bodies of ``row`` of the slot arrays."""
+    ids, _, centres = slots
+    fill(learners.slot_buckets[row], centres[row], ids[row] >= 0, reach(physics))
+
+
+@njit(cache=True, inline="always")
+def gather_slots(learners, k, x, y, slots, row) -> int:
+    """SUMO's bodies of ``row`` in the cells around (x, y), with learner ``k``'s ``gone``,
+    into ``learners.near_slots``: how many."""
+    ids, corners, centres = slots
+    near, gone = learners.near_slots, learners.gone[k]
+    n = nearby(learners.slot_buckets[row], x, y, near.index)
+    for i in range(n):
+        s = near.index[i]
+        near.ids[i], near.gone[i] = ids[row, s], gone[s]
+        near.centres[i, 0], near.centres[i, 1] = centres[row, s, 0], centres[row, s, 1]
+        for c in range(4):
+            near.corners[i, c, 0], near.corners[i, c, 1] = (corners[row, s, c, 0],
+                                                            corners[row, s, c, 1])
+    return n
+
+
+@njit(cache=True, inline="always")
+def gather_learners(learners, k, x, y, corners, centres):
+    """The learners' bodies (``corners``, ``centres``) in the cells around (x, y) into
+    ``learners.near_learners``: how many, and learner ``k``'s row there (-1 if not among
+    them)."""
+    near = learners.near_learners
+    n = nearby(learners.learner_buckets, x, y, near.index)
+    me = -1
+    for i in range(n):
+        other = near.index[i]
+        if other == k:
+            me = i
+        near.centres[i, 0], near.centres[i, 1] = centres[other, 0], centres[other, 1]
+        for c in range(4):
+            near.corners[i, c, 0], near.corners[i, c, 1] = (corners[other, c, 0],
+                                                            corners[other, c, 1])
+    return n, me
 
 
 @njit(cache=True)
@@ -79,14 +166,15 @@ def learner_events(t, vehicles, learners, physics, geometry, slots, before, now)
     collisions SUMO vehicles cause (``suffered``) and take those vehicles out of the learner's
     world (``gone[k]``). ``slots``: SUMO's (ids, corners, centres), rows ``before`` and
     ``now``. Did any life end?"""
-    ids, corners, centres = slots
-    ids_before, corners_before, centres_before = ids[before], corners[before], centres[before]
-    ids_now, corners_now, centres_now = ids[now], corners[now], centres[now]
     pose, body, centre = vehicles.pose, vehicles.corners, vehicles.centres
-    events, gone = learners.events, learners.gone
+    events, gone, near = learners.events, learners.gone, learners.near_slots
+    others = learners.near_learners
     exits = geometry.exits
     walls, cell_start, cell_walls, all_walls = wall_arrays(geometry)
-    near = 4.0 * physics.radius * physics.radius
+    touch = 4.0 * physics.radius * physics.radius
+    fill_slots(learners, physics, slots, before)
+    fill_slots(learners, physics, slots, now)
+    fill(learners.learner_buckets, vehicles.previous_centres, ~vehicles.fresh, reach(physics))
     ended = False
     for k in range(pose.shape[0]):
         events[k] = ALIVE
@@ -96,19 +184,29 @@ def learner_events(t, vehicles, learners, physics, geometry, slots, before, now)
             events[k] = LEFT_NETWORK
             ended = True
             continue
-        mark_absent(t, ids_before, gone[k], learners.absent)
-        if (responsible(k, pose, body, centre, corners_before, centres_before, learners.absent,
-                        -1, physics, walls, cell_start, cell_walls, all_walls) != NO_HIT
-                or hits_earlier_body(k, body, centre, vehicles.previous,
-                                     vehicles.previous_centres, vehicles.fresh, k,
-                                     near) != NO_HIT):
+        n = gather_slots(learners, k, centre[k, 0], centre[k, 1], slots, before)
+        mark_absent(t, near.ids[:n], near.gone[:n], near.absent[:n])
+        m, me = gather_learners(learners, k, centre[k, 0], centre[k, 1], vehicles.previous,
+                                vehicles.previous_centres)
+        for i in range(m):
+            others.absent[i] = vehicles.fresh[others.index[i]]
+        if (responsible(k, pose, body, centre, near.corners[:n], near.centres[:n],
+                        near.absent[:n], -1, physics, walls, cell_start, cell_walls,
+                        all_walls) != NO_HIT
+                or hits_earlier_body(k, body, centre, others.corners[:m], others.centres[:m],
+                                     others.absent[:m], me, touch) != NO_HIT):
             events[k] = COLLIDED
             ended = True
             continue
         if t > 0 and not vehicles.fresh[k]:
+            n = gather_slots(learners, k, vehicles.previous_centres[k, 0],
+                             vehicles.previous_centres[k, 1], slots, now)
             learners.suffered[k] += struck_by_traffic(k, vehicles.previous,
-                                                      vehicles.previous_centres, ids_now,
-                                                      corners_now, centres_now, gone[k], near)
+                                                      vehicles.previous_centres, near.ids[:n],
+                                                      near.corners[:n], near.centres[:n],
+                                                      near.gone[:n], touch)
+            for i in range(n):
+                gone[k, near.index[i]] = near.gone[i]
         if learners.spin_checked[k] and spun(learners.recent[k], learners.life[k], pose[k, 0],
                                              pose[k, 1], physics.spin_variance):
             events[k] = SPUN
@@ -117,18 +215,27 @@ def learner_events(t, vehicles, learners, physics, geometry, slots, before, now)
 
 
 @njit(cache=True, inline="always")
-def sense_learner(k, physics, geometry, ids_now, corners_now, centres_now, vehicles, learners,
-                  readings) -> None:
+def fill_now(physics, slots, now, vehicles, learners) -> None:
+    """Bucket SUMO's bodies now and the learners' bodies, for :func:`sense_learner`."""
+    fill_slots(learners, physics, slots, now)
+    fill(learners.learner_buckets, vehicles.centres, learners.active, reach(physics))
+
+
+@njit(cache=True, inline="always")
+def sense_learner(k, physics, geometry, slots, now, vehicles, learners, readings) -> None:
     """Learner ``k`` senses the walls, the SUMO vehicles in its world and the other
-    learners into ``readings``."""
-    pose, visible = vehicles.pose, learners.visible
+    learners into ``readings`` (the buckets filled by :func:`fill_now`)."""
+    pose, near, others = vehicles.pose, learners.near_slots, learners.near_learners
+    x, y = pose[k, 0], pose[k, 1]
     beams = geometry.beams
     walls, cell_start, cell_walls, all_walls = wall_arrays(geometry)
-    visible_centres(ids_now, centres_now, learners.gone[k], visible)
-    sense(k, pose, physics, beams, walls, cell_start, cell_walls, all_walls, True, corners_now,
-          visible, -1, readings)
-    sense_bodies(k, pose[k, 0], pose[k, 1], math.cos(pose[k, 2]), math.sin(pose[k, 2]), beams,
-                 vehicles.corners, vehicles.centres, physics.radius, readings)
+    n = gather_slots(learners, k, x, y, slots, now)
+    visible_centres(near.ids[:n], near.centres[:n], near.gone[:n], near.visible[:n])
+    sense(k, pose, physics, beams, walls, cell_start, cell_walls, all_walls, True,
+          near.corners[:n], near.visible[:n], -1, readings)
+    m, me = gather_learners(learners, k, x, y, vehicles.corners, vehicles.centres)
+    sense_bodies(me, x, y, math.cos(pose[k, 2]), math.sin(pose[k, 2]), beams,
+                 others.corners[:m], others.centres[:m], physics.radius, readings)
 
 
 @njit(cache=True, inline="always")
@@ -142,11 +249,9 @@ def move(steering, physics, vehicles, learners) -> None:
 def drive(genes, layer_sizes, physics, geometry, slots, now, vehicles, learners, work) -> None:
     """Every learner senses (:func:`sense_learner`), its network (``genes[k]``) steers, and
     all move at once."""
-    ids, corners, centres = slots
-    ids_now, corners_now, centres_now = ids[now], corners[now], centres[now]
+    fill_now(physics, slots, now, vehicles, learners)
     for k in range(vehicles.pose.shape[0]):
-        sense_learner(k, physics, geometry, ids_now, corners_now, centres_now, vehicles,
-                      learners, work.readings)
+        sense_learner(k, physics, geometry, slots, now, vehicles, learners, work.readings)
         work.steering[k] = network_steering(genes[k], layer_sizes, work.readings,
                                             work.activation, work.scratch, physics.gain)
     move(work.steering, physics, vehicles, learners)
@@ -156,11 +261,10 @@ def drive(genes, layer_sizes, physics, geometry, slots, now, vehicles, learners,
 def observe(physics, geometry, slots, now, vehicles, learners, out) -> None:
     """Every ``active`` learner ``k`` senses into ``out[k]`` (for a caller that steers them
     from outside: the PettingZoo SUMO crowd, :mod:`enn_traffic.envs.sumo`)."""
-    ids, corners, centres = slots
+    fill_now(physics, slots, now, vehicles, learners)
     for k in range(vehicles.pose.shape[0]):
         if learners.active[k]:
-            sense_learner(k, physics, geometry, ids[now], corners[now], centres[now], vehicles,
-                          learners, out[k])
+            sense_learner(k, physics, geometry, slots, now, vehicles, learners, out[k])
 
 
 move_once = njit(cache=True)(move.py_func)
@@ -363,12 +467,7 @@ class _Lives:
         vehicles.corners[:] = vehicles.previous[:] = 0.0
         vehicles.previous_centres[:] = FAR
         vehicles.fresh[:] = True
-        self.learners = Learners(
-            np.zeros(count, dtype=np.int64), np.zeros((count, physics.spin_window, 2)),
-            np.ones(count, dtype=np.bool_), np.ones(count, dtype=np.bool_),
-            np.zeros(count, dtype=np.int64), np.full(count, ALIVE, dtype=np.int64),
-            np.full((count, slots), -1, dtype=np.int64), np.empty(slots, dtype=np.bool_),
-            np.empty((slots, 2)))
+        self.learners = learners_for(count, physics.spin_window, slots)
         self.work = Work(np.empty(beams), *network_buffers(layer_sizes), np.zeros(count))
         self.rng = np.full(1, np.uint64(seed), dtype=np.uint64)
 
@@ -382,8 +481,9 @@ class _Lives:
         old = self.learners.gone
         gone = np.full((len(old), slots), -1, dtype=np.int64)
         gone[:, : old.shape[1]] = old
-        self.learners = self.learners._replace(gone=gone, absent=np.empty(slots, dtype=np.bool_),
-                                               visible=np.empty((slots, 2)))
+        self.learners = self.learners._replace(
+            gone=gone, slot_buckets=(buckets_for(slots), buckets_for(slots)),
+            near_slots=near_for(slots))
 
     def place(self, k: int, pose: np.ndarray, physics) -> None:
         """Learner ``k`` starts a life at ``pose``."""

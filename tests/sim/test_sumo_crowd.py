@@ -133,7 +133,7 @@ def test_a_sumo_vehicle_that_drives_into_a_learner_leaves_that_learners_world_on
     not learner 1's."""
     from enn_traffic.geometry import body_corners
     from enn_traffic.sim.rules import Vehicles
-    from enn_traffic.sim.sumo_crowd import ALIVE, Learners, learner_events
+    from enn_traffic.sim.sumo_crowd import ALIVE, learner_events, learners_for
     from enn_traffic.traffic import sumo
 
     length, width = world.scenario.vehicle.length, world.scenario.vehicle.width
@@ -157,10 +157,8 @@ def test_a_sumo_vehicle_that_drives_into_a_learner_leaves_that_learners_world_on
                         np.array([b[1] for b in before_bodies]), np.zeros(2, dtype=np.bool_),
                         np.zeros((2, 2)))
     physics = world._learner_physics(2.5)
-    learners = Learners(np.full(2, 5), np.zeros((2, physics.spin_window, 2)),
-                        np.zeros(2, dtype=np.bool_), np.ones(2, dtype=np.bool_),
-                        np.zeros(2, dtype=np.int64), np.zeros(2, dtype=np.int64),
-                        np.full((2, 4), -1), np.empty(4, dtype=np.bool_), np.empty((4, 2)))
+    learners = learners_for(2, physics.spin_window, 4)
+    learners.life[:], learners.spin_checked[:] = 5, False
     ended = learner_events(5, vehicles, learners, physics, world.geometry,
                            (ids, corners, centres), 0, 1)
     events, suffered, gone = learners.events, learners.suffered, learners.gone
