@@ -18,12 +18,13 @@ ROOT = Path(__file__).resolve().parents[1]
 
 
 @pytest.fixture(scope="session", autouse=True)
-def network_cache(tmp_path_factory) -> Path:
-    """A cache folder of the test session's own (subprocesses inherit it), so that the tests
-    neither read nor fill the user's cache."""
-    import os
-
-    folder = tmp_path_factory.mktemp("cache")
+def network_cache(request) -> Path:
+    """A cache folder of the tests' own, in pytest's cache folder (subprocesses inherit it), so
+    that the tests neither read nor fill the user's cache. It lasts from one test session to
+    the next and is shared by the ``-n`` workers, as the user's does: entries are keyed by what
+    they were built from and written whole, so none is ever stale or half-read. Tests of the
+    cache itself give their own folder."""
+    folder = request.config.cache.mkdir("enn-traffic-cache")
     os.environ["ENN_TRAFFIC_CACHE"] = str(folder)
     return folder
 

@@ -61,7 +61,7 @@ def test_network_path_resolves_relative_to_the_scenario_file(tmp_path, net):
         ("[sensor]\nbeams = 'many'\n", "sensor.beams", "integer"),
         ("[ga]\nmutation_probability = 1.5\n", "ga.mutation_probability", "less than or equal"),
         ("[vehicle]\nspeed = -1\n", "vehicle.speed", "greater than or equal to 0.1"),
-        ("[ga]\nelite_count = 500\n", "ga", "elite_count"),
+        ("[ga]\nelite_count = 500\n", "ga.elite_count", "smaller than population_size"),
         ("colour = 'red'\n", "track.colour", "unknown key"),
         ("[crowd]\ncounting = 'both'\n", "crowd.counting", "'responsible' or 'authors'"),
     ],

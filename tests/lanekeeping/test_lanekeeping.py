@@ -177,7 +177,8 @@ def test_a_bad_draw_range_is_named(tmp_path):
     path.write_text(SCENARIO.format(road="sine") + "[lane_keeping.draw]\nperiod = [90.0, 50.0]\n")
     with pytest.raises(InputError) as info:
         load_scenario(path)
-    assert info.value.key == "lane_keeping.draw" and "period" in info.value.message
+    assert info.value.key == "lane_keeping.draw.period", info.value.key
+    assert info.value.message == "must be [smallest, largest]"
 
 
 def test_a_drawn_road_run_is_chosen_on_validation_roads(tmp_path):
