@@ -143,10 +143,35 @@ def _fresh_state(scenario: Scenario, key: str, population: np.ndarray | None = N
                       extra={"elapsed_s": 0.0, "rules": rules_version()})
 
 
+RUN_OWN = ("sumo",)  # what a run writes before its first checkpoint, besides scenario.toml
+
+
+def _check_fresh_folder(scenario: Scenario, out: Path, force: bool) -> None:
+    """A fresh run writes into a folder that is empty or holds only what this run would
+    write before its first checkpoint (an interrupted start), or into any with ``--force``;
+    never over the scenario file it reads (docs/design.md, "Reliability")."""
+    own = out / "scenario.toml"
+    if scenario.source is not None and own.exists() and own.resolve() == Path(
+            scenario.source).resolve():
+        raise InputError("is the scenario's own folder: the run would write its copy of the "
+                         "scenario over scenario.toml; give another --out", out, "--out")
+    if force or not out.is_dir():
+        return
+    others = sorted(path.name for path in out.iterdir()
+                    if path.name not in RUN_OWN and not (
+                        path.name == own.name and path.is_file()
+                        and path.read_text(errors="replace") == scenario.to_toml()))
+    if others:
+        shown = ", ".join(others[:3]) + (" …" if len(others) > 3 else "")
+        raise InputError(f"holds files but no run to resume ({shown}); give an empty folder "
+                         "or --force to write over them", out, "--out")
+
+
 def _open_state(scenario: Scenario, out: Path, resume: bool, force: bool,
                 population: np.ndarray | None, key: str) -> ga.GAState:
     checkpoint = out / CHECKPOINT
     if not checkpoint.exists() or force:
+        _check_fresh_folder(scenario, out, force)
         return _fresh_state(scenario, key, population)
     if not resume:
         raise InputError(
@@ -196,6 +221,8 @@ def check_folder(scenario: Scenario, out: str | Path, resume: bool = False,
     out = Path(out)
     if (out / CHECKPOINT).exists() and not force:
         _open_state(scenario, out, resume, force, None, fingerprint(scenario))
+    else:
+        _check_fresh_folder(scenario, out, force)
 
 
 def restore_outputs(scenario: Scenario, out: Path, state: ga.GAState,

@@ -177,6 +177,33 @@ def test_folder_of_another_scenario_is_never_overwritten_without_force(tmp_path,
     assert 'name = "arena_strategy1"' in (out / "scenario.toml").read_text()
 
 
+def test_a_run_never_writes_over_the_users_files_or_its_own_scenario(tmp_path, root, capsys):
+    """A folder of the user's own files (no run of this tool) is refused without --force; the
+    folder that holds the scenario file is refused even with --force: the run would write its
+    copy of the scenario over it."""
+    from enn_traffic.cli import main
+
+    text = (root / "scenarios" / "navigation_narrow.toml").read_text().replace(
+        '"../sumo_nets/', f'"{root}/sumo_nets/')
+    mine = tmp_path / "mine"
+    mine.mkdir()
+    (mine / "scenario.toml").write_text(text)
+    (mine / "generations.csv").write_text("my,own\n1,2\n")
+    (mine / "best.npz").write_bytes(b"my own controller")
+    before = {path.name: path.read_bytes() for path in mine.iterdir()}
+    other = tmp_path / "other.toml"
+    other.write_text(text)
+    common = ["--population", "10", "--generations", "1", "--quiet"]
+    assert main(["run", str(other), "--out", str(mine), *common]) == 2
+    assert "holds files but no run to resume (best.npz, generations.csv, scenario.toml)" in (
+        capsys.readouterr().err)
+    for flags in ([], ["--force"]):
+        assert main(["run", str(mine / "scenario.toml"), "--out", str(mine), *flags,
+                     *common]) == 2
+        assert "is the scenario's own folder" in capsys.readouterr().err, flags
+    assert {path.name: path.read_bytes() for path in mine.iterdir()} == before
+
+
 def test_network_without_drivable_area_is_a_clear_error(tmp_path, root):
     net = tmp_path / "empty.net.xml"
     net.write_text('<net version="1.20"><location netOffset="0.00,0.00" '
