@@ -29,12 +29,18 @@ def shipped_scenario(name: str) -> Scenario:
 
 
 def scenario_path(argument: str | Path) -> Path:
-    """A scenario file as a user names it: a path, or the name of a shipped scenario
-    (``navigation_narrow``) when no such file exists here."""
+    """A scenario file as a user names it: a path, or the bare name of a shipped scenario
+    (``navigation_narrow``: no folder, no suffix) when no such file exists here. A path that
+    does not exist is an error, even when a shipped scenario has its name."""
+    from enn_traffic.errors import InputError
+
     path = Path(argument)
     if path.exists():
         return path
     shipped = SCENARIOS / f"{path.stem}.toml"
-    if path.parent in (Path("."), Path("scenarios")) and shipped.exists():
+    if str(path) == path.stem and shipped.exists():
         return shipped
+    if shipped.exists() and path.suffix in ("", ".toml"):
+        raise InputError(f"file not found (the shipped scenario of that name is given as "
+                         f"{path.stem!r} alone)", path)
     return path

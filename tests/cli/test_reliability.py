@@ -204,6 +204,23 @@ def test_a_run_never_writes_over_the_users_files_or_its_own_scenario(tmp_path, r
     assert {path.name: path.read_bytes() for path in mine.iterdir()} == before
 
 
+def test_a_missing_path_is_never_read_as_the_shipped_scenario_of_its_name(tmp_path, capsys,
+                                                                        monkeypatch):
+    """Only a bare name (no folder, no suffix) names a shipped scenario: a mistyped path is
+    refused, not silently replaced."""
+    from enn_traffic.cli import main
+    from enn_traffic.shipped import SCENARIOS, scenario_path
+
+    monkeypatch.chdir(tmp_path)  # no scenarios/ folder here
+    for typed in ("scenarios/navigation_narrow.toml", "navigation_narrow.toml",
+                  "mine/navigation_narrow"):
+        assert main(["run", typed, "--out", str(tmp_path / "out"), "--quiet"]) == 2, typed
+        assert f"{typed}: file not found (the shipped scenario of that name is given as " \
+               "'navigation_narrow' alone)" in capsys.readouterr().err
+    assert scenario_path("navigation_narrow") == SCENARIOS / "navigation_narrow.toml"
+    assert not (tmp_path / "out").exists()
+
+
 def test_network_without_drivable_area_is_a_clear_error(tmp_path, root):
     net = tmp_path / "empty.net.xml"
     net.write_text('<net version="1.20"><location netOffset="0.00,0.00" '
