@@ -185,7 +185,33 @@ def _open_state(scenario: Scenario, out: Path, resume: bool, force: bool,
                              f"are {rules_version()}); use another --out or --force", out)
         raise InputError(f"the folder holds a run of different {_differences(scenario, out)}; "
                          "use another --out or --force", out)
+    _check_checkpoint(state, scenario, checkpoint)
     return state
+
+
+def _check_checkpoint(state: ga.GAState, scenario: Scenario, path: Path) -> None:
+    """A checkpoint whose settings match may still have been edited or damaged: its arrays
+    must be the scenario's (population rows, genes, one champion per finished generation),
+    real and finite, before anything resumes from it or is restored from it."""
+    genes = NetworkSpec(scenario.layer_sizes, scenario.network.layout).chromosome_length
+    arrays = {"population": (state.population, (scenario.ga.population_size, genes)),
+              "best_chromosome": (state.best_chromosome, (genes,)),
+              "champions": (state.champions, (state.generation, genes))}
+    if state.generation < 0:
+        raise InputError(f"generation {state.generation} is negative", path, "generation")
+    for name, (array, shape) in arrays.items():
+        if array is None:
+            continue
+        if not np.issubdtype(array.dtype, np.floating):
+            raise InputError(f"holds {array.dtype} numbers, not real ones", path, name)
+        if array.shape != shape:
+            raise InputError(f"has shape {array.shape}; the scenario's run needs {shape}",
+                             path, name)
+        if not np.all(np.isfinite(array)):
+            raise InputError("holds NaN or inf", path, name)
+    if state.best_chromosome is not None and not np.isfinite(state.best_fitness):
+        raise InputError(f"best fitness {state.best_fitness} with a best chromosome", path,
+                         "best_fitness")
 
 
 def _differences(scenario: Scenario, out: Path) -> str:

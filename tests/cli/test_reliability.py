@@ -221,6 +221,35 @@ def test_a_missing_path_is_never_read_as_the_shipped_scenario_of_its_name(tmp_pa
     assert not (tmp_path / "out").exists()
 
 
+def test_an_edited_checkpoint_is_refused_naming_its_field_and_best_npz_is_kept(tmp_path, root,
+                                                                             capsys):
+    """Issue 64: a checkpoint whose settings match but whose arrays were edited resumed with
+    them (3 rows of a population of 10) or rewrote ``best.npz`` from them (NaN, 5 genes)."""
+    from enn_traffic.cli import main
+
+    scenario = str(root / "scenarios" / "navigation_narrow.toml")
+    common = ["--population", "10", "--seed", "2", "--quiet"]
+    source = tmp_path / "run"
+    assert main(["run", scenario, "--out", str(source), "--generations", "2", *common]) == 0
+    with np.load(source / CHECKPOINT) as saved:
+        data = dict(saved)
+    edits = {"population": data["population"][:3], "best_chromosome": data["best_chromosome"][:5],
+             "champions": data["champions"][:, :4], "generation": np.array(-1)}
+    edits = [(field, {field: value}) for field, value in edits.items()] + [
+        ("best_chromosome", {"best_chromosome": data["best_chromosome"] * np.nan}),
+        ("population", {"population": data["population"].astype(complex)})]
+    for field, edit in edits:
+        out = tmp_path / f"edited_{len(list(tmp_path.iterdir()))}"
+        out.mkdir()
+        for name in ("best.npz", "generations.csv", "scenario.toml", "outputs.npz"):
+            (out / name).write_bytes((source / name).read_bytes())
+        np.savez(out / CHECKPOINT, **(data | edit))
+        assert main(["run", scenario, "--out", str(out), "--generations", "3", "--resume",
+                     *common]) == 2, field
+        assert f"{out / CHECKPOINT}: {field}: " in capsys.readouterr().err, field
+        assert (out / "best.npz").read_bytes() == (source / "best.npz").read_bytes(), field
+
+
 def test_network_without_drivable_area_is_a_clear_error(tmp_path, root):
     net = tmp_path / "empty.net.xml"
     net.write_text('<net version="1.20"><location netOffset="0.00,0.00" '
