@@ -172,6 +172,9 @@ def _open_state(scenario: Scenario, out: Path, resume: bool, force: bool,
     checkpoint = out / CHECKPOINT
     if not checkpoint.exists() or force:
         _check_fresh_folder(scenario, out, force)
+        logs = scenario.sumo_folder
+        if force and logs is not None and logs.resolve().parent == out.resolve():
+            (logs / "sumo.log").unlink(missing_ok=True)  # starting over: the old run's log too
         return _fresh_state(scenario, key, population)
     if not resume:
         raise InputError(

@@ -431,18 +431,30 @@ class Simulation:
             return
         console = self.folder / CONSOLE_LOG
         printed = console.read_bytes() if console.is_file() else b""
+        if target.is_symlink():
+            raise InputError("is a link: SUMO's log is written only inside the output folder",
+                             target)
         target.mkdir(parents=True, exist_ok=True)
         ended = ("did not start" if math.isnan(self._ended_at)
                  else f"ended at {self._ended_at:g} s")
-        with open(target / RUN_LOG, "ab") as log:  # a block for every start, printed or not
-            log.write(f"== SUMO, seed {self.seed}, {ended}\n".encode()
-                      + (printed or b"(SUMO printed nothing)\n"))
+        try:  # never through a link, out of the output folder
+            log = os.open(target / RUN_LOG, os.O_WRONLY | os.O_APPEND | os.O_CREAT
+                          | os.O_NOFOLLOW, 0o644)
+        except OSError as exc:
+            raise InputError(f"cannot write SUMO's log ({exc.strerror}; a link is never "
+                             "followed)", target / RUN_LOG) from None
+        with open(log, "ab") as handle:  # a block for every start, printed or not
+            handle.write(f"== SUMO, seed {self.seed}, {ended}\n".encode()
+                         + (printed or b"(SUMO printed nothing)\n"))
         traffic = self.scenario.traffic
         ssm = self.folder / SSM_FILE
         if "ssm" in traffic.outputs and ssm.is_file():  # every vehicle's conflicts, kept
             shutil.copyfile(ssm, self.folder / "ssm.xml")
         outputs = [file for file in self.folder.iterdir() if file.name not in OWN_FILES]
         if outputs and (traffic.sumo_outputs == "keep" or traffic.outputs):
+            if (target / "outputs").is_symlink():
+                raise InputError("is a link: SUMO's outputs are kept only inside the output "
+                                 "folder", target / "outputs")
             (target / "outputs").mkdir(parents=True, exist_ok=True)
             kept = Path(tempfile.mkdtemp(dir=target / "outputs", prefix=f"seed{self.seed}-"))
             for file in outputs:

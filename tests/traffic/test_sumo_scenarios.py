@@ -380,3 +380,26 @@ def test_a_warm_up_with_actuated_lights_loads(tmp_path, monkeypatch):
         world = make_world(scenario.with_overrides(traffic={"mode": mode}))
         results = world.evaluate(straight(world))
         assert (results.steps > 0).all()
+
+
+def test_sumo_log_is_never_written_through_a_link_and_force_starts_it_over(tmp_path, road_net,
+                                                                         capsys, monkeypatch):
+    """Issue 64: a link at ``OUT/sumo/sumo.log`` had SUMO's log appended to its target,
+    outside the output folder; ``--force`` kept the previous run's log. (The second run
+    finds its generation in the cache: SUMO does not start, and the log is gone.)"""
+    monkeypatch.setenv("ENN_TRAFFIC_CACHE", str(tmp_path / "cache"))
+    path = road_scenario(tmp_path, road_net, extra="[ga]\npopulation_size = 4\n"
+                         "elite_count = 1\ntournament_size = 2\ngenerations = 1")
+    out, outside = tmp_path / "out", tmp_path / "outside.txt"
+    (out / "sumo").mkdir(parents=True)
+    outside.write_text("the user's own\n")
+    (out / "sumo" / "sumo.log").symlink_to(outside)
+    run = ["run", str(path), "--out", str(out), "--quiet"]
+    assert main(run) == 2
+    assert "sumo.log: cannot write SUMO's log" in capsys.readouterr().err
+    assert main([*run, "--force"]) == 0
+    assert outside.read_text() == "the user's own\n"
+    log = out / "sumo" / "sumo.log"
+    assert not log.is_symlink() and log.read_text().startswith("== SUMO, seed ")
+    assert main([*run, "--force"]) == 0
+    assert not log.exists()
