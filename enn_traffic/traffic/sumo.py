@@ -119,11 +119,11 @@ def sumo_command(scenario: Scenario, seed: int, folder: Path, state: Path | None
     so that a run loading one goes on exactly as this one."""
     traffic = scenario.traffic
     config = sumo_config(scenario)
-    source = ["-c", str(traffic.sumocfg)] if traffic.sumocfg is not None else []
+    source = ["-c", listed(traffic.sumocfg, folder)] if traffic.sumocfg is not None else []
     if traffic.routes:  # added to the .sumocfg's own route files, which -r would replace
-        source += ["-r", ",".join(str(r) for r in route_files(scenario))]
+        source += ["-r", ",".join(listed(r, folder) for r in route_files(scenario))]
     if state is not None:
-        source += ["--load-state", str(state)]
+        source += ["--load-state", listed(state, folder)]
     elif traffic.begin_s is not None or traffic.sumocfg is None:
         source += ["--begin", f"{begin_time(scenario):g}"]
     if save_rng:
@@ -152,12 +152,25 @@ def sumo_command(scenario: Scenario, seed: int, folder: Path, state: Path | None
     # where a switch per step cost 24% of the closed loop's speed (docs/bench.md).
     quiet = [] if scenario.sumo_console else ["--no-warnings", "true"]
     return [
-        "sumo", *source, "-n", str(scenario.track.net),
+        "sumo", *source, "-n", listed(scenario.track.net, folder),
         "--seed", str(seed), "--step-length", f"{scenario.vehicle.dt:g}",
         "--no-step-log", "true", *quiet,
         "--collision.action", "none",  # collisions with the learner are ours (docs/sumo.md)
         "--output-prefix", output_prefix(folder), "--error-log", ERROR_LOG,
     ]  # fmt: skip
+
+
+def listed(path: Path, folder: Path) -> str:
+    """``path`` as SUMO reads a file option, which it splits at commas: a path with a comma is
+    given through a link, in ``folder``, to the folder that holds it (relative paths inside
+    the file resolve as from the file itself)."""
+    if "," not in str(path):
+        return str(path)
+    parent = Path(path).resolve().parent
+    link = folder / f"input-{hashlib.sha256(str(parent).encode()).hexdigest()[:12]}"
+    if not link.is_symlink():
+        link.symlink_to(parent, target_is_directory=True)
+    return str(link / Path(path).name)
 
 
 # ``traffic.outputs`` that are SUMO options of their own (``ssm`` is a device, below).

@@ -403,3 +403,14 @@ def test_sumo_log_is_never_written_through_a_link_and_force_starts_it_over(tmp_p
     assert not log.is_symlink() and log.read_text().startswith("== SUMO, seed ")
     assert main([*run, "--force"]) == 0
     assert not log.exists()
+
+
+def test_a_scenario_in_a_folder_named_with_a_comma_and_a_space_runs(tmp_path, road_net):
+    """SUMO splits its file options at commas: a folder named ``a b,c`` was refused as two
+    files that do not exist (issue 64)."""
+    folder = tmp_path / "a b,c"
+    folder.mkdir()
+    path = road_scenario(folder, road_net, extra="[ga]\npopulation_size = 4\nelite_count = 1\n"
+                         "tournament_size = 2\ngenerations = 1")
+    assert main(["run", str(path), "--out", str(tmp_path / "out"), "--quiet"]) == 0
+    assert (tmp_path / "out" / "best.npz").is_file()
