@@ -78,9 +78,15 @@ class Controller:
             raise InputError("controller file not found", path)
         try:
             with np.load(path, allow_pickle=False) as data:
+                chromosome, layer_sizes = data["chromosome"], data["layer_sizes"]
+                _real(chromosome, path, "chromosome")
+                _real(layer_sizes, path, "layer_sizes")
+                if not np.array_equal(layer_sizes, np.round(layer_sizes)):
+                    raise InputError(f"layer sizes {layer_sizes.tolist()} are not whole numbers",
+                                     path, "layer_sizes")
                 controller = cls(
-                    chromosome=data["chromosome"].astype(np.float64),
-                    layer_sizes=tuple(int(n) for n in data["layer_sizes"]),
+                    chromosome=chromosome.astype(np.float64),
+                    layer_sizes=tuple(int(n) for n in layer_sizes),
                     layout=str(data["layout"]),
                     steering_gain_deg=float(data["steering_gain_deg"]),
                     span_deg=float(data["span_deg"]),
@@ -94,6 +100,8 @@ class Controller:
                     rings=(tuple(tuple(float(x) for x in ring) for ring in data["rings"])
                            if "rings" in data.files else ()),
                 )
+        except InputError:
+            raise
         except Exception as exc:  # numpy raises many types on a damaged archive
             raise InputError(f"not a readable controller file ({type(exc).__name__}: {exc})",
                              path) from None
@@ -147,3 +155,10 @@ class Controller:
                                "beams": int(ring[0])} for ring in self.rings]},
             **spin,
         )
+
+
+def _real(array: np.ndarray, path: Path, key: str) -> None:
+    """``array`` holds real numbers (integers or floats): never complex ones, whose imaginary
+    parts a conversion would silently drop, nor text or booleans."""
+    if array.dtype.kind not in "iuf":
+        raise InputError(f"holds {array.dtype} values, not real numbers", path, key)

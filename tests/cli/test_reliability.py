@@ -250,6 +250,25 @@ def test_an_edited_checkpoint_is_refused_naming_its_field_and_best_npz_is_kept(t
         assert (out / "best.npz").read_bytes() == (source / "best.npz").read_bytes(), field
 
 
+@pytest.mark.parametrize("field, edit, message", [
+    ("chromosome", lambda c: c + 1j, "holds complex128 values, not real numbers"),
+    ("chromosome", lambda c: np.array(["a"] * len(c)), "holds <U1 values, not real numbers"),
+    ("layer_sizes", lambda sizes: sizes + 0.5, "are not whole numbers"),
+])
+def test_a_controller_of_complex_or_fractional_numbers_is_refused(tmp_path, root, field, edit,
+                                                                  message):
+    """Issue 64: a complex chromosome was read with its imaginary parts dropped, fractional
+    layer sizes were truncated."""
+    source = root / "results" / "paper" / "controllers" / "city" / "table4"
+    with np.load(next(source.glob("*.npz"))) as saved:
+        data = dict(saved)
+    path = tmp_path / "edited.npz"
+    np.savez(path, **(data | {field: edit(data[field])}))
+    with pytest.raises(InputError) as error:
+        Controller.load(path)
+    assert error.value.key == field and message in error.value.message
+
+
 def test_network_without_drivable_area_is_a_clear_error(tmp_path, root):
     net = tmp_path / "empty.net.xml"
     net.write_text('<net version="1.20"><location netOffset="0.00,0.00" '
