@@ -280,7 +280,8 @@ def _cmd_run(args) -> int:
         evaluator.close()
     last = table.iloc[-1]
     best = table["best_fitness"].max()
-    print(f"{scenario.name}: {len(table)} generations, best fitness {best:.0f} steps "
+    print(f"{scenario.name}: {len(table)} generation{'s' * (len(table) != 1)}, best fitness "
+          f"{best:.0f} steps "
           f"(last generation: best {last['best_fitness']:.0f}, mean {last['mean_fitness']:.1f}); "
           f"{table['vehicle_steps'].sum():,} vehicle-steps in {last['elapsed_s']:.1f} s")
     print(f"results in {out}/")
@@ -298,7 +299,7 @@ def _cmd_crowd(args) -> int:
     out = args.out or Path("results") / f"{scenario.name}_crowd"
     check_output_folder(out)  # before any world, nothing written yet
     check_unlocked(out)
-    check_folder(out, resume=args.resume, force=args.force)
+    check_folder(out, resume=args.resume, force=args.force, source=scenario.source)
     check_room(scenario, "--learners" if args.learners else "traffic.learners")
     scenario = scenario.with_sumo_output(out / "sumo", console=args.verbose)
     lines = run_crowd(scenario, out, args.executor, args.address,

@@ -109,9 +109,13 @@ def check_room(scenario: Scenario, key: str = "traffic.learners") -> None:
                          "apart", None if key.startswith("--") else scenario.source, key)
 
 
-def check_folder(out: Path, resume: bool, force: bool) -> None:
+def check_folder(out: Path, resume: bool, force: bool, source: Path | None = None) -> None:
     """A crowd writes into an empty folder, its own run's (``--resume``), or any with
-    ``--force``."""
+    ``--force``; never over its scenario file ``source``."""
+    marker = out / MARKER
+    if source is not None and marker.exists() and marker.resolve() == Path(source).resolve():
+        raise InputError(f"is the scenario's own folder: the crowd would write its copy of the "
+                         f"scenario over {MARKER}; give another --out", out, "--out")
     if not out.is_dir() or not any(out.iterdir()) or force:
         return
     if not (out / MARKER).is_file():

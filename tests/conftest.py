@@ -18,13 +18,16 @@ ROOT = Path(__file__).resolve().parents[1]
 
 
 @pytest.fixture(scope="session", autouse=True)
-def network_cache(request) -> Path:
+def network_cache(request, tmp_path_factory) -> Path:
     """A cache folder of the tests' own, in pytest's cache folder (subprocesses inherit it), so
     that the tests neither read nor fill the user's cache. It lasts from one test session to
     the next and is shared by the ``-n`` workers, as the user's does: entries are keyed by what
     they were built from and written whole, so none is ever stale or half-read. Tests of the
-    cache itself give their own folder."""
-    folder = request.config.cache.mkdir("enn-traffic-cache")
+    cache itself give their own folder. (Without pytest's cache, ``-p no:cacheprovider``: a
+    folder of the session's own.)"""
+    cache = getattr(request.config, "cache", None)
+    folder = (cache.mkdir("enn-traffic-cache") if cache is not None
+              else tmp_path_factory.mktemp("cache"))
     os.environ["ENN_TRAFFIC_CACHE"] = str(folder)
     return folder
 

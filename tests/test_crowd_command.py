@@ -159,3 +159,14 @@ def test_crowd_situations_on_ray_are_the_local_ones(crowd_run, tmp_path):
         with np.load(out / "controllers" / f"learner{k}.npz") as local, \
                 np.load(tmp_path / "ray" / "controllers" / f"learner{k}.npz") as spread:
             np.testing.assert_array_equal(local["chromosome"], spread["chromosome"])
+
+
+def test_a_scenario_named_like_the_crowds_own_file_is_never_written_over(root, tmp_path, capsys):
+    """A newcomer's scenario ``OUT/crowd.toml`` was taken for a crowd run, and ``--resume``
+    wrote the crowd's copy of the scenario over it."""
+    path = ring_scenario(root, tmp_path, name="crowd")
+    text = path.read_text()
+    for flags in ([], ["--resume"], ["--force"]):
+        assert main(["crowd", str(path), "--out", str(tmp_path), "--quiet", *flags]) == 2
+        assert "is the scenario's own folder" in capsys.readouterr().err, flags
+    assert path.read_text() == text

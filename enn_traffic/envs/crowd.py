@@ -27,6 +27,8 @@ from enn_traffic.envs.batch import compiled
 from enn_traffic.envs.rangefinder import (
     TRAINING_KEYS,
     checked_actions,
+    checked_options,
+    checked_render_mode,
     observation_of,
     picture,
     rangefinder_world,
@@ -70,7 +72,7 @@ class ArenaCrowdEnv(ParallelEnv):
         self.possible_agents = [f"vehicle_{v}" for v in range(learners)]
         self.agents: list[str] = []
         self._observation_space, self._action_space = spaces_of(world, observation_dtype)
-        self.render_mode = render_mode
+        self.render_mode = checked_render_mode(render_mode, self.metadata)
         self.max_steps = world.max_steps
         self._rng = np.random.default_rng()
         self._step = None
@@ -84,7 +86,7 @@ class ArenaCrowdEnv(ParallelEnv):
     def reset(self, seed: int | None = None, options: dict | None = None):
         if seed is not None:
             self._rng = np.random.default_rng(seed)
-        options = options or {}
+        options = checked_options(options, others="warn")
         world = self.world
         key = options.get("key")
         key = int(self._rng.integers(TRAINING_KEYS) if key is None else key)

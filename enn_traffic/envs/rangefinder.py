@@ -19,6 +19,7 @@ in one compiled call (:mod:`enn_traffic.envs.batch`), autoresetting in the same 
 
 from __future__ import annotations
 
+import warnings
 from pathlib import Path
 
 import gymnasium as gym
@@ -114,6 +115,36 @@ OUTCOME_NAMES = np.array([OUTCOMES[code] for code in range(len(OUTCOMES))] + [""
 END_KEYS = ("steps", "outcome", "fitness", "suffered", "hit")  # a life's last info
 
 
+def checked_render_mode(render_mode: str | None, metadata: dict) -> str | None:
+    """``render_mode`` if the environment renders that way (``metadata["render_modes"]``) or
+    None; any other is an error, never silently ignored."""
+    if render_mode is not None and render_mode not in metadata["render_modes"]:
+        raise ValueError(f"render_mode={render_mode!r}: this environment renders "
+                         f"{metadata['render_modes'] or 'nothing'} (or None)")
+    return render_mode
+
+
+def checked_options(options: dict | None, names: tuple[str, ...] = ("key", "situation"),
+                    others: str = "error") -> dict:
+    """``reset``'s ``options``, of ``names`` only: ``key`` (a traffic key) and ``situation``
+    each a whole number or None; a value of another type is an error, and so is any other
+    option (``others="warn"``: a warning, for PettingZoo, whose API test resets with an option
+    of its own) rather than silently ignored."""
+    options = dict(options or {})
+    unknown = sorted(map(str, set(options) - set(names)))
+    if unknown:
+        message = f"reset options {unknown}: the options are {list(names)}"
+        if others != "warn":
+            raise ValueError(message)
+        warnings.warn(f"{message}; the others are ignored", stacklevel=3)
+    for name in set(options) & {"key", "situation"}:
+        value = options[name]
+        if value is not None and (isinstance(value, bool)
+                                  or not isinstance(value, int | np.integer)):
+            raise ValueError(f"reset option {name}={value!r}: a whole number (int) or None")
+    return options
+
+
 def outcome_info(outcome: int, steps: int, tally: np.ndarray) -> dict:
     """What a life's end tells (:data:`END_KEYS`): its steps, outcome, fitness, collisions
     suffered and hit."""
@@ -129,14 +160,14 @@ class RangefinderEnv(gym.Env):
 
     def __init__(self, scenario: str | Path | Scenario, render_mode: str | None = None,
                  observation_dtype: str = "float32"):
+        self.render_mode = checked_render_mode(render_mode, self.metadata)
         self.world = rangefinder_world(scenario)
         self.observation_space, self.action_space = spaces_of(self.world, observation_dtype)
-        self.render_mode = render_mode
         self.batch = Batch(self.world, 1)
 
     def reset(self, *, seed: int | None = None, options: dict | None = None):
         super().reset(seed=seed)
-        options = options or {}
+        options = checked_options(options)
         key = options.get("key")
         key = int(self.np_random.integers(TRAINING_KEYS) if key is None else key)
         pool = Situations.of_keys(self.world, [key])
@@ -180,10 +211,10 @@ class RangefinderVectorEnv(VectorEnv):
     def __init__(self, scenario: str | Path | Scenario, num_envs: int = 1,
                  situations: int = 64, render_mode: str | None = None,
                  observation_dtype: str = "float32"):
+        self.render_mode = checked_render_mode(render_mode, self.metadata)
         self.world = rangefinder_world(scenario)
         self.num_envs = num_envs
         self.situations = situations
-        self.render_mode = render_mode
         self.single_observation_space, self.single_action_space = spaces_of(
             self.world, observation_dtype)
         self.observation_space = batch_space(self.single_observation_space, num_envs)
@@ -192,7 +223,7 @@ class RangefinderVectorEnv(VectorEnv):
 
     def reset(self, *, seed: int | None = None, options: dict | None = None):
         super().reset(seed=seed)
-        chosen = (options or {}).get("keys")
+        chosen = checked_options(options, ("keys",)).get("keys")
         if chosen is None:
             chosen = self.np_random.integers(TRAINING_KEYS, size=self.situations)
         if len(chosen) == 0:

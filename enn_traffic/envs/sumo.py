@@ -26,6 +26,8 @@ from enn_traffic.envs.child import InChild
 from enn_traffic.envs.rangefinder import (
     TRAINING_KEYS,
     checked_actions,
+    checked_options,
+    checked_render_mode,
     observation_of,
     picture,
     spaces_of,
@@ -99,15 +101,15 @@ class SumoEnv(gym.Env):
 
     def __init__(self, scenario: str | Path | Scenario, render_mode: str | None = None,
                  observation_dtype: str = "float32"):
+        self.render_mode = checked_render_mode(render_mode, self.metadata)
         self.world = sumo_world(scenario)
         self.observation_space, self.action_space = spaces_of(self.world, observation_dtype)
-        self.render_mode = render_mode
         self.traffic: LiveTraffic | ReplayTraffic | None = None
         self._sense = self._move = None
 
     def reset(self, *, seed: int | None = None, options: dict | None = None):
         super().reset(seed=seed)
-        options, world = options or {}, self.world
+        options, world = checked_options(options), self.world
         key = options.get("key")
         key = int(self.np_random.integers(TRAINING_KEYS) if key is None else key)
         situations = world.scenario.traffic.episodes
@@ -239,7 +241,7 @@ class SumoCrowdEnv(ParallelEnv):
             return result
         if seed is not None:
             self._rng = np.random.default_rng(seed)
-        options, world = options or {}, self.world
+        options, world = checked_options(options, others="warn"), self.world
         key = options.get("key")
         key = int(self._rng.integers(TRAINING_KEYS) if key is None else key)
         situations = world.scenario.traffic.episodes

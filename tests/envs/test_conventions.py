@@ -142,3 +142,37 @@ def test_an_env_pickles_after_reset():
     again = pickle.loads(pickle.dumps(made))
     action = np.array([0.2, -0.4], np.float32)
     np.testing.assert_array_equal(made.step(action)[0], again.step(action)[0])
+
+
+@pytest.mark.parametrize("options, message", [
+    ({"situaton": 0}, "reset options ['situaton']: the options are ['key', 'situation']"),
+    ({"key": 1.5}, "reset option key=1.5: a whole number (int) or None"),
+    ({"situation": True}, "reset option situation=True: a whole number (int) or None"),
+])
+def test_a_misspelt_or_fractional_reset_option_is_an_error(options, message):
+    """Issue 64: a misspelt option or a float key was accepted silently (the key drawn at
+    random, the float truncated). The PettingZoo crowd warns of an option it does not know
+    (PettingZoo's own API test resets with one), and refuses a bad value."""
+    single = gym.make(env_id("navigation_narrow"))
+    with pytest.raises(ValueError) as error:
+        single.reset(seed=1, options=options)
+    assert str(error.value) == message
+    crowd = parallel_env("arena_strategy1", learners=2)
+    if "situaton" in options:
+        with pytest.warns(UserWarning, match=r"\['situaton'\].*; the others are ignored"):
+            crowd.reset(seed=1, options=options)
+    else:
+        with pytest.raises(ValueError, match=message.replace("(", r"\(").replace(")", r"\)")):
+            crowd.reset(seed=1, options=options)
+    vector = make_vector_env("navigation_narrow", num_envs=2)
+    with pytest.raises(ValueError, match=r"reset options \['key'\]: the options are \['keys'\]"):
+        vector.reset(options={"key": 1})
+
+
+def test_a_render_mode_the_env_does_not_have_is_an_error():
+    """Issue 64: ``render_mode="human"`` was accepted and ignored."""
+    with pytest.raises(ValueError, match=r"render_mode='human': this environment renders "
+                                         r"\['rgb_array'\] \(or None\)"):
+        make_vector_env("navigation_narrow", num_envs=2, render_mode="human")
+    with pytest.raises(ValueError, match="render_mode='human'"):
+        parallel_env("arena_strategy1", learners=2, render_mode="human")
