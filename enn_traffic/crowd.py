@@ -38,7 +38,7 @@ from enn_traffic.experiments.sumo_crowds import (
     measure_situations,
     write_tables,
 )
-from enn_traffic.io import folder_lock, write_text
+from enn_traffic.io import check_not_source, folder_lock, write_text
 from enn_traffic.progress import slow_step
 from enn_traffic.scenario import Scenario
 from enn_traffic.worlds import make_world
@@ -112,10 +112,7 @@ def check_room(scenario: Scenario, key: str = "traffic.learners") -> None:
 def check_folder(out: Path, resume: bool, force: bool, source: Path | None = None) -> None:
     """A crowd writes into an empty folder, its own run's (``--resume``), or any with
     ``--force``; never over its scenario file ``source``."""
-    marker = out / MARKER
-    if source is not None and marker.exists() and marker.resolve() == Path(source).resolve():
-        raise InputError(f"is the scenario's own folder: the crowd would write its copy of the "
-                         f"scenario over {MARKER}; give another --out", out, "--out")
+    check_not_source(out / MARKER, source)
     if not out.is_dir() or not any(out.iterdir()) or force:
         return
     if not (out / MARKER).is_file():

@@ -81,6 +81,16 @@ def check_output_file(path: str | Path, key: str | None = "--out",
     _writable(path.parent, path, key)
 
 
+def check_not_source(written: Path, source: str | Path | None) -> None:
+    """Refuse a command whose own copy of its scenario, ``written`` (in its output folder),
+    is the scenario file ``source`` it reads: it would write over the user's file, even with
+    ``--force`` (docs/design.md, "Reliability")."""
+    if source is not None and written.exists() and written.resolve() == Path(source).resolve():
+        raise InputError(f"is the scenario's own folder: the command would write its copy of "
+                         f"the scenario over {written.name}; give another --out",
+                         written.parent, "--out")
+
+
 def check_output_folder(path: str | Path, key: str | None = "--out") -> None:
     """Could a command write its files into the folder ``path`` (made if missing)?"""
     path = Path(path)

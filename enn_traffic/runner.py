@@ -27,7 +27,13 @@ from enn_traffic.controller import Controller
 from enn_traffic.errors import InputError
 from enn_traffic.evolution import ga
 from enn_traffic.evolution.backends import Evaluator, make_evaluator
-from enn_traffic.io import folder_lock, write_atomic, write_csv, write_text
+from enn_traffic.io import (
+    check_not_source,
+    folder_lock,
+    write_atomic,
+    write_csv,
+    write_text,
+)
 from enn_traffic.neural import NetworkSpec
 from enn_traffic.progress import slow_step, terminal
 from enn_traffic.provenance import rules_version, sources_of
@@ -151,10 +157,7 @@ def _check_fresh_folder(scenario: Scenario, out: Path, force: bool) -> None:
     write before its first checkpoint (an interrupted start), or into any with ``--force``;
     never over the scenario file it reads (docs/design.md, "Reliability")."""
     own = out / "scenario.toml"
-    if scenario.source is not None and own.exists() and own.resolve() == Path(
-            scenario.source).resolve():
-        raise InputError("is the scenario's own folder: the run would write its copy of the "
-                         "scenario over scenario.toml; give another --out", out, "--out")
+    check_not_source(own, scenario.source)
     if force or not out.is_dir():
         return
     others = sorted(path.name for path in out.iterdir()
@@ -174,7 +177,9 @@ def _open_state(scenario: Scenario, out: Path, resume: bool, force: bool,
         _check_fresh_folder(scenario, out, force)
         logs = scenario.sumo_folder
         if force and logs is not None and logs.resolve().parent == out.resolve():
-            (logs / "sumo.log").unlink(missing_ok=True)  # starting over: the old run's log too
+            from enn_traffic.traffic.sumo import RUN_LOG  # libsumo only where SUMO runs
+
+            (logs / RUN_LOG).unlink(missing_ok=True)  # starting over: the old run's log too
         return _fresh_state(scenario, key, population)
     if not resume:
         raise InputError(
