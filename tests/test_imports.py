@@ -168,3 +168,30 @@ def test_every_registry_entry_resolves_within_the_layers():
             assert ORDER.index(part) <= ORDER.index(holder), (holder, name)
         with pytest.raises(KeyError, match="unknown"):
             table["no such name"]
+
+
+def test_the_readme_test_install_pulls_no_torch():
+    """Issue 65: `pip install -e .[dev]` must not download torch (its CUDA build, several GB,
+    on a fresh CPU machine): the dev extra, with the extras it names expanded, holds neither
+    torch nor stable-baselines3 (which requires torch); the SB3 tests skip without them."""
+    import re
+    import tomllib
+
+    project = tomllib.loads((PACKAGE.parent / "pyproject.toml").read_text())["project"]
+    extras = project["optional-dependencies"]
+
+    def expanded(extra: str) -> set[str]:
+        names = set()
+        for requirement in extras[extra]:
+            name = re.match(r"[A-Za-z0-9_.-]+", requirement).group(0).lower()
+            inner = re.search(r"\[(.*)\]", requirement)
+            if name == project["name"] and inner:
+                names |= {n for e in inner.group(1).split(",") for n in expanded(e.strip())}
+            else:
+                names.add(name)
+        return names
+
+    pulled = expanded("dev") | {re.match(r"[A-Za-z0-9_.-]+", r).group(0).lower()
+                                for r in project["dependencies"]}
+    assert not pulled & {"torch", "stable-baselines3", "triton"}
+    assert "stable-baselines3" in expanded("rl")
