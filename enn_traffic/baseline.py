@@ -52,7 +52,7 @@ from enn_traffic.io import write_atomic
 from enn_traffic.progress import log, terminal
 from enn_traffic.report.stats import bootstrap_interval, t_interval
 from enn_traffic.runner import ga_params
-from enn_traffic.scenario import Scenario, TrackConfig
+from enn_traffic.scenario import Scenario, TrackConfig, scenario_digest
 from enn_traffic.sim.world import SituationResults
 
 METHODS = ("GA", "PPO", "SAC")
@@ -480,6 +480,7 @@ def compare(scenarios: list[Scenario], out: Path, plan: tuple[Planned, ...] = PL
     summary and the plot (:func:`write_summary`)."""
     out.mkdir(parents=True, exist_ok=True)
     check_protocol(out)
+    check_scenarios(out, scenarios)
     methods = tuple(dict.fromkeys(p.method for p in plan))
     budgets = {m: min([(tuning_budgets or TUNING_BUDGET)[m]]
                       + [p.budget_steps for p in plan if p.method == m])
@@ -557,6 +558,30 @@ def check_protocol(out: Path) -> None:
         raise InputError("holds runs but no protocol.json (made by an older enn-traffic): "
                          "give another --out", out)
     write_atomic(path, lambda handle: json.dump(protocol(), handle, indent=1))
+
+
+def check_scenarios(out: Path, scenarios: list[Scenario]) -> None:
+    """Runs are found in ``out`` by their scenario's name: ``out/scenarios.json`` keeps, for
+    each name, a digest of the scenario's settings and of every file it reads
+    (:func:`~enn_traffic.scenario.scenario_digest`), and a scenario of a known name with
+    another digest is refused (another scenario of the same name would reuse the first one's
+    runs). A name new to the folder is added; a folder of runs made before the file was kept
+    takes the digests of the scenarios it is given now."""
+    path = out / "scenarios.json"
+    known: dict[str, str] = {}
+    if path.is_file():
+        try:
+            known = dict(json.loads(path.read_text()))
+        except (OSError, ValueError, TypeError) as exc:
+            raise InputError(f"not readable ({exc})", path) from None
+    for scenario in scenarios:
+        digest = scenario_digest(scenario)
+        if known.setdefault(scenario.name, digest) != digest:
+            raise InputError(
+                f"the runs of {scenario.name!r} here were made with other settings or files "
+                f"than {scenario.source or 'this scenario'}'s: give another --out, or the "
+                "scenario another name", path, scenario.name)
+    write_atomic(path, lambda handle: json.dump(known, handle, indent=1, sort_keys=True))
 
 
 def controller_path(out: Path, scenario: str, method: str, budget: int, seed: int) -> Path:

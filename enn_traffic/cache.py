@@ -11,6 +11,7 @@ built every time.
 
 from __future__ import annotations
 
+import contextlib
 import functools
 import hashlib
 import os
@@ -70,22 +71,33 @@ def key_of(*parts: object) -> str:
 def cached_arrays(kind: str, key: str, build: Callable[[], dict[str, np.ndarray]]
                   ) -> dict[str, np.ndarray]:
     """The arrays of entry ``key`` of ``kind``: loaded when kept, else built by ``build`` and
-    kept (written whole or not at all, so concurrent processes never read half an entry)."""
+    kept (written whole or not at all, so concurrent processes never read half an entry). An
+    entry that does not load whole (cut short, a flipped bit that fails the archive's CRC) is
+    built again and replaced; a write that fails (a full or read-only disk) leaves no partial
+    file."""
     path = cache_folder() / kind / f"{key}.npz"
     try:
-        with np.load(path) as stored:
+        with np.load(path, allow_pickle=False) as stored:
             return {name: stored[name] for name in stored.files}
-    except (OSError, ValueError, EOFError):  # absent, or unreadable: build it again
+    except FileNotFoundError:
         pass
+    except Exception:  # numpy and zipfile raise many types on a damaged file
+        pass  # unreadable: build it again
     arrays = build()
+    partial = None
     try:
         path.parent.mkdir(parents=True, exist_ok=True)
         handle, partial = tempfile.mkstemp(dir=path.parent, suffix=".partial.npz")
         with os.fdopen(handle, "wb") as file:
             np.savez(file, **arrays)
         os.replace(partial, path)
+        partial = None
     except OSError:  # a read-only or full disk: the entry is simply not kept
         pass
+    finally:  # also on Ctrl-C
+        if partial is not None:
+            with contextlib.suppress(OSError):
+                os.unlink(partial)
     return arrays
 
 

@@ -6,6 +6,7 @@ Bad input ends with one message naming the file and key, and exit status 2; neve
 from __future__ import annotations
 
 import argparse
+import contextlib
 import errno
 import signal
 import sys
@@ -43,6 +44,7 @@ def _path(text: str) -> Path:
 
 
 _positive, _non_negative = _int_in(1), _int_in(0)
+_seed = _int_in(0, 2**63 - 1)  # scenario.MAX_SEED: seeds are mixed into 64-bit keys
 # The schema's own bounds, written again so that --help need not import it (a test compares):
 # ga.generations and ga.population_size, episode.max_steps, traffic.episodes
 _count, _steps, _episodes = _int_in(1, 100_000), _int_in(1, 10_000_000), _int_in(1, 1000)
@@ -75,7 +77,7 @@ def build_parser() -> argparse.ArgumentParser:
     run.add_argument("scenario", type=_path, metavar="SCENARIO.toml",
                      help="a scenario file, or a shipped scenario's name (navigation_narrow)")
     run.add_argument("--out", type=_path, help="run folder (default: results/<scenario name>)")
-    run.add_argument("--seed", type=_non_negative, help="override the scenario's seed")
+    run.add_argument("--seed", type=_seed, help="override the scenario's seed")
     run.add_argument("--generations", type=_count, help="override ga.generations")
     run.add_argument("--population", type=_count, help="override ga.population_size")
     run.add_argument("--executor", choices=["local", "process", "ray"], default="local",
@@ -99,7 +101,7 @@ def build_parser() -> argparse.ArgumentParser:
     evaluate.add_argument("--mode", choices=["replay", "closed-loop"],
                           help="SUMO traffic: replayed, or reacting to the controller "
                                "(default: the scenario's traffic.mode)")
-    evaluate.add_argument("--traffic-seed", type=_non_negative, metavar="N",
+    evaluate.add_argument("--traffic-seed", type=_seed, metavar="N",
                           help="traffic seed (default: each scenario's traffic.seed); another "
                           "seed gives traffic situations that no training or choice drew "
                           "(lane keeping has no traffic: it ignores this)")
@@ -321,8 +323,8 @@ def _labels(paths: list[Path]) -> list[str]:
 
 def _cmd_evaluate(args) -> int:
     from enn_traffic.controller import Controller
-    from enn_traffic.deploy import evaluate_batch, fitness_matrix, matrix_files, write_batch
-    from enn_traffic.io import check_output_file, check_output_folder, write_csv
+    from enn_traffic.deploy import evaluate_batch, matrix_files
+    from enn_traffic.io import check_output_file, check_output_folder, file_lock
     from enn_traffic.scenario import load_scenario
     from enn_traffic.shipped import scenario_path
 
@@ -343,6 +345,13 @@ def _cmd_evaluate(args) -> int:
     controllers = {label: Controller.load(path) for label, path
                    in zip(_labels(controller_paths), controller_paths, strict=True)}
     scenarios = [load_scenario(scenario_path(path)) for path in scenario_paths]
+    named: dict[str, Path] = {}
+    for path, scenario in zip(scenario_paths, scenarios, strict=True):
+        if scenario.name in named and scenario.source != named[scenario.name]:
+            raise InputError(f"has the name {scenario.name!r} of {named[scenario.name]}: the "
+                             "table would mix their situations in one column; give each "
+                             "scenario its own name", path, "name")
+        named[scenario.name] = scenario.source
     if args.mode:
         if not any(s.traffic.is_sumo for s in scenarios):
             raise InputError('--mode applies to SUMO traffic (traffic.strategy = "sumo")',
@@ -355,19 +364,29 @@ def _cmd_evaluate(args) -> int:
                      else s.with_overrides(traffic={"seed": args.traffic_seed})
                      for s in scenarios]
     scenarios = [s.with_sumo_output(_sumo_folder(args.out), args.verbose) for s in scenarios]
-    table = evaluate_batch(controllers, scenarios, args.episodes, args.executor, args.address,
-                           progress=not args.quiet)
+    with file_lock(args.out) if args.out else contextlib.nullcontext():
+        table = evaluate_batch(controllers, scenarios, args.episodes, args.executor,
+                               args.address, progress=not args.quiet)
+        _show_and_write(table, controllers, scenarios, args.out)
+    return 0
+
+
+def _show_and_write(table, controllers: dict, scenarios: list, out: Path | None) -> None:
+    """``evaluate``'s table on the terminal, and into ``out`` (with its matrix files when
+    several pairs ran)."""
+    from enn_traffic.deploy import fitness_matrix, write_batch
+    from enn_traffic.io import write_csv
+
     single = len(controllers) == 1 and len(scenarios) == 1
     if single:
         print(table.drop(columns="controller").to_string(index=False))
     else:
         print(fitness_matrix(table).round(1).to_string())
-    if args.out:
-        written = [args.out] if single else write_batch(table, args.out)
+    if out:
+        written = [out] if single else write_batch(table, out)
         if single:
-            write_csv(args.out, table)
+            write_csv(out, table)
         print("written " + ", ".join(str(p) for p in written))
-    return 0
 
 
 def _cmd_render(args) -> int:

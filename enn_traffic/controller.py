@@ -5,13 +5,15 @@ from __future__ import annotations
 
 import io
 import math
-from dataclasses import dataclass
+import re
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
+from pydantic import ValidationError
 
 from enn_traffic.errors import InputError
-from enn_traffic.io import write_atomic
+from enn_traffic.io import check_input_file, write_atomic
 from enn_traffic.neural import NetworkSpec
 from enn_traffic.scenario import RingConfig, Scenario
 
@@ -32,6 +34,8 @@ class Controller:
     spin_variance: float | None = None
     # The sensor's further rings, each its RingConfig's fields in order ([sensor] rings).
     rings: tuple[tuple[float, float, float, float], ...] = ()
+    # The file it was loaded from (not saved): where an error in its values is reported.
+    source: Path | None = field(default=None, compare=False, repr=False)
 
     @classmethod
     def from_scenario(
@@ -74,8 +78,7 @@ class Controller:
     @classmethod
     def load(cls, path: str | Path) -> Controller:
         path = Path(path)
-        if not path.is_file():
-            raise InputError("controller file not found", path)
+        check_input_file(path, "controller file")
         try:
             with np.load(path, allow_pickle=False) as data:
                 chromosome, layer_sizes = data["chromosome"], data["layer_sizes"]
@@ -99,6 +102,7 @@ class Controller:
                        if "spin_window" in data.files else {}),
                     rings=(tuple(tuple(float(x) for x in ring) for ring in data["rings"])
                            if "rings" in data.files else ()),
+                    source=path,
                 )
         except InputError:
             raise
@@ -120,8 +124,23 @@ class Controller:
             value = getattr(controller, name)
             if value is not None and not math.isfinite(value):
                 raise InputError("holds NaN or inf", path, name)
+        columns = len(RingConfig.model_fields)
+        if any(len(ring) != columns for ring in controller.rings):
+            raise InputError(f"each ring is a row of {columns} numbers "
+                             f"({', '.join(RingConfig.model_fields)})", path, "rings")
         if not all(math.isfinite(x) for ring in controller.rings for x in ring):
             raise InputError("holds NaN or inf", path, "rings")
+        for index, ring in enumerate(controller.rings):
+            if ring[0] != int(ring[0]):
+                raise InputError(f"ring {index}: beams {ring[0]:g} is not a whole number",
+                                 path, "rings")
+            try:
+                RingConfig.model_validate({**dict(zip(RingConfig.model_fields, ring,
+                                                      strict=True)), "beams": int(ring[0])})
+            except ValidationError as exc:
+                first = exc.errors()[0]
+                raise InputError(f"ring {index}: {first['loc'][0]}: {first['msg']}", path,
+                                 "rings") from None
         return controller
 
     def fit(self, scenario: Scenario, path: str | Path | None = None) -> Scenario:
@@ -141,20 +160,38 @@ class Controller:
                 f"sensor has {scenario.sensor.beams}"
                 + (f" (and the controller's own rings {sum(int(r[0]) for r in self.rings)})"
                    if self.rings else ""), path, "sensor.beams")
+        outputs = scenario.layer_sizes[-1]
+        if self.layer_sizes[-1] != outputs:
+            raise InputError(
+                f"the controller's network gives {self.layer_sizes[-1]} outputs, the "
+                f"scenario's needs {outputs} (steering and speed)", self.source, "layer_sizes")
         spin = ({} if self.spin_window is None else
                 {"episode": {"spin_window": self.spin_window,
                              "spin_variance": self.spin_variance}})
-        return scenario.with_overrides(
-            network={
-                "hidden": list(self.layer_sizes[1:-1]),
-                "layout": self.layout,
-                "steering_gain_deg": self.steering_gain_deg,
-            },
-            sensor={"span_deg": self.span_deg, "range": self.range,
-                    "rings": [{**dict(zip(RingConfig.model_fields, ring, strict=True)),
-                               "beams": int(ring[0])} for ring in self.rings]},
-            **spin,
-        )
+        try:
+            return scenario.with_overrides(
+                network={
+                    "hidden": list(self.layer_sizes[1:-1]),
+                    "layout": self.layout,
+                    "steering_gain_deg": self.steering_gain_deg,
+                },
+                sensor={"span_deg": self.span_deg, "range": self.range,
+                        "rings": [{**dict(zip(RingConfig.model_fields, ring, strict=True)),
+                                   "beams": int(ring[0])} for ring in self.rings]},
+                **spin,
+            )
+        except InputError as exc:  # a value of the controller's, not of the scenario file
+            key = re.sub(r"\[\d+\]$", "", exc.key or "")
+            raise InputError(f"the controller's value is refused: {exc.message}", self.source,
+                             CONTROLLER_FIELDS.get(key, exc.key)) from None
+
+
+# The scenario key each controller field is checked as (Controller.fit), by the key's name.
+CONTROLLER_FIELDS = {"network.hidden": "layer_sizes", "network.layout": "layout",
+                     "network.steering_gain_deg": "steering_gain_deg",
+                     "sensor.span_deg": "span_deg", "sensor.range": "range",
+                     "episode.spin_window": "spin_window",
+                     "episode.spin_variance": "spin_variance", "sensor.rings": "rings"}
 
 
 def _real(array: np.ndarray, path: Path, key: str) -> None:

@@ -1,13 +1,18 @@
-"""Output files and folders: checked before any work, written whole or not at all, and a run
-folder locked while a run writes it (docs/design.md, "Reliability")."""
+"""Input files checked before they are opened (regular files of bounded size); output files and
+folders checked before any work, written whole or not at all, and a run folder or an output
+file locked while a command writes it (docs/design.md, "Reliability")."""
 
 from __future__ import annotations
 
 import contextlib
 import errno
 import fcntl
+import functools
+import gzip
 import os
+import stat
 import tempfile
+import zlib
 from collections.abc import Callable, Iterator
 from pathlib import Path
 from typing import IO
@@ -15,6 +20,76 @@ from typing import IO
 import pandas as pd
 
 from enn_traffic.errors import InputError
+
+MAX_INPUT_MB_VARIABLE = "ENN_TRAFFIC_MAX_INPUT_MB"
+DEFAULT_MAX_INPUT_MB = 4096  # far above any published SUMO city's network or demand
+GZIP_RATIO = 100  # a gzip input that inflates more than this much (past 64 MB) is refused
+
+_KINDS = ((stat.S_ISDIR, "a folder"), (stat.S_ISFIFO, "a pipe"), (stat.S_ISCHR, "a device"),
+          (stat.S_ISBLK, "a device"), (stat.S_ISSOCK, "a socket"))
+
+
+def max_input_bytes() -> int:
+    """The largest input file, and the most a gzip input may inflate to:
+    ``$ENN_TRAFFIC_MAX_INPUT_MB`` megabytes (4,096 by default)."""
+    try:
+        megabytes = float(os.environ.get(MAX_INPUT_MB_VARIABLE) or DEFAULT_MAX_INPUT_MB)
+    except ValueError:
+        megabytes = DEFAULT_MAX_INPUT_MB
+    return int(max(megabytes, 0.0) * 2**20)
+
+
+def check_input_file(path: str | Path, what: str = "file", source: str | Path | None = None,
+                     key: str | None = None) -> None:
+    """Refuse, before anything opens it, an input that is missing, not a regular file (a
+    folder, a pipe that would block the read, a device such as ``/dev/zero`` that never
+    ends, a socket), larger than :func:`max_input_bytes`, or a gzip file that inflates past
+    that or by more than ``GZIP_RATIO`` times (a compressed bomb). The error names ``source``
+    and ``key`` where the path was given (a scenario's key, an including file), else the
+    path itself."""
+    path = Path(path)
+    where = (source, key) if source is not None else (path, key)
+    named = f": {path}" if source is not None else ""
+    try:
+        status = os.stat(path)
+    except FileNotFoundError:
+        raise InputError(f"{what} not found{named}", *where) from None
+    except OSError as exc:
+        raise InputError(f"{what} cannot be read{named}: {exc.strerror or exc}", *where) \
+            from None
+    for test, kind in _KINDS:
+        if test(status.st_mode):
+            raise InputError(f"{what} is {kind}, not a file{named}", *where)
+    limit = max_input_bytes()
+    if status.st_size > limit:
+        raise InputError(f"{what} is {status.st_size / 2**20:,.0f} MB, more than the "
+                         f"{limit / 2**20:,.0f} MB an input may be ({MAX_INPUT_MB_VARIABLE})"
+                         f"{named}", *where)
+    if path.name.endswith(".gz"):
+        problem = _gzip_problem(path, limit, status.st_ino, status.st_size, status.st_mtime_ns)
+        if problem:
+            raise InputError(f"{what} {problem}{named}", *where)
+
+
+@functools.lru_cache(maxsize=64)
+def _gzip_problem(path: Path, limit: int, *stamp: int) -> str | None:
+    """Why the gzip file ``path`` may not be read (None if it may), by inflating it up to
+    ``limit`` bytes (once per process while the file is unchanged)."""
+    size = stamp[1]
+    inflated = 0
+    try:
+        with gzip.open(path, "rb") as handle:
+            for block in iter(lambda: handle.read(1 << 20), b""):
+                inflated += len(block)
+                if inflated > limit:
+                    return (f"inflates past the {limit / 2**20:,.0f} MB an input may be "
+                            f"({MAX_INPUT_MB_VARIABLE})")
+                if inflated > 64 * 2**20 and inflated > GZIP_RATIO * size:
+                    return (f"inflates more than {GZIP_RATIO} times ({size:,} bytes to over "
+                            f"{inflated:,}): not a SUMO file but a compressed bomb")
+    except (OSError, EOFError, zlib.error) as exc:
+        return f"is not a whole gzip file ({exc})"
+    return None
 
 
 def write_atomic(path: str | Path, write: Callable[[IO], None], binary: bool = False) -> None:
@@ -172,3 +247,93 @@ def folder_lock(folder: str | Path) -> Iterator[None]:
         else:
             del _held[folder]
             os.close(descriptor)  # releases the lock
+
+
+@contextlib.contextmanager
+def file_lock(path: str | Path, key: str | None = "--out") -> Iterator[None]:
+    """Hold a lock on the output file ``path`` while the block runs, so that a second command
+    writing the same file is refused (exit 2, naming the process) instead of one result
+    silently replacing the other's. The lock is a hidden file beside it, ``.NAME.lock``,
+    removed at the end."""
+    path = Path(path).resolve()
+    lock = path.with_name(f".{path.name}.lock")
+    while True:
+        try:
+            path.parent.mkdir(parents=True, exist_ok=True)
+            descriptor = os.open(lock, os.O_RDWR | os.O_CREAT | os.O_NOFOLLOW, 0o644)
+        except OSError as exc:
+            raise InputError(f"cannot lock the file: {exc.strerror or exc}", path, key) \
+                from None
+        try:
+            fcntl.flock(descriptor, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except OSError as exc:
+            os.close(descriptor)
+            if exc.errno in (errno.EWOULDBLOCK, errno.EACCES):
+                raise InputError(f"another command is writing this file ({_holder(lock)}); "
+                                 "wait for it to end, or give another file", path, key) \
+                    from None
+            raise InputError(f"cannot lock the file: {exc.strerror}", path, key) from None
+        try:  # the lock file its last holder removed between our open and our lock: again
+            if os.fstat(descriptor).st_ino == os.stat(lock, follow_symlinks=False).st_ino:
+                break
+        except OSError:
+            pass
+        os.close(descriptor)
+    try:
+        yield
+    finally:
+        with contextlib.suppress(OSError):
+            lock.unlink()
+        os.close(descriptor)
+
+
+SUMO_FOLDER_PREFIX = "enn-sumo-"  # a SUMO start's own folder (traffic.sumo.Simulation)
+
+
+def process_folder(prefix: str = SUMO_FOLDER_PREFIX) -> Path:
+    """A new folder in the system's temporary folder, named ``PREFIX<pid>-...`` by the
+    process that makes it, so that :func:`sweep_process_folders` can tell one whose process
+    was killed before it could remove it."""
+    return Path(tempfile.mkdtemp(prefix=f"{prefix}{os.getpid()}-"))
+
+
+def _ended(pid: int) -> bool:
+    """Has process ``pid`` ended (gone, or a zombie not yet reaped)?"""
+    try:
+        state = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[0]
+        return state in ("Z", "X")
+    except (OSError, IndexError):  # no such process, or no /proc (not Linux)
+        try:
+            os.kill(pid, 0)
+        except ProcessLookupError:
+            return True
+        except OSError:  # another user's
+            return False
+        return False
+
+
+def sweep_process_folders(prefix: str = SUMO_FOLDER_PREFIX, pid: int | None = None,
+                          wait_s: float = 0.0) -> list[Path]:
+    """Remove this user's folders of :func:`process_folder` whose process has ended (a
+    fresh process or worker killed on Ctrl-C, a SIGKILL); with ``pid``, that process's
+    only, waiting up to ``wait_s`` seconds for it to end. Returns the folders removed."""
+    import shutil
+    import time
+
+    base = Path(tempfile.gettempdir())
+    pattern = f"{prefix}{pid}-*" if pid is not None else f"{prefix}*-*"
+    deadline = time.monotonic() + wait_s
+    while pid is not None and not _ended(pid) and time.monotonic() < deadline:
+        time.sleep(0.01)
+    removed = []
+    for folder in base.glob(pattern):
+        owner = folder.name[len(prefix):].split("-", 1)[0]
+        try:
+            mine = folder.is_dir() and not folder.is_symlink() and \
+                folder.stat().st_uid == os.getuid()
+        except OSError:
+            continue
+        if owner.isdigit() and mine and int(owner) != os.getpid() and _ended(int(owner)):
+            shutil.rmtree(folder, ignore_errors=True)
+            removed.append(folder)
+    return removed

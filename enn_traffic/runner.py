@@ -37,8 +37,7 @@ from enn_traffic.io import (
 from enn_traffic.neural import NetworkSpec
 from enn_traffic.progress import slow_step, terminal
 from enn_traffic.provenance import rules_version, sources_of
-from enn_traffic.roads.sumocfg import read_sumocfg, with_includes
-from enn_traffic.scenario import Scenario
+from enn_traffic.scenario import Scenario, read_files
 
 # What a first generation may wait for when numba's cache folder has no kernels yet.
 COMPILING = (" (numba compiles the kernels first, once per install, edit of the kernels or "
@@ -118,20 +117,8 @@ def fingerprint(scenario: Scenario, others: Sequence[Scenario] = (),
 
 
 def input_files(scenario: Scenario) -> list[Path]:
-    """The files a scenario reads: its tracks' networks, SUMO's route files, and a
-    ``.sumocfg`` with every file it names, and every file they ``<include>``; with several
-    tracks, each track's own."""
-    parts = ([scenario.on_track(i) for i in range(len(scenario.tracks))]
-             if isinstance(scenario.track, list) else [scenario])
-    files = []
-    for part in parts:
-        traffic = part.traffic
-        files += [track.net for track in part.tracks if track.net is not None]
-        files += list(traffic.routes)
-        if traffic.sumocfg is not None:
-            config = read_sumocfg(traffic.sumocfg)
-            files += [traffic.sumocfg, *config.route_files, *config.additional_files]
-    return with_includes(files)
+    """The files a scenario reads (:func:`~enn_traffic.scenario.read_files`)."""
+    return read_files(scenario)
 
 
 def _fresh_state(scenario: Scenario, key: str, population: np.ndarray | None = None

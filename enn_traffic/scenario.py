@@ -8,6 +8,7 @@ after loading is in metres, seconds and radians. See docs/scenarios.md.
 from __future__ import annotations
 
 import functools
+import hashlib
 import importlib.util
 import math
 import re
@@ -30,13 +31,14 @@ from pydantic import (
     model_validator,
 )
 
-from enn_traffic.cache import file_stamp
+from enn_traffic.cache import content_digest, file_stamp
 from enn_traffic.errors import InputError
+from enn_traffic.io import check_input_file
 from enn_traffic.kinds import STRATEGIES, SUMO
 from enn_traffic.neural import NetworkSpec
 from enn_traffic.roads.lanes import auto_lane
 from enn_traffic.roads.network import least_start_length
-from enn_traffic.roads.sumocfg import SumoConfig, read_sumocfg
+from enn_traffic.roads.sumocfg import SumoConfig, check_included, read_sumocfg, with_includes
 
 PositiveFloat = Annotated[float, Field(gt=0)]
 Heading = Annotated[float, Field(ge=-360, le=360)]
@@ -46,6 +48,8 @@ MAX_POPULATION_GENES = 50_000_000  # 0.4 GB a copy of the population; the GA hol
 # learners in one SUMO: the largest count measured, each learner's own cost flat per learner
 # there while SUMO's step grows with them (docs/bench.md, "Learners in one city SUMO")
 MAX_LEARNERS = 1000
+# Seeds are mixed into 64-bit keys (enn_traffic.keys): a larger one would wrap silently.
+MAX_SEED = 2**63 - 1
 # TOML has no tuples and no paths: these two take a list and a string (their items stay strict)
 XY = Annotated[tuple[float, float], Strict(False)]
 FilePath = Annotated[Path, Strict(False)]
@@ -353,7 +357,7 @@ class TrafficConfig(_Section):
         "`start_xy`); none = the learner drives alone")
     start_heading_deg: Annotated[tuple[Heading, Heading], Strict(False)] = Field(
         (-90.0, 90.0), description="their start headings are drawn from this range")
-    seed: int = Field(1000, ge=0, description="traffic seed")
+    seed: int = Field(1000, ge=0, le=MAX_SEED, description="traffic seed")
     network_hidden: list[Annotated[int, Field(ge=1, le=1024)]] = Field(
         [3], max_length=16,
         description="`random_network`: hidden layer sizes of the traffic's random networks "
@@ -577,7 +581,7 @@ class LaneKeepingConfig(_Section):
     noise_m: float = Field(
         0.0, ge=0, le=100, description="Gaussian noise on the offsets (m)")
     episodes: int = Field(1, ge=1, le=1000, description="episodes per chromosome")
-    seed: int = Field(0, ge=0, description="noise and road-drawing seed")
+    seed: int = Field(0, ge=0, le=MAX_SEED, description="noise and road-drawing seed")
     draw: RoadDraw | None = Field(
         None, description="`[lane_keeping.draw]`: each traffic situation draws its `road`, "
         "`amplitude`, `period`, `radius` and `mirrored` (those keys above are then unused); "
@@ -594,7 +598,8 @@ class Scenario(_Section):
         "(letters, digits, `_.-`; not `.` or `..`); the default output folder")
     description: str = Field("", description="free text")
     seed: int = Field(
-        0, ge=0, description="seed of the run's random generator; same seed, same run")
+        0, ge=0, le=MAX_SEED,
+        description="seed of the run's random generator; same seed, same run")
     track: Annotated[
         Annotated[TrackConfig, Tag("one")] | Annotated[list[TrackConfig], Tag("several")],
         Discriminator(lambda value: "several" if isinstance(value, list) else "one"),
@@ -945,12 +950,23 @@ def load_scenario(path: str | Path) -> Scenario:
     ``.sumocfg`` is read as SUMO reads it, and names the track when ``[track] net`` is left
     out."""
     path = Path(path)
-    if not path.is_file():
-        raise InputError("scenario file not found", path)
+    check_input_file(path, "scenario file")
     try:
-        data = tomllib.loads(path.read_text())
+        text = path.read_text()
+        line = _long_dotted_key(text)
+        if line:  # Python's TOML reader takes time quadratic in a key's parts
+            raise InputError(f"line {line}: a dotted key of more than {MAX_KEY_PARTS} parts "
+                             "(a scenario's keys have at most 4)", path)
+        data = tomllib.loads(text)
     except (tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
         raise InputError(f"not valid TOML: {exc}", path) from None
+    except RecursionError:
+        raise InputError("not valid TOML here: tables or lists nested too deeply", path) \
+            from None
+    except ValueError as exc:  # an integer of more digits than Python converts
+        raise InputError(f"not readable TOML here: {exc}", path) from None
+    except OSError as exc:
+        raise InputError(f"cannot be read: {exc.strerror or exc}", path) from None
     tracks = data.get("track")
     for track in tracks if isinstance(tracks, list) else [tracks]:
         _resolve(path, track, "net")
@@ -974,20 +990,31 @@ def load_scenario(path: str | Path) -> Scenario:
         for track, listed in zip(tracks, scenario.track, strict=True)]})
 
 
+MAX_KEY_PARTS = 32
+_DOT_IN_KEY = re.compile(r"[A-Za-z_\"'-]\s*\.\s*[A-Za-z_\"'-]")
+
+
+def _long_dotted_key(text: str) -> int | None:
+    """The number of the first line whose key (before any ``=``) has more than
+    ``MAX_KEY_PARTS`` dotted parts; dots between digits (numbers) are not counted."""
+    for number, line in enumerate(text.splitlines(), 1):
+        if len(_DOT_IN_KEY.findall(line.split("=", 1)[0])) >= MAX_KEY_PARTS:
+            return number
+    return None
+
+
 def _with_files(scenario: Scenario, path: Path) -> Scenario:
     """Check that a single-track scenario's files exist (a clear error naming the key if
     not), and read its ``.sumocfg``."""
     traffic = scenario.traffic
     for index, route in enumerate(traffic.routes):
-        if not route.is_file():
-            raise InputError(f"route file not found: {route}", path, f"traffic.routes[{index}]")
+        check_input_file(route, "route file", path, f"traffic.routes[{index}]")
     if traffic.sumocfg is not None:
-        if not traffic.sumocfg.is_file():
-            raise InputError(f"SUMO configuration not found: {traffic.sumocfg}", path,
-                             "traffic.sumocfg")
+        check_input_file(traffic.sumocfg, "SUMO configuration", path, "traffic.sumocfg")
         scenario = _with_sumocfg(scenario, path)
-    if scenario.track is not None and not scenario.track.net.is_file():
-        raise InputError(f"network file not found: {scenario.track.net}", path, "track.net")
+    if scenario.track is not None:
+        check_input_file(scenario.track.net, "network file", path, "track.net")
+    check_included(traffic.routes, path, "traffic.routes")
     if scenario.track is not None and scenario.track.start_lane == AUTO:
         scenario = _with_auto_lane(scenario, path)
     return scenario
@@ -1077,6 +1104,37 @@ def route_files(scenario: Scenario) -> list[Path]:
     """The route files SUMO runs: the ``.sumocfg``'s, then ``traffic.routes``."""
     config = sumo_config(scenario)
     return [*(config.route_files if config is not None else ()), *scenario.traffic.routes]
+
+
+def read_files(scenario: Scenario) -> list[Path]:
+    """Every file a scenario reads, each once: its tracks' networks, its route files, and a
+    ``.sumocfg`` with every file its options name (network, routes, additional files, a state
+    to load, edge weights ...), and every file these ``<include>``; with several tracks,
+    each track's own. What a cache or a resumed run is keyed by, besides the settings."""
+    parts = ([scenario.on_track(i) for i in range(len(scenario.tracks))]
+             if isinstance(scenario.track, list) else [scenario])
+    files: list[Path] = []
+    for part in parts:
+        files += [track.net for track in part.tracks if track.net is not None]
+        files += list(part.traffic.routes)
+        config = sumo_config(part)
+        if config is not None:
+            files += config.read_files
+    return with_includes(files)
+
+
+def scenario_digest(scenario: Scenario) -> str:
+    """SHA-256 of a scenario's settings and of the bytes of every file it reads
+    (:func:`read_files`): what identifies it, whatever its name, and wherever its files are
+    (a file is known by its name and bytes, not its folder)."""
+    files = read_files(scenario)
+    settings = scenario.to_toml()
+    for file in sorted(files, key=lambda f: -len(str(f))):
+        settings = settings.replace(str(file), file.name)
+    digest = hashlib.sha256(settings.encode())
+    for file in files:
+        digest.update(f"{file.name}:{content_digest(file)}".encode())
+    return digest.hexdigest()
 
 
 def sumo_sources(path: Path) -> tuple[Path, list[Path], list[Path], float]:

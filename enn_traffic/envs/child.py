@@ -13,6 +13,8 @@ import os
 import weakref
 from collections.abc import Callable
 
+from enn_traffic.io import sweep_process_folders
+
 
 def _serve(connection, make: Callable, args: tuple, kwargs: dict, parent: int) -> None:
     import signal
@@ -67,3 +69,4 @@ def _end(connection, process) -> None:
     process.join(timeout=10)
     if process.is_alive():
         process.terminate()
+    sweep_process_folders(pid=process.pid, wait_s=2.0)  # a SUMO folder it could not remove

@@ -161,6 +161,9 @@ class GAState:
         except Exception as exc:  # a damaged archive raises many types (zipfile, numpy, json)
             raise InputError(f"checkpoint is unreadable or corrupted ({type(exc).__name__}: "
                              f"{exc})", path) from None
+        if state.population.dtype.kind not in "iufc":
+            raise InputError(f"checkpoint population holds {state.population.dtype} values, "
+                             "not numbers", path)
         if not np.all(np.isfinite(state.population)):
             raise InputError("checkpoint population holds NaN or inf", path)
         return state

@@ -104,9 +104,9 @@ def _save(animation: FuncAnimation, figure, out: str | Path, frames: int,
                            progress_callback=lambda *_: bar.update(1))
         os.replace(partial, out)
     except OSError as exc:
-        partial.unlink(missing_ok=True)
         raise InputError(f"cannot write: {exc.strerror or exc}", out) from None
-    finally:
+    finally:  # also on Ctrl-C: no half-written GIF left beside the user's files
+        partial.unlink(missing_ok=True)
         plt.close(figure)
 
 

@@ -32,7 +32,9 @@ from enn_traffic import cache
 from enn_traffic.cache import file_stamp
 from enn_traffic.errors import InputError
 from enn_traffic.geometry import body_corners
+from enn_traffic.io import check_input_file
 from enn_traffic.progress import slow_step
+from enn_traffic.roads.sumocfg import xml_problem
 
 SLIVER_M = 0.2  # holes narrower than this are gaps between lanes, not walls
 SNAP_M = 0.05  # gaps between lane and junction shapes up to twice this are closed
@@ -225,13 +227,15 @@ def _along(lane, offset: float) -> tuple[float, float, float]:
 def read_net(path: Path) -> sumolib.net.Net:
     """The SUMO network ``path`` (its internal lanes too), read once per process while the
     file is unchanged; a clear InputError if it is missing or unreadable."""
-    if not path.is_file():
-        raise InputError("network file not found", path)
+    check_input_file(path, "network file")
     return _read_net(path.resolve(), *file_stamp(path))
 
 
 @functools.lru_cache(maxsize=2)
 def _read_net(path: Path, *stamp: int) -> sumolib.net.Net:
+    problem = xml_problem(path, *stamp)  # SUMO and sumolib take minutes on some such files
+    if problem:
+        raise InputError(f"not a readable SUMO network: {problem}", path)
     try:
         return sumolib.net.readNet(str(path), withInternal=True)
     except ElementTree.ParseError as exc:
@@ -268,7 +272,7 @@ def drivable_area(net: sumolib.net.Net, surface: Surface = "passenger"
                 )
     junctions = []
     for node in net.getNodes():
-        shape = node.getShape()
+        shape = node.getShape() or []  # None: a node its edges name, with no <junction>
         if len(shape) >= 3 and _meets_road(node, surface):
             junctions.append(_polygon(shape))
     if walking:  # the junctions' own corners of sidewalk are not road
@@ -425,8 +429,7 @@ def load_track(net_file: str | Path, exits: bool = False, surface: Surface = "pa
     into exits) for the road ``surface``; a clear :class:`InputError` if it has no drivable
     area. Built once per network file (by its bytes) and kept on disk."""
     path = Path(net_file)
-    if not path.is_file():
-        raise InputError("network file not found", path)
+    check_input_file(path, "network file")
     key = cache.key_of(cache.file_digest(path), exits, surface, WALLS_VERSION, SNAP_M,
                        SLIVER_M, EXIT_MARGIN_M, shapely.__version__, sumolib.__version__)
 

@@ -14,10 +14,14 @@ from __future__ import annotations
 
 import contextlib
 import functools
+import gzip
+import os
 import re
+import stat
 import subprocess
 import tempfile
 import xml.etree.ElementTree as ElementTree
+import zlib
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -25,6 +29,7 @@ import sumolib
 
 from enn_traffic.cache import file_stamp
 from enn_traffic.errors import InputError
+from enn_traffic.io import check_input_file
 
 FILE_OPTIONS = ("net-file", "route-files", "additional-files")
 
@@ -36,6 +41,12 @@ class SumoOption:
     name: str  # the canonical name
     section: str  # input, output, report, gui_only ...
     kind: str  # FILE, STR, BOOL, TIME ...
+
+    @property
+    def reads_file(self) -> bool:
+        """Does setting it make SUMO read a file (a network, routes, a state, weights ...)?"""
+        return (self.kind == "FILE" and self.section != "gui_only" and not self.writes_file
+                and not self.name.startswith("save-"))
 
     @property
     def writes_file(self) -> bool:
@@ -109,6 +120,16 @@ class SumoConfig:
     end: float | None
     outputs: dict[str, str] = field(default_factory=dict)
     gui_only: tuple[str, ...] = ()
+    # Every other file SUMO reads for it (a state to load, edge weights ...): option: files.
+    other_inputs: dict[str, tuple[Path, ...]] = field(default_factory=dict)
+
+    @property
+    def read_files(self) -> list[Path]:
+        """Every file SUMO reads for this configuration: itself, its network, route and
+        additional files and the other files its options name (not yet their includes)."""
+        files = [self.path, *([self.net_file] if self.net_file else []), *self.route_files,
+                 *self.additional_files]
+        return files + [file for named in self.other_inputs.values() for file in named]
 
 
 def parse_time(text: str) -> float:
@@ -143,9 +164,10 @@ def _settings(root: ElementTree.Element) -> tuple[dict[str, str], list[str]]:
 def read_sumocfg(path: Path) -> SumoConfig:
     """Read ``path``; every file it names must exist (one InputError naming every missing
     file and its option)."""
+    check_input_file(path, "SUMO configuration")
     try:
         root = ElementTree.parse(path).getroot()
-    except (ElementTree.ParseError, OSError) as exc:
+    except (ElementTree.ParseError, OSError, LookupError, ValueError) as exc:
         raise InputError(f"not a readable SUMO configuration: {exc}", path) from None
     settings, gui_only = _settings(root)
     known = sumo_options()
@@ -158,17 +180,26 @@ def read_sumocfg(path: Path) -> SumoConfig:
                              "where SUMO writes)", path, name)
     files: dict[str, tuple[Path, ...]] = {}
     missing = []
-    for option in FILE_OPTIONS:
+    read = [*FILE_OPTIONS, *(name for name in canonical if name not in FILE_OPTIONS
+                             and name in known and known[name].reads_file
+                             and not name.endswith("-path"))]  # phemlight-path: a folder
+    for option in read:
         names = [n for n in re.split(r"[,\s]+", canonical.get(option) or "") if n]
         resolved = tuple((path.parent / name).resolve() for name in names)
-        missing += [(option, name, file) for name, file in zip(names, resolved, strict=True)
-                    if not file.is_file()]
+        for name, file in zip(names, resolved, strict=True):
+            if not file.exists():
+                missing.append((option, name, file))
+            else:
+                check_input_file(file, "the file", path, option)
         files[option] = resolved
     if missing:
         listed = "; ".join(f"{option}: {name} ({file})" for option, name, file in missing)
         plural = "a file" if len(missing) == 1 else f"{len(missing)} files"
         options = ", ".join(dict.fromkeys(option for option, _, _ in missing))
         raise InputError(f"names {plural} that do not exist: {listed}", path, options)
+    for option in read:
+        if option != "net-file":  # a network is read whole, and checked, where it is used
+            check_included(files[option], path, option)
     times = {}
     for option in ("begin", "end"):
         value = canonical.get(option)
@@ -184,7 +215,8 @@ def read_sumocfg(path: Path) -> SumoConfig:
                if name in known and known[name].writes_file and value.strip()}
     return SumoConfig(path, net, files["route-files"], files["additional-files"], begin, end,
                       outputs, tuple(known[name].name if name in known else name
-                                     for name in gui_only))
+                                     for name in gui_only),
+                      {option: files[option] for option in read if option not in FILE_OPTIONS})
 
 
 def departure_span(route_files: list[Path] | tuple[Path, ...]) -> tuple[float, float] | None:
@@ -232,10 +264,68 @@ def with_includes(files: list[Path] | tuple[Path, ...]) -> list[Path]:
     return found
 
 
+def check_included(files: list[Path] | tuple[Path, ...], source: Path, key: str) -> None:
+    """``files`` and every file they ``<include>``, at any depth, checked as SUMO's XML inputs
+    before SUMO reads them: an included file as an input (:func:`~enn_traffic.io.
+    check_input_file`: no pipe, device, folder or oversized file, the error naming the
+    including file), and every one as well-formed XML (:func:`xml_problem`), so that a cut or
+    garbled file, an encoding no reader knows or an entity bomb, on which SUMO fails late or
+    hangs, is refused at once. ``files`` themselves are checked as inputs by the caller
+    (``source``, ``key``: where they were named)."""
+    seen: set[Path] = set()
+    pending = [(Path(file), None) for file in files]
+    while pending:
+        file, parent = pending.pop(0)
+        if file in seen:
+            continue
+        seen.add(file)
+        if parent is not None:
+            check_input_file(file, f"the file it includes ({file.name})", parent, "include")
+        try:
+            stamp = file_stamp(file)
+        except OSError:
+            continue
+        problem = xml_problem(file, *stamp)
+        if problem:
+            raise InputError(f"{file.name} is not readable XML: {problem}",
+                             parent or source, "include" if parent else key)
+        pending += [(inner, file) for inner in _included(file, *stamp)]
+
+
+MAX_XML_DEPTH = 64  # SUMO's own files nest a few levels (routes, vehicle, route, stop)
+
+
+@functools.lru_cache(maxsize=256)
+def xml_problem(file: Path, *stamp: int) -> str | None:
+    """Why ``file`` (gzipped when it ends in ``.gz``) is not well-formed XML, or None; read
+    once per process while it is unchanged. Python's parser refuses entity bombs (its limit
+    on amplification) and external entities."""
+    opener = gzip.open if file.name.endswith(".gz") else open
+    depth = 0
+    try:
+        with opener(file, "rb") as handle:
+            for event, element in ElementTree.iterparse(handle, events=("start", "end")):
+                if event == "start":
+                    depth += 1
+                    if depth > MAX_XML_DEPTH:
+                        return (f"elements nested more than {MAX_XML_DEPTH} deep (SUMO's "
+                                "files nest a few levels; SUMO takes minutes on such a file)")
+                else:
+                    depth -= 1
+                    element.clear()
+    except (ElementTree.ParseError, LookupError, ValueError, OSError, EOFError,
+            zlib.error) as exc:
+        return str(exc)
+    return None
+
+
 @functools.lru_cache(maxsize=256)
 def _included(file: Path, *stamp: int) -> list[Path]:
-    """The files ``file``'s ``<include>`` elements name, read once while it is unchanged."""
+    """The files ``file``'s ``<include>`` elements name, read once while it is unchanged (a
+    file that is not a regular one, a pipe or a device, is not read: it names none)."""
     try:
+        if not stat.S_ISREG(os.stat(file).st_mode):
+            return []
         data = file.read_bytes()
     except OSError:
         return []

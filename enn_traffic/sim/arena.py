@@ -210,7 +210,10 @@ class LearnerWorld:
         self.spec = NetworkSpec(scenario.layer_sizes, scenario.network.layout)
         vehicle, traffic = scenario.vehicle, scenario.traffic
         reach = max(scenario.max_range, math.hypot(vehicle.length, vehicle.width / 2)) + 1.0
-        self.grid = WallGrid.cached(self.track.walls, reach)
+        try:
+            self.grid = WallGrid.cached(self.track.walls, reach)
+        except InputError as exc:  # the network's extent: name its file
+            raise InputError(exc.message, scenario.track.net) from None
         self.starts = start_poses(scenario, self.track, listed)
         self.start = self.starts[0]
         self.layer_sizes = self.spec.layer_array

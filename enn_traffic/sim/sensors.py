@@ -18,9 +18,13 @@ import numpy as np
 from numba import njit
 
 from enn_traffic import cache
+from enn_traffic.errors import InputError
 from enn_traffic.progress import slow_step
 
 GRID_VERSION = 1  # raised when the cells a grid lists change
+# A grid's cells (1.6 GB of offsets): a city 70 km across at 5 m cells. A network larger than
+# that is refused with the reason, not left to fail allocating (coordinates of 1e12 m).
+MAX_GRID_CELLS = 200_000_000
 
 
 class WallGrid(NamedTuple):
@@ -89,6 +93,17 @@ class WallGrid(NamedTuple):
         """:meth:`build`, kept on disk by the walls' bytes, ``reach`` and ``cell_size``
         (:mod:`enn_traffic.cache`)."""
         walls = np.ascontiguousarray(walls, dtype=np.float64).reshape(-1, 4)
+        if len(walls):
+            low = np.minimum(walls[:, :2], walls[:, 2:]).min(axis=0) - reach
+            high = np.maximum(walls[:, :2], walls[:, 2:]).max(axis=0) + reach
+            width, height = high - low
+            cells = math.ceil(width / cell_size) * math.ceil(height / cell_size)
+            if not cells <= MAX_GRID_CELLS:
+                raise InputError(
+                    f"its walls span {width / 1000:,.3g} km × {height / 1000:,.3g} km: the "
+                    f"rangefinder's grid of {cell_size:g} m cells would need {cells:,.3g} cells, "
+                    f"more than {MAX_GRID_CELLS:,} (coordinates in metres, as SUMO's "
+                    "netconvert writes them?)")
         key = cache.key_of(walls.tobytes(), repr(reach), repr(cell_size), GRID_VERSION)
 
         def build() -> dict[str, np.ndarray]:

@@ -324,7 +324,7 @@ class SumoWorld(LearnerWorld):
         libsumo's leftovers changed the life (docs/sumo.md, "One SUMO start, one
         process"): 3 of 10 lifetimes of the crossing flows differed from a warm cache's."""
         missing = {(seed, warmup) for seed, _, warmup in situations
-                   if not self._state_of(seed, warmup).is_file()}
+                   if not sumo.kept_state(self._state_of(seed, warmup))}
         fresh_calls([(situation_state, self.scenario, seed, warmup)
                      for seed, warmup in sorted(missing, key=repr)],
                     workers=WORKERS)

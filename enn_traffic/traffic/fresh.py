@@ -33,6 +33,8 @@ from collections.abc import Callable, Sequence
 from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
+from enn_traffic.io import sweep_process_folders
+
 
 class FreshProcessError(RuntimeError):
     """The fresh process ended without a result (killed, or it could not start)."""
@@ -160,6 +162,7 @@ class _Child:
     def kill(self) -> None:
         with contextlib.suppress(OSError, FreshProcessError):  # else the zygote, and so
             self.zygote.ask(b"K", self.pid)  # the child, is gone
+        sweep_process_folders(pid=self.pid, wait_s=2.0)  # the SUMO folder it could not remove
 
 
 def _run(function: Callable, args: tuple, running: set | None = None,

@@ -37,6 +37,7 @@ import re
 import shutil
 import tempfile
 import xml.etree.ElementTree as ElementTree
+import zlib
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -44,15 +45,17 @@ import libsumo
 import numpy as np
 from numba import njit
 
-from enn_traffic.cache import cache_folder, content_digest
+from enn_traffic.cache import cache_folder, content_digest, file_stamp
 from enn_traffic.errors import InputError
 from enn_traffic.geometry import body_corners
+from enn_traffic.io import process_folder, sweep_process_folders
 from enn_traffic.progress import bar, console_into, slow_step
-from enn_traffic.roads.sumocfg import departure_span, with_includes
+from enn_traffic.roads.sumocfg import departure_span
 from enn_traffic.scenario import (
     Scenario,
     begin_time,
     learner_start_time,
+    read_files,
     route_files,
     sumo_config,
 )
@@ -237,7 +240,8 @@ class Simulation:
                 "its own process (gymnasium.make_vec(..., vectorization_mode='async'))")
         self.scenario = scenario
         self.seed = seed
-        self.folder = Path(tempfile.mkdtemp(prefix="enn-sumo-"))  # all this start writes
+        sweep_process_folders()  # those of killed processes (Ctrl-C, SIGKILL)
+        self.folder = process_folder()  # all this start writes
         self._open = True
         Simulation.running = self
         command = sumo_command(scenario, seed, self.folder, state, save_rng)
@@ -531,13 +535,10 @@ STATE_VERSION = 6  # raised when the code that simulates and saves a warm-up cha
 
 def _inputs_key(scenario: Scenario) -> list[str]:
     """What a warm-up depends on: the SHA-256 of every file SUMO reads (network, route and
-    additional files, the ``.sumocfg``, and every file they ``<include>``), begin, warm-up and
-    step length, and SUMO's version."""
-    config = sumo_config(scenario)
-    files = [scenario.track.net, *route_files(scenario)]
-    if config is not None:
-        files += [config.path, *config.additional_files]
-    digests = [f"{file}:{content_digest(file)}" for file in with_includes(files)]
+    additional files, the ``.sumocfg`` and every file its options name, such as a state to
+    load or edge weights, and every file they ``<include>``: :func:`~enn_traffic.scenario.
+    read_files`), begin, warm-up and step length, and SUMO's version."""
+    digests = [f"{file}:{content_digest(file)}" for file in read_files(scenario)]
     return [*digests, repr(begin_time(scenario)), repr(scenario.traffic.warmup_s),
             scenario.traffic.drivers.model_dump_json(), str(STATE_VERSION),
             repr(scenario.vehicle.dt), libsumo.getVersion()[1]]
@@ -567,7 +568,7 @@ def warm_state(scenario: Scenario, seed: int, keep_rng: bool) -> Path:
     warm-up would have (one traffic situation's own warm-up); without, a run loading it goes
     on by its own seed (a warm-up shared by several situations)."""
     path = state_path(scenario, seed, keep_rng)
-    if path.is_file():
+    if kept_state(path):
         return path
     path.parent.mkdir(parents=True, exist_ok=True)
     partial = path.with_name(f"{path.name.split('.')[0]}.{os.getpid()}.partial.xml.gz")
@@ -576,10 +577,37 @@ def warm_state(scenario: Scenario, seed: int, keep_rng: bool) -> Path:
         warm_up(simulation)
         with slow_step("saving the warm-up"):
             simulation.save_state(partial)
+        os.replace(partial, path)  # whole or not at all, whichever process wrote it first
     finally:
         simulation.close()
-    os.replace(partial, path)  # whole or not at all, whichever process wrote it first
+        partial.unlink(missing_ok=True)  # a failed or interrupted save leaves nothing
     return path
+
+
+def kept_state(path: Path) -> bool:
+    """Is the saved warm-up ``path`` there, and whole? One cut short or damaged (a full disk,
+    a copy broken off, a flipped bit that fails gzip's CRC) is deleted, so that it is
+    simulated again rather than handed to SUMO, which would refuse it."""
+    try:
+        stamp = file_stamp(path)
+    except OSError:
+        return False
+    if _whole_gzip(path, *stamp):
+        return True
+    with contextlib.suppress(OSError):
+        path.unlink()
+    return False
+
+
+@functools.lru_cache(maxsize=256)
+def _whole_gzip(path: Path, *stamp: int) -> bool:
+    try:
+        with gzip.open(path, "rb") as handle:
+            while handle.read(1 << 20):
+                pass
+    except (OSError, EOFError, zlib.error):
+        return False
+    return True
 
 
 EMPTY_TL_STATE = re.compile(r'(<tlLogic\b[^>]*?) state=""')

@@ -224,16 +224,16 @@ def test_closed_loop_driver_brakes_for_the_learner(tmp_path, root):
 
 
 @pytest.mark.parametrize("routes, needle", [
-    ("<routes><vehicle id='a' depart='0'", "SUMO failed to start"),
+    # a cut file: refused as XML when the scenario is read, before SUMO starts
+    ("<routes><vehicle id='a' depart='0'", "not readable XML: unclosed token"),
     ("<routes><vehicle id='a' type='no_such_type' depart='0'><route edges='g0_0to1_0'/>"
      "</vehicle></routes>", "no_such_type"),
     ("<routes><vehicle id='a' depart='0'><route edges='no_such_edge'/></vehicle></routes>",
      "no_such_edge"),
 ])
 def test_bad_sumo_input_is_one_clear_message(tmp_path, root, routes, needle):
-    scenario = sumo_scenario(tmp_path, root, routes)
     with pytest.raises(InputError, match=needle) as error:
-        world = make_world(scenario)
+        world = make_world(sumo_scenario(tmp_path, root, routes))
         world.evaluate(np.zeros((1, world.spec.chromosome_length)))
     assert error.value.key == "traffic.routes"
     result = subprocess.run(
