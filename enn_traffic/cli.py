@@ -60,8 +60,19 @@ def _run_folder_options(command: argparse.ArgumentParser, resume: str, force: st
                          help="show SUMO's console instead of logging it to OUT/sumo/sumo.log")
 
 
+class _Parser(argparse.ArgumentParser):
+    """argparse with a bad command line as every other error: one line, ``enn-traffic:
+    error: ...`` (the command named in it), exit status 2; ``--help`` shows the usage."""
+
+    def error(self, message: str):
+        command = self.prog.removeprefix("enn-traffic").strip()
+        print(f"enn-traffic: error: {command + ': ' if command else ''}{message} "
+              f"(see {self.prog} --help)", file=sys.stderr)
+        raise SystemExit(2)
+
+
 def build_parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(
+    parser = _Parser(
         prog="enn-traffic",
         description="Evolve neural-network driving controllers in SUMO traffic "
         "(Eraqi et al., 2016).",
@@ -324,7 +335,7 @@ def _labels(paths: list[Path]) -> list[str]:
 def _cmd_evaluate(args) -> int:
     from enn_traffic.controller import Controller
     from enn_traffic.deploy import evaluate_batch, matrix_files
-    from enn_traffic.io import check_output_file, check_output_folder, file_lock
+    from enn_traffic.io import check_not_input, check_output_file, check_output_folder, file_lock
     from enn_traffic.scenario import load_scenario
     from enn_traffic.shipped import scenario_path
 
@@ -332,6 +343,7 @@ def _cmd_evaluate(args) -> int:
     scenario_paths = [p for p in args.paths if p.suffix == ".toml"]
     if args.out:  # every file it will write, before any work
         check_output_file(args.out, suffixes=(".csv",))
+        check_not_input(args.out, args.paths)
         if len(controller_paths) * len(scenario_paths) > 1:
             for written in matrix_files(args.out):
                 check_output_file(written)
@@ -392,11 +404,12 @@ def _show_and_write(table, controllers: dict, scenarios: list, out: Path | None)
 def _cmd_render(args) -> int:
     from enn_traffic.controller import Controller
     from enn_traffic.deploy import render
-    from enn_traffic.io import check_output_file, check_output_folder
+    from enn_traffic.io import check_not_input, check_output_file, check_output_folder
     from enn_traffic.scenario import load_scenario
     from enn_traffic.shipped import scenario_path
 
     check_output_file(args.out, suffixes=(".png", ".gif", ".svg", ".pdf"))
+    check_not_input(args.out, [args.controller, args.scenario])
     check_output_folder(_sumo_folder(args.out))
     controller = Controller.load(args.controller)
     scenario = load_scenario(scenario_path(args.scenario)).with_sumo_output(

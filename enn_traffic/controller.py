@@ -3,18 +3,20 @@ and the spin rule it was evolved under."""
 
 from __future__ import annotations
 
+import functools
 import io
 import math
 import re
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import get_args
 
 import numpy as np
 from pydantic import ValidationError
 
 from enn_traffic.errors import InputError
-from enn_traffic.io import check_input_file, write_atomic
-from enn_traffic.neural import NetworkSpec
+from enn_traffic.io import GZIP_RATIO, check_input_file, max_input_bytes, write_atomic
+from enn_traffic.neural import Layout, NetworkSpec
 from enn_traffic.scenario import RingConfig, Scenario
 
 
@@ -79,26 +81,35 @@ class Controller:
     def load(cls, path: str | Path) -> Controller:
         path = Path(path)
         check_input_file(path, "controller file")
+        _check_members(path)
         try:
             with np.load(path, allow_pickle=False) as data:
                 chromosome, layer_sizes = data["chromosome"], data["layer_sizes"]
                 _real(chromosome, path, "chromosome")
                 _real(layer_sizes, path, "layer_sizes")
+                if layer_sizes.ndim != 1:
+                    raise InputError(f"a list of sizes, not an array of shape "
+                                     f"{layer_sizes.shape}", path, "layer_sizes")
                 if not np.array_equal(layer_sizes, np.round(layer_sizes)):
                     raise InputError(f"layer sizes {layer_sizes.tolist()} are not whole numbers",
                                      path, "layer_sizes")
+                layout = data["layout"]
+                if layout.dtype.kind != "U" or str(layout) not in get_args(Layout):
+                    raise InputError(f"layout {layout!r} is none of {get_args(Layout)}", path,
+                                     "layout")
+                number = functools.partial(_number, data, path)
                 controller = cls(
                     chromosome=chromosome.astype(np.float64),
                     layer_sizes=tuple(int(n) for n in layer_sizes),
-                    layout=str(data["layout"]),
-                    steering_gain_deg=float(data["steering_gain_deg"]),
-                    span_deg=float(data["span_deg"]),
-                    range=float(data["range"]),
-                    fitness=float(data["fitness"]),
+                    layout=str(layout),
+                    steering_gain_deg=number("steering_gain_deg"),
+                    span_deg=number("span_deg"),
+                    range=number("range"),
+                    fitness=number("fitness"),
                     scenario_name=str(data["scenario_name"]),
-                    generation=int(data["generation"]),
-                    **({"spin_window": int(data["spin_window"]),
-                        "spin_variance": float(data["spin_variance"])}
+                    generation=int(number("generation", whole=True)),
+                    **({"spin_window": int(number("spin_window", whole=True)),
+                        "spin_variance": number("spin_variance")}
                        if "spin_window" in data.files else {}),
                     rings=(tuple(tuple(float(x) for x in ring) for ring in data["rings"])
                            if "rings" in data.files else ()),
@@ -192,6 +203,39 @@ CONTROLLER_FIELDS = {"network.hidden": "layer_sizes", "network.layout": "layout"
                      "sensor.span_deg": "span_deg", "sensor.range": "range",
                      "episode.spin_window": "spin_window",
                      "episode.spin_variance": "spin_variance", "sensor.rings": "rings"}
+
+
+def _number(data, path: Path, key: str, whole: bool = False) -> float:
+    """The single number ``key`` of a controller file: a real number (an integer where
+    ``whole``), never text, a boolean or an array."""
+    value = data[key]
+    if value.shape != () or value.dtype.kind not in "iuf":
+        raise InputError(f"holds {value.dtype} of shape {value.shape}, not a number", path, key)
+    if whole and value != np.round(value):
+        raise InputError(f"{float(value):g} is not a whole number", path, key)
+    return float(value)
+
+
+def _check_members(path: Path) -> None:
+    """Refuse a controller archive whose arrays would inflate past the input limit, or more
+    than :data:`~enn_traffic.io.GZIP_RATIO` times (a compressed bomb), before any is read."""
+    import zipfile
+
+    try:
+        with zipfile.ZipFile(path) as archive:
+            members = archive.infolist()
+    except zipfile.BadZipFile:
+        raise InputError("not a controller archive (.npz, as enn-traffic run writes)",
+                         path) from None
+    except (OSError, ValueError):
+        return  # np.load says what is wrong
+    limit = max_input_bytes()
+    for member in members:
+        if member.file_size > limit or (member.file_size > 64 * 2**20 and member.file_size
+                                        > GZIP_RATIO * max(member.compress_size, 1)):
+            raise InputError(f"{member.filename} would inflate to {member.file_size:,} bytes "
+                             f"from {member.compress_size:,}: not a controller", path,
+                             member.filename.removesuffix(".npy"))
 
 
 def _real(array: np.ndarray, path: Path, key: str) -> None:

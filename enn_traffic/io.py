@@ -9,6 +9,7 @@ import errno
 import fcntl
 import functools
 import gzip
+import math
 import os
 import stat
 import tempfile
@@ -32,11 +33,15 @@ _KINDS = ((stat.S_ISDIR, "a folder"), (stat.S_ISFIFO, "a pipe"), (stat.S_ISCHR, 
 def max_input_bytes() -> int:
     """The largest input file, and the most a gzip input may inflate to:
     ``$ENN_TRAFFIC_MAX_INPUT_MB`` megabytes (4,096 by default)."""
+    text = os.environ.get(MAX_INPUT_MB_VARIABLE) or str(DEFAULT_MAX_INPUT_MB)
     try:
-        megabytes = float(os.environ.get(MAX_INPUT_MB_VARIABLE) or DEFAULT_MAX_INPUT_MB)
+        megabytes = float(text)
     except ValueError:
-        megabytes = DEFAULT_MAX_INPUT_MB
-    return int(max(megabytes, 0.0) * 2**20)
+        megabytes = math.nan
+    if not (math.isfinite(megabytes) and megabytes > 0):
+        raise InputError(f"{MAX_INPUT_MB_VARIABLE}={text!r}: expected a number of megabytes "
+                         "above 0")
+    return int(megabytes * 2**20)
 
 
 def check_input_file(path: str | Path, what: str = "file", source: str | Path | None = None,
@@ -164,6 +169,18 @@ def check_not_source(written: Path, source: str | Path | None) -> None:
         raise InputError(f"is the scenario's own folder: the command would write its copy of "
                          f"the scenario over {written.name}; give another --out",
                          written.parent, "--out")
+
+
+def check_not_input(written: str | Path, inputs: list, key: str = "--out") -> None:
+    """Refuse an output path that is one of the files the command reads (a scenario named
+    ``.png`` given as ``render``'s ``--out``): writing it would replace the user's file."""
+    written = Path(written)
+    if not written.exists():
+        return
+    for source in inputs:
+        if Path(source).exists() and written.resolve() == Path(source).resolve():
+            raise InputError("is a file the command reads: writing it would replace it; give "
+                             "another file", written, key)
 
 
 def check_output_folder(path: str | Path, key: str | None = "--out") -> None:

@@ -273,9 +273,14 @@ def check_included(files: list[Path] | tuple[Path, ...], source: Path, key: str)
     hangs, is refused at once. ``files`` themselves are checked as inputs by the caller
     (``source``, ``key``: where they were named)."""
     seen: set[Path] = set()
-    pending = [(Path(file), None) for file in files]
+    pending: list[tuple[Path, tuple[Path, ...]]] = [(Path(file), ()) for file in files]
     while pending:
-        file, parent = pending.pop(0)
+        file, chain = pending.pop(0)
+        parent = chain[-1] if chain else None
+        if file in chain:  # SUMO crashes on a file that includes itself (exit -11)
+            raise InputError(f"includes {file.name}, which includes it again: "
+                             + " -> ".join(f.name for f in (*chain[chain.index(file):], file)),
+                             parent, "include")
         if file in seen:
             continue
         seen.add(file)
@@ -289,7 +294,7 @@ def check_included(files: list[Path] | tuple[Path, ...], source: Path, key: str)
         if problem:
             raise InputError(f"{file.name} is not readable XML: {problem}",
                              parent or source, "include" if parent else key)
-        pending += [(inner, file) for inner in _included(file, *stamp)]
+        pending += [(inner, (*chain, file)) for inner in _included(file, *stamp)]
 
 
 MAX_XML_DEPTH = 64  # SUMO's own files nest a few levels (routes, vehicle, route, stop)

@@ -303,6 +303,8 @@ def _zygote_main(control: socket.socket) -> None:
                 try:
                     _serve(socket.socket(fileno=fds[0]))
                     code = 0
+                except (KeyboardInterrupt, BrokenPipeError, ConnectionResetError, EOFError):
+                    pass  # the caller was interrupted, or is gone: it reads nothing, says why
                 except BaseException:  # the caller reads no result: say why here
                     traceback.print_exc()
                 finally:

@@ -43,10 +43,11 @@ def refused(capsys, argv: list, names: tuple | str, key: str | None = None) -> s
     ``names`` (and ``key``)."""
     try:
         status = cli.main([str(a) for a in argv])
-    except SystemExit as exit:  # argparse's own refusal: its usage and one error line
+    except SystemExit as exit:  # the command line's refusal: one line too
         status = exit.code
-        message = capsys.readouterr().err.strip().splitlines()[-1]
-        assert status == 2 and "error:" in message, message
+        message = capsys.readouterr().err.strip()
+        assert status == 2 and message.startswith("enn-traffic: error: "), message
+        assert "\n" not in message, message
         return message
     message = capsys.readouterr().err.strip()
     assert status == 2, f"exit {status}: {message}"
@@ -276,14 +277,14 @@ def _controller(tmp_path: Path, **edits) -> Path:
         data = dict(saved)
     inputs = int(data["layer_sizes"][0])
     data.update(edits)
-    if "layer_sizes" in edits:  # a first size of 0 stands for the saved one's inputs
+    if "layer_sizes" in edits and edits["layer_sizes"].ndim == 1:  # 0: the saved inputs
         data["layer_sizes"] = np.where(np.arange(len(edits["layer_sizes"])) == 0, inputs,
                                        edits["layer_sizes"])
     if "layer_sizes" in edits or "layout" in edits:
-        sizes = tuple(int(n) for n in np.atleast_1d(data["layer_sizes"]))
         try:
+            sizes = tuple(int(n) for n in np.atleast_1d(data["layer_sizes"]))
             length = NetworkSpec(sizes, str(data["layout"])).chromosome_length
-        except ValueError:
+        except (ValueError, TypeError):
             length = 10
         data["chromosome"] = np.zeros(length)
     path = tmp_path / "edited_controller.npz"
@@ -292,6 +293,15 @@ def _controller(tmp_path: Path, **edits) -> Path:
 
 
 CONTROLLER_EDITS = {
+    "a gain of text": ({"steering_gain_deg": np.str_("90")}, "steering_gain_deg"),
+    "a boolean gain": ({"steering_gain_deg": np.bool_(True)}, "steering_gain_deg"),
+    "a fractional spin window": ({"spin_window": np.float64(300.7)}, "spin_window"),
+    "an unknown layout": ({"layout": np.str_("bogus")}, "layout"),
+    "a layout of bytes": ({"layout": np.bytes_(b"source")}, "layout"),
+    "a fitness of text": ({"fitness": np.str_("lots")}, "fitness"),
+    "a generation of text": ({"generation": np.str_("x")}, "generation"),
+    "layer sizes of 2 rows": ({"layer_sizes": np.array([[19, 3, 2], [19, 3, 2]])},
+                              "layer_sizes"),
     "range -5": ({"range": np.float64(-5)}, "range"),
     "range 0": ({"range": np.float64(0)}, "range"),
     "span 400°": ({"span_deg": np.float64(400)}, "span_deg"),
@@ -299,7 +309,6 @@ CONTROLLER_EDITS = {
     "a hidden layer of 2000": ({"layer_sizes": np.array([0, 2000, 2])}, "layer_sizes"),
     "3 outputs": ({"layer_sizes": np.array([0, 3])}, "layer_sizes"),
     "17 hidden layers": ({"layer_sizes": np.array([0, *[4] * 17, 2])}, "layer_sizes"),
-    "a layout of its own": ({"layout": np.str_("diagonal")}, "layout"),
     "a spin window of 0": ({"spin_window": np.int64(0)}, "spin_window"),
     "a negative spin variance": ({"spin_variance": np.float64(-1)}, "spin_variance"),
     "rings of 3 columns": ({"rings": np.ones((1, 3))}, "rings"),
@@ -564,11 +573,68 @@ def test_every_number_of_the_command_line_refuses_what_is_not_one(capsys, tmp_pa
     assert not list(tmp_path.iterdir()), "something was written"
 
 
+# --- a tester's second probe ----------------------------------------------------------------
+
+@pytest.mark.parametrize("value", ["nan", "inf", "abc", "-1", "0"])
+def test_a_bad_input_limit_in_the_environment_is_one_message(capsys, tmp_path, monkeypatch,
+                                                              value):
+    monkeypatch.chdir(tmp_path)
+    monkeypatch.setenv(MAX_INPUT_MB_VARIABLE, value)
+    refused(capsys, ["run", NARROW, "--out", tmp_path / "out"], MAX_INPUT_MB_VARIABLE)
+
+
+def test_render_never_writes_over_a_file_it_reads(capsys, tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    scenario = tmp_path / "scenario.png"  # a scenario file of an odd name
+    scenario.write_text(_narrow_with())
+    refused(capsys, ["render", BEST, scenario, "--out", scenario], scenario.name, "--out")
+    assert scenario.read_text() == _narrow_with()
+
+
+def test_a_controller_archive_that_inflates_past_the_limit_is_refused_unread(capsys, tmp_path,
+                                                                             monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    monkeypatch.setenv(MAX_INPUT_MB_VARIABLE, "1")
+    with np.load(BEST) as saved:
+        data = dict(saved)
+    data["chromosome"] = np.zeros(1_000_000)  # 8 MB, a few kB compressed
+    path = tmp_path / "bomb.npz"
+    np.savez_compressed(path, **data)
+    refused(capsys, ["evaluate", path, NARROW], path.name, "chromosome")
+
+
+def test_a_numpy_array_file_named_npz_is_not_a_controller(capsys, tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    path = tmp_path / "array.npz"
+    with open(path, "wb") as handle:
+        np.save(handle, np.zeros(68))
+    refused(capsys, ["evaluate", path, NARROW], path.name)
+
+
+@pytest.mark.parametrize("cycle", ["itself", "each other"])
+def test_files_that_include_each_other_are_refused_before_sumo_crashes(capsys, tmp_path,
+                                                                       monkeypatch, road_net,
+                                                                       cycle):
+    """SUMO crashed (exit -11) on an additional file that includes itself."""
+    monkeypatch.chdir(tmp_path)
+    scenario = _road(tmp_path, road_net)
+    first, second = tmp_path / "a.add.xml", tmp_path / "b.add.xml"
+    first.write_text(f'<additional><include href="{"a" if cycle == "itself" else "b"}'
+                     '.add.xml"/></additional>')
+    second.write_text('<additional><include href="a.add.xml"/></additional>')
+    config = tmp_path / "road.sumocfg"
+    config.write_text(config.read_text().replace(
+        "</input>", '<additional-files value="a.add.xml"/></input>'))
+    message = refused(capsys, ["run", scenario, "--out", tmp_path / "out"], "a.add.xml")
+    assert "includes" in message
+
+
 def test_the_corpus_holds_at_least_350_cases():
     """The issue's measure: count every parametrised case of this file."""
     count = (len(SPECIAL_CASES) + len(XML_CASES) + 3 * len(TOML_BODIES)
              + 2 * len(CONTROLLER_EDITS) + len(CHECKPOINT_EDITS) + 2 * 4 + 1
-             + len(OUTPUT_LINKS) + 1 + 2 + len(_read_options()) + len(NUMBER_CASES) + 3)
+             + len(OUTPUT_LINKS) + 1 + 2 + len(_read_options()) + len(NUMBER_CASES) + 3
+             + 5 + 1 + 1 + 1 + 2)
     assert count >= 350, count
 
 
@@ -621,16 +687,17 @@ def test_ctrl_c_of_a_closed_loop_evaluation_leaves_no_sumo_folder(tmp_path, road
 
 
 def test_a_full_disk_leaves_no_partial_cache_entry(tmp_path):
-    """A cache write that fails (here: a file-size limit, as a full disk) keeps no entry and
-    leaves no ``*.partial.npz``; the command still ends well."""
-    code = ("import resource, signal, sys; signal.signal(signal.SIGXFSZ, signal.SIG_IGN); "
+    """A cache write that fails (here: a file-size limit, as a full disk gives) keeps no
+    entry and leaves no ``*.partial.npz``; the arrays are still returned."""
+    code = ("import resource, signal, sys, numpy as np; from enn_traffic import cache; "
+            "signal.signal(signal.SIGXFSZ, signal.SIG_IGN); "
             "resource.setrlimit(resource.RLIMIT_FSIZE, (4096, 4096)); "
-            "from enn_traffic.cli import main; sys.exit(main(sys.argv[1:]))")
+            "arrays = cache.cached_arrays('walls', 'k', lambda: {'w': np.ones(100_000)}); "
+            "sys.exit(0 if arrays['w'].sum() == 100_000 else 1)")
     env = {**os.environ, "ENN_TRAFFIC_CACHE": str(tmp_path / "cache")}
-    done = subprocess.run([sys.executable, "-c", code, "evaluate", str(BEST), str(NARROW),
-                           "--quiet"], env=env, capture_output=True, text=True, cwd=tmp_path)
+    done = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True,
+                          text=True, cwd=ROOT)
     assert done.returncode == 0, done.stderr
+    assert (tmp_path / "cache" / "walls").is_dir()
     assert not list((tmp_path / "cache").rglob("*.partial*"))
-    for entry in (tmp_path / "cache").rglob("*.npz"):  # what was kept is whole
-        with np.load(entry) as kept:
-            assert all(kept[name] is not None for name in kept.files)
+    assert not list((tmp_path / "cache").rglob("*.npz"))
