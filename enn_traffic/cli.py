@@ -335,7 +335,7 @@ def _labels(paths: list[Path]) -> list[str]:
 def _cmd_evaluate(args) -> int:
     from enn_traffic.controller import Controller
     from enn_traffic.deploy import evaluate_batch, matrix_files
-    from enn_traffic.io import check_not_input, check_output_file, check_output_folder, file_lock
+    from enn_traffic.io import check_output_file, check_output_folder, file_lock
     from enn_traffic.scenario import load_scenario
     from enn_traffic.shipped import scenario_path
 
@@ -343,7 +343,6 @@ def _cmd_evaluate(args) -> int:
     scenario_paths = [p for p in args.paths if p.suffix == ".toml"]
     if args.out:  # every file it will write, before any work
         check_output_file(args.out, suffixes=(".csv",))
-        check_not_input(args.out, args.paths)
         if len(controller_paths) * len(scenario_paths) > 1:
             for written in matrix_files(args.out):
                 check_output_file(written)

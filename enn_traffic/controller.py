@@ -15,7 +15,7 @@ import numpy as np
 from pydantic import ValidationError
 
 from enn_traffic.errors import InputError
-from enn_traffic.io import GZIP_RATIO, check_input_file, max_input_bytes, write_atomic
+from enn_traffic.io import check_input_file, inflation_problem, max_input_bytes, write_atomic
 from enn_traffic.neural import Layout, NetworkSpec
 from enn_traffic.scenario import RingConfig, Scenario
 
@@ -146,8 +146,7 @@ class Controller:
                 raise InputError(f"ring {index}: beams {ring[0]:g} is not a whole number",
                                  path, "rings")
             try:
-                RingConfig.model_validate({**dict(zip(RingConfig.model_fields, ring,
-                                                      strict=True)), "beams": int(ring[0])})
+                RingConfig.model_validate(_ring_settings(ring))
             except ValidationError as exc:
                 first = exc.errors()[0]
                 raise InputError(f"ring {index}: {first['loc'][0]}: {first['msg']}", path,
@@ -187,8 +186,7 @@ class Controller:
                     "steering_gain_deg": self.steering_gain_deg,
                 },
                 sensor={"span_deg": self.span_deg, "range": self.range,
-                        "rings": [{**dict(zip(RingConfig.model_fields, ring, strict=True)),
-                                   "beams": int(ring[0])} for ring in self.rings]},
+                        "rings": [_ring_settings(ring) for ring in self.rings]},
                 **spin,
             )
         except InputError as exc:  # a value of the controller's, not of the scenario file
@@ -205,6 +203,12 @@ CONTROLLER_FIELDS = {"network.hidden": "layer_sizes", "network.layout": "layout"
                      "episode.spin_variance": "spin_variance", "sensor.rings": "rings"}
 
 
+def _ring_settings(ring: tuple[float, ...]) -> dict:
+    """A saved ring (its :class:`~enn_traffic.scenario.RingConfig` fields in order) as the
+    scenario's ``[[sensor.rings]]`` settings."""
+    return {**dict(zip(RingConfig.model_fields, ring, strict=True)), "beams": int(ring[0])}
+
+
 def _number(data, path: Path, key: str, whole: bool = False) -> float:
     """The single number ``key`` of a controller file: a real number (an integer where
     ``whole``), never text, a boolean or an array."""
@@ -217,8 +221,8 @@ def _number(data, path: Path, key: str, whole: bool = False) -> float:
 
 
 def _check_members(path: Path) -> None:
-    """Refuse a controller archive whose arrays would inflate past the input limit, or more
-    than :data:`~enn_traffic.io.GZIP_RATIO` times (a compressed bomb), before any is read."""
+    """Refuse a controller archive whose arrays would inflate as
+    :func:`~enn_traffic.io.inflation_problem` refuses (a compressed bomb), before any is read."""
     import zipfile
 
     try:
@@ -231,10 +235,9 @@ def _check_members(path: Path) -> None:
         return
     limit = max_input_bytes()
     for member in members:
-        if member.file_size > limit or (member.file_size > 64 * 2**20 and member.file_size
-                                        > GZIP_RATIO * max(member.compress_size, 1)):
-            raise InputError(f"{member.filename} would inflate to {member.file_size:,} bytes "
-                             f"from {member.compress_size:,}: not a controller", path,
+        problem = inflation_problem(member.file_size, member.compress_size, limit)
+        if problem:
+            raise InputError(f"{member.filename} {problem}: not a controller", path,
                              member.filename.removesuffix(".npy"))
 
 

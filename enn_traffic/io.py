@@ -71,27 +71,36 @@ def check_input_file(path: str | Path, what: str = "file", source: str | Path | 
                          f"{limit / 2**20:,.0f} MB an input may be ({MAX_INPUT_MB_VARIABLE})"
                          f"{named}", *where)
     if path.name.endswith(".gz"):
-        problem = _gzip_problem(path, limit, status.st_ino, status.st_size, status.st_mtime_ns)
+        problem = gzip_problem(path, limit, status.st_ino, status.st_size, status.st_mtime_ns)
         if problem:
             raise InputError(f"{what} {problem}{named}", *where)
 
 
-@functools.lru_cache(maxsize=64)
-def _gzip_problem(path: Path, limit: int, *stamp: int) -> str | None:
-    """Why the gzip file ``path`` may not be read (None if it may), by inflating it up to
-    ``limit`` bytes (once per process while the file is unchanged)."""
-    size = stamp[1]
+def inflation_problem(inflated: int, packed: int, limit: int) -> str | None:
+    """Why data of ``packed`` bytes that inflates to ``inflated`` may not be read: past the
+    input limit, or more than ``GZIP_RATIO`` times past 64 MB (a compressed bomb)."""
+    if inflated > limit:
+        return (f"inflates past the {limit / 2**20:,.0f} MB an input may be "
+                f"({MAX_INPUT_MB_VARIABLE})")
+    if inflated > 64 * 2**20 and inflated > GZIP_RATIO * max(packed, 1):
+        return (f"inflates more than {GZIP_RATIO} times ({packed:,} bytes to over "
+                f"{inflated:,}): a compressed bomb")
+    return None
+
+
+@functools.lru_cache(maxsize=256)
+def gzip_problem(path: Path, limit: int, *stamp: int) -> str | None:
+    """Why the gzip file ``path`` (of stamp ``(inode, size, ...)``) may not be read, or None:
+    not whole (cut short, a CRC that fails), or inflating as :func:`inflation_problem`
+    refuses; by inflating it up to ``limit`` bytes, once per process while it is unchanged."""
     inflated = 0
     try:
         with gzip.open(path, "rb") as handle:
             for block in iter(lambda: handle.read(1 << 20), b""):
                 inflated += len(block)
-                if inflated > limit:
-                    return (f"inflates past the {limit / 2**20:,.0f} MB an input may be "
-                            f"({MAX_INPUT_MB_VARIABLE})")
-                if inflated > 64 * 2**20 and inflated > GZIP_RATIO * size:
-                    return (f"inflates more than {GZIP_RATIO} times ({size:,} bytes to over "
-                            f"{inflated:,}): not a SUMO file but a compressed bomb")
+                problem = inflation_problem(inflated, stamp[1], limit)
+                if problem:
+                    return problem
     except (OSError, EOFError, zlib.error) as exc:
         return f"is not a whole gzip file ({exc})"
     return None
@@ -165,7 +174,7 @@ def check_not_source(written: Path, source: str | Path | None) -> None:
     """Refuse a command whose own copy of its scenario, ``written`` (in its output folder),
     is the scenario file ``source`` it reads: it would write over the user's file, even with
     ``--force`` (docs/design.md, "Reliability")."""
-    if source is not None and written.exists() and written.resolve() == Path(source).resolve():
+    if source is not None and _same_file(written, source):
         raise InputError(f"is the scenario's own folder: the command would write its copy of "
                          f"the scenario over {written.name}; give another --out",
                          written.parent, "--out")
@@ -174,13 +183,17 @@ def check_not_source(written: Path, source: str | Path | None) -> None:
 def check_not_input(written: str | Path, inputs: list, key: str = "--out") -> None:
     """Refuse an output path that is one of the files the command reads (a scenario named
     ``.png`` given as ``render``'s ``--out``): writing it would replace the user's file."""
-    written = Path(written)
-    if not written.exists():
-        return
-    for source in inputs:
-        if Path(source).exists() and written.resolve() == Path(source).resolve():
-            raise InputError("is a file the command reads: writing it would replace it; give "
-                             "another file", written, key)
+    if any(_same_file(written, source) for source in inputs):
+        raise InputError("is a file the command reads: writing it would replace it; give "
+                         "another file", written, key)
+
+
+def _same_file(one: str | Path, other: str | Path) -> bool:
+    """Do both paths exist and name the same file (through links too)?"""
+    try:
+        return os.path.samefile(one, other)
+    except OSError:
+        return False
 
 
 def check_output_folder(path: str | Path, key: str | None = "--out") -> None:

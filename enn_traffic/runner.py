@@ -109,16 +109,11 @@ def fingerprint(scenario: Scenario, others: Sequence[Scenario] = (),
     digest.update(sources_of(*deciders).encode())
     for one in (scenario, *others):
         digest.update(one.with_overrides(ga={"generations": 1}).to_toml().encode())
-        for path in input_files(one):
+        for path in read_files(one):
             digest.update(path.read_bytes() if path.is_file() else b"missing")
     if population is not None:
         digest.update(np.ascontiguousarray(population, dtype=np.float64).tobytes())
     return digest.hexdigest()[:16]
-
-
-def input_files(scenario: Scenario) -> list[Path]:
-    """The files a scenario reads (:func:`~enn_traffic.scenario.read_files`)."""
-    return read_files(scenario)
 
 
 def _fresh_state(scenario: Scenario, key: str, population: np.ndarray | None = None

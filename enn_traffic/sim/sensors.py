@@ -55,7 +55,13 @@ class WallGrid(NamedTuple):
         walls = np.ascontiguousarray(walls, dtype=np.float64).reshape(-1, 4)
         low = np.minimum(walls[:, :2], walls[:, 2:]).min(axis=0) - reach
         high = np.maximum(walls[:, :2], walls[:, 2:]).max(axis=0) + reach
-        nx, ny = np.ceil((high - low) / cell_size).astype(int)
+        nx, ny = (math.ceil(side / cell_size) for side in high - low)
+        if nx * ny > MAX_GRID_CELLS:  # refused before anything of its size is allocated
+            width, height = (high - low) / 1000
+            raise InputError(
+                f"its walls span {width:,.3g} km × {height:,.3g} km: the rangefinder's grid "
+                f"of {cell_size:g} m cells would need {nx * ny:,.3g} cells, more than "
+                f"{MAX_GRID_CELLS:,} (coordinates in metres, as SUMO's netconvert writes them?)")
         limit = reach + cell_size * math.sqrt(0.5)
         cells, members = [], []
         for chunk in _chunks_of_pairs(walls, low, cell_size, limit, nx, ny):
@@ -93,17 +99,6 @@ class WallGrid(NamedTuple):
         """:meth:`build`, kept on disk by the walls' bytes, ``reach`` and ``cell_size``
         (:mod:`enn_traffic.cache`)."""
         walls = np.ascontiguousarray(walls, dtype=np.float64).reshape(-1, 4)
-        if len(walls):
-            low = np.minimum(walls[:, :2], walls[:, 2:]).min(axis=0) - reach
-            high = np.maximum(walls[:, :2], walls[:, 2:]).max(axis=0) + reach
-            width, height = high - low
-            cells = math.ceil(width / cell_size) * math.ceil(height / cell_size)
-            if not cells <= MAX_GRID_CELLS:
-                raise InputError(
-                    f"its walls span {width / 1000:,.3g} km × {height / 1000:,.3g} km: the "
-                    f"rangefinder's grid of {cell_size:g} m cells would need {cells:,.3g} cells, "
-                    f"more than {MAX_GRID_CELLS:,} (coordinates in metres, as SUMO's "
-                    "netconvert writes them?)")
         key = cache.key_of(walls.tobytes(), repr(reach), repr(cell_size), GRID_VERSION)
 
         def build() -> dict[str, np.ndarray]:

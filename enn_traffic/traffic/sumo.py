@@ -37,7 +37,6 @@ import re
 import shutil
 import tempfile
 import xml.etree.ElementTree as ElementTree
-import zlib
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -48,7 +47,7 @@ from numba import njit
 from enn_traffic.cache import cache_folder, content_digest, file_stamp
 from enn_traffic.errors import InputError
 from enn_traffic.geometry import body_corners
-from enn_traffic.io import process_folder, sweep_process_folders
+from enn_traffic.io import gzip_problem, max_input_bytes, process_folder, sweep_process_folders
 from enn_traffic.progress import bar, console_into, slow_step
 from enn_traffic.roads.sumocfg import departure_span
 from enn_traffic.scenario import (
@@ -592,22 +591,11 @@ def kept_state(path: Path) -> bool:
         stamp = file_stamp(path)
     except OSError:
         return False
-    if _whole_gzip(path, *stamp):
+    if gzip_problem(path, max_input_bytes(), *stamp) is None:
         return True
     with contextlib.suppress(OSError):
         path.unlink()
     return False
-
-
-@functools.lru_cache(maxsize=256)
-def _whole_gzip(path: Path, *stamp: int) -> bool:
-    try:
-        with gzip.open(path, "rb") as handle:
-            while handle.read(1 << 20):
-                pass
-    except (OSError, EOFError, zlib.error):
-        return False
-    return True
 
 
 EMPTY_TL_STATE = re.compile(r'(<tlLogic\b[^>]*?) state=""')
