@@ -26,6 +26,7 @@ import json
 import math
 import os
 import pickle
+import re
 import subprocess
 import sys
 import tempfile
@@ -1060,6 +1061,44 @@ def bench_quick_bench() -> pd.DataFrame:
                           "speedup_vs_reference": np.nan}])
 
 
+def test_suite_bench() -> pd.DataFrame:
+    """The README's test command (``pytest``, its install not timed) in a fresh clone of the
+    project's git checkout, as a contributor meets it (issue 62): first with empty caches
+    (numba compiles every kernel, SUMO's warm-ups are simulated, pytest's cache is new), then
+    again in the same clone (warm). The clone's package is the one imported, by the tests and
+    by the commands they start. Needs the source checkout (an installed wheel has no tests)."""
+    from enn_traffic.errors import InputError
+
+    root = Path(__file__).resolve().parents[1]
+    if not (root / ".git").exists() or not (root / "tests").is_dir():
+        raise InputError("times the README's test command in a clone of the project's git "
+                         f"checkout; {root} is not one (an installed package has no tests)",
+                         key="test_suite")
+    rows = []
+    with tempfile.TemporaryDirectory(prefix="enn-bench-tests-") as folder:
+        clone = Path(folder) / "clone"
+        subprocess.run(["git", "clone", "--quiet", str(root), str(clone)], check=True)
+        env = {**os.environ, "ENN_TRAFFIC_CACHE": str(Path(folder) / "cache"),
+               "PYTHONPATH": str(clone)}
+        env.pop("NUMBA_CACHE_DIR", None)  # derived from the empty cache folder
+        for cache in ("empty caches: numba compiles, SUMO warms up", "warm: the same clone again"):
+            started = time.perf_counter()
+            done = subprocess.run([sys.executable, "-m", "pytest"], cwd=clone, env=env,
+                                  capture_output=True, text=True)
+            seconds = time.perf_counter() - started
+            last = (done.stdout.strip().splitlines() or [""])[-1]
+            if done.returncode != 0:
+                raise RuntimeError(f"pytest failed in the clone ({last})")
+            passed = re.search(r"(\d+) passed", last)
+            rows.append({"workload": "the README's test command: pytest (2 workers)",
+                         "implementation": cache, "threads": numba.get_num_threads(),
+                         "rows": int(passed.group(1)) if passed else np.nan,
+                         "seconds": seconds})
+    table = pd.DataFrame(rows)
+    table["speedup_vs_reference"] = np.nan
+    return table
+
+
 def workloads(quick: bool = False) -> dict[str, Callable[[], pd.DataFrame]]:
     """Every workload by the name ``bench --only`` takes, in the order the table shows them."""
     return {
@@ -1086,12 +1125,15 @@ def workloads(quick: bool = False) -> dict[str, Callable[[], pd.DataFrame]]:
         "crowd_ray": crowd_ray_bench,
         "reproduce_quick": reproduce_quick_bench,
         "bench_quick": bench_quick_bench,
+        "test_suite": test_suite_bench,
     }
 
 
 # Workloads that take minutes whatever the settings (a compile from an empty cache, a whole
 # reproduction): ``bench --quick`` runs them only when ``--only`` names them.
-LONG = ("first_run", "crowd_ray", "reproduce_quick", "bench_quick")
+LONG = ("first_run", "crowd_ray", "reproduce_quick", "bench_quick", "test_suite")
+# Workloads that need the project's git checkout, not only the package: run only when named.
+CHECKOUT = ("test_suite",)
 
 
 def table_text(table: pd.DataFrame) -> str:
@@ -1122,12 +1164,13 @@ def table_text(table: pd.DataFrame) -> str:
 
 
 def chosen_workloads(quick: bool = False, only: list[str] | None = None) -> list[str]:
-    """The workloads ``only`` names, or every one (with ``quick``, but the :data:`LONG`
-    ones), in the order the table shows them."""
+    """The workloads ``only`` names, or every one but the :data:`CHECKOUT` ones (with
+    ``quick``, but the :data:`LONG` ones too), in the order the table shows them."""
     names = list(workloads(quick))
     if only:
         return [name for name in names if name in only]
-    return [name for name in names if not (quick and name in LONG)]
+    return [name for name in names
+            if not (quick and name in LONG) and name not in CHECKOUT]
 
 
 def run_bench(quick: bool = False, only: list[str] | None = None) -> pd.DataFrame:

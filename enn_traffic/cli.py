@@ -225,7 +225,8 @@ def build_parser() -> argparse.ArgumentParser:
     bench.add_argument("--only", help="comma-separated workloads (default: all): first_run, "
                        "contention, fresh, network, sumo_step, navigation, arena, env, sb3, "
                        "sumo, recording, crowd_scale, city, lane_keeping, crowd_ray, "
-                       "reproduce_quick, bench_quick")
+                       "reproduce_quick, bench_quick, test_suite (the README's pytest in a "
+                       "clone of the git checkout, cold and warm: only when named)")
     return parser
 
 

@@ -116,6 +116,16 @@ def bench_quick(folder: Path) -> str:
                       f"| enn-traffic bench --quick | {row.rows} | {row.seconds:.0f} s |"])
 
 
+def test_suite(folder: Path) -> str:
+    """The README's ``pytest`` in a fresh clone, cold and warm (issue 62), from
+    ``test_suite_issue62.csv`` (:func:`enn_traffic.bench.test_suite_bench`)."""
+    table = pd.read_csv(folder / "test_suite_issue62.csv")
+    lines = ["| command | caches | tests passed | wall time |", "|---|---|---:|---:|"]
+    lines += [f"| pytest | {row.implementation} | {row.rows:,.0f} | {row.seconds:.0f} s "
+              f"({row.seconds / 60:.1f} min) |" for row in table.itertuples()]
+    return "\n".join(lines)
+
+
 def crowd_scale(folder: Path) -> str:
     """Learners in one city SUMO (issue 63), from ``crowd_scale_issue63.csv``
     (:func:`enn_traffic.bench.crowd_scale_bench`)."""
@@ -148,7 +158,8 @@ def crowd_ray(folder: Path) -> str:
 SECTIONS: generated.Sections = {"sumo_step": sumo_step, "published": published,
                                 "contention": contention, "first_run": first_run,
                                 "fresh": fresh, "reproduce_quick": reproduce_quick,
-                                "bench_quick": bench_quick, "crowd_scale": crowd_scale,
+                                "bench_quick": bench_quick, "test_suite": test_suite,
+                                "crowd_scale": crowd_scale,
                                 "crowd_ray": crowd_ray}
 
 

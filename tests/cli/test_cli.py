@@ -238,15 +238,16 @@ def test_bench_only_refuses_a_workload_it_does_not_have():
 
 
 def test_bench_help_lists_every_workload_and_quick_leaves_out_the_long_ones():
-    from enn_traffic.bench import LONG, chosen_workloads, workloads
+    from enn_traffic.bench import CHECKOUT, LONG, chosen_workloads, workloads
 
     result = cli("bench", "--help")
     listed = " ".join(result.stdout.split())
     assert all(name in listed for name in workloads()), listed
-    assert chosen_workloads() == list(workloads())
+    assert chosen_workloads() == [name for name in workloads() if name not in CHECKOUT]
+    assert "test_suite" in CHECKOUT and "test_suite" in workloads()
     assert chosen_workloads(quick=True) == [name for name in workloads() if name not in LONG]
-    assert chosen_workloads(quick=True, only=["reproduce_quick", "fresh"]) == [
-        "fresh", "reproduce_quick"]
+    assert chosen_workloads(quick=True, only=["reproduce_quick", "fresh", "test_suite"]) == [
+        "fresh", "reproduce_quick", "test_suite"]
 
 
 @pytest.mark.parametrize("preset, expected", [
