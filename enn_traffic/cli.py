@@ -260,10 +260,14 @@ def _cmd_run(args) -> int:
     from enn_traffic.evolution.backends import make_evaluator
     from enn_traffic.io import check_output_folder, check_unlocked
     from enn_traffic.progress import slow_step
-    from enn_traffic.runner import check_folder, evolve
+    from enn_traffic.runner import check_folder, check_folder_unread, evolve
     from enn_traffic.scenario import load_scenario
     from enn_traffic.shipped import scenario_path
 
+    if args.out:  # said before the scenario's network is read
+        check_output_folder(args.out)
+        check_unlocked(args.out)
+        check_folder_unread(args.out, resume=args.resume, force=args.force)
     scenario = load_scenario(scenario_path(args.scenario))
     overrides = {}
     if args.generations:
@@ -308,6 +312,11 @@ def _cmd_crowd(args) -> int:
     from enn_traffic.scenario import load_scenario
     from enn_traffic.shipped import scenario_path
 
+    if args.out:  # said before the scenario's network is read
+        check_output_folder(args.out)
+        check_unlocked(args.out)
+        check_folder(args.out, resume=args.resume, force=args.force,
+                     source=scenario_path(args.scenario).resolve())
     scenario = crowd_scenario(load_scenario(scenario_path(args.scenario)), args.learners,
                               args.quick)
     out = args.out or Path("results") / f"{scenario.name}_crowd"

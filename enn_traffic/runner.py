@@ -142,14 +142,35 @@ def _check_fresh_folder(scenario: Scenario, out: Path, force: bool) -> None:
     check_not_source(own, scenario.source)
     if force or not out.is_dir():
         return
+    _refuse_others(out, lambda path: path.name == own.name and path.is_file()
+                   and path.read_text(errors="replace") == scenario.to_toml())
+
+
+def _refuse_others(out: Path, own) -> None:
+    """Refuse a folder holding files that are neither :data:`RUN_OWN` nor ``own(path)``."""
     others = sorted(path.name for path in out.iterdir()
-                    if path.name not in RUN_OWN and not (
-                        path.name == own.name and path.is_file()
-                        and path.read_text(errors="replace") == scenario.to_toml()))
+                    if path.name not in RUN_OWN and not own(path))
     if others:
         shown = ", ".join(others[:3]) + (" …" if len(others) > 3 else "")
         raise InputError(f"holds files but no run to resume ({shown}); give an empty folder "
                          "or --force to write over them", out, "--out")
+
+
+def check_folder_unread(out: str | Path, resume: bool = False, force: bool = False) -> None:
+    """What :func:`check_folder` can tell without the scenario, asked before the scenario is
+    read (a city's network takes seconds): a run without ``--resume``, others' files."""
+    out = Path(out)
+    if force or not out.is_dir():
+        return
+    if (out / CHECKPOINT).exists():
+        if not resume:
+            raise InputError(ALREADY_A_RUN, out)
+        return
+    _refuse_others(out, lambda path: path.name == "scenario.toml")  # compared once read
+
+
+ALREADY_A_RUN = ("the folder already holds a run; pass --resume to continue it or --force to "
+                 "start over")
 
 
 def _open_state(scenario: Scenario, out: Path, resume: bool, force: bool,
@@ -164,9 +185,7 @@ def _open_state(scenario: Scenario, out: Path, resume: bool, force: bool,
             (logs / RUN_LOG).unlink(missing_ok=True)  # starting over: the old run's log too
         return _fresh_state(scenario, key, population)
     if not resume:
-        raise InputError(
-            "the folder already holds a run; pass --resume to continue it or --force to "
-            "start over", out)
+        raise InputError(ALREADY_A_RUN, out)
     state = ga.GAState.load(checkpoint)
     if state.fingerprint != key:
         made_by = state.extra.get("rules", "older")

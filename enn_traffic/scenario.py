@@ -13,6 +13,8 @@ import importlib.util
 import math
 import re
 import tomllib
+from collections.abc import Iterator
+from contextlib import contextmanager
 from pathlib import Path
 from typing import Annotated, Any, Literal
 
@@ -37,7 +39,7 @@ from enn_traffic.io import check_input_file
 from enn_traffic.kinds import STRATEGIES, SUMO
 from enn_traffic.neural import NetworkSpec
 from enn_traffic.roads.lanes import auto_lane
-from enn_traffic.roads.network import least_start_length
+from enn_traffic.roads.network import least_start_length, read_net
 from enn_traffic.roads.sumocfg import SumoConfig, check_included, read_sumocfg, with_includes
 
 PositiveFloat = Annotated[float, Field(gt=0)]
@@ -846,7 +848,8 @@ def _key_of(error: dict) -> tuple[str, str]:
     message's prefix: ``"track.net: required ..."`` of the whole scenario, ``"learning_s:
     must be ..."`` of a section (the section's key then)."""
     parts = [part for part in error["loc"] if part not in ("one", "several")]
-    key = "".join(f"[{part}]" if isinstance(part, int) else f".{part}" for part in parts)
+    key = "".join(f"[{part}]" if isinstance(part, int) else f'."{part}"' if "." in part
+                  else f".{part}" for part in parts)  # a quoted TOML key with a dot: one name
     key = key.removeprefix(".")
     message = error["msg"].removeprefix("Value error, ")
     prefix, _, rest = message.partition(": ")
@@ -855,7 +858,13 @@ def _key_of(error: dict) -> tuple[str, str]:
     return key or "(top level)", message
 
 
+QUOTED_DOT = " (a quoted key with a dot is one name; without the quotes each dot opens a table)"
+
+
 def _validate(data: dict, source: Path | None) -> Scenario:
+    quoted = [key for key in data if "." in key] if isinstance(data, dict) else []
+    if quoted:  # said before the missing [track] it hides
+        raise InputError("unknown key" + QUOTED_DOT, source, f'"{quoted[0]}"')
     tasks = [key for key in ("track", "lane_keeping")
              if isinstance(data, dict) and data.get(key) is not None]
     if isinstance(data, dict) and len(tasks) != 1:
@@ -870,6 +879,8 @@ def _validate(data: dict, source: Path | None) -> Scenario:
         key, message = _key_of(first)
         if first["type"] == "extra_forbidden":
             message = "unknown key"
+            if '"' in key:
+                message += QUOTED_DOT
         elif first["type"] == "missing":
             message = "required key is missing"
         extra = f" (and {exc.error_count() - 1} more problems)" if exc.error_count() > 1 else ""
@@ -1009,6 +1020,9 @@ def _with_files(scenario: Scenario, path: Path) -> Scenario:
     traffic = scenario.traffic
     for index, route in enumerate(traffic.routes):
         check_input_file(route, "route file", path, f"traffic.routes[{index}]")
+        if "," in route.name:  # a comma in a folder's name is passed through a link
+            raise InputError(f"SUMO splits a list of files at commas, so it cannot read "
+                             f"{route.name!r}; rename the file", path, f"traffic.routes[{index}]")
     if traffic.sumocfg is not None:
         check_input_file(traffic.sumocfg, "SUMO configuration", path, "traffic.sumocfg")
         scenario = _with_sumocfg(scenario, path)
@@ -1023,12 +1037,28 @@ def _with_files(scenario: Scenario, path: Path) -> Scenario:
 AUTO = "auto"  # [track] start_lane = "auto"
 
 
+@contextmanager
+def network_named(scenario: Scenario, key: str = "track.net") -> Iterator[None]:
+    """An unreadable network said as the scenario file's ``key`` that names it (the network's
+    own file in the message), not as a file the user may not know the scenario reads."""
+    try:
+        yield
+    except InputError as exc:
+        net = scenario.track.net if isinstance(scenario.track, TrackConfig) else None
+        if (exc.key is None and exc.file is not None and net is not None
+                and scenario.source is not None and Path(exc.file).resolve() == net.resolve()):
+            raise InputError(f"{exc.file}: {exc.message}", scenario.source, key) from None
+        raise
+
+
 def _with_auto_lane(scenario: Scenario, path: Path) -> Scenario:
     """``start_lane = "auto"`` made the lane it stands for (enn_traffic.roads.lanes)."""
     track = scenario.track
     length = least_start_length(track.start_offset, scenario.vehicle.length)
     config = sumo_config(scenario)
     additional = config.additional_files if config is not None else ()
+    with network_named(scenario):
+        read_net(track.net)  # read once per process: auto_lane reads it from memory
     try:
         lane = auto_lane(track.net, route_files(scenario), length, additional)
     except InputError as exc:

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 from enn_traffic.kinds import Registry
 from enn_traffic.roads import Track
-from enn_traffic.scenario import Scenario
+from enn_traffic.scenario import Scenario, network_named
 from enn_traffic.sim.world import World
 
 # Each world kind's class, imported when first made (an arena run does not load SUMO). A
@@ -31,4 +31,5 @@ def make_world(scenario: Scenario, track: Track | None = None) -> World:
             raise ValueError("a track may be given only for a single-track scenario")
         return WORLDS[kind](scenario, [make_world(scenario.on_track(index))
                                        for index in range(len(scenario.track))])
-    return WORLDS[kind](scenario, track)
+    with network_named(scenario):
+        return WORLDS[kind](scenario, track)

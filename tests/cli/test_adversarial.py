@@ -36,6 +36,7 @@ from enn_traffic.io import MAX_INPUT_MB_VARIABLE, file_lock
 ROOT = Path(__file__).resolve().parents[2]
 SCENARIOS = ROOT / "scenarios"
 NARROW = SCENARIOS / "navigation_narrow.toml"
+NARROW_NET = ROOT / "sumo_nets" / "track_narrow.net.xml"
 BEST = ROOT / "results/paper/controllers/table1/strategy1.npz"
 
 
@@ -607,6 +608,70 @@ def test_files_that_include_each_other_are_refused_before_sumo_crashes(capsys, t
         "</input>", '<additional-files value="a.add.xml"/></input>'))
     message = refusal(capsys, ["run", scenario, "--out", tmp_path / "out"], "a.add.xml")
     assert "includes" in message
+
+
+# --- said against the wrong key, or too late ----------------------------------------------
+
+def test_a_route_file_whose_own_name_holds_a_comma_is_refused_naming_it(capsys, tmp_path,
+                                                                        monkeypatch, road_net):
+    """SUMO splits a list of files at commas, so it failed at its start (a folder so named
+    is passed through a link: tests/traffic/test_sumo_scenarios.py)."""
+    monkeypatch.chdir(tmp_path)
+    scenario = _road(tmp_path, road_net)
+    (tmp_path / "more,buses.rou.xml").write_text("<routes/>")
+    scenario.write_text(scenario.read_text().replace(
+        'sumocfg = "road.sumocfg"', 'sumocfg = "road.sumocfg"\nroutes = ["more,buses.rou.xml"]'))
+    message = refusal(capsys, ["run", scenario, "--out", tmp_path / "out"], scenario.name,
+                      "traffic.routes[0]")
+    assert "more,buses.rou.xml" in message and "comma" in message
+
+
+@pytest.mark.parametrize(("body", "key"), [
+    ('name = "x"\n"track.net" = "a.net.xml"\n', '"track.net"'),
+    ('name = "x"\n[track]\n"start.lane" = "a"\nstart_anywhere = true\n', 'track."start.lane"'),
+])
+def test_a_quoted_key_with_a_dot_is_named_as_written(capsys, tmp_path, monkeypatch, body, key):
+    """A quoted TOML key with a dot is one name: it was said as the dotted key it is not."""
+    monkeypatch.chdir(tmp_path)
+    path = tmp_path / "quoted.toml"
+    path.write_text(body.replace("[track]\n", f"[track]\nnet = {str(NARROW_NET)!r}\n"))
+    message = refusal(capsys, ["run", path, "--out", tmp_path / "out"], path.name, key)
+    assert "unknown key" in message and "quoted" in message
+
+
+@pytest.mark.parametrize("start", ["start_anywhere = true", 'start_lane = "auto"'])
+@pytest.mark.parametrize("command", ["run", "evaluate"])
+def test_an_unreadable_network_is_said_as_the_key_that_names_it(capsys, tmp_path, monkeypatch,
+                                                                start, command):
+    """The network's own read error named the network file alone, or ``track.start_lane``."""
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "broken.net.xml").write_text('<net version="1.9"><edge id="a">')
+    path = tmp_path / "broken.toml"
+    path.write_text(f'name = "broken"\n[track]\nnet = "broken.net.xml"\n{start}\n')
+    argv = {"run": ["run", path, "--out", tmp_path / "out"],
+            "evaluate": ["evaluate", BEST, path, "--quiet"]}[command]  # no bar before it
+    message = refusal(capsys, argv, path.name, "track.net")
+    assert "broken.net.xml" in message and "not a readable SUMO network" in message
+
+
+@pytest.mark.parametrize("command", ["run", "crowd"])
+@pytest.mark.parametrize("held", ["the user's files", "a run, without --resume"])
+def test_a_refused_out_folder_is_said_before_the_network_is_read(capsys, tmp_path, monkeypatch,
+                                                                  command, held):
+    """A refused ``--out`` waited for the network's read (11–15 s on a city): with a network
+    that cannot be read, the folder is what the refusal names."""
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "broken.net.xml").write_text('<net version="1.9"><edge id="a">')
+    path = tmp_path / "broken.toml"
+    path.write_text('name = "broken"\n[track]\nnet = "broken.net.xml"\nstart_lane = "auto"\n')
+    out = tmp_path / "out"
+    out.mkdir()
+    (out / ("notes.txt" if held == "the user's files" else
+            {"run": "checkpoint.npz", "crowd": "crowd.toml"}[command])).write_text("mine")
+    message = refusal(capsys, [command, path, "--out", out], out.name)
+    assert "network" not in message
+    assert (out / ("notes.txt" if held == "the user's files" else
+                   {"run": "checkpoint.npz", "crowd": "crowd.toml"}[command])).read_text() == "mine"
 
 
 def test_the_corpus_holds_at_least_350_cases():
