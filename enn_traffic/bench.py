@@ -1083,12 +1083,14 @@ def test_suite_bench() -> pd.DataFrame:
         env.pop("NUMBA_CACHE_DIR", None)  # derived from the empty cache folder
         for cache in ("empty caches: numba compiles, SUMO warms up", "warm: the same clone again"):
             started = time.perf_counter()
-            done = subprocess.run([sys.executable, "-m", "pytest"], cwd=clone, env=env,
+            done = subprocess.run([sys.executable, "-m", "pytest", "-rf"], cwd=clone, env=env,
                                   capture_output=True, text=True)
             seconds = time.perf_counter() - started
-            last = (done.stdout.strip().splitlines() or [""])[-1]
+            lines = done.stdout.strip().splitlines() or [""]
+            last = lines[-1]
             if done.returncode != 0:
-                raise RuntimeError(f"pytest failed in the clone ({last})")
+                failed = "\n".join(line for line in lines if line.startswith("FAILED"))
+                raise RuntimeError(f"pytest failed in the clone ({last}):\n{failed}")
             passed = re.search(r"(\d+) passed", last)
             rows.append({"workload": "the README's test command: pytest (2 workers)",
                          "implementation": cache, "threads": numba.get_num_threads(),
