@@ -19,6 +19,8 @@ in one compiled call (:mod:`enn_traffic.envs.batch`), autoresetting in the same 
 
 from __future__ import annotations
 
+import math
+
 import warnings
 from pathlib import Path
 
@@ -260,10 +262,21 @@ class RangefinderVectorEnv(VectorEnv):
                 ended & ~terminated, infos)
 
     def render(self):
-        if self.render_mode == "rgb_array":
-            w = self.batch.worlds
-            return picture(self.world, w.corners[0], w.pose[0], w.observation[:1])
-        return None
+        """The first :data:`RENDERED_WORLDS` worlds (or all, when fewer) as one RGB image:
+        a grid of tiles, world 0 top left, row by row (blank tiles fill the last row)."""
+        if self.render_mode != "rgb_array":
+            return None
+        w = self.batch.worlds
+        tiles = [picture(self.world, w.corners[i], w.pose[i], w.observation[i:i + 1])
+                 for i in range(min(self.num_envs, RENDERED_WORLDS))]
+        columns = math.ceil(math.sqrt(len(tiles)))
+        tiles += [np.full_like(tiles[0], 255)] * (-len(tiles) % columns)
+        rows = [np.concatenate(tiles[r:r + columns], axis=1)
+                for r in range(0, len(tiles), columns)]
+        return np.concatenate(rows, axis=0)
+
+
+RENDERED_WORLDS = 16  # a vector environment's render(): its first worlds, as a grid
 
 
 def picture(world: ArenaWorld, corners: np.ndarray, pose: np.ndarray,

@@ -176,3 +176,26 @@ def test_a_render_mode_the_env_does_not_have_is_an_error():
         make_vector_env("navigation_narrow", num_envs=2, render_mode="human")
     with pytest.raises(ValueError, match="render_mode='human'"):
         parallel_env("arena_strategy1", learners=2, render_mode="human")
+
+
+def test_the_vector_env_renders_its_first_worlds_as_a_grid():
+    """Issue 65: render() drew world 0 alone. Five worlds: a grid of 3 columns, 2 rows, each
+    tile the world's own picture (its own traffic, not world 0's), a blank sixth."""
+    from enn_traffic.envs.rangefinder import RENDERED_WORLDS, picture
+
+    vector = make_vector_env("arena_strategy1", num_envs=5, render_mode="rgb_array")
+    vector.reset(options={"keys": [keys.VALIDATION.start + k for k in range(5)]})
+    vector.step(np.zeros((5, 2), np.float32))
+    image = vector.render()
+    w = vector.batch.worlds
+    tiles = [picture(vector.world, w.corners[i], w.pose[i], w.observation[i:i + 1])
+             for i in range(5)]
+    height, width, _ = tiles[0].shape
+    assert image.shape == (2 * height, 3 * width, 3)
+    for i, tile in enumerate(tiles):
+        row, column = divmod(i, 3)
+        np.testing.assert_array_equal(
+            image[row * height:(row + 1) * height, column * width:(column + 1) * width], tile)
+    assert not np.array_equal(tiles[0], tiles[1])
+    assert (image[height:, 2 * width:] == 255).all()
+    assert RENDERED_WORLDS == 16
