@@ -1,30 +1,32 @@
 """The paper's GA against gradient RL (PPO and SAC, Stable-Baselines3) at equal learner-steps
-(docs/results.md, "The GA against gradient RL"; issue 52).
+(docs/results.md, "The GA against gradient RL"; issues 52 and 65).
 
 The protocol, the same for every method:
 
-- it learns on training keys: the GA on its scenario's own settings (the paper's, §4), PPO and
-  SAC on :class:`~enn_traffic.envs.rangefinder.RangefinderVectorEnv` through
-  :func:`~enn_traffic.envs.sb3.sb3_vec_env`, with ``VecNormalize`` on the observations;
-  PPO and SAC draw each life from a pool of :data:`TRAINING_POOL_KEYS` training keys, as
-  the GA meets a new key each generation;
+- its settings come from a search of twelve on validation keys (:data:`SEARCH`: the GA's
+  mutation and population around the scenario's own, the paper's; PPO and SAC around RL Zoo's
+  settings for BipedalWalker-v3, a continuous-control task read through rangefinders, their
+  exploration included), one run each at :data:`SEARCH_BUDGET`; each scenario takes the
+  setting whose run scored best on validation;
+- it learns on training keys: the GA meets a new key each generation, PPO and SAC on
+  :class:`~enn_traffic.envs.rangefinder.RangefinderVectorEnv` through
+  :func:`~enn_traffic.envs.sb3.sb3_vec_env`, with ``VecNormalize`` on the observations, draw
+  each life from a pool of :data:`TRAINING_POOL_KEYS` training keys; every run has its own
+  random stream (:func:`run_seed`: a longer run is no continuation of a shorter one);
 - its controllers along the way, one at every ``budget / CHECKPOINTS`` learner-steps and one
   at the end (the GA: the best of the generation that reached it, by training fitness, one a
   generation at most; PPO and SAC: the policy then, acting on its mean), are scored on
-  validation situations, and the best there is the run's controller, saved in
-  ``controllers/``;
-- that controller alone is scored on test situations sealed for this comparison
-  (:data:`TEST_KEY`), read once, by the final configuration.
+  :data:`VALIDATION_SITUATIONS` validation situations, and the best there is the run's
+  controller, saved in ``controllers/``;
+- that controller alone is scored on :data:`TEST_SITUATIONS` test situations sealed for this
+  comparison (:data:`TEST_KEY`), read once, by the final configuration.
 
 Validation and test situations are the scenario's own, except on a track without traffic
 that starts at one pose (the narrow track, §5.1): there they start anywhere on the same track
-(:func:`scoring_scenario`), so that its 64 test situations differ.
-
-PPO's and SAC's settings come from a search on validation keys (:data:`SEARCH`, starting at RL
-Zoo's settings for BipedalWalker-v3, a continuous-control task read through rangefinders):
-each scenario takes the setting whose run scored best on validation. A run is one (scenario,
-method, budget, seed); it is written to ``comparison.csv`` as soon as it ends and skipped when
-already there, so the same command continues an interrupted comparison.
+(:func:`scoring_scenario`), every situation at a start of its own, none of the test starts a
+validation start (:func:`held_out_keys`). A run is one (scenario, method, budget, seed); it is
+written to ``comparison.csv`` as soon as it ends and skipped when already there, so the same
+command continues an interrupted comparison.
 """
 
 from __future__ import annotations
@@ -57,12 +59,16 @@ from enn_traffic.sim.world import SituationResults
 
 METHODS = ("GA", "PPO", "SAC")
 # Keys of this comparison alone, never read by anything else (enn_traffic.keys). Its first
-# round read the test keys from FIRST_ROUND_TEST_KEY on; this, the second, reads fresh ones.
+# two rounds read the test keys from FIRST_ROUND_TEST_KEY and SECOND_ROUND_TEST_KEY on; this,
+# the third (issue 65), reads fresh ones, and no start of its validation situations is a
+# start of its test situations (DISTINCT_STARTS).
 FIRST_ROUND_TEST_KEY = keys.TEST.start + 520_000
-VALIDATION_KEY = keys.VALIDATION.start + 530_000
-TEST_KEY = keys.TEST.start + 530_000
-VALIDATION_SITUATIONS = 32
-TEST_SITUATIONS = 64
+SECOND_ROUND_TEST_KEY = keys.TEST.start + 530_000
+VALIDATION_KEY = keys.VALIDATION.start + 540_000
+TEST_KEY = keys.TEST.start + 540_000
+VALIDATION_SITUATIONS = 128
+TEST_SITUATIONS = 256
+DISTINCT_STARTS = True
 CHECKPOINTS = 20  # candidates along a run, every method alike (and one at its end)
 TRAINING_POOL_KEYS = 4096  # PPO's and SAC's training keys: 16,384 arena situations
 TUNING_SEED = 0  # the search's runs; the comparison's seeds are 1, 2, ...
@@ -77,9 +83,11 @@ class Planned:
     seeds: int
 
 
-# Issue 52: every method at about 1 M learner-steps, then the GA at 20 M and PPO at 5 M.
-PLAN = (Planned("GA", 1_000_000, 5), Planned("PPO", 1_000_000, 5), Planned("SAC", 1_000_000, 3),
-        Planned("GA", 20_000_000, 5), Planned("PPO", 5_000_000, 3))
+# Issue 65: ten independent seeds of every method at 1 M learner-steps, five of the GA and PPO
+# at 5 M (their own seeds: :func:`run_seed`).
+PLAN = (Planned("GA", 1_000_000, 10), Planned("PPO", 1_000_000, 10),
+        Planned("SAC", 1_000_000, 10), Planned("GA", 5_000_000, 5),
+        Planned("PPO", 5_000_000, 5))
 
 # RL Zoo's BipedalWalker-v3 settings (rl-baselines3-zoo, hyperparams/ppo.yml and sac.yml: a
 # continuous-control task read through rangefinders) as the search's start. Two changes make
@@ -89,21 +97,38 @@ PLAN = (Planned("GA", 1_000_000, 5), Planned("PPO", 1_000_000, 5), Planned("SAC"
 # SAC takes one per 32 (32 worlds, one step per vector step) on a 256-256 network.
 ZOO_PPO = {"n_envs": 32, "n_steps": 2048, "batch_size": 1024, "n_epochs": 10, "gamma": 0.999,
            "gae_lambda": 0.95, "clip_range": 0.18, "ent_coef": 0.0, "learning_rate": 3e-4,
-           "norm_reward": True}
+           "norm_reward": True, "log_std_init": 0.0}
 ZOO_SAC = {"n_envs": 32, "learning_rate": 7.3e-4, "buffer_size": 300_000, "batch_size": 256,
            "gamma": 0.98, "tau": 0.02, "train_freq": 1, "gradient_steps": 1,
            "learning_starts": 10_000, "use_sde": True, "log_std_init": -3.0,
-           "net_arch": [256, 256], "norm_reward": False}
-# The search: the start and its variations, one run each on validation keys at TUNING_BUDGET.
+           "net_arch": [256, 256], "norm_reward": False, "target_entropy": "auto"}
+
+
+def _grid(start: dict, name: Callable[..., str], **axes: tuple) -> dict[str, dict]:
+    """Every combination of ``axes`` (key: values) over ``start``, named by ``name``."""
+    import itertools
+
+    return {name(**dict(zip(axes, values, strict=True))):
+            start | dict(zip(axes, values, strict=True))
+            for values in itertools.product(*axes.values())}
+
+
+# The search (issue 65): twelve settings of every method, exploration among the axes (the
+# GA's mutation, PPO's initial log-std, SAC's target entropy), one run each on validation
+# keys at SEARCH_BUDGET. The GA's start is the scenario's own [ga] (the paper's).
 SEARCH = {
-    "PPO": {"zoo": ZOO_PPO,
-            "zoo, gamma 0.99": ZOO_PPO | {"gamma": 0.99},
-            "short rollouts": ZOO_PPO | {"n_steps": 256},
-            "short rollouts, gamma 0.99": ZOO_PPO | {"n_steps": 256, "gamma": 0.99}},
-    "SAC": {"zoo": ZOO_SAC,
-            "zoo, gamma 0.999": ZOO_SAC | {"gamma": 0.999}},
+    "GA": _grid({}, lambda mutation_probability, population_size:
+                f"mutation {mutation_probability:g}, P {population_size}",
+                mutation_probability=(0.02, 0.05, 0.1, 0.2), population_size=(50, 200, 800)),
+    "PPO": _grid(ZOO_PPO, lambda log_std_init, gamma, n_steps:
+                 f"log-std {log_std_init:g}, gamma {gamma:g}, rollouts {n_steps}",
+                 log_std_init=(0.0, -1.0, -2.0), gamma=(0.99, 0.999), n_steps=(256, 2048)),
+    "SAC": _grid(ZOO_SAC, lambda target_entropy, gamma, use_sde:
+                 f"target entropy {target_entropy:g}, gamma {gamma:g}"
+                 f"{', gSDE' if use_sde else ''}",
+                 target_entropy=(-4.0, -2.0, -0.5), gamma=(0.98, 0.999), use_sde=(True, False)),
 }
-TUNING_BUDGET = {"PPO": 300_000, "SAC": 300_000}
+SEARCH_BUDGET = 300_000  # learner-steps of each search run, every method alike
 
 
 @dataclass(frozen=True)
@@ -139,32 +164,72 @@ def scoring_scenario(scenario: Scenario) -> Scenario:
                                           "start_edge": None, "start_anywhere": True})
 
 
-def situation_keys(scenario: Scenario, first_key: int, count: int) -> list[int]:
-    """The keys, from ``first_key`` on, whose situations (in order) hold ``count``."""
-    per_key = len(rangefinder_world(scenario).situations(first_key))
-    return list(range(first_key, first_key + -(-count // per_key)))
+def situation_keys(scenario: Scenario, first_key: int, count: int, distinct: bool = False,
+                   avoid: frozenset = frozenset()) -> list[int]:
+    """The keys, from ``first_key`` on, whose situations (in order) hold ``count``. With
+    ``distinct``, in a world that draws each situation's start from several, only keys whose
+    starts are all new (to the keys before and to ``avoid``, a set of :func:`start_of`)."""
+    world = rangefinder_world(scenario)
+    per_key = len(world.situations(first_key))
+    if not distinct or len(world.starts) == 1:
+        return list(range(first_key, first_key + -(-count // per_key)))
+    chosen, seen, key = [], set(avoid), first_key
+    while len(chosen) * per_key < count:
+        starts = [start_of(situation) for situation in world.situations(key)]
+        if seen.isdisjoint(starts) and len(set(starts)) == len(starts):
+            chosen.append(key)
+            seen.update(starts)
+        key += 1
+        if key - first_key > 1000 * count:
+            raise ValueError(f"{scenario.name}: too few starts for {count} situations that "
+                             "share none")
+    return chosen
 
 
-def chromosome_fitness(scenario: Scenario, chromosomes: np.ndarray, first_key: int,
+def start_of(situation) -> tuple[float, float, float]:
+    """The learner's start pose of a situation, rounded to the millimetre."""
+    return tuple(np.round(situation.start[0], 3))
+
+
+def held_out_keys(scenario: Scenario, protocol: dict | None = None
+                  ) -> tuple[list[int], list[int]]:
+    """The validation and the test keys of ``scenario``'s :func:`scoring_scenario` under
+    ``protocol`` (:func:`protocol`, this round's by default): with distinct starts, the
+    test keys avoid every validation start, and no start repeats within either."""
+    protocol = protocol or globals()["protocol"]()
+    scenario = scoring_scenario(scenario)
+    distinct = bool(protocol.get("distinct_starts", False))
+    validation = situation_keys(scenario, protocol["validation_key"],
+                                protocol["validation_situations"], distinct)
+    world = rangefinder_world(scenario)
+    taken = frozenset(start_of(situation) for key in validation
+                      for situation in world.situations(key)) if distinct else frozenset()
+    test = situation_keys(scenario, protocol["test_key"], protocol["test_situations"],
+                          distinct, taken)
+    return validation, test
+
+
+def chromosome_fitness(scenario: Scenario, chromosomes: np.ndarray, chosen_keys: list[int],
                        count: int) -> np.ndarray:
     """(C, count): each GA controller's fitness (steps lived, 0 for a spin) per situation of
-    :func:`scoring_scenario`."""
+    ``chosen_keys`` (in order, the first ``count``) of :func:`scoring_scenario`."""
     scenario = scoring_scenario(scenario)
     world = rangefinder_world(scenario)
     columns = []
-    for key in situation_keys(scenario, first_key, count):
+    for key in chosen_keys:
         results = world.evaluate(chromosomes, key)
         columns.append(SituationResults.lifetime_fitness(results.steps, results.outcome))
     return np.concatenate(columns, axis=1)[:, :count]
 
 
 def policy_fitness(scenario: Scenario, act: Callable[[np.ndarray], np.ndarray],
-                   first_key: int, count: int) -> np.ndarray:
-    """(count,): a policy's fitness per situation of :func:`scoring_scenario`, each driven
-    once through the vector environment (``act``: observations (N, B) → actions (N, 2))."""
+                   chosen_keys: list[int], count: int) -> np.ndarray:
+    """(count,): a policy's fitness per situation of ``chosen_keys`` (in order, the first
+    ``count``) of :func:`scoring_scenario`, each driven once through the vector environment
+    (``act``: observations (N, B) → actions (N, 2))."""
     scenario = scoring_scenario(scenario)
     env = RangefinderVectorEnv(scenario, count)
-    observation, _ = env.reset(options={"keys": situation_keys(scenario, first_key, count)})
+    observation, _ = env.reset(options={"keys": list(chosen_keys)})
     fitness = np.full(count, np.nan)
     while np.isnan(fitness).any():
         observation, _, terminated, truncated, info = env.step(act(observation))
@@ -175,15 +240,30 @@ def policy_fitness(scenario: Scenario, act: Callable[[np.ndarray], np.ndarray],
 
 # --- the GA ---------------------------------------------------------------------------------
 
-def ga_run(scenario: Scenario, budget: int, seed: int, test: bool = True) -> RunResult:
+def run_seed(seed: int, budget: int) -> np.random.SeedSequence:
+    """A run's own random stream: from its seed and its budget, so that a run at 5 M steps is
+    no continuation of the same seed's run at 1 M (issue 65)."""
+    return np.random.SeedSequence([seed, budget])
+
+
+def ga_run(scenario: Scenario, budget: int, seed: int, test: bool = True,
+           settings: dict | None = None) -> RunResult:
     """The scenario's GA, seeded by ``seed``, until ``budget`` learner-steps are simulated;
     a generation's champion is a candidate while the steps so far have passed more
     checkpoints than there are candidates (one a generation at most: after a generation that
     spans several checkpoints, the next ones are candidates too), and the last generation's;
-    the candidates are scored on validation, the best of them on test."""
+    the candidates are scored on validation, the best of them on test. ``settings``: the
+    scenario's ``[ga]`` keys to override (:data:`SEARCH`); another population size keeps the
+    scenario's share of elites."""
+    if settings:
+        ga_settings = scenario.ga
+        if "population_size" in settings and "elite_count" not in settings:
+            share = ga_settings.elite_count / ga_settings.population_size
+            settings = settings | {"elite_count": round(share * settings["population_size"])}
+        scenario = scenario.with_overrides(ga=settings)
     world = rangefinder_world(scenario)
     params = ga_params(scenario)
-    rng = np.random.default_rng([scenario.seed, seed])
+    rng = np.random.default_rng([scenario.seed, *run_seed(seed, budget).generate_state(2)])
     population = ga.initial_population(rng, params.population_size,
                                        world.spec.chromosome_length, params.init_range)
     run = ga.generations(ga.GAState(generation=0, population=population, rng=rng),
@@ -201,10 +281,11 @@ def ga_run(scenario: Scenario, budget: int, seed: int, test: bool = True) -> Run
             rows.append((spent, time.perf_counter() - began, generation))
     wall = time.perf_counter() - began
     candidates = np.asarray(candidates)
-    validation = chromosome_fitness(scenario, candidates, VALIDATION_KEY,
+    validation_keys, test_keys = held_out_keys(scenario)
+    validation = chromosome_fitness(scenario, candidates, validation_keys,
                                     VALIDATION_SITUATIONS).mean(1)
     chosen = int(np.argmax(validation))
-    tested = (chromosome_fitness(scenario, candidates[chosen:chosen + 1], TEST_KEY,
+    tested = (chromosome_fitness(scenario, candidates[chosen:chosen + 1], test_keys,
                                  TEST_SITUATIONS)[0]
               if test else np.empty(0))
     curve = pd.DataFrame(rows, columns=["learner_steps", "wall_s", "generation"])
@@ -299,9 +380,10 @@ def rl_model(method: str, venv, settings: dict, seed: int):
         names = ("n_steps", "batch_size", "n_epochs", "gamma", "gae_lambda", "clip_range",
                  "ent_coef", "learning_rate")
         return PPO("MlpPolicy", venv, seed=seed, device="cpu", verbose=0,
+                   policy_kwargs={"log_std_init": settings["log_std_init"]},
                    **{name: settings[name] for name in names})
     names = ("learning_rate", "buffer_size", "batch_size", "gamma", "tau", "train_freq",
-             "gradient_steps", "learning_starts", "use_sde")
+             "gradient_steps", "learning_starts", "use_sde", "target_entropy")
     return SAC("MlpPolicy", venv, seed=seed, device="cpu", verbose=0,
                policy_kwargs={"log_std_init": settings["log_std_init"],
                               "net_arch": settings["net_arch"]},
@@ -327,6 +409,7 @@ def rl_run(scenario: Scenario, method: str, settings: dict, budget: int, seed: i
     venv = VecNormalize(sb3_vec_env(training),
                         norm_obs=True, norm_reward=settings["norm_reward"],
                         gamma=settings["gamma"])
+    seed = int(run_seed(seed, budget).generate_state(1)[0] % 2**31)
     venv.seed(seed)
     model = rl_model(method, venv, settings, seed)
     every = max(1, budget // CHECKPOINTS)
@@ -351,11 +434,12 @@ def rl_run(scenario: Scenario, method: str, settings: dict, budget: int, seed: i
     wall = time.perf_counter() - began
     if not snapshots or snapshots[-1][0] < model.num_timesteps:  # PPO's last update
         snapshot()
-    validation = np.array([policy_fitness(scenario, act, VALIDATION_KEY,
+    validation_keys, test_keys = held_out_keys(scenario)
+    validation = np.array([policy_fitness(scenario, act, validation_keys,
                                           VALIDATION_SITUATIONS).mean()
                            for _, _, act in snapshots])
     chosen = int(np.argmax(validation))
-    tested = (policy_fitness(scenario, snapshots[chosen][2], TEST_KEY, TEST_SITUATIONS)
+    tested = (policy_fitness(scenario, snapshots[chosen][2], test_keys, TEST_SITUATIONS)
               if test else np.empty(0))
     curve = pd.DataFrame([s[:2] for s in snapshots], columns=["learner_steps", "wall_s"])
     return RunResult(curve.assign(validation_fitness=validation), chosen, tested, wall,
@@ -372,7 +456,7 @@ def run_one(scenario: Scenario, method: str, setting: str, budget: int, seed: in
 
     numba.set_num_threads(1)
     if method == "GA":
-        return ga_run(scenario, budget, seed, test)
+        return ga_run(scenario, budget, seed, test, SEARCH["GA"][setting])
     return rl_run(scenario, method, SEARCH[method][setting], budget, seed, test)
 
 
@@ -426,16 +510,16 @@ def _jobs(jobs: list[tuple], workers: int, done: Callable[[tuple, RunResult], No
 
 
 def tune(scenarios: list[Scenario], out: Path, methods: tuple[str, ...], workers: int,
-         progress: bool = True, budgets: dict[str, int] | None = None) -> pd.DataFrame:
+         progress: bool = True, budget: int = SEARCH_BUDGET) -> pd.DataFrame:
     """Every setting of :data:`SEARCH` for ``methods``, one run each per scenario on
-    validation keys, into ``out/tuning.csv`` (a setting already there is not run again)."""
+    validation keys at ``budget`` learner-steps, into ``out/tuning.csv`` (a setting already
+    there is not run again)."""
     path = out / "tuning.csv"
-    budgets = budgets or TUNING_BUDGET
     have = _read(path)
     done_before = set() if have.empty else set(
         zip(have["scenario"], have["method"], have["setting"], strict=True))
-    jobs = [(scenario, method, setting, budgets[method], TUNING_SEED, False)
-            for scenario in scenarios for method in methods if method != "GA"
+    jobs = [(scenario, method, setting, budget, TUNING_SEED, False)
+            for scenario in scenarios for method in methods
             for setting in SEARCH[method] if (scenario.name, method, setting) not in done_before]
 
     def record(job: tuple, result: RunResult) -> None:
@@ -473,7 +557,7 @@ def chosen_setting(tuning: pd.DataFrame, scenario: str, method: str) -> str:
 
 def compare(scenarios: list[Scenario], out: Path, plan: tuple[Planned, ...] = PLAN,
             workers: int = 1, progress: bool = True,
-            tuning_budgets: dict[str, int] | None = None) -> pd.DataFrame:
+            search_budget: int = SEARCH_BUDGET) -> pd.DataFrame:
     """The search, then every planned run of each scenario not yet in ``out/comparison.csv``:
     its row there, its validation curve in ``curves.csv``, its test situations in
     ``situations.csv``; then the lives lived in training (:func:`training_lives`), the
@@ -482,15 +566,12 @@ def compare(scenarios: list[Scenario], out: Path, plan: tuple[Planned, ...] = PL
     check_protocol(out)
     check_scenarios(out, scenarios)
     methods = tuple(dict.fromkeys(p.method for p in plan))
-    budgets = {m: min([(tuning_budgets or TUNING_BUDGET)[m]]
-                      + [p.budget_steps for p in plan if p.method == m])
-               for m in methods if m != "GA"}
-    tuning = tune(scenarios, out, methods, workers, progress, budgets)
+    budget = min([search_budget] + [p.budget_steps for p in plan])
+    tuning = tune(scenarios, out, methods, workers, progress, budget)
     have = _read(out / "comparison.csv")
     done_before = set() if have.empty else set(
         zip(have["scenario"], have["method"], have["budget_steps"], have["seed"], strict=True))
-    jobs = [(scenario, p.method,
-             "paper" if p.method == "GA" else chosen_setting(tuning, scenario.name, p.method),
+    jobs = [(scenario, p.method, chosen_setting(tuning, scenario.name, p.method),
              p.budget_steps, seed, True)
             for scenario in scenarios for p in plan for seed in range(1, p.seeds + 1)
             if (scenario.name, p.method, p.budget_steps, seed) not in done_before]
@@ -518,7 +599,7 @@ def compare(scenarios: list[Scenario], out: Path, plan: tuple[Planned, ...] = PL
             {**run, "situation": np.arange(len(fitness)), "test_fitness": fitness}), run)
         _append(out / "curves.csv", result.curve.assign(**run), run)
         _append(out / "comparison.csv", pd.DataFrame([{
-            **run, "setting": setting,
+            **run, "setting": setting, "spin_variance": scenario.episode.spin_variance,
             "learner_steps": result.learner_steps,
             "test_situations": len(fitness), "test_fitness": fitness.mean(),
             "test_fitness_low": low, "test_fitness_high": high,
@@ -536,7 +617,8 @@ def protocol() -> dict[str, int]:
     return {"validation_key": VALIDATION_KEY, "test_key": TEST_KEY,
             "validation_situations": VALIDATION_SITUATIONS,
             "test_situations": TEST_SITUATIONS, "checkpoints": CHECKPOINTS,
-            "training_pool_keys": TRAINING_POOL_KEYS}
+            "training_pool_keys": TRAINING_POOL_KEYS, "distinct_starts": DISTINCT_STARTS,
+            "search_budget_steps": SEARCH_BUDGET}
 
 
 def check_protocol(out: Path) -> None:
@@ -609,8 +691,8 @@ def training_lives(scenarios: list[Scenario], out: Path, plan: tuple[Planned, ..
     tuning, have = _read(out / "tuning.csv"), _read(path)
     done_before = set() if have.empty else set(zip(have["scenario"], have["method"],
                                                    strict=True))
-    jobs = [(scenario, p.method, "paper" if p.method == "GA"
-             else chosen_setting(tuning, scenario.name, p.method), p.budget_steps, 1, False)
+    jobs = [(scenario, p.method, chosen_setting(tuning, scenario.name, p.method),
+             p.budget_steps, 1, False)
             for scenario in scenarios for p in plan
             if _lives_run(plan, p.method, p.budget_steps, 1)
             and (scenario.name, p.method) not in done_before]
@@ -664,7 +746,10 @@ def summary(comparison: pd.DataFrame, curves: pd.DataFrame) -> pd.DataFrame:
 def differences(comparison: pd.DataFrame, level: float = 0.9) -> pd.DataFrame:
     """PPO's and SAC's test fitness minus the GA's, at every pair of budgets in a scenario:
     the difference of the seeds' means with its Welch t interval (the seeds' spread, the
-    main spread of RL, counts; each seed's score is the mean over the same situations)."""
+    main spread of RL, counts; each seed's score is the mean over the same situations), its
+    Welch p-value, and, for the family of a scenario's comparisons (``family`` of them),
+    Holm's adjusted p-value and Bonferroni's simultaneous interval (each at level
+    1 − (1 − ``level``) / family, so that all of a scenario's intervals hold together)."""
     from scipy import stats
 
     rows = []
@@ -675,16 +760,37 @@ def differences(comparison: pd.DataFrame, level: float = 0.9) -> pd.DataFrame:
         ga = comparison[(comparison["scenario"] == name) & (comparison["method"] == "GA")]
         for ga_budget, theirs in ga.groupby("budget_steps"):
             mine, other = runs["test_fitness"].to_numpy(), theirs["test_fitness"].to_numpy()
-            low = high = np.nan
-            if len(mine) > 1 and len(other) > 1:
-                interval = stats.ttest_ind(mine, other, equal_var=False).confidence_interval(
-                    level)
-                low, high = float(interval.low), float(interval.high)
             rows.append({"scenario": name, "method": method, "budget_steps": budget,
                          "ga_budget_steps": ga_budget, "seeds": len(mine),
                          "ga_seeds": len(other), "minus_ga": mine.mean() - other.mean(),
-                         "minus_ga_low": low, "minus_ga_high": high})
-    return pd.DataFrame(rows)
+                         "mine_values": mine, "ga_values": other})
+    table = pd.DataFrame(rows)
+    if table.empty:
+        return table
+    family = table.groupby("scenario")["method"].transform("size")
+    columns = {"minus_ga_low": [], "minus_ga_high": [], "p_value": [],
+               "minus_ga_low_simultaneous": [], "minus_ga_high_simultaneous": []}
+    for row, size in zip(table.itertuples(), family, strict=True):
+        values = [np.nan] * 5
+        if len(row.mine_values) > 1 and len(row.ga_values) > 1:
+            test = stats.ttest_ind(row.mine_values, row.ga_values, equal_var=False)
+            one = test.confidence_interval(level)
+            together = test.confidence_interval(1 - (1 - level) / size)
+            values = [one.low, one.high, test.pvalue, together.low, together.high]
+        for column, value in zip(columns, values, strict=True):
+            columns[column].append(float(value))
+    table = table.drop(columns=["mine_values", "ga_values"]).assign(**columns, family=family)
+    table["p_holm"] = table.groupby("scenario")["p_value"].transform(holm)
+    return table
+
+
+def holm(p_values: pd.Series) -> pd.Series:
+    """Holm's step-down adjustment of a family of p-values (missing ones left out of the
+    family and missing in the result)."""
+    known = p_values.dropna().sort_values()
+    size = len(known)
+    adjusted = np.maximum.accumulate((size - np.arange(size)) * known.to_numpy())
+    return pd.Series(np.minimum(adjusted, 1.0), index=known.index).reindex(p_values.index)
 
 
 def write_summary(out: Path) -> pd.DataFrame:

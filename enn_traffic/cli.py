@@ -193,9 +193,10 @@ def build_parser() -> argparse.ArgumentParser:
 
     baseline = commands.add_parser(
         "baseline", help="the GA against PPO and SAC (Stable-Baselines3) at equal learner-steps",
-        epilog=EPILOG, description="For each scenario: search PPO's and SAC's settings on "
-        "validation keys, then make the planned runs; each run's controller is the best of "
-        "its checkpoints on validation, scored once on 64 sealed test situations. Writes "
+        epilog=EPILOG, description="For each scenario: search twelve settings of each "
+        "method on validation keys, then make the planned runs; each run's controller is the "
+        "best of its checkpoints on 128 validation situations, scored once on 256 sealed test "
+        "situations (no start shared with validation). Writes "
         "OUT/tuning.csv, comparison.csv (a row per run), situations.csv, curves.csv, "
         "training_lives.csv, comparison_summary.csv, comparison_differences.csv, "
         "comparison.png and each run's controller in OUT/controllers/; runs already there "
@@ -204,7 +205,7 @@ def build_parser() -> argparse.ArgumentParser:
         "(pip install -e .[rl]; docs/envs.md).")
     baseline.add_argument("scenario", type=_path, nargs="+", metavar="SCENARIO.toml",
                           help="arena or navigation scenarios, or shipped ones' names")
-    baseline.add_argument("--plan", default="GA:1M:5,PPO:1M:5,SAC:1M:3,GA:20M:5,PPO:5M:3",
+    baseline.add_argument("--plan", default="GA:1M:10,PPO:1M:10,SAC:1M:10,GA:5M:5,PPO:5M:5",
                           help="runs as METHOD:BUDGET:SEEDS,... (METHOD GA, PPO or SAC; "
                           "default: %(default)s)")
     baseline.add_argument("--workers", type=_int_in(1, 256), default=None,
@@ -267,7 +268,8 @@ def _cmd_run(args) -> int:
     if args.out:  # said before the scenario's network is read
         check_output_folder(args.out)
         check_unlocked(args.out)
-        check_folder_unread(args.out, resume=args.resume, force=args.force)
+        check_folder_unread(args.out, scenario_path(args.scenario).resolve(),
+                            resume=args.resume, force=args.force)
     scenario = load_scenario(scenario_path(args.scenario))
     overrides = {}
     if args.generations:

@@ -147,26 +147,29 @@ def _check_fresh_folder(scenario: Scenario, out: Path, force: bool) -> None:
 
 
 def _refuse_others(out: Path, own) -> None:
-    """Refuse a folder holding files that are neither :data:`RUN_OWN` nor ``own(path)``."""
-    others = sorted(path.name for path in out.iterdir()
-                    if path.name not in RUN_OWN and not own(path))
-    if others:
-        shown = ", ".join(others[:3]) + (" …" if len(others) > 3 else "")
+    """Refuse a folder holding a file that is neither :data:`RUN_OWN` nor ``own(path)``,
+    naming every file but :data:`RUN_OWN`."""
+    names = sorted(path.name for path in out.iterdir() if path.name not in RUN_OWN)
+    if any(not own(out / name) for name in names):
+        shown = ", ".join(names[:3]) + (" …" if len(names) > 3 else "")
         raise InputError(f"holds files but no run to resume ({shown}); give an empty folder "
                          "or --force to write over them", out, "--out")
 
 
-def check_folder_unread(out: str | Path, resume: bool = False, force: bool = False) -> None:
-    """What :func:`check_folder` can tell without the scenario, asked before the scenario is
-    read (a city's network takes seconds): a run without ``--resume``, others' files."""
+def check_folder_unread(out: str | Path, source: Path, resume: bool = False,
+                        force: bool = False) -> None:
+    """What :func:`check_folder` can tell before the scenario file ``source`` is read (a
+    city's network takes seconds): the scenario's own folder, a run without ``--resume``,
+    the user's files (a ``scenario.toml`` alone is compared once the scenario is read)."""
     out = Path(out)
+    check_not_source(out / "scenario.toml", source)
     if force or not out.is_dir():
         return
     if (out / CHECKPOINT).exists():
         if not resume:
             raise InputError(ALREADY_A_RUN, out)
         return
-    _refuse_others(out, lambda path: path.name == "scenario.toml")  # compared once read
+    _refuse_others(out, lambda path: path.name == "scenario.toml")
 
 
 ALREADY_A_RUN = ("the folder already holds a run; pass --resume to continue it or --force to "

@@ -18,9 +18,34 @@ from enn_traffic.shipped import shipped_scenario
 def test_the_comparisons_keys_are_its_own_and_held_out(monkeypatch):
     monkeypatch.undo()  # the real test keys, as the command reads them
     assert baseline.VALIDATION_KEY in keys.VALIDATION and baseline.TEST_KEY in keys.TEST
-    arena = shipped_scenario("arena_strategy1")
-    test = baseline.situation_keys(arena, baseline.TEST_KEY, baseline.TEST_SITUATIONS)
-    assert len(test) == 16  # 4 situations a key: 16 keys hold the 64
+    assert baseline.TEST_KEY not in (baseline.FIRST_ROUND_TEST_KEY,
+                                     baseline.SECOND_ROUND_TEST_KEY)
+    validation, test = baseline.held_out_keys(shipped_scenario("arena_strategy1"))
+    assert (len(validation), len(test)) == (32, 64)  # 4 situations a key: 128 and 256
+    assert validation[0] == baseline.VALIDATION_KEY and test[0] == baseline.TEST_KEY
+
+
+def test_no_validation_start_of_the_narrow_track_is_a_test_start():
+    """Issue 65: 5 of the narrow track's 64 test starts were validation starts (both drawn
+    with replacement from the same 453 poses). Now 128 validation and 256 test situations
+    start at as many distinct poses, none shared."""
+    from enn_traffic.envs.rangefinder import rangefinder_world
+
+    narrow = shipped_scenario("navigation_narrow")
+    validation, test = baseline.held_out_keys(narrow)
+    world = rangefinder_world(baseline.scoring_scenario(narrow))
+    starts = {name: [baseline.start_of(world.situations(key)[0]) for key in chosen]
+              for name, chosen in (("validation", validation), ("test", test))}
+    assert len(set(starts["validation"])) == len(starts["validation"]) == 128
+    assert len(set(starts["test"])) == len(starts["test"]) == 256
+    assert set(starts["validation"]).isdisjoint(starts["test"])
+    # the second round's draw, kept for its committed folder: starts repeat and are shared
+    old = {"validation_key": baseline.keys.VALIDATION.start + 530_000,
+           "test_key": baseline.SECOND_ROUND_TEST_KEY, "validation_situations": 32,
+           "test_situations": 64}
+    old_validation, old_test = baseline.held_out_keys(narrow, old)
+    assert old_test == list(range(old["test_key"], old["test_key"] + 64))
+    assert len(old_validation) == 32
 
 
 def test_the_narrow_track_is_scored_from_starts_all_along_it():
@@ -32,7 +57,7 @@ def test_the_narrow_track_is_scored_from_starts_all_along_it():
     scored = baseline.scoring_scenario(narrow)
     assert scored.track.start_anywhere and scored.track.net == narrow.track.net
     world = rangefinder_world(scored)
-    starts = {tuple(np.round(world.situations(key)[0].start[0], 3))
+    starts = {baseline.start_of(world.situations(key)[0])
               for key in baseline.situation_keys(scored, keys.VALIDATION.start, 64)}
     assert len(starts) > 50  # 64 draws from every 5 m of 1.3 km, facing either way
     arena = shipped_scenario("arena_strategy1")
@@ -59,7 +84,7 @@ def test_a_ga_run_spends_its_budget_and_chooses_on_validation():
     assert (result.test_fitness > 0).any()
     # the chosen controller, scored again: its validation score
     again = baseline.chromosome_fitness(scenario, result.controller.chromosome[None],
-                                        baseline.VALIDATION_KEY,
+                                        baseline.held_out_keys(scenario)[0],
                                         baseline.VALIDATION_SITUATIONS).mean()
     assert again == result.curve["validation_fitness"].iloc[result.chosen]
 
@@ -72,12 +97,21 @@ def test_a_policy_and_its_chromosome_score_alike():
     scenario = shipped_scenario("arena_strategy1")
     spec = rangefinder_world(scenario).spec
     chromosome = np.random.default_rng(3).uniform(-1, 1, (1, spec.chromosome_length))
-    ga = baseline.chromosome_fitness(scenario, chromosome, keys.VALIDATION.start, 8)[0]
+    chosen = [keys.VALIDATION.start, keys.VALIDATION.start + 1]  # 4 situations each
+    ga = baseline.chromosome_fitness(scenario, chromosome, chosen, 8)[0]
     env = baseline.policy_fitness(
         scenario, lambda o: action_of(spec.forward(np.repeat(chromosome, len(o), 0), o)),
-        keys.VALIDATION.start, 8)
+        chosen, 8)
     assert ga.std() > 0  # situations that tell the scorers apart
     np.testing.assert_allclose(env, ga)
+
+
+def test_the_command_lines_default_plan_is_the_modules():
+    from enn_traffic.cli import build_parser
+
+    default = build_parser().parse_args(["baseline", "navigation_narrow"]).plan
+    assert baseline.parse_plan(default) == baseline.PLAN
+    assert all(len(search) >= 12 for search in baseline.SEARCH.values())
 
 
 def test_plans_are_read_and_bad_ones_refused():
@@ -117,6 +151,49 @@ def test_the_summary_and_the_differences_carry_the_seeds_spread():
     assert difference["minus_ga_high"] - 7.0 == pytest.approx(2.9200 * np.sqrt(2), abs=1e-3)
 
 
+def test_holm_adjusts_a_family_of_p_values_step_down():
+    """Hand-computed: sorted 0.01, 0.03, 0.04 times 3, 2, 1 is 0.03, 0.06, 0.04; each at
+    least the one before: 0.03, 0.06, 0.06. A missing p-value stays out of the family."""
+    adjusted = baseline.holm(pd.Series([0.01, 0.04, np.nan, 0.03]))
+    np.testing.assert_allclose(adjusted, [0.03, 0.06, np.nan, 0.06])
+    assert baseline.holm(pd.Series([0.5, 0.9])).tolist() == [1.0, 1.0]  # capped at 1
+
+
+def test_a_scenarios_differences_are_corrected_for_their_family():
+    """Two RL methods against one GA budget: a family of 2 per scenario; the simultaneous
+    intervals are Welch's at 95% (90% shared by 2), wider than each one's 90%."""
+    from scipy import stats
+
+    fitness = {"GA": [2.0, 4.0, 3.0], "PPO": [9.0, 11.0, 7.0], "SAC": [3.0, 5.0, 2.0]}
+    runs = pd.DataFrame([{"scenario": "s", "method": m, "budget_steps": 100, "seed": i,
+                          "test_fitness": f} for m, values in fitness.items()
+                         for i, f in enumerate(values)])
+    table = baseline.differences(runs).set_index("method")
+    assert (table["family"] == 2).all()
+    for method in ("PPO", "SAC"):
+        test = stats.ttest_ind(fitness[method], fitness["GA"], equal_var=False)
+        row = table.loc[method]
+        assert row["p_value"] == pytest.approx(test.pvalue)
+        assert row["minus_ga_low_simultaneous"] == pytest.approx(
+            test.confidence_interval(0.95).low)
+        assert row["minus_ga_low_simultaneous"] < row["minus_ga_low"]
+    p = sorted(table["p_value"])
+    assert sorted(table["p_holm"]) == pytest.approx([2 * p[0], max(2 * p[0], p[1])])
+
+
+def test_a_longer_run_is_no_continuation_of_the_shorter_one_of_its_seed():
+    """Issue 65: a 5 M run of seed 1 replayed the 1 M run of seed 1 for its first 1 M steps.
+    Each run's stream now comes from its seed and its budget."""
+    scenario = shipped_scenario("arena_strategy1").with_overrides(
+        ga={"population_size": 20, "elite_count": 2})
+    short, long = (baseline.ga_run(scenario, budget, seed=1, test=False)
+                   for budget in (4_000, 8_000))
+    assert short.training_lives.tolist() != long.training_lives[:len(short.training_lives)]\
+        .tolist()
+    again = baseline.ga_run(scenario, 4_000, seed=1, test=False)
+    assert again.training_lives.tolist() == short.training_lives.tolist()
+
+
 def test_a_folder_of_runs_made_another_way_is_refused(tmp_path, monkeypatch):
     """Runs are skipped by (scenario, method, budget, seed): a folder made with other keys or
     counts would have its rows mixed with new ones, so it is refused."""
@@ -136,21 +213,26 @@ def test_a_folder_of_runs_made_another_way_is_refused(tmp_path, monkeypatch):
 
 def test_the_comparison_resumes_without_running_a_finished_run_again(tmp_path, monkeypatch):
     pytest.importorskip("stable_baselines3")
-    # a search of two PPO settings with rollouts of 2,048 steps (the zoo's are 65,536): what
-    # is checked here is the resume, not the search's size
+    # a search of two settings each, PPO's with rollouts of 2,048 steps (the zoo's are
+    # 65,536): what is checked here is the resume, not the search's size
     monkeypatch.setitem(baseline.SEARCH, "PPO", {
         name: baseline.SEARCH["PPO"][name] | {"n_envs": 8}
-        for name in ("short rollouts", "short rollouts, gamma 0.99")})
+        for name in list(baseline.SEARCH["PPO"])[:2]})
+    monkeypatch.setitem(baseline.SEARCH, "GA", {
+        "P 10": {"population_size": 10}, "P 12": {"population_size": 12}})
     scenario = shipped_scenario("navigation_narrow").with_overrides(
-        ga={"population_size": 10}, episode={"max_steps": 300})
+        episode={"max_steps": 300})
     plan = baseline.parse_plan("GA:20k:2,PPO:16k:1")
-    budgets = {"PPO": 8_192, "SAC": 1_000}
     baseline.compare([scenario], tmp_path, plan, workers=1, progress=False,
-                     tuning_budgets=budgets)
+                     search_budget=8_192)
     tuning = pd.read_csv(tmp_path / "tuning.csv")
-    assert sorted(tuning["setting"]) == sorted(baseline.SEARCH["PPO"])
+    assert sorted(tuning["setting"]) == sorted([*baseline.SEARCH["GA"], *baseline.SEARCH["PPO"]])
+    assert set(tuning["budget_steps"]) == {8_192}
     first = pd.read_csv(tmp_path / "comparison.csv")
     assert len(first) == 3 and set(first["test_situations"]) == {baseline.TEST_SITUATIONS}
+    assert set(first["spin_variance"]) == {scenario.episode.spin_variance}
+    ga_setting = baseline.chosen_setting(tuning, scenario.name, "GA")
+    assert set(first[first["method"] == "GA"]["setting"]) == {ga_setting}
     ppo = first[first["method"] == "PPO"].iloc[0]
     assert ppo["setting"] == baseline.chosen_setting(tuning, scenario.name, "PPO")
     assert ppo["learner_steps"] >= 16_000
@@ -160,18 +242,18 @@ def test_the_comparison_resumes_without_running_a_finished_run_again(tmp_path, m
     # every run's controller is saved, and scores on test what the run's row says
     policy = baseline.NumpyPolicy.load(baseline.controller_path(
         tmp_path, scenario.name, "PPO", 16_000, 1))
-    tested = baseline.policy_fitness(scenario, policy, baseline.TEST_KEY,
-                                     baseline.TEST_SITUATIONS)
+    test_keys = baseline.held_out_keys(scenario)[1]
+    tested = baseline.policy_fitness(scenario, policy, test_keys, baseline.TEST_SITUATIONS)
     assert tested.mean() == pytest.approx(ppo["test_fitness"])
     controller = Controller.load(baseline.controller_path(
         tmp_path, scenario.name, "GA", 20_000, 1))
     ga = first[first["method"] == "GA"].iloc[0]
-    assert baseline.chromosome_fitness(scenario, controller.chromosome[None], baseline.TEST_KEY,
+    assert baseline.chromosome_fitness(scenario, controller.chromosome[None], test_keys,
                                        baseline.TEST_SITUATIONS).mean() == pytest.approx(
         ga["test_fitness"])
     # a second call with one more seed makes that run alone
     baseline.compare([scenario], tmp_path, baseline.parse_plan("GA:20k:3,PPO:16k:1"),
-                     workers=1, progress=False, tuning_budgets=budgets)
+                     workers=1, progress=False, search_budget=8_192)
     second = pd.read_csv(tmp_path / "comparison.csv")
     pd.testing.assert_frame_equal(second.iloc[:3], first)
     assert len(second) == 4 and second.iloc[3]["seed"] == 3
@@ -191,7 +273,8 @@ def test_numpy_actor_is_the_sb3_policy_of_ppo_and_sac_after_learning(tmp_path):
     from enn_traffic.envs.sb3 import sb3_vec_env
 
     scenario = shipped_scenario("arena_strategy1")
-    for method, setting in (("SAC", "zoo"), ("PPO", "zoo")):
+    for method in ("SAC", "PPO"):
+        setting = next(iter(baseline.SEARCH[method]))
         settings = baseline.SEARCH[method][setting] | {"learning_starts": 100}
         venv = VecNormalize(sb3_vec_env(RangefinderVectorEnv(scenario, settings["n_envs"])))
         model = baseline.rl_model(method, venv, settings, seed=1)
@@ -216,6 +299,9 @@ def test_a_committed_ga_run_of_the_comparison_comes_out_the_same(monkeypatch):
     from pathlib import Path
 
     folder = Path(__file__).resolve().parents[1] / "results" / "baseline"
+    if json.loads((folder / "protocol.json").read_text()) != baseline.protocol():
+        pytest.skip("results/baseline holds the second round; the third (issue 65) is in "
+                    "progress under another protocol")
     runs = pd.read_csv(folder / "comparison.csv").set_index(
         ["scenario", "method", "budget_steps", "seed"])
     committed = runs.loc[("arena_strategy1", "GA", 1_000_000, 1)]

@@ -20,7 +20,6 @@ in one compiled call (:mod:`enn_traffic.envs.batch`), autoresetting in the same 
 from __future__ import annotations
 
 import math
-
 import warnings
 from pathlib import Path
 

@@ -9,6 +9,7 @@ checks that the committed docs/results.md holds what the committed tables give.
 
 from __future__ import annotations
 
+import json
 import sys
 from collections.abc import Callable
 from pathlib import Path
@@ -449,6 +450,7 @@ def baseline(paper: Path) -> str:
     from enn_traffic import baseline as comparison
 
     folder = paper.parent / "baseline"
+    protocol = json.loads((folder / "protocol.json").read_text())  # the folder's, not today's
     runs = pd.read_csv(folder / "comparison.csv")
     summary = pd.read_csv(folder / "comparison_summary.csv")
     tuning = pd.read_csv(folder / "tuning.csv")
@@ -457,24 +459,25 @@ def baseline(paper: Path) -> str:
         "`enn-traffic baseline navigation_narrow arena_strategy1` (needs `pip install -e "
         ".[rl]`). Every method learns on training keys: the GA meets a new key each "
         "generation, PPO and SAC draw each life from "
-        f"{comparison.TRAINING_POOL_KEYS:,} training keys. A run's candidates are its "
-        f"controllers at every 1/{comparison.CHECKPOINTS} of its budget and at its end: for "
+        f"{protocol['training_pool_keys']:,} training keys. A run's candidates are its "
+        f"controllers at every 1/{protocol['checkpoints']} of its budget and at its end: for "
         "PPO and SAC the policy then, acting on its mean (PPO's weights change only once a "
         "rollout, so candidates within one rollout share weights and differ in their "
         "observation scaling); for the GA the best, by training fitness, of the generation "
         "that reached the checkpoint, one a generation at most (when one generation spans "
         "several checkpoints, as on the narrow track once lives are long, the generations "
         "after it give the candidates it could not). Candidates are scored on "
-        f"{comparison.VALIDATION_SITUATIONS} validation situations (keys from "
-        f"{comparison.VALIDATION_KEY:,}); the best there is the run's controller (saved in "
+        f"{protocol['validation_situations']} validation situations (keys from "
+        f"{protocol['validation_key']:,}); the best there is the run's controller (saved in "
         "`controllers/`), scored once "
-        f"on {comparison.TEST_SITUATIONS} test situations (keys from {comparison.TEST_KEY:,}, "
+        f"on {protocol['test_situations']} test situations (keys from "
+        f"{protocol['test_key']:,}, "
         "read once, by this round; the first round of this comparison read those from "
         f"{comparison.FIRST_ROUND_TEST_KEY:,}). The narrow track trains from its one start "
         "(§5.1); its validation and test situations start anywhere on it (every 5 m along "
         "it, facing either way, drawn per key): they measure how a run drives the track it "
         f"learned from other starts. "
-        f"{_narrow_starts(comparison, pd.read_csv(folder / 'situations.csv'))} "
+        f"{_narrow_starts(comparison, protocol, pd.read_csv(folder / 'situations.csv'))} "
         "A run at 20 M or 5 M steps continues the trajectory of the same "
         "seed's 1 M run (the same generator), so the budgets are not independent samples. "
         "The GA runs the scenario's own settings (the "
@@ -491,11 +494,11 @@ def baseline(paper: Path) -> str:
         "|---|---|---|---|---|---|",
     ]
     for (name, method), rows in tuning.groupby(["scenario", "method"], sort=False):
-        best = comparison.chosen_setting(tuning, name, method)
+        chosen = set(runs[(runs["scenario"] == name) & (runs["method"] == method)]["setting"])
         for row in rows.itertuples():
             lines.append(f"| {names.get(name, name)} | {method} | {row.setting} | "
                          f"{_steps(row.budget_steps)} | {row.validation_fitness:.0f} | "
-                         f"{'yes' if row.setting == best else ''} |")
+                         f"{'yes' if row.setting in chosen else ''} |")
     lines += [
         "",
         "Test fitness (steps lived, 0 for a spin) of each run's chosen controller: the mean "
@@ -544,7 +547,7 @@ def baseline(paper: Path) -> str:
     return "\n".join(lines)
 
 
-def _shared_starts(comparison) -> tuple[list[bool], int]:
+def _shared_starts(comparison, protocol: dict) -> tuple[list[bool], int]:
     """Which of the narrow track's test starts are also a validation start (both are drawn,
     with replacement, from the same poses), and how many test starts are distinct."""
     from enn_traffic.envs.rangefinder import rangefinder_world
@@ -553,20 +556,20 @@ def _shared_starts(comparison) -> tuple[list[bool], int]:
     scored = comparison.scoring_scenario(shipped_scenario("navigation_narrow"))
     world = rangefinder_world(scored)
 
-    def starts(first: int, count: int) -> list[tuple]:
-        return [tuple(np.round(situation.start[0], 3))
-                for key in comparison.situation_keys(scored, first, count)
+    def starts(chosen: list[int], count: int) -> list[tuple]:
+        return [comparison.start_of(situation) for key in chosen
                 for situation in world.situations(key)][:count]
 
-    validation = set(starts(comparison.VALIDATION_KEY, comparison.VALIDATION_SITUATIONS))
-    test = starts(comparison.TEST_KEY, comparison.TEST_SITUATIONS)
+    validation_keys, test_keys = comparison.held_out_keys(scored, protocol)
+    validation = set(starts(validation_keys, protocol["validation_situations"]))
+    test = starts(test_keys, protocol["test_situations"])
     return [start in validation for start in test], len(set(test))
 
 
-def _narrow_starts(comparison, situations: pd.DataFrame) -> str:
+def _narrow_starts(comparison, protocol: dict, situations: pd.DataFrame) -> str:
     """The narrow track's test starts: how many are distinct, how many are also a validation
     start, and each method's mean test fitness without those."""
-    shared, distinct = _shared_starts(comparison)
+    shared, distinct = _shared_starts(comparison, protocol)
     narrow = situations[situations["scenario"] == "navigation_narrow"]
     others = narrow[~narrow["situation"].map(dict(enumerate(shared)))]
     means = others.groupby(["method", "budget_steps"])["test_fitness"].mean()
@@ -863,13 +866,40 @@ def crowd_departures(paper: Path) -> str:
     return "\n".join(lines)
 
 
+def spin_rule(paper: Path) -> str:
+    """The narrow track's spin rule against centre keeping (:mod:`enn_traffic.spin_rule`),
+    from ``spin_rule.csv`` of the comparison's third round beside ``paper``."""
+    from enn_traffic import spin_rule as rule
+
+    table = pd.read_csv(paper.parent / Path(rule.FOLDER).name / "spin_rule.csv")
+    gains = sorted(table["gain"].unique())
+    lines = [
+        f"Centre-keeping controllers (gains {', '.join(f'{g:g}' for g in gains)}) on the "
+        f"{table['situations'].iloc[0]} validation situations of the narrow track (keys from "
+        f"{table['first_key'].iloc[0]:,}): lives ruled a spin, and the median life in steps, "
+        "under each candidate `spin_variance` (m² over 49 steps; the paper's is 64):",
+        "",
+        "| spin_variance | " + " | ".join(f"gain {g:g}: spins (median life)" for g in gains)
+        + " |",
+        "|---:|" + "---:|" * len(gains)]
+    for variance, rows in table.groupby("spin_variance", sort=False):
+        by_gain = rows.set_index("gain")
+        lines.append(f"| {variance:g} | " + " | ".join(
+            f"{by_gain.loc[g, 'spins']} of {by_gain.loc[g, 'situations']} "
+            f"({by_gain.loc[g, 'median_steps']:.0f})" for g in gains) + " |")
+    lines += ["", f"The second rule, the largest candidate under which none of these lives is "
+              f"a spin: **{rule.chosen_variance(table):g} m²** (`navigation_narrow_spin40`)."]
+    return "\n".join(lines)
+
+
 SECTIONS: dict[str, Callable[[Path], str]] = {
     "tables34": tables34, "table4_ablation": table4_ablation,
     "crowd_departures": crowd_departures,
     "sumo_tables34": lambda paper: family_tables34(paper, SUMO),
     "city_tables34": lambda paper: family_tables34(paper, CITY),
     "sumo_closed_loop": lambda paper: closed_loop(paper, SUMO),
-    "city_closed_loop": lambda paper: closed_loop(paper, CITY), "baseline": baseline}
+    "city_closed_loop": lambda paper: closed_loop(paper, CITY), "baseline": baseline,
+    "spin_rule": spin_rule}
 
 
 def section(name: str, paper: Path) -> str:

@@ -51,8 +51,9 @@ def test_a_changed_crowd_table_changes_the_results_md_text(root, tmp_path):
                     ignore=shutil.ignore_patterns("controllers", "*.png", "runs", "crowds"))
     shutil.copytree(root / "results" / "paper" / "controllers" / "table4",
                     paper / "controllers" / "table4")
-    shutil.copytree(root / "results" / "baseline", tmp_path / "baseline",
-                    ignore=shutil.ignore_patterns("*.png"))
+    for comparison in ("baseline", "baseline_round3"):
+        shutil.copytree(root / "results" / comparison, tmp_path / comparison,
+                        ignore=shutil.ignore_patterns("*.png", "controllers"))
     learners = pd.read_csv(paper / "table4_learners.csv")
     learners.loc[learners["strategy"] == 1, "generations_bred"] = learners.loc[
         learners["strategy"] == 1, "generations_bred"].clip(upper=4)

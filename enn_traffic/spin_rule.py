@@ -1,0 +1,118 @@
+"""The spin rule's second setting for the GA-against-RL comparison (issue 65).
+
+The paper rules a vehicle whose last ``spin_window`` positions vary by at most
+``spin_variance`` m² on both axes to be spinning in place: fitness 0 (§5.3). On the narrow
+track's double bend that also rules ordinary driving a spin. Controllers without learning
+that keep to the middle of the road (:func:`centre_keeping`: steer towards the side whose
+beams read farther) show where: each is driven on the comparison's validation situations
+under every candidate ``spin_variance``, and the second rule is the largest candidate under
+which none of their lives ends as a spin (:func:`chosen_variance`). Validation keys only:
+the choice reads no test situation.
+
+``python -m enn_traffic.spin_rule [OUT]`` writes ``OUT/spin_rule.csv`` (default
+:data:`FOLDER`, the third round's comparison).
+"""
+
+from __future__ import annotations
+
+import sys
+from collections.abc import Callable
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+from enn_traffic.scenario import Scenario
+
+# Candidate ``spin_variance`` values (m²), the paper's first; gains of the centre-keeping
+# controllers (steering, as a share of full lock, per unit of the normalised left-right
+# difference of the beams).
+CANDIDATES = (64.0, 56.0, 48.0, 40.0, 32.0, 24.0, 16.0)
+GAINS = (0.5, 1.0, 2.0, 4.0)
+FOLDER = "results/baseline_round3"
+
+
+def centre_keeping(gain: float, beam_range: float) -> Callable[[np.ndarray], np.ndarray]:
+    """A controller that keeps to the middle of the road: ``u = gain · (mean of the left
+    half's beams − mean of the right half's) / range``, clipped to [−1, 1], as the action
+    (−u, u): steering = the vehicle's gain · u, towards the side with more room (beams are
+    read right to left; docs/envs.md)."""
+
+    def act(observation: np.ndarray) -> np.ndarray:
+        half = observation.shape[1] // 2
+        left = observation[:, -half:].mean(axis=1)
+        right = observation[:, :half].mean(axis=1)
+        u = np.clip(gain * (left - right) / beam_range, -1.0, 1.0)
+        return np.column_stack([-u, u]).astype(np.float32)
+
+    return act
+
+
+def lives(scenario: Scenario, act: Callable[[np.ndarray], np.ndarray],
+          keys: list[int]) -> pd.DataFrame:
+    """Each situation of ``keys`` driven once by ``act`` through the vector environment of
+    ``scenario``: its steps and outcome."""
+    from enn_traffic.envs.rangefinder import RangefinderVectorEnv
+
+    env = RangefinderVectorEnv(scenario, len(keys))
+    observation, _ = env.reset(options={"keys": keys})
+    steps = np.full(len(keys), -1)
+    outcome = np.empty(len(keys), dtype=object)
+    while (steps < 0).any():
+        observation, _, terminated, truncated, info = env.step(act(observation))
+        for i in np.flatnonzero((terminated | truncated) & (steps < 0)):
+            steps[i] = info["final_info"]["steps"][i]
+            outcome[i] = info["final_info"]["outcome"][i]
+    return pd.DataFrame({"steps": steps, "outcome": outcome})
+
+
+def spin_table(scenario: Scenario, keys: list[int], candidates=CANDIDATES,
+               gains=GAINS) -> pd.DataFrame:
+    """Per candidate ``spin_variance`` and gain: how many of the situations of ``keys`` the
+    centre-keeping controller's lives end as a spin, as a collision, at the cap, and their
+    median length."""
+    beam_range = scenario.sensor.range
+    rows = []
+    for variance in candidates:
+        ruled = scenario.with_overrides(episode={"spin_variance": variance})
+        for gain in gains:
+            table = lives(ruled, centre_keeping(gain, beam_range), keys)
+            rows.append({"scenario": scenario.name, "spin_variance": variance, "gain": gain,
+                         "situations": len(table),
+                         "spins": int((table["outcome"] == "spin").sum()),
+                         "collisions": int((table["outcome"] == "collision").sum()),
+                         "capped": int((table["outcome"] == "capped").sum()),
+                         "median_steps": float(table["steps"].median()),
+                         "first_key": keys[0]})
+    return pd.DataFrame(rows)
+
+
+def chosen_variance(table: pd.DataFrame) -> float:
+    """The largest candidate ``spin_variance`` under which no centre-keeping life ends as a
+    spin."""
+    spins = table.groupby("spin_variance")["spins"].sum()
+    passed = spins[spins == 0]
+    if passed.empty:
+        raise ValueError("centre keeping spins under every candidate spin_variance")
+    return float(passed.index.max())
+
+
+def write(out: Path) -> pd.DataFrame:
+    """``out/spin_rule.csv``: the narrow track's table on the comparison's validation
+    situations."""
+    from enn_traffic import baseline
+    from enn_traffic.io import write_atomic
+    from enn_traffic.shipped import shipped_scenario
+
+    narrow = shipped_scenario("navigation_narrow")
+    validation, _ = baseline.held_out_keys(narrow)
+    table = spin_table(baseline.scoring_scenario(narrow), validation)
+    out.mkdir(parents=True, exist_ok=True)
+    write_atomic(out / "spin_rule.csv", lambda handle: table.to_csv(handle, index=False))
+    return table
+
+
+if __name__ == "__main__":
+    table = write(Path(sys.argv[1] if len(sys.argv) > 1 else FOLDER))
+    print(table.to_string(index=False))
+    print(f"chosen spin_variance: {chosen_variance(table):g} m²")

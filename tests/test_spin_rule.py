@@ -1,0 +1,70 @@
+"""The comparison's second spin rule (issue 65): centre-keeping controllers without learning,
+and the rule chosen on validation situations where none of their lives is ruled a spin."""
+
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from enn_traffic import baseline, spin_rule
+from enn_traffic.scenario import load_scenario
+from enn_traffic.shipped import shipped_scenario
+
+ROOT = Path(__file__).resolve().parents[1]
+COMMITTED = ROOT / spin_rule.FOLDER / "spin_rule.csv"
+
+
+def test_centre_keeping_steers_towards_the_side_with_more_room():
+    """Beams are read right to left: 9 on the right at 5 m, the middle one, 9 on the left at
+    15 m; range 25 m, gain 1: u = (15 - 5) / 25 = 0.4, the action (-0.4, 0.4); the mirror
+    image steers the other way, and a large gain is clipped to full lock."""
+    observation = np.array([[5.0] * 9 + [20.0] + [15.0] * 9], dtype=np.float32)
+    np.testing.assert_allclose(spin_rule.centre_keeping(1.0, 25.0)(observation),
+                               [[-0.4, 0.4]], rtol=1e-6)
+    np.testing.assert_allclose(spin_rule.centre_keeping(1.0, 25.0)(observation[:, ::-1]),
+                               [[0.4, -0.4]], rtol=1e-6)
+    np.testing.assert_array_equal(spin_rule.centre_keeping(10.0, 25.0)(observation),
+                                  [[-1.0, 1.0]])
+
+
+def test_the_papers_rule_rules_centre_keeping_a_spin_and_the_second_rule_does_not():
+    """On 16 of the narrow track's validation situations: under 64 m² most centre-keeping
+    lives end as a spin (the double bend), under 40 m² none does, and they live longer."""
+    narrow = shipped_scenario("navigation_narrow")
+    validation, _ = baseline.held_out_keys(narrow)
+    table = spin_rule.spin_table(baseline.scoring_scenario(narrow), validation[:16],
+                                 candidates=(64.0, 40.0), gains=(1.0,)).set_index(
+        "spin_variance")
+    assert table.loc[64.0, "spins"] >= 8
+    assert table.loc[40.0, "spins"] == 0
+    assert table.loc[40.0, "median_steps"] > table.loc[64.0, "median_steps"]
+    assert spin_rule.chosen_variance(table.reset_index()) == 40.0
+
+
+def test_the_choice_is_the_largest_candidate_without_a_spin():
+    table = pd.DataFrame({"spin_variance": [64.0, 64.0, 48.0, 48.0, 32.0, 32.0],
+                          "gain": [1, 2] * 3, "spins": [5, 0, 0, 1, 0, 0]})
+    assert spin_rule.chosen_variance(table) == 32.0
+    with pytest.raises(ValueError, match="every candidate"):
+        spin_rule.chosen_variance(table.assign(spins=1))
+
+
+def test_the_shipped_second_rule_is_the_committed_choice():
+    """``navigation_narrow_spin40`` is the narrow track with the spin_variance that the
+    committed table chose (validation situations only), and nothing else changed."""
+    table = pd.read_csv(COMMITTED)
+    assert set(table["first_key"]) == {baseline.held_out_keys(
+        shipped_scenario("navigation_narrow"))[0][0]}
+    assert (table["situations"] == baseline.VALIDATION_SITUATIONS).all()
+    second = load_scenario(ROOT / "scenarios" / "navigation_narrow_spin40.toml")
+    paper = shipped_scenario("navigation_narrow")
+    assert second.episode.spin_variance == spin_rule.chosen_variance(table)
+    assert second.model_copy(update={"name": paper.name, "description": paper.description,
+                                     "source": paper.source}).with_overrides(
+        episode={"spin_variance": paper.episode.spin_variance}) == paper
+
+
+@pytest.mark.full
+def test_the_committed_spin_rule_table_comes_out_the_same(tmp_path):
+    pd.testing.assert_frame_equal(spin_rule.write(tmp_path), pd.read_csv(COMMITTED))
