@@ -268,7 +268,7 @@ def _cmd_run(args) -> int:
     if args.out:  # said before the scenario's network is read
         check_output_folder(args.out)
         check_unlocked(args.out)
-        check_folder_unread(args.out, scenario_path(args.scenario).resolve(),
+        check_folder_unread(args.out, scenario_path(args.scenario),
                             resume=args.resume, force=args.force)
     scenario = load_scenario(scenario_path(args.scenario))
     overrides = {}
@@ -318,7 +318,7 @@ def _cmd_crowd(args) -> int:
         check_output_folder(args.out)
         check_unlocked(args.out)
         check_folder(args.out, resume=args.resume, force=args.force,
-                     source=scenario_path(args.scenario).resolve())
+                     source=scenario_path(args.scenario))
     scenario = crowd_scenario(load_scenario(scenario_path(args.scenario)), args.learners,
                               args.quick)
     out = args.out or Path("results") / f"{scenario.name}_crowd"

@@ -21,7 +21,7 @@ LAYERS = {
     "simulation": ["traffic", "sim", "lanekeeping"],
     "worlds": ["worlds", "controller", "generations"],
     "learning": ["evolution", "envs"],
-    "runs": ["runner", "deploy", "baseline"],
+    "runs": ["runner", "deploy", "baseline", "spin_rule"],
     "experiments": ["experiments"],
     "commands": ["bench", "reproduce", "crowd", "cli", "__main__"],
 }
