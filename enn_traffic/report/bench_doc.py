@@ -158,7 +158,8 @@ def crowd_ray(folder: Path) -> str:
 SECTIONS: generated.Sections = {"sumo_step": sumo_step, "published": published,
                                 "contention": contention, "first_run": first_run,
                                 "fresh": fresh, "reproduce_quick": reproduce_quick,
-                                "bench_quick": bench_quick, "crowd_scale": crowd_scale,
+                                "bench_quick": bench_quick, "test_suite": test_suite,
+                                "crowd_scale": crowd_scale,
                                 "crowd_ray": crowd_ray}
 
 
