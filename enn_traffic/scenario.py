@@ -1020,18 +1020,27 @@ def _with_files(scenario: Scenario, path: Path) -> Scenario:
     traffic = scenario.traffic
     for index, route in enumerate(traffic.routes):
         check_input_file(route, "route file", path, f"traffic.routes[{index}]")
-        if "," in route.name:  # a comma in a folder's name is passed through a link
-            raise InputError(f"SUMO splits a list of files at commas, so it cannot read "
-                             f"{route.name!r}; rename the file", path, f"traffic.routes[{index}]")
+        _no_comma(route, path, f"traffic.routes[{index}]")
+    given_net = scenario.track is not None and scenario.track.net is not None
     if traffic.sumocfg is not None:
         check_input_file(traffic.sumocfg, "SUMO configuration", path, "traffic.sumocfg")
-        scenario = _with_sumocfg(scenario, path)
+        scenario = _with_sumocfg(scenario, path)  # names the network when [track] does not
     if scenario.track is not None:
         check_input_file(scenario.track.net, "network file", path, "track.net")
+        if traffic.is_sumo:
+            _no_comma(scenario.track.net, path, "track.net" if given_net else "traffic.sumocfg")
     check_included(traffic.routes, path, "traffic.routes")
     if scenario.track is not None and scenario.track.start_lane == AUTO:
         scenario = _with_auto_lane(scenario, path)
     return scenario
+
+
+def _no_comma(file: Path, path: Path, key: str) -> None:
+    """SUMO splits a file option at commas: a file whose own name holds one cannot be read
+    (a comma in a folder's name is passed through a link: traffic.sumo.listed)."""
+    if "," in file.name:
+        raise InputError(f"SUMO splits a list of files at commas, so it cannot read "
+                         f"{file.name!r}; rename the file", path, key)
 
 
 AUTO = "auto"  # [track] start_lane = "auto"

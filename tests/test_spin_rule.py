@@ -42,6 +42,18 @@ def test_the_papers_rule_rules_centre_keeping_a_spin_and_the_second_rule_does_no
     assert spin_rule.chosen_variance(table.reset_index()) == 40.0
 
 
+def test_from_the_registered_ids_one_start_centre_keeping_spins_only_under_the_papers_rule():
+    """docs/envs.md: from NavigationNarrow-v0's one start, centre keeping is ruled a spin at
+    the first turn under 64 m² (within the first 100 steps), and drives on under 40 m²."""
+    lives = {name: spin_rule.lives(shipped_scenario(name), spin_rule.centre_keeping(1.0, 25.0),
+                                   [baseline.VALIDATION_KEY]).iloc[0]
+             for name in ("navigation_narrow", "navigation_narrow_spin40")}
+    assert lives["navigation_narrow"]["outcome"] == "spin"
+    assert lives["navigation_narrow"]["steps"] < 100
+    assert lives["navigation_narrow_spin40"]["outcome"] != "spin"
+    assert lives["navigation_narrow_spin40"]["steps"] > 1000
+
+
 def test_the_choice_is_the_largest_candidate_without_a_spin():
     table = pd.DataFrame({"spin_variance": [64.0, 64.0, 48.0, 48.0, 32.0, 32.0],
                           "gain": [1, 2] * 3, "spins": [5, 0, 0, 1, 0, 0]})

@@ -302,9 +302,11 @@ def picture(world: ArenaWorld, corners: np.ndarray, pose: np.ndarray,
                                            colors="orange", linewidths=0.5))
     for v, body in enumerate(corners):
         axes.fill(body[:, 0], body[:, 1], color="tab:blue" if v < len(readings) else "tab:red")
-    if around is None:
-        axes.set_xlim(walls[:, [0, 2]].min(), walls[:, [0, 2]].max())
-        axes.set_ylim(walls[:, [1, 3]].min(), walls[:, [1, 3]].max())
+    if around is None:  # every wall, with a margin: a wall on the frame's edge was cut away
+        low, high = walls.reshape(-1, 2).min(axis=0), walls.reshape(-1, 2).max(axis=0)
+        margin = 0.02 * (high - low).max()
+        axes.set_xlim(low[0] - margin, high[0] + margin)
+        axes.set_ylim(low[1] - margin, high[1] + margin)
     else:
         x, y, half = around
         axes.set_xlim(x - half, x + half)

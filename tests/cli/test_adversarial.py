@@ -612,18 +612,28 @@ def test_files_that_include_each_other_are_refused_before_sumo_crashes(capsys, t
 
 # --- said against the wrong key, or too late ----------------------------------------------
 
-def test_a_route_file_whose_own_name_holds_a_comma_is_refused_naming_it(capsys, tmp_path,
-                                                                        monkeypatch, road_net):
-    """SUMO splits a list of files at commas, so it failed at its start (a folder so named
-    is passed through a link: tests/traffic/test_sumo_scenarios.py)."""
+@pytest.mark.parametrize("kind", ["route", "network"])
+def test_a_file_whose_own_name_holds_a_comma_is_refused_naming_it(capsys, tmp_path, monkeypatch,
+                                                                  road_net, kind):
+    """SUMO splits a list of files at commas (the network's option too), so it failed at its
+    start, a network named as ``traffic.routes`` (a folder so named is passed through a
+    link: tests/traffic/test_sumo_scenarios.py)."""
     monkeypatch.chdir(tmp_path)
     scenario = _road(tmp_path, road_net)
-    (tmp_path / "more,buses.rou.xml").write_text("<routes/>")
-    scenario.write_text(scenario.read_text().replace(
-        'sumocfg = "road.sumocfg"', 'sumocfg = "road.sumocfg"\nroutes = ["more,buses.rou.xml"]'))
-    message = refusal(capsys, ["run", scenario, "--out", tmp_path / "out"], scenario.name,
-                      "traffic.routes[0]")
-    assert "more,buses.rou.xml" in message and "comma" in message
+    if kind == "route":
+        (tmp_path / "more,buses.rou.xml").write_text("<routes/>")
+        line, name, key = 'routes = ["more,buses.rou.xml"]', "more,buses.rou.xml", \
+            "traffic.routes[0]"
+        scenario.write_text(scenario.read_text().replace(
+            'sumocfg = "road.sumocfg"', f'sumocfg = "road.sumocfg"\n{line}'))
+    else:
+        shutil.copy(road_net, tmp_path / "road,net.net.xml")
+        name, key = "road,net.net.xml", "track.net"
+        scenario.write_text(scenario.read_text().replace(
+            "[track]\n", '[track]\nnet = "road,net.net.xml"\n'))
+    message = refusal(capsys, ["run", scenario, "--out", tmp_path / "out"], scenario.name, key)
+    assert name in message and "comma" in message
+    assert not (tmp_path / "out").exists()
 
 
 @pytest.mark.parametrize(("body", "key"), [

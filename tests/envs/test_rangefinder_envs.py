@@ -46,6 +46,17 @@ def test_every_registered_id_passes_the_checker(name):
     env.close()
 
 
+def test_every_wall_is_drawn_inside_the_frame():
+    """The narrow track's walls reach its bounding box: with the frame cut at the box, the
+    end wall of the right-hand corridor was not drawn (a newcomer's probe). Every wall lies
+    inside a margin now: no wall pixel on the image's edge."""
+    env = gym.make(env_id("navigation_narrow"), render_mode="rgb_array")
+    env.reset(seed=0)
+    dark = env.render().sum(axis=2) < 200
+    assert dark.any()
+    assert not (dark[0].any() or dark[-1].any() or dark[:, 0].any() or dark[:, -1].any())
+
+
 def test_a_saved_controller_lives_as_long_in_the_env_as_in_the_gas_world(root):
     controller = Controller.load(root / "results/paper/controllers/generalization/"
                                         "navigation_narrow_seed1.npz")
