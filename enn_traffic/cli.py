@@ -257,17 +257,23 @@ def _warn_unread(scenario, command: str) -> None:
               f"(the crowds of Tables 3-4, every vehicle driving at once); {command} ignores it")
 
 
+def _check_out(out: Path) -> None:
+    """A run folder this command could write and no other run writes (nothing written)."""
+    from enn_traffic.io import check_output_folder, check_unlocked
+
+    check_output_folder(out)
+    check_unlocked(out)
+
+
 def _cmd_run(args) -> int:
     from enn_traffic.evolution.backends import make_evaluator
-    from enn_traffic.io import check_output_folder, check_unlocked
     from enn_traffic.progress import slow_step
     from enn_traffic.runner import check_folder, check_folder_unread, evolve
     from enn_traffic.scenario import load_scenario
     from enn_traffic.shipped import scenario_path
 
     if args.out:  # said before the scenario's network is read
-        check_output_folder(args.out)
-        check_unlocked(args.out)
+        _check_out(args.out)
         check_folder_unread(args.out, scenario_path(args.scenario),
                             resume=args.resume, force=args.force)
     scenario = load_scenario(scenario_path(args.scenario))
@@ -287,8 +293,7 @@ def _cmd_run(args) -> int:
     )
     out = args.out or Path("results") / scenario.name
     args.run_folder = out  # for the message of an interrupt (_interrupted_note)
-    check_output_folder(out)  # before any world, nothing written yet
-    check_unlocked(out)
+    _check_out(out)  # before any world, nothing written yet
     check_folder(scenario, out, resume=args.resume, force=args.force)
     scenario = scenario.with_sumo_output(out / "sumo", console=args.verbose)
     with slow_step(f"preparing the worlds of {scenario.name}"):
@@ -310,20 +315,17 @@ def _cmd_run(args) -> int:
 
 def _cmd_crowd(args) -> int:
     from enn_traffic.crowd import check_folder, check_room, crowd_scenario, run_crowd
-    from enn_traffic.io import check_output_folder, check_unlocked
     from enn_traffic.scenario import load_scenario
     from enn_traffic.shipped import scenario_path
 
     if args.out:  # said before the scenario's network is read
-        check_output_folder(args.out)
-        check_unlocked(args.out)
+        _check_out(args.out)
         check_folder(args.out, resume=args.resume, force=args.force,
                      source=scenario_path(args.scenario))
     scenario = crowd_scenario(load_scenario(scenario_path(args.scenario)), args.learners,
                               args.quick)
     out = args.out or Path("results") / f"{scenario.name}_crowd"
-    check_output_folder(out)  # before any world, nothing written yet
-    check_unlocked(out)
+    _check_out(out)  # before any world, nothing written yet
     check_folder(out, resume=args.resume, force=args.force, source=scenario.source)
     check_room(scenario, "--learners" if args.learners else "traffic.learners")
     scenario = scenario.with_sumo_output(out / "sumo", console=args.verbose)
