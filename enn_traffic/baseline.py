@@ -222,20 +222,31 @@ def chromosome_fitness(scenario: Scenario, chromosomes: np.ndarray, chosen_keys:
     return np.concatenate(columns, axis=1)[:, :count]
 
 
+def policy_lives(scenario: Scenario, act: Callable[[np.ndarray], np.ndarray],
+                 keys: list[int], count: int | None = None) -> pd.DataFrame:
+    """The first ``count`` situations of ``keys`` in ``scenario`` (in order; every one by
+    default), each driven once by ``act`` (observations (N, B) → actions (N, 2)) through the
+    vector environment: each life's steps, outcome and fitness (0 for a spin)."""
+    if count is None:
+        count = len(keys) * len(rangefinder_world(scenario).situations(keys[0]))
+    env = RangefinderVectorEnv(scenario, count)
+    observation, _ = env.reset(options={"keys": list(keys)})
+    ended = {"steps": np.full(count, -1), "outcome": np.empty(count, dtype=object),
+             "fitness": np.full(count, np.nan)}
+    while (ended["steps"] < 0).any():
+        observation, _, terminated, truncated, info = env.step(act(observation))
+        for i in np.flatnonzero((terminated | truncated) & (ended["steps"] < 0)):
+            for column, values in ended.items():
+                values[i] = info["final_info"][column][i]
+    return pd.DataFrame(ended)
+
+
 def policy_fitness(scenario: Scenario, act: Callable[[np.ndarray], np.ndarray],
                    chosen_keys: list[int], count: int) -> np.ndarray:
     """(count,): a policy's fitness per situation of ``chosen_keys`` (in order, the first
-    ``count``) of :func:`scoring_scenario`, each driven once through the vector environment
-    (``act``: observations (N, B) → actions (N, 2))."""
-    scenario = scoring_scenario(scenario)
-    env = RangefinderVectorEnv(scenario, count)
-    observation, _ = env.reset(options={"keys": list(chosen_keys)})
-    fitness = np.full(count, np.nan)
-    while np.isnan(fitness).any():
-        observation, _, terminated, truncated, info = env.step(act(observation))
-        for i in np.flatnonzero((terminated | truncated) & np.isnan(fitness)):
-            fitness[i] = info["final_info"]["fitness"][i]
-    return fitness
+    ``count``) of :func:`scoring_scenario` (:func:`policy_lives`)."""
+    return policy_lives(scoring_scenario(scenario), act, chosen_keys, count)[
+        "fitness"].to_numpy()
 
 
 # --- the GA ---------------------------------------------------------------------------------

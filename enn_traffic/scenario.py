@@ -1047,16 +1047,16 @@ AUTO = "auto"  # [track] start_lane = "auto"
 
 
 @contextmanager
-def network_named(scenario: Scenario, key: str = "track.net") -> Iterator[None]:
-    """An unreadable network said as the scenario file's ``key`` that names it (the network's
-    own file in the message), not as a file the user may not know the scenario reads."""
+def network_named(scenario: Scenario) -> Iterator[None]:
+    """An unreadable network said as the scenario file's ``track.net`` (the network's own file
+    in the message), not as a file the user may not know the scenario reads."""
     try:
         yield
     except InputError as exc:
         net = scenario.track.net if isinstance(scenario.track, TrackConfig) else None
         if (exc.key is None and exc.file is not None and net is not None
                 and scenario.source is not None and Path(exc.file).resolve() == net.resolve()):
-            raise InputError(f"{exc.file}: {exc.message}", scenario.source, key) from None
+            raise InputError(f"{exc.file}: {exc.message}", scenario.source, "track.net") from None
         raise
 
 

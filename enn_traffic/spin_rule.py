@@ -22,7 +22,10 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from enn_traffic import baseline
+from enn_traffic.io import write_atomic
 from enn_traffic.scenario import Scenario
+from enn_traffic.shipped import shipped_scenario
 
 # Candidate ``spin_variance`` values (m²), the paper's first; gains of the centre-keeping
 # controllers (steering, as a share of full lock, per unit of the normalised left-right
@@ -48,24 +51,6 @@ def centre_keeping(gain: float, beam_range: float) -> Callable[[np.ndarray], np.
     return act
 
 
-def lives(scenario: Scenario, act: Callable[[np.ndarray], np.ndarray],
-          keys: list[int]) -> pd.DataFrame:
-    """Each situation of ``keys`` driven once by ``act`` through the vector environment of
-    ``scenario``: its steps and outcome."""
-    from enn_traffic.envs.rangefinder import RangefinderVectorEnv
-
-    env = RangefinderVectorEnv(scenario, len(keys))
-    observation, _ = env.reset(options={"keys": keys})
-    steps = np.full(len(keys), -1)
-    outcome = np.empty(len(keys), dtype=object)
-    while (steps < 0).any():
-        observation, _, terminated, truncated, info = env.step(act(observation))
-        for i in np.flatnonzero((terminated | truncated) & (steps < 0)):
-            steps[i] = info["final_info"]["steps"][i]
-            outcome[i] = info["final_info"]["outcome"][i]
-    return pd.DataFrame({"steps": steps, "outcome": outcome})
-
-
 def spin_table(scenario: Scenario, keys: list[int], candidates=CANDIDATES,
                gains=GAINS) -> pd.DataFrame:
     """Per candidate ``spin_variance`` and gain: how many of the situations of ``keys`` the
@@ -76,7 +61,7 @@ def spin_table(scenario: Scenario, keys: list[int], candidates=CANDIDATES,
     for variance in candidates:
         ruled = scenario.with_overrides(episode={"spin_variance": variance})
         for gain in gains:
-            table = lives(ruled, centre_keeping(gain, beam_range), keys)
+            table = baseline.policy_lives(ruled, centre_keeping(gain, beam_range), keys)
             rows.append({"scenario": scenario.name, "spin_variance": variance, "gain": gain,
                          "situations": len(table),
                          "spins": int((table["outcome"] == "spin").sum()),
@@ -100,10 +85,6 @@ def chosen_variance(table: pd.DataFrame) -> float:
 def write(out: Path) -> pd.DataFrame:
     """``out/spin_rule.csv``: the narrow track's table on the comparison's validation
     situations."""
-    from enn_traffic import baseline
-    from enn_traffic.io import write_atomic
-    from enn_traffic.shipped import shipped_scenario
-
     narrow = shipped_scenario("navigation_narrow")
     validation, _ = baseline.held_out_keys(narrow)
     table = spin_table(baseline.scoring_scenario(narrow), validation)

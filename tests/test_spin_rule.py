@@ -45,8 +45,9 @@ def test_the_papers_rule_rules_centre_keeping_a_spin_and_the_second_rule_does_no
 def test_from_the_registered_ids_one_start_centre_keeping_spins_only_under_the_papers_rule():
     """docs/envs.md: from NavigationNarrow-v0's one start, centre keeping is ruled a spin at
     the first turn under 64 m² (within the first 100 steps), and drives on under 40 m²."""
-    lives = {name: spin_rule.lives(shipped_scenario(name), spin_rule.centre_keeping(1.0, 25.0),
-                                   [baseline.VALIDATION_KEY]).iloc[0]
+    lives = {name: baseline.policy_lives(shipped_scenario(name),
+                                         spin_rule.centre_keeping(1.0, 25.0),
+                                         [baseline.VALIDATION_KEY]).iloc[0]
              for name in ("navigation_narrow", "navigation_narrow_spin40")}
     assert lives["navigation_narrow"]["outcome"] == "spin"
     assert lives["navigation_narrow"]["steps"] < 100

@@ -198,4 +198,7 @@ def test_the_vector_env_renders_its_first_worlds_as_a_grid():
             image[row * height:(row + 1) * height, column * width:(column + 1) * width], tile)
     assert not np.array_equal(tiles[0], tiles[1])
     assert (image[height:, 2 * width:] == 255).all()
-    assert RENDERED_WORLDS == 16
+    many = make_vector_env("arena_strategy1", num_envs=RENDERED_WORLDS + 4,
+                           render_mode="rgb_array")
+    many.reset(seed=0)
+    assert many.render().shape == (4 * height, 4 * width, 3)  # the first 16 worlds, 4 × 4
