@@ -52,7 +52,7 @@ from enn_traffic.errors import InputError
 from enn_traffic.evolution import ga
 from enn_traffic.io import write_atomic
 from enn_traffic.progress import log, terminal
-from enn_traffic.report.stats import bootstrap_interval, t_interval
+from enn_traffic.report.stats import bootstrap_interval, t_interval, welch_contrast
 from enn_traffic.runner import ga_params
 from enn_traffic.scenario import Scenario, TrackConfig, scenario_digest
 from enn_traffic.sim.world import SituationResults
@@ -777,7 +777,10 @@ def differences(comparison: pd.DataFrame, level: float = 0.9) -> pd.DataFrame:
                          "mine_values": mine, "ga_values": other})
     table = pd.DataFrame(rows)
     if table.empty:
-        return table
+        return pd.DataFrame(columns=[
+            "scenario", "method", "budget_steps", "ga_budget_steps", "seeds", "ga_seeds",
+            "minus_ga", "minus_ga_low", "minus_ga_high", "p_value",
+            "minus_ga_low_simultaneous", "minus_ga_high_simultaneous", "family", "p_holm"])
     family = table.groupby("scenario")["method"].transform("size")
     columns = {"minus_ga_low": [], "minus_ga_high": [], "p_value": [],
                "minus_ga_low_simultaneous": [], "minus_ga_high_simultaneous": []}
@@ -804,14 +807,54 @@ def holm(p_values: pd.Series) -> pd.Series:
     return pd.Series(np.minimum(adjusted, 1.0), index=known.index).reindex(p_values.index)
 
 
+# Scenarios that differ in their spin rule alone (issue 65): the paper's first, the second
+# rule (enn_traffic.spin_rule) after it.
+RULE_PAIRS = (("navigation_narrow", "navigation_narrow_spin40"),)
+
+
+def rule_changes(comparison: pd.DataFrame, pairs: tuple = RULE_PAIRS,
+                 level: float = 0.9) -> pd.DataFrame:
+    """How each method's gap to the GA (its seeds' mean test fitness minus the GA's, at every
+    pair of budgets) changes from the paper's spin rule to the second: both gaps, and the
+    change, (method − GA) under the second minus (method − GA) under the paper's, with its
+    Welch–Satterthwaite t interval over the four groups of seeds (independent runs)."""
+    def seeds(name: str, method: str, budget: int) -> np.ndarray:
+        return comparison[(comparison["scenario"] == name) & (comparison["method"] == method)
+                          & (comparison["budget_steps"] == budget)]["test_fitness"].to_numpy()
+
+    rows = []
+    for paper_rule, second in pairs:
+        both = comparison[comparison["scenario"].isin([paper_rule, second])]
+        budgets = both.groupby("method")["budget_steps"].unique()
+        for method in (m for m in METHODS if m != "GA" and m in budgets):
+            for budget in sorted(budgets[method]):
+                for ga_budget in sorted(budgets.get("GA", [])):
+                    groups = [seeds(second, method, budget), seeds(second, "GA", ga_budget),
+                              seeds(paper_rule, method, budget),
+                              seeds(paper_rule, "GA", ga_budget)]
+                    if min(map(len, groups)) == 0:
+                        continue
+                    change, low, high = welch_contrast(groups, [1, -1, -1, 1], level)
+                    rows.append({
+                        "paper_rule": paper_rule, "second_rule": second, "method": method,
+                        "budget_steps": budget, "ga_budget_steps": ga_budget,
+                        "minus_ga_paper_rule": groups[2].mean() - groups[3].mean(),
+                        "minus_ga_second_rule": groups[0].mean() - groups[1].mean(),
+                        "change": change, "change_low": low, "change_high": high})
+    return pd.DataFrame(rows, columns=[
+        "paper_rule", "second_rule", "method", "budget_steps", "ga_budget_steps",
+        "minus_ga_paper_rule", "minus_ga_second_rule", "change", "change_low", "change_high"])
+
+
 def write_summary(out: Path) -> pd.DataFrame:
-    """``out/comparison_summary.csv``, ``comparison_differences.csv`` and
-    ``comparison.png`` from the runs' CSVs."""
+    """``out/comparison_summary.csv``, ``comparison_differences.csv``,
+    ``comparison_rules.csv`` and ``comparison.png`` from the runs' CSVs."""
     runs = _read(out / "comparison.csv")
     table = summary(runs, _read(out / "curves.csv"))
     write_atomic(out / "comparison_summary.csv", partial(table.to_csv, index=False))
     write_atomic(out / "comparison_differences.csv",
                  partial(differences(runs).to_csv, index=False))
+    write_atomic(out / "comparison_rules.csv", partial(rule_changes(runs).to_csv, index=False))
     plot(_read(out / "curves.csv"), _read(out / "comparison.csv"), out / "comparison.png")
     return table
 

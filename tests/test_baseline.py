@@ -310,3 +310,23 @@ def test_a_committed_ga_run_of_the_comparison_comes_out_the_same(monkeypatch):
     assert int(result.curve["learner_steps"].iloc[-1]) == committed["learner_steps"]
     assert int(best["learner_steps"]) == committed["chosen_at_steps"]
     assert result.test_fitness.mean() == pytest.approx(committed["test_fitness"], abs=1e-9)
+
+
+def test_a_rules_change_of_the_gap_is_a_contrast_of_four_groups_of_seeds():
+    """Hand-computed: under the paper's rule PPO − GA = 2 − 10 = −8, under the second
+    7 − 11 = −4: the gap changes by +4; its interval is Welch's when three groups have no
+    spread (the fourth's alone counts)."""
+    from scipy import stats
+
+    fitness = {("paper", "GA"): [10.0, 10.0, 10.0], ("paper", "PPO"): [2.0, 2.0, 2.0],
+               ("second", "GA"): [11.0, 11.0, 11.0], ("second", "PPO"): [5.0, 7.0, 9.0]}
+    runs = pd.DataFrame([{"scenario": name, "method": method, "budget_steps": 100,
+                          "seed": i, "test_fitness": f}
+                         for (name, method), values in fitness.items()
+                         for i, f in enumerate(values)])
+    row = baseline.rule_changes(runs, pairs=(("paper", "second"),)).iloc[0]
+    assert (row["minus_ga_paper_rule"], row["minus_ga_second_rule"]) == (-8.0, -4.0)
+    assert row["change"] == pytest.approx(4.0)
+    half = stats.t.ppf(0.95, 2) * stats.sem(fitness[("second", "PPO")])
+    assert (row["change_low"], row["change_high"]) == pytest.approx((4.0 - half, 4.0 + half))
+    assert baseline.rule_changes(runs, pairs=(("paper", "other"),)).empty

@@ -19,6 +19,7 @@ import pandas as pd
 
 from enn_traffic import keys
 from enn_traffic.controller import Controller
+from enn_traffic.experiments.comparison_doc import _training_lives, comparison
 from enn_traffic.experiments.protocol import ARENA, CITY, SUMO, Family
 from enn_traffic.experiments.regime import PAPER_INITIAL
 from enn_traffic.experiments.simultaneous import (
@@ -580,25 +581,6 @@ def _narrow_starts(comparison, protocol: dict, situations: pd.DataFrame) -> str:
             f"the mean test fitness over seeds is {listed}.")
 
 
-def _training_lives(lives: pd.DataFrame, names: dict[str, str]) -> list[str]:
-    """``training_lives.csv``: how long the lives lived while learning were, per method."""
-    lines = [
-        "How long the lives lived while learning were (`training_lives.csv`: one run per "
-        "method, seed 1, its first budget; the GA's every individual in every situation, "
-        "PPO's and SAC's exploring policy):",
-        "",
-        "| scenario | method | learner-steps | lives | median | longest | over 100 steps | "
-        "over 1,000 steps |",
-        "|---|---|---|---|---|---|---|---|",
-    ]
-    for row in lives.sort_values(["scenario", "method"]).itertuples():
-        lines.append(f"| {names.get(row.scenario, row.scenario)} | {row.method} | "
-                     f"{_steps(row.budget_steps)} | {row.lives:,} | {row.median_life:.0f} | "
-                     f"{row.longest_life:,} | {row.lives_over_100:,} | "
-                     f"{row.lives_over_1000:,} |")
-    return lines
-
-
 def table4_ablation(paper: Path) -> str:
     """Table 4's ablation (:mod:`enn_traffic.experiments.ablation`): every arm against its own
     start, the initial drivers and the winner; each choice's effect; the first reading."""
@@ -899,7 +881,8 @@ SECTIONS: dict[str, Callable[[Path], str]] = {
     "city_tables34": lambda paper: family_tables34(paper, CITY),
     "sumo_closed_loop": lambda paper: closed_loop(paper, SUMO),
     "city_closed_loop": lambda paper: closed_loop(paper, CITY), "baseline": baseline,
-    "spin_rule": spin_rule}
+    "spin_rule": spin_rule,
+    "baseline_round3": lambda paper: comparison(paper.parent / "baseline_round3")}
 
 
 def section(name: str, paper: Path) -> str:

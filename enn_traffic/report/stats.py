@@ -26,3 +26,24 @@ def t_interval(values: np.ndarray, level: float = 0.9) -> tuple[float, float]:
     low, high = stats.t.interval(level, len(values) - 1, loc=values.mean(),
                                  scale=stats.sem(values))
     return float(low), float(high)
+
+
+def welch_contrast(groups: list[np.ndarray], weights: list[float], level: float = 0.9
+                   ) -> tuple[float, float, float]:
+    """A weighted sum of independent groups' means (a difference of two differences, say)
+    with its Welch–Satterthwaite t interval: (estimate, low, high). Groups without spread
+    give a point; a group of one value has no spread to estimate (NaN interval)."""
+    from scipy import stats
+
+    groups = [np.asarray(group, dtype=np.float64) for group in groups]
+    estimate = float(sum(w * group.mean() for w, group in zip(weights, groups, strict=True)))
+    if min(len(group) for group in groups) < 2:
+        return estimate, float("nan"), float("nan")
+    parts = np.array([w * w * group.var(ddof=1) / len(group)
+                      for w, group in zip(weights, groups, strict=True)])
+    if parts.sum() == 0:
+        return estimate, estimate, estimate
+    freedom = parts.sum() ** 2 / sum(part ** 2 / (len(group) - 1)
+                                     for part, group in zip(parts, groups, strict=True))
+    half = stats.t.ppf((1 + level) / 2, freedom) * np.sqrt(parts.sum())
+    return estimate, float(estimate - half), float(estimate + half)

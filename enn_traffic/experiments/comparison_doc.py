@@ -1,0 +1,222 @@
+"""docs/results.md's section on the GA against PPO and SAC (:mod:`enn_traffic.baseline`),
+written from a comparison folder's CSVs and its ``protocol.json`` (the folder's protocol, not
+today's): the protocol, the search, the test fitness, the differences from the GA with their
+family-corrected intervals, and how the gap changes between the spin rules (issue 65)."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import pandas as pd
+
+from enn_traffic import baseline
+from enn_traffic.shipped import shipped_scenario
+
+TRACKS = {"navigation_narrow": "narrow track", "navigation_narrow_spin40": "narrow track",
+          "arena_strategy1": "arena, strategy 1"}
+PAPER_SPIN_VARIANCE = 64.0  # §5.3
+
+
+def _steps(budget: float) -> str:
+    return f"{budget / 1e6:g} M"
+
+
+def _name(scenario: str, spin_variance: float) -> str:
+    """A scenario as the tables name it: its track, and its spin rule where it has two."""
+    track = TRACKS.get(scenario, scenario)
+    if not any(scenario in pair for pair in baseline.RULE_PAIRS):
+        return track
+    paper = " (the paper's)" if spin_variance == PAPER_SPIN_VARIANCE else ""
+    return f"{track}, spin ≤ {spin_variance:g} m²{paper}"
+
+
+def comparison(folder: Path) -> str:
+    """The section, from ``folder``'s CSVs."""
+    protocol = json.loads((folder / "protocol.json").read_text())
+    runs = pd.read_csv(folder / "comparison.csv")
+    rules = dict(zip(runs["scenario"], runs["spin_variance"], strict=False))
+    names = {name: _name(name, rule) for name, rule in rules.items()}
+    lines = _protocol(protocol, folder, names)
+    lines += _search(pd.read_csv(folder / "tuning.csv"), names, rules)
+    lines += _fitness(runs, folder, names)
+    lines += _differences(pd.read_csv(folder / "comparison_differences.csv"), names)
+    lines += _rule_changes(pd.read_csv(folder / "comparison_rules.csv"), names)
+    lines += ["", f"![GA, PPO and SAC](../{folder.parent.name}/{folder.name}/comparison.png)",
+              ""]
+    lines += _training_lives(pd.read_csv(folder / "training_lives.csv"), names)
+    return "\n".join(lines)
+
+
+def _protocol(protocol: dict, folder: Path, names: dict[str, str]) -> list[str]:
+    shared, distinct = _starts(protocol)
+    scenarios = " ".join(json.loads((folder / "scenarios.json").read_text()))
+    planned = ", ".join(f"{p.method} {_steps(p.budget_steps)} × {p.seeds} seeds"
+                        for p in baseline.PLAN)
+    return [
+        f"`enn-traffic baseline {scenarios}` (PPO and SAC need the `[rl]` extra and a CPU "
+        "torch: docs/envs.md). Every method learns on training keys: the GA meets a new key "
+        "each generation, PPO and SAC draw each life from "
+        f"{protocol['training_pool_keys']:,} training keys. A run's candidates are its "
+        f"controllers at every 1/{protocol['checkpoints']} of its budget and at its end (PPO's "
+        "and SAC's policy acting on its mean; the GA's best of the generation that reached "
+        "the checkpoint, one a generation at most). Candidates are scored on "
+        f"{protocol['validation_situations']} validation situations (keys from "
+        f"{protocol['validation_key']:,}); the best there is the run's controller (saved in "
+        f"`controllers/`), scored once on {protocol['test_situations']} test situations (keys "
+        f"from {protocol['test_key']:,}, read by this round alone). The narrow track trains "
+        "from its one start (§5.1) and is scored from starts all along it (every 5 m, facing "
+        f"either way): of its {protocol['test_situations']} test starts {distinct} are "
+        f"distinct, and {shared} of them also start a validation situation. "
+        f"Planned per scenario: {planned}. A run's random stream comes from its seed and its "
+        "budget, so a 5 M run is no continuation of a 1 M run. Every method's setting is the "
+        "best on validation of an equal search (below). Runs ran two at a time on the shared "
+        "2-core machine, one torch thread each; wall time is training alone.",
+        ""]
+
+
+def _starts(protocol: dict) -> tuple[int, int]:
+    """How many of the narrow track's test starts are also validation starts, and how many
+    test starts are distinct, under ``protocol``."""
+    from enn_traffic.envs.rangefinder import rangefinder_world
+
+    scored = baseline.scoring_scenario(shipped_scenario("navigation_narrow"))
+    world = rangefinder_world(scored)
+
+    def starts(chosen: list[int], count: int) -> list[tuple]:
+        return [baseline.start_of(situation) for key in chosen
+                for situation in world.situations(key)][:count]
+
+    validation_keys, test_keys = baseline.held_out_keys(scored, protocol)
+    validation = set(starts(validation_keys, protocol["validation_situations"]))
+    test = starts(test_keys, protocol["test_situations"])
+    return sum(start in validation for start in test), len(set(test))
+
+
+def _search(tuning: pd.DataFrame, names: dict[str, str], rules: dict) -> list[str]:
+    budget = tuning["budget_steps"].iloc[0]
+    counts = tuning.groupby("method")["setting"].nunique()
+    searched = (f"{counts.iloc[0]} settings of each method" if counts.nunique() == 1 else
+                ", ".join(f"{count} settings of {method}" for method, count in counts.items()))
+    lines = [
+        "The search (`tuning.csv`, every setting in `enn_traffic/baseline.py`'s `SEARCH`): "
+        f"{searched}, one run each per scenario (seed {baseline.TUNING_SEED}, "
+        f"{_steps(budget)} learner-steps) scored on validation keys; the best is each "
+        "method's setting in the comparison (PPO and SAC start at RL Zoo's BipedalWalker-v3 "
+        "entries; the GA's other settings keep the scenario's share of elites).",
+        "",
+        "| scenario | method | validation fitness: best (its setting) | median | worst |",
+        "|---|---|---|---|---|"]
+    for (name, method), rows in tuning.groupby(["scenario", "method"]):
+        chosen = baseline.chosen_setting(tuning, name, method)
+        best = rows.set_index("setting").loc[chosen, "validation_fitness"]
+        fitness = rows["validation_fitness"]
+        label = names.get(name) or _name(name, rules.get(name, PAPER_SPIN_VARIANCE))
+        lines.append(f"| {label} | {method} | {best:,.0f} ({chosen}) | {fitness.median():,.0f} "
+                     f"| {fitness.min():,.0f} |")
+    return lines + [""]
+
+
+def _fitness(runs: pd.DataFrame, folder: Path, names: dict[str, str]) -> list[str]:
+    summary = pd.read_csv(folder / "comparison_summary.csv")
+    situations = pd.read_csv(folder / "situations.csv")
+    planned = {(p.method, p.budget_steps): p.seeds for p in baseline.PLAN}
+    lines = [
+        "Test fitness (steps lived, 0 for a spin) of each run's chosen controller: the mean "
+        "over seeds with its 90% Student's t interval over seeds (cut to the fitness a run "
+        "can have, 0 to the step cap); at the cap: the share of "
+        "all its runs' test situations driven to the scenario's step cap. The learner-steps "
+        "simulated are in brackets (the GA's last generation and PPO's last rollout end past "
+        "the budget); validation − test: the optimism of choosing the best of many "
+        "candidates.",
+        "",
+        "| scenario | method | budget (simulated) | seeds | test fitness (90% interval over "
+        "seeds) | runs, min–max | at the cap | candidates | chose its last | validation − "
+        "test | wall time per run |",
+        "|---|---|---|---|---|---|---|---|---|---|---|"]
+    for row in summary.itertuples():
+        mine = runs[(runs["scenario"] == row.scenario) & (runs["method"] == row.method)
+                    & (runs["budget_steps"] == row.budget_steps)]
+        cap = shipped_scenario(row.scenario).episode.max_steps
+        lived = situations[(situations["scenario"] == row.scenario)
+                           & (situations["method"] == row.method)
+                           & (situations["budget_steps"] == row.budget_steps)]["test_fitness"]
+        seeds = planned.get((row.method, row.budget_steps))
+        lines.append(
+            f"| {names[row.scenario]} | {row.method} | {_steps(row.budget_steps)} "
+            f"({row.learner_steps / 1e6:.2f} M) | {row.seeds}"
+            f"{'' if seeds in (None, row.seeds) else f' of {seeds}'} | "
+            f"{row.test_fitness:,.0f} ({max(row.seeds_low, 0):,.0f}–"
+            f"{min(row.seeds_high, cap):,.0f}) | "
+            f"{mine['test_fitness'].min():,.0f}–{mine['test_fitness'].max():,.0f} | "
+            f"{(lived >= cap).mean():.0%} | {row.candidates:.0f} | "
+            f"{row.last_chosen} of {row.seeds} | {row.validation_minus_test:,.0f} | "
+            f"{row.wall_s:.0f} s |")
+    return lines + [""]
+
+
+def _cell(row) -> str:
+    if pd.isna(row.p_value):
+        return f"{row.minus_ga:+,.0f}"
+    return (f"{row.minus_ga:+,.0f} ({row.minus_ga_low:+,.0f} to {row.minus_ga_high:+,.0f}; "
+            f"together {row.minus_ga_low_simultaneous:+,.0f} to "
+            f"{row.minus_ga_high_simultaneous:+,.0f}), Holm p {row.p_holm:.2g}")
+
+
+def _differences(differences: pd.DataFrame, names: dict[str, str]) -> list[str]:
+    if differences.empty:
+        return []
+    ga_budgets = sorted(differences["ga_budget_steps"].unique())
+    lines = [
+        "PPO and SAC minus the GA (`comparison_differences.csv`): the difference of the seeds' "
+        "mean test fitness with its 90% Welch t interval; *together*: Bonferroni's "
+        "simultaneous interval, all of a scenario's comparisons at once (90% together); "
+        "Holm's p-value, adjusted for the same family.",
+        "",
+        "| scenario | method, budget | " + " | ".join(
+            f"minus the GA at {_steps(b)}" for b in ga_budgets) + " |",
+        "|---|---|" + "---|" * len(ga_budgets)]
+    for (name, method, budget), rows in differences.groupby(
+            ["scenario", "method", "budget_steps"]):
+        cells = {row.ga_budget_steps: _cell(row) for row in rows.itertuples()}
+        lines.append(f"| {names.get(name, name)} | {method}, {_steps(budget)} | "
+                     + " | ".join(cells.get(b, "") for b in ga_budgets) + " |")
+    return lines + [""]
+
+
+def _rule_changes(changes: pd.DataFrame, names: dict[str, str]) -> list[str]:
+    if changes.empty:
+        return []
+    lines = [
+        "How the gap changes between the spin rules (`comparison_rules.csv`): each method's "
+        "difference from the GA under the paper's rule and under the second, and the change "
+        "(second minus paper's) with its 90% Welch–Satterthwaite interval over the four "
+        "groups of seeds.",
+        "",
+        "| method, budget | against the GA at | under " + " | under ".join(
+            names.get(n, n) for n in changes.iloc[0][["paper_rule", "second_rule"]])
+        + " | change (90% interval) |",
+        "|---|---|---|---|---|"]
+    for row in changes.itertuples():
+        lines.append(f"| {row.method}, {_steps(row.budget_steps)} | "
+                     f"{_steps(row.ga_budget_steps)} | {row.minus_ga_paper_rule:+,.0f} | "
+                     f"{row.minus_ga_second_rule:+,.0f} | {row.change:+,.0f} "
+                     f"({row.change_low:+,.0f} to {row.change_high:+,.0f}) |")
+    return lines + [""]
+
+
+def _training_lives(lives: pd.DataFrame, names: dict[str, str]) -> list[str]:
+    lines = [
+        "How long the lives lived while learning were (`training_lives.csv`: one run per "
+        "method, seed 1, its first budget; the GA's every individual in every situation, "
+        "PPO's and SAC's exploring policy):",
+        "",
+        "| scenario | method | learner-steps | lives | median | longest | over 100 steps | "
+        "over 1,000 steps |",
+        "|---|---|---|---|---|---|---|---|"]
+    for row in lives.sort_values(["scenario", "method"]).itertuples():
+        lines.append(f"| {names.get(row.scenario, row.scenario)} | {row.method} | "
+                     f"{_steps(row.budget_steps)} | {row.lives:,} | {row.median_life:.0f} | "
+                     f"{row.longest_life:,} | {row.lives_over_100:,} | "
+                     f"{row.lives_over_1000:,} |")
+    return lines
