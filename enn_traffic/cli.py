@@ -199,8 +199,8 @@ def build_parser() -> argparse.ArgumentParser:
         "situations (no start shared with validation). Writes "
         "OUT/tuning.csv, comparison.csv (a row per run), situations.csv, curves.csv, "
         "training_lives.csv, comparison_summary.csv, comparison_differences.csv, "
-        "comparison_rules.csv (the gaps under both spin rules), comparison.png and each run's controller in OUT/controllers/; runs already there "
-        "are skipped, so the "
+        "comparison_rules.csv (the gaps under both spin rules), comparison.png and each "
+        "run's controller in OUT/controllers/; runs already there are skipped, so the "
         "same command continues an interrupted comparison. PPO and SAC need the rl extra "
         "(pip install -e .[rl]; docs/envs.md).")
     baseline.add_argument("scenario", type=_path, nargs="+", metavar="SCENARIO.toml",

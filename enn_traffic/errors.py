@@ -15,5 +15,16 @@ class InputError(Exception):
         super().__init__(str(self))
 
     def __str__(self) -> str:
-        where = ": ".join(part for part in (self.file, self.key) if part)
+        where = ": ".join(part for part in (shown(self.file), self.key) if part)
         return f"{where}: {self.message}" if where else self.message
+
+
+def shown(file: str | None) -> str | None:
+    """A file as a message names it: relative to the working folder when inside it, so that a
+    scenario reads the same whether a check ran before its path was resolved or after."""
+    if file is None or not Path(file).is_absolute():
+        return file
+    try:
+        return str(Path(file).relative_to(Path.cwd()))
+    except (ValueError, OSError):
+        return file

@@ -5,6 +5,7 @@ own refusals (argparse's) too."""
 from __future__ import annotations
 
 from enn_traffic import cli
+from enn_traffic.errors import shown
 
 
 def refusal(capsys, argv: list, names: tuple | object = (), key: str | None = None) -> str:
@@ -19,7 +20,8 @@ def refusal(capsys, argv: list, names: tuple | object = (), key: str | None = No
     assert message.startswith("enn-traffic: error: ") and "\n" not in message, message
     names = names if isinstance(names, tuple) else (names,)
     if names:
-        assert any(str(name) in message for name in names), message
+        assert any(str(name) in message or shown(str(name)) in message for name in names), \
+            message  # a file inside the working folder is named relative to it
     if key:
         assert key in message, message
     return message
