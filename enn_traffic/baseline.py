@@ -129,6 +129,9 @@ SEARCH = {
                  target_entropy=(-4.0, -2.0, -0.5), gamma=(0.98, 0.999), use_sde=(True, False)),
 }
 SEARCH_BUDGET = 300_000  # learner-steps of each search run, every method alike
+# No method learns from steps past its budget: the GA's last generation, PPO's last rollout
+# end within it (issue 65; before, both ended past it, a GA generation by up to 4 M steps).
+WITHIN_BUDGET = True
 
 
 @dataclass(frozen=True)
@@ -259,8 +262,10 @@ def run_seed(seed: int, budget: int) -> np.random.SeedSequence:
 
 def ga_run(scenario: Scenario, budget: int, seed: int, test: bool = True,
            settings: dict | None = None) -> RunResult:
-    """The scenario's GA, seeded by ``seed``, until ``budget`` learner-steps are simulated;
-    a generation's champion is a candidate while the steps so far have passed more
+    """The scenario's GA, seeded by ``seed``, for at most ``budget`` learner-steps: a
+    generation that would end past the budget is not learned from (issue 65: no method learns
+    from more steps than its budget; only a first generation larger than the budget counts).
+    A generation's champion is a candidate while the steps so far have passed more
     checkpoints than there are candidates (one a generation at most: after a generation that
     spans several checkpoints, the next ones are candidates too), and the last generation's;
     the candidates are scored on validation, the best of them on test. ``settings``: the
@@ -281,16 +286,24 @@ def ga_run(scenario: Scenario, budget: int, seed: int, test: bool = True,
                          world.evaluate, params)
     every = max(1, budget // CHECKPOINTS)
     spent, began, rows, lives, candidates = 0, time.perf_counter(), [], [], []
+    last = None  # the last generation learned from: (champion, steps so far, wall, generation)
     while spent < budget:
         stopping.raise_if_requested()
         state, _, results = next(run)
-        spent += int(results.steps.sum())
+        steps = int(results.steps.sum())
+        if last is not None and spent + steps > budget:
+            break
+        spent += steps
         lives.append(results.steps.ravel())
-        if spent >= every * (len(rows) + 1) or spent >= budget:
-            generation = len(state.champions) - 1
-            candidates.append(state.champions[generation])
-            rows.append((spent, time.perf_counter() - began, generation))
-    wall = time.perf_counter() - began
+        generation = len(state.champions) - 1
+        last = (state.champions[generation], spent, time.perf_counter() - began, generation)
+        if spent >= every * (len(rows) + 1):
+            candidates.append(last[0])
+            rows.append(last[1:])
+    if not rows or rows[-1][2] != last[3]:  # the last generation is a candidate too
+        candidates.append(last[0])
+        rows.append(last[1:])
+    wall = last[2]
     candidates = np.asarray(candidates)
     validation_keys, test_keys = held_out_keys(scenario)
     validation = chromosome_fitness(scenario, candidates, validation_keys,
@@ -403,9 +416,9 @@ def rl_model(method: str, venv, settings: dict, seed: int):
 
 def rl_run(scenario: Scenario, method: str, settings: dict, budget: int, seed: int,
            test: bool = True) -> RunResult:
-    """PPO or SAC with ``settings`` for ``budget`` learner-steps; its policy at every
-    ``budget / CHECKPOINTS`` steps and at the end scored on validation, the best of them on
-    test."""
+    """PPO or SAC with ``settings`` for at most ``budget`` learner-steps (whole rollouts);
+    its policy at every ``budget / CHECKPOINTS`` steps and at the end scored on validation,
+    the best of them on test."""
     try:
         import torch
         from stable_baselines3.common.callbacks import BaseCallback
@@ -441,7 +454,11 @@ def rl_run(scenario: Scenario, method: str, settings: dict, budget: int, seed: i
                 snapshot()
             return True
 
-    model.learn(total_timesteps=budget, callback=Snapshots())
+    # Whole rollouts (PPO) or vector steps (SAC) within the budget, at least one: no method
+    # learns from more steps than its budget (issue 65).
+    rollout = settings["n_envs"] * (settings["n_steps"] if method == "PPO" else 1)
+    model.learn(total_timesteps=max(rollout, budget // rollout * rollout),
+                callback=Snapshots())
     wall = time.perf_counter() - began
     if not snapshots or snapshots[-1][0] < model.num_timesteps:  # PPO's last update
         snapshot()
@@ -538,7 +555,7 @@ def tune(scenarios: list[Scenario], out: Path, methods: tuple[str, ...], workers
         best = result.curve.iloc[result.chosen]
         _append(path, pd.DataFrame([{
             "scenario": scenario.name, "method": method, "setting": setting,
-            "budget_steps": budget, "seed": seed,
+            "budget_steps": budget, "seed": seed, "learner_steps": result.learner_steps,
             "validation_situations": VALIDATION_SITUATIONS,
             "validation_fitness": best["validation_fitness"],
             "chosen_at_steps": int(best["learner_steps"]), "wall_s": result.wall_s}]))
@@ -629,7 +646,7 @@ def protocol() -> dict[str, int]:
             "validation_situations": VALIDATION_SITUATIONS,
             "test_situations": TEST_SITUATIONS, "checkpoints": CHECKPOINTS,
             "training_pool_keys": TRAINING_POOL_KEYS, "distinct_starts": DISTINCT_STARTS,
-            "search_budget_steps": SEARCH_BUDGET}
+            "search_budget_steps": SEARCH_BUDGET, "within_budget": WITHIN_BUDGET}
 
 
 def check_protocol(out: Path) -> None:
