@@ -52,7 +52,13 @@ from enn_traffic.errors import InputError
 from enn_traffic.evolution import ga
 from enn_traffic.io import write_atomic
 from enn_traffic.progress import log, terminal
-from enn_traffic.report.stats import bootstrap_interval, t_interval, welch_contrast
+from enn_traffic.report.stats import (
+    above_share,
+    bootstrap_interval,
+    permutation_p,
+    t_interval,
+    welch_contrast,
+)
 from enn_traffic.runner import ga_params
 from enn_traffic.scenario import Scenario, TrackConfig, scenario_digest
 from enn_traffic.sim.world import SituationResults
@@ -774,10 +780,12 @@ def summary(comparison: pd.DataFrame, curves: pd.DataFrame) -> pd.DataFrame:
 def differences(comparison: pd.DataFrame, level: float = 0.9) -> pd.DataFrame:
     """PPO's and SAC's test fitness minus the GA's, at every pair of budgets in a scenario:
     the difference of the seeds' means with its Welch t interval (the seeds' spread, the
-    main spread of RL, counts; each seed's score is the mean over the same situations), its
-    Welch p-value, and, for the family of a scenario's comparisons (``family`` of them),
-    Holm's adjusted p-value and Bonferroni's simultaneous interval (each at level
-    1 − (1 − ``level``) / family, so that all of a scenario's intervals hold together)."""
+    main spread of RL, counts; each seed's score is the mean over the same situations; two
+    groups without spread give a point), its exact permutation p-value (no normal shape
+    assumed: scores pile at the step cap), and, for the family of a scenario's comparisons
+    (``family`` of them), Holm's adjusted p-value and Bonferroni's simultaneous interval
+    (each at level 1 − (1 − ``level``) / family, so that all of a scenario's intervals hold
+    together)."""
     from scipy import stats
 
     rows = []
@@ -804,10 +812,14 @@ def differences(comparison: pd.DataFrame, level: float = 0.9) -> pd.DataFrame:
     for row, size in zip(table.itertuples(), family, strict=True):
         values = [np.nan] * 5
         if len(row.mine_values) > 1 and len(row.ga_values) > 1:
-            test = stats.ttest_ind(row.mine_values, row.ga_values, equal_var=False)
-            one = test.confidence_interval(level)
-            together = test.confidence_interval(1 - (1 - level) / size)
-            values = [one.low, one.high, test.pvalue, together.low, together.high]
+            p_value = permutation_p(row.mine_values, row.ga_values)
+            if row.mine_values.std() == 0 and row.ga_values.std() == 0:
+                values = [row.minus_ga, row.minus_ga, p_value, row.minus_ga, row.minus_ga]
+            else:
+                test = stats.ttest_ind(row.mine_values, row.ga_values, equal_var=False)
+                one = test.confidence_interval(level)
+                together = test.confidence_interval(1 - (1 - level) / size)
+                values = [one.low, one.high, p_value, together.low, together.high]
         for column, value in zip(columns, values, strict=True):
             columns[column].append(float(value))
     table = table.drop(columns=["mine_values", "ga_values"]).assign(**columns, family=family)
@@ -832,9 +844,15 @@ RULE_PAIRS = (("navigation_narrow", "navigation_narrow_spin40"),)
 def rule_changes(comparison: pd.DataFrame, pairs: tuple = RULE_PAIRS,
                  level: float = 0.9) -> pd.DataFrame:
     """How each method's gap to the GA (its seeds' mean test fitness minus the GA's, at every
-    pair of budgets) changes from the paper's spin rule to the second: both gaps, and the
-    change, (method − GA) under the second minus (method − GA) under the paper's, with its
-    Welch–Satterthwaite t interval over the four groups of seeds (independent runs)."""
+    pair of budgets) changes from the paper's spin rule to the second: both gaps; the share
+    of (method seed, GA seed) pairs in which the method scores higher under each rule (a
+    measure no rescaling of fitness changes, where the rules' fitness ranges differ); and
+    the change, (method − GA) under the second minus (method − GA) under the paper's, with
+    its Welch–Satterthwaite t interval over the four groups of seeds and Bonferroni's
+    simultaneous one for a pair's ``family`` of changes. The two scenarios share their seed
+    (same ``seed``, same run streams), so seed s starts alike under both rules; the interval
+    treats the groups as independent, which is conservative if that pairing makes a seed's
+    scores under the two rules agree."""
     def seeds(name: str, method: str, budget: int) -> np.ndarray:
         return comparison[(comparison["scenario"] == name) & (comparison["method"] == method)
                           & (comparison["budget_steps"] == budget)]["test_fitness"].to_numpy()
@@ -851,16 +869,30 @@ def rule_changes(comparison: pd.DataFrame, pairs: tuple = RULE_PAIRS,
                               seeds(paper_rule, "GA", ga_budget)]
                     if min(map(len, groups)) == 0:
                         continue
-                    change, low, high = welch_contrast(groups, [1, -1, -1, 1], level)
                     rows.append({
                         "paper_rule": paper_rule, "second_rule": second, "method": method,
                         "budget_steps": budget, "ga_budget_steps": ga_budget,
                         "minus_ga_paper_rule": groups[2].mean() - groups[3].mean(),
                         "minus_ga_second_rule": groups[0].mean() - groups[1].mean(),
-                        "change": change, "change_low": low, "change_high": high})
-    return pd.DataFrame(rows, columns=[
-        "paper_rule", "second_rule", "method", "budget_steps", "ga_budget_steps",
-        "minus_ga_paper_rule", "minus_ga_second_rule", "change", "change_low", "change_high"])
+                        "above_ga_paper_rule": above_share(groups[2], groups[3]),
+                        "above_ga_second_rule": above_share(groups[0], groups[1]),
+                        "groups": groups})
+    columns = ["paper_rule", "second_rule", "method", "budget_steps", "ga_budget_steps",
+               "minus_ga_paper_rule", "minus_ga_second_rule", "above_ga_paper_rule",
+               "above_ga_second_rule", "change", "change_low", "change_high",
+               "change_low_simultaneous", "change_high_simultaneous", "family"]
+    if not rows:
+        return pd.DataFrame(columns=columns)
+    table = pd.DataFrame(rows)
+    table["family"] = table.groupby("paper_rule")["method"].transform("size")
+    weights = [1, -1, -1, 1]  # (method − GA) under the second rule, minus under the paper's
+    for i, row in table.iterrows():
+        together = 1 - (1 - level) / row["family"]
+        table.loc[i, ["change", "change_low", "change_high"]] = welch_contrast(
+            row["groups"], weights, level)
+        table.loc[i, ["change_low_simultaneous", "change_high_simultaneous"]] = \
+            welch_contrast(row["groups"], weights, together)[1:]
+    return table[columns]
 
 
 def write_summary(out: Path) -> pd.DataFrame:

@@ -12,6 +12,7 @@ from enn_traffic import baseline, keys
 from enn_traffic.cli import main
 from enn_traffic.controller import Controller
 from enn_traffic.errors import InputError
+from enn_traffic.report.stats import t_interval
 from enn_traffic.shipped import shipped_scenario
 
 
@@ -163,8 +164,12 @@ def test_holm_adjusts_a_family_of_p_values_step_down():
 
 def test_a_scenarios_differences_are_corrected_for_their_family():
     """Two RL methods against one GA budget: a family of 2 per scenario; the simultaneous
-    intervals are Welch's at 95% (90% shared by 2), wider than each one's 90%."""
+    intervals are Welch's at 95% (90% shared by 2), wider than each one's 90%; p-values are
+    exact permutation ones (hand-computed: PPO's 3 values are the top 3 of the 6, 1 of the
+    20 ways to split them, and so are the GA's on the other side: p = 2/20)."""
     from scipy import stats
+
+    from enn_traffic.report.stats import permutation_p
 
     fitness = {"GA": [2.0, 4.0, 3.0], "PPO": [9.0, 11.0, 7.0], "SAC": [3.0, 5.0, 2.0]}
     runs = pd.DataFrame([{"scenario": "s", "method": m, "budget_steps": 100, "seed": i,
@@ -175,10 +180,11 @@ def test_a_scenarios_differences_are_corrected_for_their_family():
     for method in ("PPO", "SAC"):
         test = stats.ttest_ind(fitness[method], fitness["GA"], equal_var=False)
         row = table.loc[method]
-        assert row["p_value"] == pytest.approx(test.pvalue)
+        assert row["p_value"] == pytest.approx(permutation_p(fitness[method], fitness["GA"]))
         assert row["minus_ga_low_simultaneous"] == pytest.approx(
             test.confidence_interval(0.95).low)
         assert row["minus_ga_low_simultaneous"] < row["minus_ga_low"]
+    assert table.loc["PPO", "p_value"] == pytest.approx(0.1)
     p = sorted(table["p_value"])
     assert sorted(table["p_holm"]) == pytest.approx([2 * p[0], max(2 * p[0], p[1])])
 
@@ -342,4 +348,19 @@ def test_a_rules_change_of_the_gap_is_a_contrast_of_four_groups_of_seeds():
     assert row["change"] == pytest.approx(4.0)
     half = stats.t.ppf(0.95, 2) * stats.sem(fitness[("second", "PPO")])
     assert (row["change_low"], row["change_high"]) == pytest.approx((4.0 - half, 4.0 + half))
+    assert (row["above_ga_paper_rule"], row["above_ga_second_rule"]) == (0.0, 0.0)
+    assert row["family"] == 1 and row["change_low_simultaneous"] == row["change_low"]
     assert baseline.rule_changes(runs, pairs=(("paper", "other"),)).empty
+
+
+def test_seeds_piled_at_the_cap_give_a_point_not_a_missing_interval():
+    """Every seed of both methods at the step cap: the difference is exactly 0, p = 1 (the
+    t-test's is undefined), and the seeds' interval is the cap itself."""
+    runs = pd.DataFrame([{"scenario": "s", "method": method, "budget_steps": 100, "seed": i,
+                          "test_fitness": 20_000.0}
+                         for method in ("GA", "SAC") for i in range(3)])
+    row = baseline.differences(runs).iloc[0]
+    assert row[["minus_ga", "minus_ga_low", "minus_ga_high", "minus_ga_low_simultaneous",
+                "minus_ga_high_simultaneous"]].tolist() == [0.0] * 5
+    assert row["p_value"] == 1.0 and row["p_holm"] == 1.0
+    assert t_interval(runs["test_fitness"].to_numpy()) == (20_000.0, 20_000.0)

@@ -81,3 +81,30 @@ def test_the_shipped_second_rule_is_the_committed_choice():
 @pytest.mark.full
 def test_the_committed_spin_rule_table_comes_out_the_same(tmp_path):
     pd.testing.assert_frame_equal(spin_rule.write(tmp_path), pd.read_csv(COMMITTED))
+
+
+def test_a_right_angle_bend_is_a_spin_under_the_papers_rule_and_not_under_40():
+    """Hand-computed: 49 positions 1 m apart (4.9 s at 10 m/s), 25 along x then 24 along y:
+    each axis's population variance is 62.5 m² (half the points spread over 24 m, half at
+    its end), under 64 and over 40."""
+    from enn_traffic.sim.rules import _small_spread
+
+    bend = np.array([(i, 0.0) for i in range(25)] + [(24.0, j) for j in range(1, 25)])
+    assert bend[:, 0].var() == pytest.approx(62.516, abs=1e-3)
+    assert _small_spread(bend, 64.0) and not _small_spread(bend, 40.0)
+    straight = np.column_stack([np.arange(49.0), np.zeros(49)])
+    assert not _small_spread(straight, 64.0)  # 200 m² along the road
+
+
+@pytest.mark.parametrize(("radius", "paper", "second"),
+                         [(3.0, True, True), (8.5, True, True), (10.0, True, False),
+                          (12.0, False, False)])
+def test_circling_is_still_a_spin_under_40_up_to_a_radius_of_about_8_5_m(radius, paper, second):
+    """What the second rule lets through: a vehicle circling at 1 m a step with a radius up
+    to 8.5 m is a spin under both rules (a full turn within the window at 7.8 m: variance
+    r²/2); 9–11.5 m only under the paper's; 12 m under neither."""
+    from enn_traffic.sim.rules import _small_spread
+
+    angle = np.arange(49) / radius
+    circle = np.column_stack([radius * np.cos(angle), radius * np.sin(angle)])
+    assert (_small_spread(circle, 64.0), _small_spread(circle, 40.0)) == (paper, second)

@@ -57,10 +57,13 @@ def _protocol(protocol: dict, folder: Path, names: dict[str, str]) -> list[str]:
         f"`enn-traffic baseline {scenarios}` (PPO and SAC need the `[rl]` extra and a CPU "
         "torch: docs/envs.md). Every method learns on training keys: the GA meets a new key "
         "each generation, PPO and SAC draw each life from "
-        f"{protocol['training_pool_keys']:,} training keys. A run's candidates are its "
-        f"controllers at every 1/{protocol['checkpoints']} of its budget and at its end (PPO's "
-        "and SAC's policy acting on its mean; the GA's best of the generation that reached "
-        "the checkpoint, one a generation at most). Candidates are scored on "
+        f"{protocol['training_pool_keys']:,} training keys (on the narrow track, without "
+        "traffic and from its one start, every key is the same situation). A run's "
+        f"candidates are its controllers at every 1/{protocol['checkpoints']} of its budget "
+        "and the last it learned (PPO's and SAC's policy acting on its mean; the GA's best "
+        "of the generation that reached the checkpoint, one a generation at most). No method "
+        "learns from steps past its budget: the GA's last generation and PPO's last rollout "
+        "end within it. Candidates are scored on "
         f"{protocol['validation_situations']} validation situations (keys from "
         f"{protocol['validation_key']:,}); the best there is the run's controller (saved in "
         f"`controllers/`), scored once on {protocol['test_situations']} test situations (keys "
@@ -101,9 +104,11 @@ def _search(tuning: pd.DataFrame, names: dict[str, str], rules: dict) -> list[st
     lines = [
         "The search (`tuning.csv`, every setting in `enn_traffic/baseline.py`'s `SEARCH`): "
         f"{searched}, one run each per scenario (seed {baseline.TUNING_SEED}, "
-        f"{_steps(budget)} learner-steps) scored on validation keys; the best is each "
-        "method's setting in the comparison (PPO and SAC start at RL Zoo's BipedalWalker-v3 "
-        "entries; the GA's other settings keep the scenario's share of elites).",
+        f"{_steps(budget)} learner-steps at most) scored on validation keys; the best is "
+        "each method's setting in the comparison, a tie going to the setting listed first "
+        "(PPO and SAC start at RL Zoo's BipedalWalker-v3 entries; the GA's other settings "
+        "keep the scenario's share of elites). One seed a setting: the seeds' spread below "
+        "is the measure of how much a search score can owe to its seed.",
         "",
         "| scenario | method | validation fitness: best (its setting) | median | worst |",
         "|---|---|---|---|---|"]
@@ -118,8 +123,12 @@ def _search(tuning: pd.DataFrame, names: dict[str, str], rules: dict) -> list[st
 
 
 def _fitness(runs: pd.DataFrame, folder: Path, names: dict[str, str]) -> list[str]:
-    summary = pd.read_csv(folder / "comparison_summary.csv")
-    situations = pd.read_csv(folder / "situations.csv")
+    # from the runs' rows alone: a run's other rows are written before its comparison row,
+    # so a run under way may have some (and comparison_summary.csv may be older)
+    run_keys = ["scenario", "method", "budget_steps", "seed"]
+    summary = baseline.summary(runs, pd.read_csv(folder / "curves.csv").merge(
+        runs[run_keys], on=run_keys))
+    situations = pd.read_csv(folder / "situations.csv").merge(runs[run_keys], on=run_keys)
     planned = {(p.method, p.budget_steps): p.seeds for p in baseline.PLAN}
     lines = [
         "Test fitness (steps lived, 0 for a spin) of each run's chosen controller: the mean "
@@ -160,7 +169,8 @@ def _cell(row) -> str:
         return f"{row.minus_ga:+,.0f}"
     return (f"{row.minus_ga:+,.0f} ({row.minus_ga_low:+,.0f} to {row.minus_ga_high:+,.0f}; "
             f"together {row.minus_ga_low_simultaneous:+,.0f} to "
-            f"{row.minus_ga_high_simultaneous:+,.0f}), Holm p {row.p_holm:.2g}")
+            f"{row.minus_ga_high_simultaneous:+,.0f}), p {row.p_value:.2g}, Holm "
+            f"{row.p_holm:.2g}")
 
 
 def _differences(differences: pd.DataFrame, names: dict[str, str]) -> list[str]:
@@ -170,8 +180,9 @@ def _differences(differences: pd.DataFrame, names: dict[str, str]) -> list[str]:
     lines = [
         "PPO and SAC minus the GA (`comparison_differences.csv`): the difference of the seeds' "
         "mean test fitness with its 90% Welch t interval; *together*: Bonferroni's "
-        "simultaneous interval, all of a scenario's comparisons at once (90% together); "
-        "Holm's p-value, adjusted for the same family.",
+        "simultaneous interval, all of a scenario's comparisons at once (90% together); p: "
+        "the exact permutation test's (every split of the two groups' seeds), and Holm's "
+        "adjustment of it for the same family.",
         "",
         "| scenario | method, budget | " + " | ".join(
             f"minus the GA at {_steps(b)}" for b in ga_budgets) + " |",
@@ -187,21 +198,29 @@ def _differences(differences: pd.DataFrame, names: dict[str, str]) -> list[str]:
 def _rule_changes(changes: pd.DataFrame, names: dict[str, str]) -> list[str]:
     if changes.empty:
         return []
+    paper_rule, second = (names.get(n, n) for n in changes.iloc[0][["paper_rule",
+                                                                     "second_rule"]])
     lines = [
         "How the gap changes between the spin rules (`comparison_rules.csv`): each method's "
-        "difference from the GA under the paper's rule and under the second, and the change "
-        "(second minus paper's) with its 90% Welch–Satterthwaite interval over the four "
-        "groups of seeds.",
+        "difference from the GA under each rule; how often a seed of the method scores above "
+        "a seed of the GA (of every pair; a measure no rescaling of fitness changes, where "
+        "the rules' fitness ranges differ); and the change of the difference (second rule "
+        "minus the paper's) with its 90% Welch–Satterthwaite interval over the four groups "
+        "of seeds and, *together*, Bonferroni's simultaneous one for the table. A seed "
+        "starts alike under both rules (the scenarios share their seed); the intervals treat "
+        "the groups as independent.",
         "",
-        "| method, budget | against the GA at | under " + " | under ".join(
-            names.get(n, n) for n in changes.iloc[0][["paper_rule", "second_rule"]])
-        + " | change (90% interval) |",
-        "|---|---|---|---|---|"]
+        f"| method, budget | against the GA at | minus the GA, {paper_rule} | minus the GA, "
+        f"{second} | above the GA, paper's → second | change (90% interval; together) |",
+        "|---|---|---|---|---|---|"]
     for row in changes.itertuples():
         lines.append(f"| {row.method}, {_steps(row.budget_steps)} | "
                      f"{_steps(row.ga_budget_steps)} | {row.minus_ga_paper_rule:+,.0f} | "
-                     f"{row.minus_ga_second_rule:+,.0f} | {row.change:+,.0f} "
-                     f"({row.change_low:+,.0f} to {row.change_high:+,.0f}) |")
+                     f"{row.minus_ga_second_rule:+,.0f} | {row.above_ga_paper_rule:.0%} → "
+                     f"{row.above_ga_second_rule:.0%} | {row.change:+,.0f} "
+                     f"({row.change_low:+,.0f} to {row.change_high:+,.0f}; "
+                     f"{row.change_low_simultaneous:+,.0f} to "
+                     f"{row.change_high_simultaneous:+,.0f}) |")
     return lines + [""]
 
 
