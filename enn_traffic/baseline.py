@@ -232,22 +232,34 @@ def chromosome_fitness(scenario: Scenario, chromosomes: np.ndarray, chosen_keys:
 
 
 def policy_lives(scenario: Scenario, act: Callable[[np.ndarray], np.ndarray],
-                 keys: list[int], count: int | None = None) -> pd.DataFrame:
+                 keys: list[int], count: int | None = None, tail: int = 0) -> pd.DataFrame:
     """The first ``count`` situations of ``keys`` in ``scenario`` (in order; every one by
     default), each driven once by ``act`` (observations (N, B) → actions (N, 2)) through the
-    vector environment: each life's steps, outcome and fitness (0 for a spin)."""
+    vector environment: each life's steps, outcome and fitness (0 for a spin). With ``tail``,
+    also where the learner went: ``distance`` (m) and ``tail_extent``, the larger of the x and
+    y ranges of its last ``tail`` positions (m: a vehicle circling in place stays within its
+    circle's diameter)."""
     if count is None:
         count = len(keys) * len(rangefinder_world(scenario).situations(keys[0]))
     env = RangefinderVectorEnv(scenario, count)
     observation, _ = env.reset(options={"keys": list(keys)})
     ended = {"steps": np.full(count, -1), "outcome": np.empty(count, dtype=object),
              "fitness": np.full(count, np.nan)}
+    positions = []
     while (ended["steps"] < 0).any():
+        if tail:
+            positions.append(env.batch.worlds.pose[:, 0, :2].copy())
         observation, _, terminated, truncated, info = env.step(act(observation))
         for i in np.flatnonzero((terminated | truncated) & (ended["steps"] < 0)):
             for column, values in ended.items():
                 values[i] = info["final_info"][column][i]
-    return pd.DataFrame(ended)
+    table = pd.DataFrame(ended)
+    if tail:
+        path = np.stack(positions, axis=1)  # (count, steps, 2)
+        lived = [path[i, :max(1, steps)] for i, steps in enumerate(ended["steps"])]
+        table["distance"] = [np.linalg.norm(np.diff(p, axis=0), axis=1).sum() for p in lived]
+        table["tail_extent"] = [np.ptp(p[-tail:], axis=0).max() for p in lived]
+    return table
 
 
 def policy_fitness(scenario: Scenario, act: Callable[[np.ndarray], np.ndarray],

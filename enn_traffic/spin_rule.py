@@ -1,6 +1,6 @@
 """The spin rule's second setting for the GA-against-RL comparison (issue 65).
 
-The paper rules a vehicle whose last ``spin_window`` positions vary by at most
+The authors' code rules a vehicle whose last ``spin_window`` positions vary by at most
 ``spin_variance`` m² on both axes to be spinning in place: fitness 0 (§5.3). On the narrow
 track's double bend that also rules ordinary driving a spin. Controllers without learning
 that keep to the middle of the road (:func:`centre_keeping`: steer towards the side whose
@@ -9,8 +9,12 @@ under every candidate ``spin_variance``, and the second rule is the largest cand
 which none of their lives ends as a spin (:func:`chosen_variance`). Validation keys only:
 the choice reads no test situation.
 
+A looser rule also lets more through: :func:`travel` checks that the comparison's long
+lives under it drive the track rather than circle in place.
+
 ``python -m enn_traffic.spin_rule [OUT]`` writes ``OUT/spin_rule.csv`` (default
-:data:`FOLDER`, the third round's comparison).
+:data:`FOLDER`, the third round's comparison); ``python -m enn_traffic.spin_rule travel
+[OUT]`` writes ``OUT/travel.csv`` from the runs there.
 """
 
 from __future__ import annotations
@@ -93,7 +97,58 @@ def write(out: Path) -> pd.DataFrame:
     return table
 
 
+def controller_act(folder: Path, scenario: Scenario, method: str, budget: int,
+                   seed: int) -> Callable[[np.ndarray], np.ndarray]:
+    """A comparison run's saved controller as a policy for the vector environment."""
+    from enn_traffic.controller import Controller
+    from enn_traffic.envs.rangefinder import action_of, rangefinder_world
+
+    path = baseline.controller_path(folder, scenario.name, method, budget, seed)
+    if method != "GA":
+        return baseline.NumpyPolicy.load(path)
+    chromosome = Controller.load(path).chromosome[None]
+    spec = rangefinder_world(scenario).spec
+    return lambda observation: action_of(
+        spec.forward(np.repeat(chromosome, len(observation), 0), observation))
+
+
+LONG = 1000  # a life this long (steps) has left any bend behind
+TAIL = 1000  # the last positions of a long life whose extent says whether it still travels
+
+
+def travel(folder: Path, situations: int = 32) -> pd.DataFrame:
+    """Do long lives under the second rule drive the track, or circle in a space the rule
+    lets through (a radius of 9–11.5 m, tests/test_spin_rule.py)? Every comparison run of
+    the pair's scenarios in ``folder``, its controller driven on the first ``situations``
+    validation situations: how many lives pass :data:`LONG` steps, their median distance,
+    and the smallest extent of their last :data:`TAIL` positions (a circle of 11.5 m stays
+    within 23 m). Validation keys only, ``folder/travel.csv``."""
+    runs = pd.read_csv(folder / "comparison.csv")
+    pair = {name for names in baseline.RULE_PAIRS for name in names}
+    rows = []
+    for run in runs[runs["scenario"].isin(pair)].itertuples():
+        scenario = baseline.scoring_scenario(shipped_scenario(run.scenario))
+        validation, _ = baseline.held_out_keys(scenario)
+        act = controller_act(folder, scenario, run.method, run.budget_steps, run.seed)
+        lives = baseline.policy_lives(scenario, act, validation, situations, tail=TAIL)
+        long = lives[lives["steps"] > LONG]
+        rows.append({"scenario": run.scenario, "method": run.method,
+                     "budget_steps": run.budget_steps, "seed": run.seed,
+                     "situations": situations, "long_lives": len(long),
+                     "capped": int((lives["outcome"] == "capped").sum()),
+                     "median_distance": long["distance"].median(),
+                     "least_tail_extent": long["tail_extent"].min()})
+    table = pd.DataFrame(rows)
+    write_atomic(folder / "travel.csv", lambda handle: table.to_csv(handle, index=False))
+    return table
+
+
 if __name__ == "__main__":
-    table = write(Path(sys.argv[1] if len(sys.argv) > 1 else FOLDER))
-    print(table.to_string(index=False))
-    print(f"chosen spin_variance: {chosen_variance(table):g} m²")
+    arguments = sys.argv[1:]
+    if arguments[:1] == ["travel"]:
+        print(travel(Path(arguments[1] if len(arguments) > 1 else FOLDER)).to_string(
+            index=False))
+    else:
+        table = write(Path(arguments[0] if arguments else FOLDER))
+        print(table.to_string(index=False))
+        print(f"chosen spin_variance: {chosen_variance(table):g} m²")

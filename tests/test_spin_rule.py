@@ -108,3 +108,17 @@ def test_circling_is_still_a_spin_under_40_up_to_a_radius_of_about_8_5_m(radius,
     angle = np.arange(49) / radius
     circle = np.column_stack([radius * np.cos(angle), radius * np.sin(angle)])
     assert (_small_spread(circle, 64.0), _small_spread(circle, 40.0)) == (paper, second)
+
+
+def test_a_straight_life_travels_a_metre_a_step():
+    """Steering 0 (both outputs alike): each step carries the learner speed × dt = 1 m, so
+    a life of n steps covers n − 1 m between its first and last recorded positions, and its
+    last 50 positions span at least 49 m / √2 on one axis."""
+    narrow = baseline.scoring_scenario(shipped_scenario("navigation_narrow_spin40"))
+    validation, _ = baseline.held_out_keys(narrow)
+    lives = baseline.policy_lives(narrow, lambda o: np.zeros((len(o), 2), np.float32),
+                                  validation, 8, tail=50)
+    assert (lives["outcome"] == "collision").all()
+    np.testing.assert_allclose(lives["distance"], lives["steps"] - 1, rtol=1e-6)
+    long = lives[lives["steps"] > 50]
+    assert len(long) and (long["tail_extent"] >= 49 / np.sqrt(2) - 1e-6).all()
