@@ -49,7 +49,7 @@ def comparison(folder: Path) -> str:
 
 
 def _protocol(protocol: dict, folder: Path, names: dict[str, str]) -> list[str]:
-    shared, distinct = _starts(protocol)
+    starts = _starts(protocol)
     scenarios = " ".join(json.loads((folder / "scenarios.json").read_text()))
     planned = ", ".join(f"{p.method} {_steps(p.budget_steps)} × {p.seeds} seeds"
                         for p in baseline.PLAN)
@@ -69,21 +69,32 @@ def _protocol(protocol: dict, folder: Path, names: dict[str, str]) -> list[str]:
         f"`controllers/`), scored once on {protocol['test_situations']} test situations (keys "
         f"from {protocol['test_key']:,}, read by this round alone). The narrow track trains "
         "from its one start (§5.1) and is scored from starts all along it (every 5 m, facing "
-        f"either way): of its {protocol['test_situations']} test starts {distinct} are "
-        f"distinct, and {shared} of them also start a validation situation. "
+        f"either way): of its {protocol['test_situations']} test starts {starts['distinct']} "
+        f"are distinct, and {starts['shared']} of them also start a validation situation. "
+        f"Validation and test take {starts['used']} of the track's {starts['track']} starts, "
+        "and the median test start has a validation start facing the same way "
+        f"{starts['validation_nearest']:.0f} m from it; the training start "
+        f"is {starts['training_nearest']:.1f} m from the nearest test start. "
         f"Planned per scenario: {planned}. A run's random stream comes from its seed and its "
-        "budget, so a 5 M run is no continuation of a 1 M run. Every method's setting is the "
-        "best on validation of an equal search (below). Runs ran two at a time on the shared "
-        "2-core machine, one torch thread each; wall time is training alone.",
+        "budget, so a 5 M run is no continuation of a 1 M run; the two spin rules' "
+        "scenarios share their seed, so a seed starts alike under both. Every method's "
+        "setting is the best on validation of an equal search (below). Runs ran two at a "
+        "time on the shared 2-core machine, one torch thread each; wall time is training "
+        "alone.",
         ""]
 
 
-def _starts(protocol: dict) -> tuple[int, int]:
-    """How many of the narrow track's test starts are also validation starts, and how many
-    test starts are distinct, under ``protocol``."""
+def _starts(protocol: dict) -> dict:
+    """The narrow track's starts under ``protocol``: how many of its test starts are also
+    validation starts, how many are distinct, how many starts the track has, and how far
+    the training start is from the nearest test start."""
+    import numpy as np
+
     from enn_traffic.envs.rangefinder import rangefinder_world
 
-    scored = baseline.scoring_scenario(shipped_scenario("navigation_narrow"))
+    narrow = shipped_scenario("navigation_narrow")
+    training = baseline.start_of(rangefinder_world(narrow).situations(0)[0])
+    scored = baseline.scoring_scenario(narrow)
     world = rangefinder_world(scored)
 
     def starts(chosen: list[int], count: int) -> list[tuple]:
@@ -93,7 +104,16 @@ def _starts(protocol: dict) -> tuple[int, int]:
     validation_keys, test_keys = baseline.held_out_keys(scored, protocol)
     validation = set(starts(validation_keys, protocol["validation_situations"]))
     test = starts(test_keys, protocol["test_situations"])
-    return sum(start in validation for start in test), len(set(test))
+    def nearest(start: tuple, among: set) -> float:  # facing the same way
+        return min((np.hypot(start[0] - x, start[1] - y) for x, y, heading in among
+                    if abs(np.angle(np.exp(1j * (heading - start[2])))) < 0.1), default=np.inf)
+
+    return {"shared": sum(start in validation for start in test), "distinct": len(set(test)),
+            "validation_nearest": float(np.median([nearest(start, validation)
+                                                   for start in test])),
+            "track": len(world.starts), "used": len(validation | set(test)),
+            "training_nearest": min(np.hypot(x - training[0], y - training[1])
+                                    for x, y, _ in test)}
 
 
 def _search(tuning: pd.DataFrame, names: dict[str, str], rules: dict) -> list[str]:
