@@ -85,7 +85,7 @@ def _protocol(protocol: dict, folder: Path, names: dict[str, str]) -> list[str]:
 
 
 def _starts(protocol: dict) -> dict:
-    """The narrow track's starts under ``protocol``: how many of its test starts are also
+    """The narrow track's starts under ``protocol``: which of its test starts are also
     validation starts, how many are distinct, how many starts the track has, and how far
     the training start is from the nearest test start."""
     import numpy as np
@@ -109,6 +109,7 @@ def _starts(protocol: dict) -> dict:
                     if abs(np.angle(np.exp(1j * (heading - start[2])))) < 0.1), default=np.inf)
 
     return {"shared": sum(start in validation for start in test), "distinct": len(set(test)),
+            "test_shared": [start in validation for start in test],
             "validation_nearest": float(np.median([nearest(start, validation)
                                                    for start in test])),
             "track": len(world.starts), "used": len(validation | set(test)),

@@ -19,7 +19,7 @@ import pandas as pd
 
 from enn_traffic import keys
 from enn_traffic.controller import Controller
-from enn_traffic.experiments.comparison_doc import _training_lives, comparison
+from enn_traffic.experiments.comparison_doc import _starts, _training_lives, comparison
 from enn_traffic.experiments.protocol import ARENA, CITY, SUMO, Family
 from enn_traffic.experiments.regime import PAPER_INITIAL
 from enn_traffic.experiments.simultaneous import (
@@ -478,7 +478,7 @@ def baseline(paper: Path) -> str:
         "(§5.1); its validation and test situations start anywhere on it (every 5 m along "
         "it, facing either way, drawn per key): they measure how a run drives the track it "
         f"learned from other starts. "
-        f"{_narrow_starts(comparison, protocol, pd.read_csv(folder / 'situations.csv'))} "
+        f"{_narrow_starts(protocol, pd.read_csv(folder / 'situations.csv'))} "
         "A run at 20 M or 5 M steps continues the trajectory of the same "
         "seed's 1 M run (the same generator), so the budgets are not independent samples. "
         "The GA runs the scenario's own settings (the "
@@ -548,29 +548,11 @@ def baseline(paper: Path) -> str:
     return "\n".join(lines)
 
 
-def _shared_starts(comparison, protocol: dict) -> tuple[list[bool], int]:
-    """Which of the narrow track's test starts are also a validation start (both are drawn,
-    with replacement, from the same poses), and how many test starts are distinct."""
-    from enn_traffic.envs.rangefinder import rangefinder_world
-    from enn_traffic.shipped import shipped_scenario
-
-    scored = comparison.scoring_scenario(shipped_scenario("navigation_narrow"))
-    world = rangefinder_world(scored)
-
-    def starts(chosen: list[int], count: int) -> list[tuple]:
-        return [comparison.start_of(situation) for key in chosen
-                for situation in world.situations(key)][:count]
-
-    validation_keys, test_keys = comparison.held_out_keys(scored, protocol)
-    validation = set(starts(validation_keys, protocol["validation_situations"]))
-    test = starts(test_keys, protocol["test_situations"])
-    return [start in validation for start in test], len(set(test))
-
-
-def _narrow_starts(comparison, protocol: dict, situations: pd.DataFrame) -> str:
+def _narrow_starts(protocol: dict, situations: pd.DataFrame) -> str:
     """The narrow track's test starts: how many are distinct, how many are also a validation
     start, and each method's mean test fitness without those."""
-    shared, distinct = _shared_starts(comparison, protocol)
+    starts = _starts(protocol)
+    shared, distinct = starts["test_shared"], starts["distinct"]
     narrow = situations[situations["scenario"] == "navigation_narrow"]
     others = narrow[~narrow["situation"].map(dict(enumerate(shared)))]
     means = others.groupby(["method", "budget_steps"])["test_fitness"].mean()
