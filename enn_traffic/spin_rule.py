@@ -122,22 +122,30 @@ def travel(folder: Path, situations: int = 32) -> pd.DataFrame:
     the pair's scenarios in ``folder``, its controller driven on the first ``situations``
     validation situations: how many lives pass :data:`LONG` steps, their median distance,
     and the smallest extent of their last :data:`TAIL` positions (a circle of 11.5 m stays
-    within 23 m). Validation keys only, ``folder/travel.csv``."""
+    within 23 m). The same controller scored under the pair's other rule too: what a rule
+    does to a controller trained under the other. Validation keys only,
+    ``folder/travel.csv``."""
     runs = pd.read_csv(folder / "comparison.csv")
-    pair = {name for names in baseline.RULE_PAIRS for name in names}
+    partner = {name: other for pair in baseline.RULE_PAIRS
+               for name, other in (pair, pair[::-1])}
     rows = []
-    for run in runs[runs["scenario"].isin(pair)].itertuples():
+    for run in runs[runs["scenario"].isin(partner)].itertuples():
         scenario = baseline.scoring_scenario(shipped_scenario(run.scenario))
+        other = baseline.scoring_scenario(shipped_scenario(partner[run.scenario]))
         validation, _ = baseline.held_out_keys(scenario)
         act = controller_act(folder, scenario, run.method, run.budget_steps, run.seed)
         lives = baseline.policy_lives(scenario, act, validation, situations, tail=TAIL)
+        crossed = baseline.policy_lives(other, act, validation, situations)
         long = lives[lives["steps"] > LONG]
         rows.append({"scenario": run.scenario, "method": run.method,
                      "budget_steps": run.budget_steps, "seed": run.seed,
                      "situations": situations, "long_lives": len(long),
                      "capped": int((lives["outcome"] == "capped").sum()),
                      "median_distance": long["distance"].median(),
-                     "least_tail_extent": long["tail_extent"].min()})
+                     "least_tail_extent": long["tail_extent"].min(),
+                     "fitness": lives["fitness"].mean(),
+                     "other_rule_fitness": crossed["fitness"].mean(),
+                     "other_rule_spins": int((crossed["outcome"] == "spin").sum())})
     table = pd.DataFrame(rows)
     write_atomic(folder / "travel.csv", lambda handle: table.to_csv(handle, index=False))
     return table
