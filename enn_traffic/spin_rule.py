@@ -26,7 +26,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from enn_traffic import baseline
+from enn_traffic import baseline, progress
 from enn_traffic.io import write_atomic
 from enn_traffic.scenario import Scenario
 from enn_traffic.shipped import shipped_scenario
@@ -129,7 +129,9 @@ def travel(folder: Path, situations: int = 32) -> pd.DataFrame:
     partner = {name: other for pair in baseline.RULE_PAIRS
                for name, other in (pair, pair[::-1])}
     rows = []
-    for run in runs[runs["scenario"].isin(partner)].itertuples():
+    pair_runs = runs[runs["scenario"].isin(partner)]
+    for run in progress.bar(len(pair_runs), "travel", "run",
+                            iterable=pair_runs.itertuples()):
         scenario = baseline.scoring_scenario(shipped_scenario(run.scenario))
         other = baseline.scoring_scenario(shipped_scenario(partner[run.scenario]))
         validation, _ = baseline.held_out_keys(scenario)
