@@ -42,6 +42,8 @@ def comparison(folder: Path) -> str:
     lines += _fitness(runs, folder, names)
     lines += _differences(pd.read_csv(folder / "comparison_differences.csv"), names)
     lines += _rule_changes(pd.read_csv(folder / "comparison_rules.csv"), names)
+    if (folder / "travel.csv").is_file():
+        lines += _travel(pd.read_csv(folder / "travel.csv"), names)
     lines += ["", f"![GA, PPO and SAC](../{folder.parent.name}/{folder.name}/comparison.png)",
               ""]
     lines += _training_lives(pd.read_csv(folder / "training_lives.csv"), names)
@@ -242,6 +244,35 @@ def _rule_changes(changes: pd.DataFrame, names: dict[str, str]) -> list[str]:
                      f"({row.change_low:+,.0f} to {row.change_high:+,.0f}; "
                      f"{row.change_low_simultaneous:+,.0f} to "
                      f"{row.change_high_simultaneous:+,.0f}) |")
+    return lines + [""]
+
+
+def _travel(travel: pd.DataFrame, names: dict[str, str]) -> list[str]:
+    from enn_traffic import spin_rule
+
+    situations = travel["situations"].iloc[0]
+    lines = [
+        "Where the controllers drive (`travel.csv`, `python -m enn_traffic.spin_rule travel`): "
+        f"each run's controller on the first {situations} validation situations. Long lives "
+        f"pass {spin_rule.LONG:,} steps; their extent is the larger of the x and y ranges "
+        f"of a life's last {spin_rule.TAIL:,} positions (a vehicle circling where the "
+        "looser rule lets it, a radius of 9–11.5 m, stays within 23 m); and the same "
+        "controllers scored under the other rule of the pair.",
+        "",
+        "| scenario | method, budget | runs | long lives (of all) | capped | distance of a long "
+        "life (median of the runs' medians) | least extent of a long life | fitness | under the "
+        "other rule (spins) |",
+        "|---|---|---|---|---|---|---|---|---|"]
+    for (name, method, budget), rows in travel.groupby(["scenario", "method",
+                                                        "budget_steps"]):
+        long = rows["long_lives"].sum()
+        lines.append(
+            f"| {names.get(name, name)} | {method}, {_steps(budget)} | {len(rows)} | "
+            f"{long} of {rows['situations'].sum()} | {rows['capped'].sum()} | "
+            + (f"{rows['median_distance'].median():,.0f} m | "
+               f"{rows['least_tail_extent'].min():,.0f} m | " if long else "– | – | ")
+            + f"{rows['fitness'].mean():,.0f} | {rows['other_rule_fitness'].mean():,.0f} "
+            f"({rows['other_rule_spins'].sum()}) |")
     return lines + [""]
 
 
