@@ -114,6 +114,7 @@ def controller_act(folder: Path, scenario: Scenario, method: str, budget: int,
 
 LONG = 1000  # a life this long (steps) has left any bend behind
 TAIL = 1000  # the last positions of a long life whose extent says whether it still travels
+CIRCLING = 25.0  # m: a long life whose tail stays this close circles (a 11.5 m radius: 23 m)
 
 
 def travel(folder: Path, situations: int = 32) -> pd.DataFrame:
@@ -145,6 +146,7 @@ def travel(folder: Path, situations: int = 32) -> pd.DataFrame:
                      "capped": int((lives["outcome"] == "capped").sum()),
                      "median_distance": long["distance"].median(),
                      "least_tail_extent": long["tail_extent"].min(),
+                     "circling": int((long["tail_extent"] < CIRCLING).sum()),
                      "fitness": lives["fitness"].mean(),
                      "other_rule_fitness": crossed["fitness"].mean(),
                      "other_rule_spins": int((crossed["outcome"] == "spin").sum())})

@@ -256,19 +256,24 @@ def _travel(travel: pd.DataFrame, names: dict[str, str]) -> list[str]:
         f"each run's controller on the first {situations} validation situations. Long lives "
         f"pass {spin_rule.LONG:,} steps; their extent is the larger of the x and y ranges "
         f"of a life's last {spin_rule.TAIL:,} positions (a vehicle circling where the "
-        "looser rule lets it, a radius of 9–11.5 m, stays within 23 m); and the same "
-        "controllers scored under the other rule of the pair.",
+        "looser rule lets it, a radius of 9–11.5 m, stays within 23 m; *circling*: long "
+        f"lives within {spin_rule.CIRCLING:g} m); and the same controllers scored under the "
+        "other rule of the pair.",
         "",
-        "| scenario | method, budget | runs | long lives (of all) | capped | distance of a long "
+        "| scenario | method, budget | runs | long lives (of all) | capped | circling | "
+        "distance of a long "
         "life (median of the runs' medians) | least extent of a long life | fitness | under the "
         "other rule (spins) |",
-        "|---|---|---|---|---|---|---|---|---|"]
+        "|---|---|---|---|---|---|---|---|---|---|"]
+    if "circling" not in travel:  # made before the column was
+        travel = travel.assign(circling=pd.NA)
     for (name, method, budget), rows in travel.groupby(["scenario", "method",
                                                         "budget_steps"]):
         long = rows["long_lives"].sum()
         lines.append(
             f"| {names.get(name, name)} | {method}, {_steps(budget)} | {len(rows)} | "
             f"{long} of {rows['situations'].sum()} | {rows['capped'].sum()} | "
+            f"{'?' if rows['circling'].isna().any() else rows['circling'].sum()} | "
             + (f"{rows['median_distance'].median():,.0f} m | "
                f"{rows['least_tail_extent'].min():,.0f} m | " if long else "– | – | ")
             + f"{rows['fitness'].mean():,.0f} | {rows['other_rule_fitness'].mean():,.0f} "
