@@ -9,6 +9,7 @@ import pandas as pd
 import pytest
 
 from enn_traffic.cli import main
+from enn_traffic.errors import shown
 
 CROWD = """
 [crowd]
@@ -82,7 +83,8 @@ def test_a_scenario_without_sumo_traffic_is_refused(root, tmp_path, capsys):
     path = root / "scenarios" / "arena_strategy1.toml"
     assert main(["crowd", str(path), "--out", str(tmp_path / "out"), "--quiet"]) == 2
     error = capsys.readouterr().err
-    assert f"{path}: traffic.strategy" in error and 'strategy = "sumo"' in error, error
+    assert f"{shown(str(path))}: traffic.strategy" in error and 'strategy = "sumo"' in error, \
+        error  # named relative to the working folder, which holds it
 
 
 def test_a_crowd_resumed_with_other_learners_measures_again_but_not_its_ga(crowd_run,
