@@ -798,8 +798,6 @@ def differences(comparison: pd.DataFrame, level: float = 0.9) -> pd.DataFrame:
     (``family`` of them), Holm's adjusted p-value and Bonferroni's simultaneous interval
     (each at level 1 − (1 − ``level``) / family, so that all of a scenario's intervals hold
     together)."""
-    from scipy import stats
-
     rows = []
     for (name, method, budget), runs in comparison.groupby(
             ["scenario", "method", "budget_steps"]):
@@ -822,16 +820,12 @@ def differences(comparison: pd.DataFrame, level: float = 0.9) -> pd.DataFrame:
     columns = {"minus_ga_low": [], "minus_ga_high": [], "p_value": [],
                "minus_ga_low_simultaneous": [], "minus_ga_high_simultaneous": []}
     for row, size in zip(table.itertuples(), family, strict=True):
-        values = [np.nan] * 5
-        if len(row.mine_values) > 1 and len(row.ga_values) > 1:
-            p_value = permutation_p(row.mine_values, row.ga_values)
-            if row.mine_values.std() == 0 and row.ga_values.std() == 0:
-                values = [row.minus_ga, row.minus_ga, p_value, row.minus_ga, row.minus_ga]
-            else:
-                test = stats.ttest_ind(row.mine_values, row.ga_values, equal_var=False)
-                one = test.confidence_interval(level)
-                together = test.confidence_interval(1 - (1 - level) / size)
-                values = [one.low, one.high, p_value, together.low, together.high]
+        groups = [row.mine_values, row.ga_values]
+        _, low, high = welch_contrast(groups, [1, -1], level)
+        _, low_together, high_together = welch_contrast(groups, [1, -1],
+                                                        1 - (1 - level) / size)
+        p_value = permutation_p(*groups) if min(map(len, groups)) > 1 else np.nan
+        values = [low, high, p_value, low_together, high_together]
         for column, value in zip(columns, values, strict=True):
             columns[column].append(float(value))
     table = table.drop(columns=["mine_values", "ga_values"]).assign(**columns, family=family)
