@@ -859,46 +859,42 @@ def rule_changes(comparison: pd.DataFrame, pairs: tuple = RULE_PAIRS,
     (same ``seed``, same run streams), so seed s starts alike under both rules; the interval
     treats the groups as independent, which is conservative if that pairing makes a seed's
     scores under the two rules agree."""
-    def seeds(name: str, method: str, budget: int) -> np.ndarray:
-        return comparison[(comparison["scenario"] == name) & (comparison["method"] == method)
-                          & (comparison["budget_steps"] == budget)]["test_fitness"].to_numpy()
-
+    scores = {key: runs["test_fitness"].to_numpy() for key, runs in
+              comparison.groupby(["scenario", "method", "budget_steps"])}
+    weights = [1, -1, -1, 1]  # (method − GA) under the second rule, minus under the paper's
     rows = []
     for paper_rule, second in pairs:
-        both = comparison[comparison["scenario"].isin([paper_rule, second])]
-        budgets = both.groupby("method")["budget_steps"].unique()
-        for method in (m for m in METHODS if m != "GA" and m in budgets):
-            for budget in sorted(budgets[method]):
-                for ga_budget in sorted(budgets.get("GA", [])):
-                    groups = [seeds(second, method, budget), seeds(second, "GA", ga_budget),
-                              seeds(paper_rule, method, budget),
-                              seeds(paper_rule, "GA", ga_budget)]
-                    if min(map(len, groups)) == 0:
-                        continue
-                    rows.append({
-                        "paper_rule": paper_rule, "second_rule": second, "method": method,
-                        "budget_steps": budget, "ga_budget_steps": ga_budget,
-                        "minus_ga_paper_rule": groups[2].mean() - groups[3].mean(),
-                        "minus_ga_second_rule": groups[0].mean() - groups[1].mean(),
-                        "above_ga_paper_rule": above_share(groups[2], groups[3]),
-                        "above_ga_second_rule": above_share(groups[0], groups[1]),
-                        "groups": groups})
-    columns = ["paper_rule", "second_rule", "method", "budget_steps", "ga_budget_steps",
-               "minus_ga_paper_rule", "minus_ga_second_rule", "above_ga_paper_rule",
-               "above_ga_second_rule", "change", "change_low", "change_high",
-               "change_low_simultaneous", "change_high_simultaneous", "family"]
-    if not rows:
-        return pd.DataFrame(columns=columns)
-    table = pd.DataFrame(rows)
-    table["family"] = table.groupby("paper_rule")["method"].transform("size")
-    weights = [1, -1, -1, 1]  # (method − GA) under the second rule, minus under the paper's
-    for i, row in table.iterrows():
-        together = 1 - (1 - level) / row["family"]
-        table.loc[i, ["change", "change_low", "change_high"]] = welch_contrast(
-            row["groups"], weights, level)
-        table.loc[i, ["change_low_simultaneous", "change_high_simultaneous"]] = \
-            welch_contrast(row["groups"], weights, together)[1:]
-    return table[columns]
+        budgets = comparison[comparison["scenario"].isin([paper_rule, second])].groupby(
+            "method")["budget_steps"].unique()
+        found = [(method, budget, ga_budget, [
+                     scores.get((second, method, budget), []),
+                     scores.get((second, "GA", ga_budget), []),
+                     scores.get((paper_rule, method, budget), []),
+                     scores.get((paper_rule, "GA", ga_budget), [])])
+                 for method in METHODS if method != "GA" and method in budgets
+                 for budget in sorted(budgets[method])
+                 for ga_budget in sorted(budgets.get("GA", []))]
+        found = [f for f in found if min(map(len, f[3])) > 0]
+        together = 1 - (1 - level) / max(1, len(found))
+        for method, budget, ga_budget, groups in found:
+            change, low, high = welch_contrast(groups, weights, level)
+            _, low_together, high_together = welch_contrast(groups, weights, together)
+            rows.append({
+                "paper_rule": paper_rule, "second_rule": second, "method": method,
+                "budget_steps": budget, "ga_budget_steps": ga_budget,
+                "minus_ga_paper_rule": groups[2].mean() - groups[3].mean(),
+                "minus_ga_second_rule": groups[0].mean() - groups[1].mean(),
+                "above_ga_paper_rule": above_share(groups[2], groups[3]),
+                "above_ga_second_rule": above_share(groups[0], groups[1]),
+                "change": change, "change_low": low, "change_high": high,
+                "change_low_simultaneous": low_together,
+                "change_high_simultaneous": high_together,
+                "family": len(found)})
+    return pd.DataFrame(rows, columns=[
+        "paper_rule", "second_rule", "method", "budget_steps", "ga_budget_steps",
+        "minus_ga_paper_rule", "minus_ga_second_rule", "above_ga_paper_rule",
+        "above_ga_second_rule", "change", "change_low", "change_high",
+        "change_low_simultaneous", "change_high_simultaneous", "family"])
 
 
 def write_summary(out: Path) -> pd.DataFrame:
