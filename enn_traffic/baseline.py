@@ -304,24 +304,24 @@ def ga_run(scenario: Scenario, budget: int, seed: int, test: bool = True,
                          world.evaluate, params)
     every = max(1, budget // CHECKPOINTS)
     spent, began, rows, lives, candidates = 0, time.perf_counter(), [], [], []
-    last = None  # the last generation learned from: (champion, steps so far, wall, generation)
+    row = None  # the last generation learned from: (steps so far, wall, generation)
     while spent < budget:
         stopping.raise_if_requested()
         state, _, results = next(run)
         steps = int(results.steps.sum())
-        if last is not None and spent + steps > budget:
+        if row is not None and spent + steps > budget:
             break
         spent += steps
         lives.append(results.steps.ravel())
-        generation = len(state.champions) - 1
-        last = (state.champions[generation], spent, time.perf_counter() - began, generation)
+        champion = state.champions[-1]
+        row = (spent, time.perf_counter() - began, len(state.champions) - 1)
         if spent >= every * (len(rows) + 1):
-            candidates.append(last[0])
-            rows.append(last[1:])
-    if not rows or rows[-1][2] != last[3]:  # the last generation is a candidate too
-        candidates.append(last[0])
-        rows.append(last[1:])
-    wall = last[2]
+            candidates.append(champion)
+            rows.append(row)
+    if rows[-1:] != [row]:  # the last generation is a candidate too
+        candidates.append(champion)
+        rows.append(row)
+    wall = row[1]
     candidates = np.asarray(candidates)
     validation_keys, test_keys = held_out_keys(scenario)
     validation = chromosome_fitness(scenario, candidates, validation_keys,
