@@ -129,13 +129,15 @@ def travel(folder: Path, situations: int = 32) -> pd.DataFrame:
     runs = pd.read_csv(folder / "comparison.csv")
     partner = {name: other for pair in baseline.RULE_PAIRS
                for name, other in (pair, pair[::-1])}
+    scored = {name: baseline.scoring_scenario(shipped_scenario(name)) for name in partner}
+    validation_of = {name: baseline.held_out_keys(scenario)[0]  # once a scenario, not a run
+                     for name, scenario in scored.items()}
     rows = []
     pair_runs = runs[runs["scenario"].isin(partner)]
     for run in progress.bar(len(pair_runs), "travel", "run",
                             iterable=pair_runs.itertuples()):
-        scenario = baseline.scoring_scenario(shipped_scenario(run.scenario))
-        other = baseline.scoring_scenario(shipped_scenario(partner[run.scenario]))
-        validation, _ = baseline.held_out_keys(scenario)
+        scenario, other = scored[run.scenario], scored[partner[run.scenario]]
+        validation = validation_of[run.scenario]
         act = controller_act(folder, scenario, run.method, run.budget_steps, run.seed)
         lives = baseline.policy_lives(scenario, act, validation, situations, tail=TAIL)
         crossed = baseline.policy_lives(other, act, validation, situations)
