@@ -15,7 +15,6 @@ from enn_traffic.shipped import shipped_scenario
 
 TRACKS = {"navigation_narrow": "narrow track", "navigation_narrow_spin40": "narrow track",
           "arena_strategy1": "arena, strategy 1"}
-PAPER_SPIN_VARIANCE = 64.0  # §5.3
 
 
 def _steps(budget: float) -> str:
@@ -27,7 +26,8 @@ def _name(scenario: str, spin_variance: float) -> str:
     track = TRACKS.get(scenario, scenario)
     if not any(scenario in pair for pair in baseline.RULE_PAIRS):
         return track
-    paper = " (the paper's)" if spin_variance == PAPER_SPIN_VARIANCE else ""
+    paper = (" (the paper's)" if any(scenario == pair[0] for pair in baseline.RULE_PAIRS)
+             else "")
     return f"{track}, spin ≤ {spin_variance:g} m²{paper}"
 
 
@@ -38,7 +38,7 @@ def comparison(folder: Path) -> str:
     rules = dict(zip(runs["scenario"], runs["spin_variance"], strict=False))
     names = {name: _name(name, rule) for name, rule in rules.items()}
     lines = _protocol(protocol, folder, names)
-    lines += _search(pd.read_csv(folder / "tuning.csv"), names, rules)
+    lines += _search(pd.read_csv(folder / "tuning.csv"), names)
     lines += _fitness(runs, folder, names)
     lines += _differences(pd.read_csv(folder / "comparison_differences.csv"), names)
     lines += _rule_changes(pd.read_csv(folder / "comparison_rules.csv"), names)
@@ -119,7 +119,7 @@ def _starts(protocol: dict) -> dict:
                                     for x, y, _ in test)}
 
 
-def _search(tuning: pd.DataFrame, names: dict[str, str], rules: dict) -> list[str]:
+def _search(tuning: pd.DataFrame, names: dict[str, str]) -> list[str]:
     budget = tuning["budget_steps"].iloc[0]
     counts = tuning.groupby("method")["setting"].nunique()
     searched = (f"{counts.iloc[0]} settings of each method" if counts.nunique() == 1 else
@@ -139,9 +139,8 @@ def _search(tuning: pd.DataFrame, names: dict[str, str], rules: dict) -> list[st
         chosen = baseline.chosen_setting(tuning, name, method)
         best = rows.set_index("setting").loc[chosen, "validation_fitness"]
         fitness = rows["validation_fitness"]
-        label = names.get(name) or _name(name, rules.get(name, PAPER_SPIN_VARIANCE))
-        lines.append(f"| {label} | {method} | {best:,.0f} ({chosen}) | {fitness.median():,.0f} "
-                     f"| {fitness.min():,.0f} |")
+        lines.append(f"| {names.get(name, name)} | {method} | {best:,.0f} ({chosen}) | "
+                     f"{fitness.median():,.0f} | {fitness.min():,.0f} |")
     return lines + [""]
 
 

@@ -19,7 +19,7 @@ import pandas as pd
 
 from enn_traffic import keys
 from enn_traffic.controller import Controller
-from enn_traffic.experiments.comparison_doc import _starts, _training_lives, comparison
+from enn_traffic.experiments.comparison_doc import _starts, _steps, _training_lives, comparison
 from enn_traffic.experiments.protocol import ARENA, CITY, SUMO, Family
 from enn_traffic.experiments.regime import PAPER_INITIAL
 from enn_traffic.experiments.simultaneous import (
@@ -439,10 +439,6 @@ def closed_loop(paper: Path, family: Family) -> str:
             f"process ([sumo.md](sumo.md#one-sumo-start-one-process)): the same lifetimes "
             f"whatever ran before ([`{family.folder}/closed_loop.csv`]"
             f"(../results/paper/{family.folder}/closed_loop.csv)).\n")
-
-
-def _steps(budget: float) -> str:
-    return f"{budget / 1e6:g} M"
 
 
 def baseline(paper: Path) -> str:
