@@ -232,16 +232,20 @@ def chromosome_fitness(scenario: Scenario, chromosomes: np.ndarray, chosen_keys:
 
 
 def policy_lives(scenario: Scenario, act: Callable[[np.ndarray], np.ndarray],
-                 keys: list[int], count: int | None = None, tail: int = 0) -> pd.DataFrame:
+                 keys: list[int], count: int | None = None, tail: int = 0,
+                 observation_dtype: str = "float32") -> pd.DataFrame:
     """The first ``count`` situations of ``keys`` in ``scenario`` (in order; every one by
     default), each driven once by ``act`` (observations (N, B) → actions (N, 2)) through the
-    vector environment: each life's steps, outcome and fitness (0 for a spin). With ``tail``,
+    vector environment: each life's steps, outcome and fitness (0 for a spin). A GA
+    controller reads ``float64`` observations to live the lives :func:`chromosome_fitness`
+    scores (its world's readings; ``float32`` ones part from them after hundreds of steps,
+    :func:`observation_dtype`). With ``tail``,
     also where the learner went: ``distance`` (m) and ``tail_extent``, the larger of the x and
     y ranges of its last ``tail`` positions (m: a vehicle circling in place stays within its
     circle's diameter)."""
     if count is None:
         count = len(keys) * len(rangefinder_world(scenario).situations(keys[0]))
-    env = RangefinderVectorEnv(scenario, count)
+    env = RangefinderVectorEnv(scenario, count, observation_dtype=observation_dtype)
     observation, _ = env.reset(options={"keys": list(keys)})
     ended = {"steps": np.full(count, -1), "outcome": np.empty(count, dtype=object),
              "fitness": np.full(count, np.nan)}
@@ -263,11 +267,19 @@ def policy_lives(scenario: Scenario, act: Callable[[np.ndarray], np.ndarray],
 
 
 def policy_fitness(scenario: Scenario, act: Callable[[np.ndarray], np.ndarray],
-                   chosen_keys: list[int], count: int) -> np.ndarray:
+                   chosen_keys: list[int], count: int,
+                   observation_dtype: str = "float32") -> np.ndarray:
     """(count,): a policy's fitness per situation of ``chosen_keys`` (in order, the first
     ``count``) of :func:`scoring_scenario` (:func:`policy_lives`)."""
-    return policy_lives(scoring_scenario(scenario), act, chosen_keys, count)[
-        "fitness"].to_numpy()
+    return policy_lives(scoring_scenario(scenario), act, chosen_keys, count,
+                        observation_dtype=observation_dtype)["fitness"].to_numpy()
+
+
+def observation_dtype(method: str) -> str:
+    """The observations a method's controllers are scored on in the comparison: the GA's
+    world's ``float64`` readings (:func:`chromosome_fitness`), the vector environment's
+    ``float32`` ones for the policies it trained."""
+    return "float64" if method == "GA" else "float32"
 
 
 # --- the GA ---------------------------------------------------------------------------------

@@ -99,7 +99,8 @@ def write(out: Path) -> pd.DataFrame:
 
 def controller_act(folder: Path, scenario: Scenario, method: str, budget: int,
                    seed: int) -> Callable[[np.ndarray], np.ndarray]:
-    """A comparison run's saved controller as a policy for the vector environment."""
+    """A comparison run's saved controller as a policy for the vector environment (on the
+    observations :func:`baseline.observation_dtype` names)."""
     from enn_traffic.controller import Controller
     from enn_traffic.envs.rangefinder import action_of, rangefinder_world
 
@@ -139,8 +140,11 @@ def travel(folder: Path, situations: int = 32) -> pd.DataFrame:
         scenario, other = scored[run.scenario], scored[partner[run.scenario]]
         validation = validation_of[run.scenario]
         act = controller_act(folder, scenario, run.method, run.budget_steps, run.seed)
-        lives = baseline.policy_lives(scenario, act, validation, situations, tail=TAIL)
-        crossed = baseline.policy_lives(other, act, validation, situations)
+        dtype = baseline.observation_dtype(run.method)
+        lives = baseline.policy_lives(scenario, act, validation, situations, tail=TAIL,
+                                      observation_dtype=dtype)
+        crossed = baseline.policy_lives(other, act, validation, situations,
+                                        observation_dtype=dtype)
         long = lives[lives["steps"] > LONG]
         rows.append({"scenario": run.scenario, "method": run.method,
                      "budget_steps": run.budget_steps, "seed": run.seed,
