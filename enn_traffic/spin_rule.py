@@ -21,6 +21,7 @@ from __future__ import annotations
 
 import sys
 from collections.abc import Callable
+from functools import partial
 from pathlib import Path
 
 import numpy as np
@@ -126,17 +127,20 @@ def travel(folder: Path, situations: int = 32) -> pd.DataFrame:
     and the smallest extent of their last :data:`TAIL` positions (a circle of 11.5 m stays
     within 23 m). The same controller scored under the pair's other rule too: what a rule
     does to a controller trained under the other. Validation keys only,
-    ``folder/travel.csv``."""
+    ``folder/travel.csv``, a row written as each run ends: a stopped travel goes on from the
+    runs it has (:func:`_travelled`)."""
     runs = pd.read_csv(folder / "comparison.csv")
     partner = {name: other for pair in baseline.RULE_PAIRS
                for name, other in (pair, pair[::-1])}
     scored = {name: baseline.scoring_scenario(shipped_scenario(name)) for name in partner}
     validation_of = {name: baseline.held_out_keys(scenario)[0]  # once a scenario, not a run
                      for name, scenario in scored.items()}
-    rows = []
-    pair_runs = runs[runs["scenario"].isin(partner)]
-    for run in progress.bar(len(pair_runs), "travel", "run",
-                            iterable=pair_runs.itertuples()):
+    path = folder / "travel.csv"
+    rows = _travelled(path, situations)
+    done = {tuple(row[key] for key in RUN_KEYS) for row in rows}
+    pair_runs = [run for run in runs[runs["scenario"].isin(partner)].itertuples()
+                 if tuple(getattr(run, key) for key in RUN_KEYS) not in done]
+    for run in progress.bar(len(pair_runs), "travel", "run", iterable=pair_runs):
         scenario, other = scored[run.scenario], scored[partner[run.scenario]]
         validation = validation_of[run.scenario]
         act = controller_act(folder, scenario, run.method, run.budget_steps, run.seed)
@@ -156,9 +160,26 @@ def travel(folder: Path, situations: int = 32) -> pd.DataFrame:
                      "fitness": lives["fitness"].mean(),
                      "other_rule_fitness": crossed["fitness"].mean(),
                      "other_rule_spins": int((crossed["outcome"] == "spin").sum())})
-    table = pd.DataFrame(rows)
-    write_atomic(folder / "travel.csv", lambda handle: table.to_csv(handle, index=False))
-    return table
+        table = pd.DataFrame(rows, columns=TRAVEL_COLUMNS)
+        write_atomic(path, partial(table.to_csv, index=False))  # kept as each run ends
+    return pd.DataFrame(rows, columns=TRAVEL_COLUMNS)
+
+
+RUN_KEYS = ("scenario", "method", "budget_steps", "seed")
+TRAVEL_COLUMNS = (*RUN_KEYS, "situations", "long_lives", "capped", "median_distance",
+                  "least_tail_extent", "circling", "fitness", "other_rule_fitness",
+                  "other_rule_spins")
+
+
+def _travelled(path: Path, situations: int) -> list[dict]:
+    """The rows of an earlier ``travel.csv`` that this one keeps: all of them when it has
+    this version's columns and was driven on as many situations, else none."""
+    if not path.exists():
+        return []
+    table = pd.read_csv(path)
+    if tuple(table.columns) != TRAVEL_COLUMNS or (table["situations"] != situations).any():
+        return []
+    return table.to_dict("records")
 
 
 if __name__ == "__main__":

@@ -129,7 +129,8 @@ def test_travel_scores_a_runs_controller_under_its_rule_and_the_other(tmp_path):
     fitness under its own rule and under the pair's other rule are the GA world's on the
     same validation situations (the comparison's scorer: on float32 readings its long lives
     part from the GA's, 758.25 against 759.5 here), and they differ (it drives the bends the
-    paper's rule calls spins), so the two columns cannot be swapped unnoticed."""
+    paper's rule calls spins), so the two columns cannot be swapped unnoticed. Run again, it
+    keeps the row it wrote."""
     import shutil
 
     from enn_traffic.controller import Controller
@@ -150,3 +151,5 @@ def test_travel_scores_a_runs_controller_under_its_rule_and_the_other(tmp_path):
             baseline.chromosome_fitness(scenario, chromosome, validation, 4).mean())
     assert row["fitness"] > 10 * row["other_rule_fitness"]
     assert pd.read_csv(tmp_path / "travel.csv").shape[0] == 1
+    path.unlink()  # run again, travel keeps the row it has: it loads no controller
+    pd.testing.assert_series_equal(spin_rule.travel(tmp_path, situations=4).iloc[0], row)
