@@ -116,6 +116,7 @@ def controller_act(folder: Path, scenario: Scenario, method: str, budget: int,
 
 LONG = 1000  # a life this long (steps) has left any bend behind
 TAIL = 1000  # the last positions of a long life whose extent says whether it still travels
+CAPS = (1000, 5000)  # lower step caps, the scenario's as an ablation (:func:`capped`)
 CIRCLING = 25.0  # m: a long life whose tail stays this close circles (a 11.5 m radius: 23 m)
 
 
@@ -158,6 +159,7 @@ def travel(folder: Path, situations: int = 32) -> pd.DataFrame:
                      "least_tail_extent": long["tail_extent"].min(),
                      "circling": int((long["tail_extent"] < CIRCLING).sum()),
                      "fitness": lives["fitness"].mean(),
+                     **{f"fitness_cap_{cap}": capped(lives, cap).mean() for cap in CAPS},
                      "other_rule_fitness": crossed["fitness"].mean(),
                      "other_rule_spins": int((crossed["outcome"] == "spin").sum())})
         table = pd.DataFrame(rows, columns=TRAVEL_COLUMNS)
@@ -167,8 +169,17 @@ def travel(folder: Path, situations: int = 32) -> pd.DataFrame:
 
 RUN_KEYS = ("scenario", "method", "budget_steps", "seed")
 TRAVEL_COLUMNS = (*RUN_KEYS, "situations", "long_lives", "capped", "median_distance",
-                  "least_tail_extent", "circling", "fitness", "other_rule_fitness",
+                  "least_tail_extent", "circling", "fitness",
+                  *(f"fitness_cap_{cap}" for cap in CAPS), "other_rule_fitness",
                   "other_rule_spins")
+
+
+def capped(lives: pd.DataFrame, cap: int) -> np.ndarray:
+    """Each life's fitness had the scenario capped lives at ``cap`` steps: a life that went
+    on past ``cap`` scores ``cap`` whatever ended it later (a spin ruled after ``cap`` too),
+    one that ended sooner its own fitness. The cap as an ablation of the comparison: a
+    method's lead owed to lives at the 20,000-step cap shows as a gap shrinking with it."""
+    return np.where(lives["steps"] > cap, cap, lives["fitness"]).astype(float)
 
 
 def _travelled(path: Path, situations: int) -> list[dict]:

@@ -153,3 +153,11 @@ def test_travel_scores_a_runs_controller_under_its_rule_and_the_other(tmp_path):
     assert pd.read_csv(tmp_path / "travel.csv").shape[0] == 1
     path.unlink()  # run again, travel keeps the row it has: it loads no controller
     pd.testing.assert_series_equal(spin_rule.travel(tmp_path, situations=4).iloc[0], row)
+
+
+def test_a_lower_cap_scores_a_life_past_it_as_the_cap():
+    """Hand-computed: under a cap of 1,000 a crash at 700 keeps 700, a spin at 80 scores 0,
+    a crash at 5,000, a spin at 3,000 and a life capped at 20,000 all score 1,000."""
+    lives = pd.DataFrame({"steps": [700, 80, 5000, 3000, 20000],
+                          "fitness": [700.0, 0.0, 5000.0, 0.0, 20000.0]})
+    assert spin_rule.capped(lives, 1000).tolist() == [700, 0, 1000, 1000, 1000]
