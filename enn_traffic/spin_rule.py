@@ -127,13 +127,15 @@ def travel(folder: Path, situations: int = 32) -> pd.DataFrame:
     validation situations: how many lives pass :data:`LONG` steps, their median distance,
     and the smallest extent of their last :data:`TAIL` positions (a circle of 11.5 m stays
     within 23 m). The same controller scored under the pair's other rule too: what a rule
-    does to a controller trained under the other. Validation keys only,
-    ``folder/travel.csv``, a row written as each run ends: a stopped travel goes on from the
-    runs it has (:func:`_travelled`)."""
+    does to a controller trained under the other, and from the one start it trained from
+    (the start state as an ablation: the situations start all along the track). Validation
+    keys only, ``folder/travel.csv``, a row written as each run ends: a stopped travel goes
+    on from the runs it has (:func:`_travelled`)."""
     runs = pd.read_csv(folder / "comparison.csv")
     partner = {name: other for pair in baseline.RULE_PAIRS
                for name, other in (pair, pair[::-1])}
-    scored = {name: baseline.scoring_scenario(shipped_scenario(name)) for name in partner}
+    trained = {name: shipped_scenario(name) for name in partner}
+    scored = {name: baseline.scoring_scenario(scenario) for name, scenario in trained.items()}
     validation_of = {name: baseline.held_out_keys(scenario)[0]  # once a scenario, not a run
                      for name, scenario in scored.items()}
     path = folder / "travel.csv"
@@ -150,6 +152,8 @@ def travel(folder: Path, situations: int = 32) -> pd.DataFrame:
                                       observation_dtype=dtype)
         crossed = baseline.policy_lives(other, act, validation, situations,
                                         observation_dtype=dtype)
+        own_start = baseline.policy_lives(trained[run.scenario], act, validation[:1], 1,
+                                          observation_dtype=dtype)
         long = lives[lives["steps"] > LONG]
         rows.append({"scenario": run.scenario, "method": run.method,
                      "budget_steps": run.budget_steps, "seed": run.seed,
@@ -160,6 +164,7 @@ def travel(folder: Path, situations: int = 32) -> pd.DataFrame:
                      "circling": int((long["tail_extent"] < CIRCLING).sum()),
                      "fitness": lives["fitness"].mean(),
                      **{f"fitness_cap_{cap}": capped(lives, cap).mean() for cap in CAPS},
+                     "training_start_fitness": own_start["fitness"].iloc[0],
                      "other_rule_fitness": crossed["fitness"].mean(),
                      "other_rule_spins": int((crossed["outcome"] == "spin").sum())})
         table = pd.DataFrame(rows, columns=TRAVEL_COLUMNS)
@@ -170,7 +175,8 @@ def travel(folder: Path, situations: int = 32) -> pd.DataFrame:
 RUN_KEYS = ("scenario", "method", "budget_steps", "seed")
 TRAVEL_COLUMNS = (*RUN_KEYS, "situations", "long_lives", "capped", "median_distance",
                   "least_tail_extent", "circling", "fitness",
-                  *(f"fitness_cap_{cap}" for cap in CAPS), "other_rule_fitness",
+                  *(f"fitness_cap_{cap}" for cap in CAPS), "training_start_fitness",
+                  "other_rule_fitness",
                   "other_rule_spins")
 
 

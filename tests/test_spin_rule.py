@@ -8,8 +8,10 @@ import pandas as pd
 import pytest
 
 from enn_traffic import baseline, spin_rule
+from enn_traffic.envs.rangefinder import rangefinder_world
 from enn_traffic.scenario import load_scenario
 from enn_traffic.shipped import shipped_scenario
+from enn_traffic.sim.world import SituationResults
 
 ROOT = Path(__file__).resolve().parents[1]
 COMMITTED = ROOT / spin_rule.FOLDER / "spin_rule.csv"
@@ -130,7 +132,7 @@ def test_travel_scores_a_runs_controller_under_its_rule_and_the_other(tmp_path):
     same validation situations (the comparison's scorer: on float32 readings its long lives
     part from the GA's, 758.25 against 759.5 here), and they differ (it drives the bends the
     paper's rule calls spins), so the two columns cannot be swapped unnoticed. Run again, it
-    keeps the row it wrote."""
+    keeps the row it wrote. From the start it trained from it lives as the GA's world says."""
     import shutil
 
     from enn_traffic.controller import Controller
@@ -150,6 +152,9 @@ def test_travel_scores_a_runs_controller_under_its_rule_and_the_other(tmp_path):
         assert row[column] == pytest.approx(
             baseline.chromosome_fitness(scenario, chromosome, validation, 4).mean())
     assert row["fitness"] > 10 * row["other_rule_fitness"]
+    from_start = rangefinder_world(shipped_scenario(second.name)).evaluate(chromosome, 7)
+    assert row["training_start_fitness"] == SituationResults.lifetime_fitness(
+        from_start.steps, from_start.outcome)[0, 0]
     assert pd.read_csv(tmp_path / "travel.csv").shape[0] == 1
     path.unlink()  # run again, travel keeps the row it has: it loads no controller
     pd.testing.assert_series_equal(spin_rule.travel(tmp_path, situations=4).iloc[0], row)
