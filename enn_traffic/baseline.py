@@ -805,8 +805,9 @@ def differences(comparison: pd.DataFrame, level: float = 0.9) -> pd.DataFrame:
     """PPO's and SAC's test fitness minus the GA's, at every pair of budgets in a scenario:
     the difference of the seeds' means with its Welch t interval (the seeds' spread, the
     main spread of RL, counts; each seed's score is the mean over the same situations; two
-    groups without spread give a point), its exact permutation p-value (no normal shape
-    assumed: scores pile at the step cap), and, for the family of a scenario's comparisons
+    groups without spread give a point), the share of (seed, GA seed) pairs in which the
+    method's scores higher (:func:`above_share`), its exact permutation p-value (no normal
+    shape assumed: scores pile at the step cap), and, for the family of a scenario's comparisons
     (``family`` of them), Holm's adjusted p-value and Bonferroni's simultaneous interval
     (each at level 1 − (1 − ``level``) / family, so that all of a scenario's intervals hold
     together)."""
@@ -821,12 +822,13 @@ def differences(comparison: pd.DataFrame, level: float = 0.9) -> pd.DataFrame:
             rows.append({"scenario": name, "method": method, "budget_steps": budget,
                          "ga_budget_steps": ga_budget, "seeds": len(mine),
                          "ga_seeds": len(other), "minus_ga": mine.mean() - other.mean(),
+                         "above_ga": above_share(mine, other),
                          "mine_values": mine, "ga_values": other})
     table = pd.DataFrame(rows)
     if table.empty:
         return pd.DataFrame(columns=[
             "scenario", "method", "budget_steps", "ga_budget_steps", "seeds", "ga_seeds",
-            "minus_ga", "minus_ga_low", "minus_ga_high", "p_value",
+            "minus_ga", "above_ga", "minus_ga_low", "minus_ga_high", "p_value",
             "minus_ga_low_simultaneous", "minus_ga_high_simultaneous", "family", "p_holm"])
     family = table.groupby("scenario")["method"].transform("size")
     columns = {"minus_ga_low": [], "minus_ga_high": [], "p_value": [],

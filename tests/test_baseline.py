@@ -150,7 +150,7 @@ def test_the_summary_and_the_differences_carry_the_seeds_spread():
         6.3138, abs=1e-3)
     difference = baseline.differences(runs).iloc[0]
     # Welch over 2 + 2 seeds of spread 1.414: 7 ± t(0.95, 2) · 1.414
-    assert difference["minus_ga"] == 7.0
+    assert difference["minus_ga"] == 7.0 and difference["above_ga"] == 1.0
     assert difference["minus_ga_high"] - 7.0 == pytest.approx(2.9200 * np.sqrt(2), abs=1e-3)
 
 
@@ -362,5 +362,5 @@ def test_seeds_piled_at_the_cap_give_a_point_not_a_missing_interval():
     row = baseline.differences(runs).iloc[0]
     assert row[["minus_ga", "minus_ga_low", "minus_ga_high", "minus_ga_low_simultaneous",
                 "minus_ga_high_simultaneous"]].tolist() == [0.0] * 5
-    assert row["p_value"] == 1.0 and row["p_holm"] == 1.0
+    assert row["p_value"] == 1.0 and row["p_holm"] == 1.0 and row["above_ga"] == 0.5
     assert t_interval(runs["test_fitness"].to_numpy()) == (20_000.0, 20_000.0)

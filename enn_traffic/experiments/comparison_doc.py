@@ -8,6 +8,7 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
+import numpy as np
 import pandas as pd
 
 from enn_traffic import baseline
@@ -43,7 +44,8 @@ def comparison(folder: Path) -> str:
     lines += _differences(pd.read_csv(folder / "comparison_differences.csv"), names)
     lines += _rule_changes(pd.read_csv(folder / "comparison_rules.csv"), names)
     if (folder / "travel.csv").is_file():
-        lines += _travel(pd.read_csv(folder / "travel.csv"), names)
+        travel = pd.read_csv(folder / "travel.csv")
+        lines += _travel(travel, names) + _ablations(travel, names)
     lines += ["", f"![GA, PPO and SAC](../{folder.parent.name}/{folder.name}/comparison.png)",
               ""]
     lines += _training_lives(pd.read_csv(folder / "training_lives.csv"), names)
@@ -157,9 +159,9 @@ def _fitness(runs: pd.DataFrame, folder: Path, names: dict[str, str]) -> list[st
         "over seeds with its 90% Student's t interval over seeds (cut to the fitness a run "
         "can have, 0 to the step cap); at the cap: the share of "
         "all its runs' test situations driven to the scenario's step cap. The learner-steps "
-        "simulated are in brackets (the GA's last generation and PPO's last rollout end past "
-        "the budget); validation − test: the optimism of choosing the best of many "
-        "candidates.",
+        "simulated are in brackets (short of the budget where the GA's last generation or "
+        "PPO's last rollout would have ended past it); validation − test: the optimism of "
+        "choosing the best of many candidates.",
         "",
         "| scenario | method | budget (simulated) | seeds | test fitness (90% interval over "
         "seeds) | runs, min–max | at the cap | candidates | chose its last | validation − "
@@ -192,7 +194,7 @@ def _cell(row) -> str:
     return (f"{row.minus_ga:+,.0f} ({row.minus_ga_low:+,.0f} to {row.minus_ga_high:+,.0f}; "
             f"together {row.minus_ga_low_simultaneous:+,.0f} to "
             f"{row.minus_ga_high_simultaneous:+,.0f}), p {row.p_value:.2g}, Holm "
-            f"{row.p_holm:.2g}")
+            f"{row.p_holm:.2g}, above {row.above_ga:.0%}")
 
 
 def _differences(differences: pd.DataFrame, names: dict[str, str]) -> list[str]:
@@ -204,7 +206,8 @@ def _differences(differences: pd.DataFrame, names: dict[str, str]) -> list[str]:
         "mean test fitness with its 90% Welch t interval; *together*: Bonferroni's "
         "simultaneous interval, all of a scenario's comparisons at once (90% together); p: "
         "the exact permutation test's (every split of the two groups' seeds), and Holm's "
-        "adjustment of it for the same family.",
+        "adjustment of it for the same family; above: the share of (seed, GA seed) pairs "
+        "in which the method's seed scores higher, ties counting half.",
         "",
         "| scenario | method, budget | " + " | ".join(
             f"minus the GA at {_steps(b)}" for b in ga_budgets) + " |",
@@ -214,6 +217,27 @@ def _differences(differences: pd.DataFrame, names: dict[str, str]) -> list[str]:
         cells = {row.ga_budget_steps: _cell(row) for row in rows.itertuples()}
         lines.append(f"| {names.get(name, name)} | {method}, {_steps(budget)} | "
                      + " | ".join(cells.get(b, "") for b in ga_budgets) + " |")
+    return lines + [""] + _verdicts(differences, names)
+
+
+def _verdicts(differences: pd.DataFrame, names: dict[str, str], alpha: float = 0.1
+              ) -> list[str]:
+    """Each method against the GA at the same budget, read from the table above: ahead or
+    behind where Holm's p is under ``alpha``, else not told apart."""
+    lines = [f"In short, each method against the GA at the same budget (Holm's p under "
+             f"{alpha:g}, a scenario's comparisons at once):", ""]
+    same = differences[differences["budget_steps"] == differences["ga_budget_steps"]]
+    for name, rows in same.groupby("scenario", sort=False):
+        parts = []
+        for row in rows.itertuples():
+            if not row.p_holm < alpha:
+                verdict = f"not told apart from the GA (Holm p {row.p_holm:.2g})"
+            else:
+                verdict = (f"{'ahead of' if row.minus_ga > 0 else 'behind'} the GA by "
+                           f"{abs(row.minus_ga):,.0f} steps (Holm p {row.p_holm:.2g}; above "
+                           f"the GA in {row.above_ga:.0%} of seed pairs)")
+            parts.append(f"{row.method} at {_steps(row.budget_steps)} {verdict}")
+        lines.append(f"- {names.get(name, name)}: " + "; ".join(parts) + ".")
     return lines + [""]
 
 
@@ -264,19 +288,57 @@ def _travel(travel: pd.DataFrame, names: dict[str, str]) -> list[str]:
         "life (median of the runs' medians) | least extent of a long life | fitness | under the "
         "other rule (spins) |",
         "|---|---|---|---|---|---|---|---|---|---|"]
-    if "circling" not in travel:  # made before the column was
-        travel = travel.assign(circling=pd.NA)
     for (name, method, budget), rows in travel.groupby(["scenario", "method",
                                                         "budget_steps"]):
         long = rows["long_lives"].sum()
         lines.append(
             f"| {names.get(name, name)} | {method}, {_steps(budget)} | {len(rows)} | "
             f"{long} of {rows['situations'].sum()} | {rows['capped'].sum()} | "
-            f"{'?' if rows['circling'].isna().any() else rows['circling'].sum()} | "
+            f"{rows['circling'].sum()} | "
             + (f"{rows['median_distance'].median():,.0f} m | "
                f"{rows['least_tail_extent'].min():,.0f} m | " if long else "– | – | ")
             + f"{rows['fitness'].mean():,.0f} | {rows['other_rule_fitness'].mean():,.0f} "
             f"({rows['other_rule_spins'].sum()}) |")
+    return lines + [""]
+
+
+def _ablations(travel: pd.DataFrame, names: dict[str, str]) -> list[str]:
+    """The step cap and the start state as ablations: each group's validation fitness had
+    lives been capped lower (:func:`enn_traffic.spin_rule.capped`) and its one life from the
+    start it trained from, each with its difference from the GA at the smallest budget and
+    a 90% Welch t interval over seeds."""
+    from enn_traffic import spin_rule
+    from enn_traffic.report.stats import welch_contrast
+
+    columns = [*(f"fitness_cap_{cap}" for cap in spin_rule.CAPS), "fitness",
+               "training_start_fitness"]
+    lines = [
+        "The step cap and the start state as ablations (the same controllers and validation "
+        "situations as above): each method's mean fitness had a life been capped at "
+        + ", ".join(f"{cap:,}" for cap in spin_rule.CAPS) + " steps (a life past the cap "
+        "scores the cap), at the scenario's own cap, and of one life from the start it "
+        "trained from (the narrow track's one start, §5.1), each with its difference from "
+        "the GA at the smallest budget and a 90% Welch t interval over seeds (uncorrected).",
+        "",
+        "| scenario | method, budget | " + "".join(
+            f"cap {cap:,} | minus the GA | " for cap in spin_rule.CAPS)
+        + "the scenario's cap | minus the GA | from the training start | minus the GA |",
+        "|---|---|" + "---|---|" * len(columns)]
+    for name, runs in travel.groupby("scenario"):
+        ga = runs[runs["method"] == "GA"]
+        ga = ga[ga["budget_steps"] == ga["budget_steps"].min()]
+        for (method, budget), rows in runs.groupby(["method", "budget_steps"]):
+            cells = []
+            for column in columns:
+                cells.append(f"{rows[column].mean():,.0f}")
+                if ga.empty or rows.index.equals(ga.index):
+                    cells.append("–")
+                    continue
+                estimate, low, high = welch_contrast([rows[column], ga[column]], [1, -1])
+                cells.append(f"{estimate:+,.0f}" + (
+                    "" if np.isnan(low) else f" ({low:+,.0f} to {high:+,.0f})"))
+            lines.append(f"| {names.get(name, name)} | {method}, {_steps(budget)} | "
+                         + " | ".join(cells) + " |")
     return lines + [""]
 
 
