@@ -145,9 +145,9 @@ class RunResult:
     """One run: its validation curve (learner_steps, wall_s, validation_fitness per
     candidate), the chosen candidate's row in it, that controller's fitness on each test
     situation (empty for a search run, which reads no test key), and the learner-steps it
-    simulated in all (the GA's last generation and PPO's last rollout end past the budget)
-    and the length of every life lived in training (the GA's individuals', the exploring
-    policy's), and the chosen controller."""
+    simulated in all (at most its budget: :data:`WITHIN_BUDGET`), the length of every life
+    lived in training (the GA's individuals', the exploring policy's), and the chosen
+    controller."""
 
     curve: pd.DataFrame
     chosen: int
