@@ -13,7 +13,7 @@ A looser rule also lets more through: :func:`travel` checks that the comparison'
 lives under it drive the track rather than circle in place.
 
 ``python -m enn_traffic.spin_rule [OUT]`` writes ``OUT/spin_rule.csv`` (default
-:data:`FOLDER`, the third round's comparison); ``python -m enn_traffic.spin_rule travel
+:data:`FOLDER`, the comparison's); ``python -m enn_traffic.spin_rule travel
 [OUT]`` writes ``OUT/travel.csv`` from the runs there.
 """
 
@@ -37,7 +37,7 @@ from enn_traffic.shipped import shipped_scenario
 # difference of the beams).
 CANDIDATES = (64.0, 56.0, 48.0, 40.0, 32.0, 24.0, 16.0)
 GAINS = (0.5, 1.0, 2.0, 4.0)
-FOLDER = "results/baseline_round3"
+FOLDER = "results/baseline"
 
 
 def centre_keeping(gain: float, beam_range: float) -> Callable[[np.ndarray], np.ndarray]:

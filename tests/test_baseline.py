@@ -313,7 +313,7 @@ def test_a_committed_ga_run_of_the_comparison_comes_out_the_same(monkeypatch):
     from pathlib import Path
 
     results = Path(__file__).resolve().parents[1] / "results"
-    folders = [folder for folder in (results / "baseline", results / "baseline_round3")
+    folders = [folder for folder in (results / "baseline", results / "baseline_round2")
                if (folder / "protocol.json").is_file()
                and json.loads((folder / "protocol.json").read_text()) == baseline.protocol()]
     assert folders, "no committed comparison folder under today's protocol"

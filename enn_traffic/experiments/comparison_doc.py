@@ -305,8 +305,8 @@ def _travel(travel: pd.DataFrame, names: dict[str, str]) -> list[str]:
 def _ablations(travel: pd.DataFrame, names: dict[str, str]) -> list[str]:
     """The step cap and the start state as ablations: each group's validation fitness had
     lives been capped lower (:func:`enn_traffic.spin_rule.capped`) and its one life from the
-    start it trained from, each with its difference from the GA at the smallest budget and
-    a 90% Welch t interval over seeds."""
+    start it trained from, each with its difference from the GA at the same budget and a
+    90% Welch t interval over seeds."""
     from enn_traffic import spin_rule
     from enn_traffic.report.stats import welch_contrast
 
@@ -317,24 +317,26 @@ def _ablations(travel: pd.DataFrame, names: dict[str, str]) -> list[str]:
         "situations as above): each method's mean fitness had a life been capped at "
         + ", ".join(f"{cap:,}" for cap in spin_rule.CAPS) + " steps (a life past the cap "
         "scores the cap), at the scenario's own cap, and of one life from the start it "
-        "trained from (the narrow track's one start, §5.1), each with its difference from "
-        "the GA at the smallest budget and a 90% Welch t interval over seeds (uncorrected).",
+        "trained from (the narrow track's one start, §5.1; one life a seed), each with its "
+        "difference from the GA at the same budget and a 90% Welch t interval over seeds "
+        "(uncorrected).",
         "",
         "| scenario | method, budget | " + "".join(
             f"cap {cap:,} | minus the GA | " for cap in spin_rule.CAPS)
         + "the scenario's cap | minus the GA | from the training start | minus the GA |",
         "|---|---|" + "---|---|" * len(columns)]
     for name, runs in travel.groupby("scenario"):
-        ga = runs[runs["method"] == "GA"]
-        ga = ga[ga["budget_steps"] == ga["budget_steps"].min()]
+        ga = {budget: rows for budget, rows in runs[runs["method"] == "GA"].groupby(
+            "budget_steps")}
         for (method, budget), rows in runs.groupby(["method", "budget_steps"]):
+            theirs = ga.get(budget) if method != "GA" else None
             cells = []
             for column in columns:
                 cells.append(f"{rows[column].mean():,.0f}")
-                if ga.empty or rows.index.equals(ga.index):
+                if theirs is None:
                     cells.append("–")
                     continue
-                estimate, low, high = welch_contrast([rows[column], ga[column]], [1, -1])
+                estimate, low, high = welch_contrast([rows[column], theirs[column]], [1, -1])
                 cells.append(f"{estimate:+,.0f}" + (
                     "" if np.isnan(low) else f" ({low:+,.0f} to {high:+,.0f})"))
             lines.append(f"| {names.get(name, name)} | {method}, {_steps(budget)} | "

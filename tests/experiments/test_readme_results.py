@@ -51,7 +51,7 @@ def test_a_changed_crowd_table_changes_the_results_md_text(root, tmp_path):
                     ignore=shutil.ignore_patterns("controllers", "*.png", "runs", "crowds"))
     shutil.copytree(root / "results" / "paper" / "controllers" / "table4",
                     paper / "controllers" / "table4")
-    for comparison in ("baseline", "baseline_round3"):
+    for comparison in ("baseline", "baseline_round2"):
         shutil.copytree(root / "results" / comparison, tmp_path / comparison,
                         ignore=shutil.ignore_patterns("*.png", "controllers"))
     learners = pd.read_csv(paper / "table4_learners.csv")
