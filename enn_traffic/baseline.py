@@ -233,7 +233,7 @@ def chromosome_fitness(scenario: Scenario, chromosomes: np.ndarray, chosen_keys:
 
 def policy_lives(scenario: Scenario, act: Callable[[np.ndarray], np.ndarray],
                  keys: list[int], count: int | None = None, tail: int = 0,
-                 observation_dtype: str = "float32") -> pd.DataFrame:
+                 observation_dtype: str = "float32", paths: bool = False) -> pd.DataFrame:
     """The first ``count`` situations of ``keys`` in ``scenario`` (in order; every one by
     default), each driven once by ``act`` (observations (N, B) → actions (N, 2)) through the
     vector environment: each life's steps, outcome and fitness (0 for a spin). A GA
@@ -242,7 +242,7 @@ def policy_lives(scenario: Scenario, act: Callable[[np.ndarray], np.ndarray],
     :func:`observation_dtype`). With ``tail``,
     also where the learner went: ``distance`` (m) and ``tail_extent``, the larger of the x and
     y ranges of its last ``tail`` positions (m: a vehicle circling in place stays within its
-    circle's diameter)."""
+    circle's diameter), and with ``paths`` each life's positions (``path``, (steps, 2))."""
     if count is None:
         count = len(keys) * len(rangefinder_world(scenario).situations(keys[0]))
     env = RangefinderVectorEnv(scenario, count, observation_dtype=observation_dtype)
@@ -263,6 +263,8 @@ def policy_lives(scenario: Scenario, act: Callable[[np.ndarray], np.ndarray],
         lived = [path[i, :max(1, steps)] for i, steps in enumerate(ended["steps"])]
         table["distance"] = [np.linalg.norm(np.diff(p, axis=0), axis=1).sum() for p in lived]
         table["tail_extent"] = [np.ptp(p[-tail:], axis=0).max() for p in lived]
+        if paths:
+            table["path"] = lived
     return table
 
 

@@ -29,6 +29,7 @@ import pandas as pd
 
 from enn_traffic import baseline, progress
 from enn_traffic.io import write_atomic
+from enn_traffic.roads.network import read_net
 from enn_traffic.scenario import Scenario
 from enn_traffic.shipped import shipped_scenario
 
@@ -116,6 +117,7 @@ def controller_act(folder: Path, scenario: Scenario, method: str, budget: int,
 
 LONG = 1000  # a life this long (steps) has left any bend behind
 TAIL = 1000  # the last positions of a long life whose extent says whether it still travels
+END_RADIUS = 20.0  # m: a life this close to a dead end of the track has reached it
 CAPS = (1000, 5000)  # lower step caps, the scenario's as an ablation (:func:`capped`)
 CIRCLING = 25.0  # m: a long life whose tail stays this close circles (a 11.5 m radius: 23 m)
 
@@ -136,6 +138,7 @@ def travel(folder: Path, situations: int = 32) -> pd.DataFrame:
                for name, other in (pair, pair[::-1])}
     trained = {name: shipped_scenario(name) for name in partner}
     scored = {name: baseline.scoring_scenario(scenario) for name, scenario in trained.items()}
+    ends_of = {name: dead_ends(scenario) for name, scenario in trained.items()}
     validation_of = {name: baseline.held_out_keys(scenario)[0]  # once a scenario, not a run
                      for name, scenario in scored.items()}
     path = folder / "travel.csv"
@@ -149,12 +152,13 @@ def travel(folder: Path, situations: int = 32) -> pd.DataFrame:
         act = controller_act(folder, scenario, run.method, run.budget_steps, run.seed)
         dtype = baseline.observation_dtype(run.method)
         lives = baseline.policy_lives(scenario, act, validation, situations, tail=TAIL,
-                                      observation_dtype=dtype)
+                                      observation_dtype=dtype, paths=True)
         crossed = baseline.policy_lives(other, act, validation, situations,
                                         observation_dtype=dtype)
         own_start = baseline.policy_lives(trained[run.scenario], act, validation[:1], 1,
                                           observation_dtype=dtype)
         long = lives[lives["steps"] > LONG]
+        visits = np.array([end_visits(path, ends_of[run.scenario]) for path in long["path"]])
         rows.append({"scenario": run.scenario, "method": run.method,
                      "budget_steps": run.budget_steps, "seed": run.seed,
                      "situations": situations, "long_lives": len(long),
@@ -162,6 +166,8 @@ def travel(folder: Path, situations: int = 32) -> pd.DataFrame:
                      "median_distance": long["distance"].median(),
                      "least_tail_extent": long["tail_extent"].min(),
                      "circling": int((long["tail_extent"] < CIRCLING).sum()),
+                     "turned": int((visits >= 2).sum()),
+                     "median_end_visits": float(np.median(visits)) if len(visits) else np.nan,
                      "fitness": lives["fitness"].mean(),
                      **{f"fitness_cap_{cap}": capped(lives, cap).mean() for cap in CAPS},
                      "training_start_fitness": own_start["fitness"].iloc[0],
@@ -174,10 +180,25 @@ def travel(folder: Path, situations: int = 32) -> pd.DataFrame:
 
 RUN_KEYS = ("scenario", "method", "budget_steps", "seed")
 TRAVEL_COLUMNS = (*RUN_KEYS, "situations", "long_lives", "capped", "median_distance",
-                  "least_tail_extent", "circling", "fitness",
+                  "least_tail_extent", "circling", "turned", "median_end_visits", "fitness",
                   *(f"fitness_cap_{cap}" for cap in CAPS), "training_start_fitness",
                   "other_rule_fitness",
                   "other_rule_spins")
+
+
+def dead_ends(scenario: Scenario) -> np.ndarray:
+    """(E, 2): where the scenario's track ends, its SUMO network's dead-end nodes (m)."""
+    net = read_net(Path(scenario.track.net))
+    return np.array([node.getCoord()[:2] for node in net.getNodes()
+                     if node.getType() == "dead_end"], dtype=float).reshape(-1, 2)
+
+
+def end_visits(path: np.ndarray, ends: np.ndarray, radius: float = END_RADIUS) -> int:
+    """How many times a life's ``path`` (steps, 2) comes within ``radius`` of one of ``ends``
+    (a start there not counted): a life that drives one way meets a dead end once at most,
+    one that turns round at a dead end and drives on meets one again."""
+    near = (np.linalg.norm(path[:, None, :] - ends[None], axis=2) < radius).any(axis=1)
+    return int((np.diff(near.astype(np.int8)) == 1).sum())
 
 
 def capped(lives: pd.DataFrame, cap: int) -> np.ndarray:

@@ -166,3 +166,20 @@ def test_a_lower_cap_scores_a_life_past_it_as_the_cap():
     lives = pd.DataFrame({"steps": [700, 80, 5000, 3000, 20000],
                           "fitness": [700.0, 0.0, 5000.0, 0.0, 20000.0]})
     assert spin_rule.capped(lives, 1000).tolist() == [700, 0, 1000, 1000, 1000]
+
+
+def test_a_life_that_turns_round_at_a_dead_end_meets_one_twice():
+    """The narrow track's dead ends are its network's nodes n0 (−2, −20) and n27 (−210, −30)
+    (sumo_nets/track_narrow.nod.xml). Hand-made lives along x with ends at 0 and 100: from
+    5 to 100 and back to 0 meets an end twice (its start beside one not counted); from 50 to
+    100 once; from 30 to 70 never."""
+    ends = spin_rule.dead_ends(shipped_scenario("navigation_narrow"))
+    np.testing.assert_allclose(ends, [[-2, -20], [-210, -30]])
+    ends = np.array([[0.0, 0.0], [100.0, 0.0]])
+
+    def along(*xs):
+        return np.stack([np.concatenate(xs), np.zeros(sum(map(len, xs)))], axis=1)
+
+    assert spin_rule.end_visits(along(np.arange(5, 101), np.arange(99, -1, -1)), ends) == 2
+    assert spin_rule.end_visits(along(np.arange(50, 101)), ends) == 1
+    assert spin_rule.end_visits(along(np.arange(30, 71)), ends) == 0

@@ -41,11 +41,14 @@ def comparison(folder: Path) -> str:
     lines = _protocol(protocol, folder, names)
     lines += _search(pd.read_csv(folder / "tuning.csv"), names)
     lines += _fitness(runs, folder, names)
-    lines += _differences(pd.read_csv(folder / "comparison_differences.csv"), names)
+    lines += _differences(pd.read_csv(folder / "comparison_differences.csv"), names, runs)
     lines += _rule_changes(pd.read_csv(folder / "comparison_rules.csv"), names)
     if (folder / "travel.csv").is_file():
         travel = pd.read_csv(folder / "travel.csv")
         lines += _travel(travel, names) + _ablations(travel, names)
+    lines += _stopping(pd.read_csv(folder / "curves.csv").merge(
+        runs[["scenario", "method", "budget_steps", "seed"]]), names,
+        protocol["validation_situations"])
     lines += ["", f"![GA, PPO and SAC](../{folder.parent.name}/{folder.name}/comparison.png)",
               ""]
     lines += _training_lives(pd.read_csv(folder / "training_lives.csv"), names)
@@ -197,7 +200,8 @@ def _cell(row) -> str:
             f"{row.p_holm:.2g}, above {row.above_ga:.0%}")
 
 
-def _differences(differences: pd.DataFrame, names: dict[str, str]) -> list[str]:
+def _differences(differences: pd.DataFrame, names: dict[str, str], runs: pd.DataFrame
+                 ) -> list[str]:
     if differences.empty:
         return []
     ga_budgets = sorted(differences["ga_budget_steps"].unique())
@@ -217,26 +221,29 @@ def _differences(differences: pd.DataFrame, names: dict[str, str]) -> list[str]:
         cells = {row.ga_budget_steps: _cell(row) for row in rows.itertuples()}
         lines.append(f"| {names.get(name, name)} | {method}, {_steps(budget)} | "
                      + " | ".join(cells.get(b, "") for b in ga_budgets) + " |")
-    return lines + [""] + _verdicts(differences, names)
+    return lines + [""] + _verdicts(differences, names, runs)
 
 
-def _verdicts(differences: pd.DataFrame, names: dict[str, str], alpha: float = 0.1
-              ) -> list[str]:
+def _verdicts(differences: pd.DataFrame, names: dict[str, str], runs: pd.DataFrame,
+              alpha: float = 0.1) -> list[str]:
     """Each method against the GA at the same budget, read from the table above: ahead or
-    behind where Holm's p is under ``alpha``, else not told apart."""
+    behind where Holm's p is under ``alpha``, else not told apart; with the seeds' medians,
+    which a few seeds at the step cap move less than the means."""
+    median = runs.groupby(["scenario", "method", "budget_steps"])["test_fitness"].median()
     lines = [f"In short, each method against the GA at the same budget (Holm's p under "
-             f"{alpha:g}, a scenario's comparisons at once):", ""]
+             f"{alpha:g}, a scenario's comparisons at once; the seeds' median test fitness, "
+             "the method's against the GA's):", ""]
     same = differences[differences["budget_steps"] == differences["ga_budget_steps"]]
     for name, rows in same.groupby("scenario", sort=False):
         parts = []
         for row in rows.itertuples():
-            if not row.p_holm < alpha:
-                verdict = f"not told apart from the GA (Holm p {row.p_holm:.2g})"
-            else:
-                verdict = (f"{'ahead of' if row.minus_ga > 0 else 'behind'} the GA by "
-                           f"{abs(row.minus_ga):,.0f} steps (Holm p {row.p_holm:.2g}; above "
-                           f"the GA in {row.above_ga:.0%} of seed pairs)")
-            parts.append(f"{row.method} at {_steps(row.budget_steps)} {verdict}")
+            verdict = ("not told apart from the GA" if not row.p_holm < alpha else
+                       "ahead of the GA" if row.minus_ga > 0 else "behind the GA")
+            parts.append(
+                f"{row.method} at {_steps(row.budget_steps)} {verdict} (Holm p "
+                f"{row.p_holm:.2g}; above the GA in {row.above_ga:.0%} of seed pairs; "
+                f"medians {median[name, row.method, row.budget_steps]:,.0f} against "
+                f"{median[name, 'GA', row.ga_budget_steps]:,.0f})")
         lines.append(f"- {names.get(name, name)}: " + "; ".join(parts) + ".")
     return lines + [""]
 
@@ -280,23 +287,26 @@ def _travel(travel: pd.DataFrame, names: dict[str, str]) -> list[str]:
         f"pass {spin_rule.LONG:,} steps; their extent is the larger of the x and y ranges "
         f"of a life's last {spin_rule.TAIL:,} positions (a vehicle circling where the "
         "looser rule lets it, a radius of 9–11.5 m, stays within 23 m; *circling*: long "
-        f"lives within {spin_rule.CIRCLING:g} m); and the same controllers scored under the "
-        "other rule of the pair.",
+        f"lives within {spin_rule.CIRCLING:g} m); *turned*: long lives that reach a dead end "
+        f"of the track (within {spin_rule.END_RADIUS:g} m of it) and then reach one again, "
+        "so turned round at least once (the track is one corridor between two dead ends); "
+        "and the same controllers scored under the other rule of the pair.",
         "",
         "| scenario | method, budget | runs | long lives (of all) | capped | circling | "
-        "distance of a long "
-        "life (median of the runs' medians) | least extent of a long life | fitness | under the "
-        "other rule (spins) |",
-        "|---|---|---|---|---|---|---|---|---|---|"]
+        "turned | dead ends met by a long life (median) | distance of a long life (median of "
+        "the runs' medians) | least extent of a long life | fitness | under the other rule "
+        "(spins) |",
+        "|---|---|---|---|---|---|---|---|---|---|---|---|"]
     for (name, method, budget), rows in travel.groupby(["scenario", "method",
                                                         "budget_steps"]):
         long = rows["long_lives"].sum()
         lines.append(
             f"| {names.get(name, name)} | {method}, {_steps(budget)} | {len(rows)} | "
             f"{long} of {rows['situations'].sum()} | {rows['capped'].sum()} | "
-            f"{rows['circling'].sum()} | "
-            + (f"{rows['median_distance'].median():,.0f} m | "
-               f"{rows['least_tail_extent'].min():,.0f} m | " if long else "– | – | ")
+            f"{rows['circling'].sum()} | {rows['turned'].sum()} | "
+            + (f"{rows['median_end_visits'].median():g} | "
+               f"{rows['median_distance'].median():,.0f} m | "
+               f"{rows['least_tail_extent'].min():,.0f} m | " if long else "– | – | – | ")
             + f"{rows['fitness'].mean():,.0f} | {rows['other_rule_fitness'].mean():,.0f} "
             f"({rows['other_rule_spins'].sum()}) |")
     return lines + [""]
@@ -341,6 +351,41 @@ def _ablations(travel: pd.DataFrame, names: dict[str, str]) -> list[str]:
                     "" if np.isnan(low) else f" ({low:+,.0f} to {high:+,.0f})"))
             lines.append(f"| {names.get(name, name)} | {method}, {_steps(budget)} | "
                          + " | ".join(cells) + " |")
+    return lines + [""]
+
+
+def _stopping(curves: pd.DataFrame, names: dict[str, str], situations: int) -> list[str]:
+    """The stopping rule as an ablation: each run's last candidate (the controller its
+    training ended with) against its chosen one (the best on validation), both on the
+    validation situations; the last one's difference from the GA's last at the same budget,
+    with a 90% Welch t interval over seeds."""
+    from enn_traffic.report.stats import welch_contrast
+
+    keys = ["scenario", "method", "budget_steps", "seed"]
+    runs = curves.sort_values("learner_steps").groupby(keys).agg(
+        chosen=("validation_fitness", "max"),
+        last=("validation_fitness", "last")).reset_index()  # curves in learner-step order
+    lines = [
+        f"The stopping rule as an ablation (`curves.csv`, all {situations} validation "
+        "situations): "
+        "each run's chosen controller (the best of its candidates on validation, as above) "
+        "and its last (the one its training ended with, chosen by nothing), the mean over "
+        "seeds, and the last ones' difference from the GA's last at the same budget with a "
+        "90% Welch t interval over seeds (uncorrected).",
+        "",
+        "| scenario | method, budget | chosen | last | last, minus the GA's last |",
+        "|---|---|---|---|---|"]
+    for name, scenario_runs in runs.groupby("scenario"):
+        ga = {budget: rows["last"] for budget, rows in
+              scenario_runs[scenario_runs["method"] == "GA"].groupby("budget_steps")}
+        for (method, budget), rows in scenario_runs.groupby(["method", "budget_steps"]):
+            cell = "–"
+            if method != "GA" and budget in ga:
+                estimate, low, high = welch_contrast([rows["last"], ga[budget]], [1, -1])
+                cell = f"{estimate:+,.0f} ({low:+,.0f} to {high:+,.0f})"
+            lines.append(f"| {names.get(name, name)} | {method}, {_steps(budget)} | "
+                         f"{rows['chosen'].mean():,.0f} | {rows['last'].mean():,.0f} | "
+                         f"{cell} |")
     return lines + [""]
 
 
