@@ -964,6 +964,7 @@ def plot(curves: pd.DataFrame, comparison: pd.DataFrame, path: Path) -> None:
                             alpha=0.6)
             mean = group["test_fitness"].mean()
             low, high = t_interval(group["test_fitness"].to_numpy())
+            low = max(low, 0.0)  # no fitness is below 0 (the tables cut alike)
             row[1].errorbar([x + 0.3], [mean], yerr=[[mean - low], [high - mean]], fmt="D",
                             color="black", capsize=3)
         row[1].set_xticks(range(len(groups)),
