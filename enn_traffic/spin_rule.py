@@ -9,8 +9,10 @@ under every candidate ``spin_variance``, and the second rule is the largest cand
 which none of their lives ends as a spin (:func:`chosen_variance`). Validation keys only:
 the choice reads no test situation.
 
-A looser rule also lets more through: :func:`travel` checks that the comparison's long
-lives under it drive the track rather than circle in place.
+A looser rule also lets more through: :func:`travel` checks whether the comparison's long
+lives under it drive the track, turn round at its dead ends (:func:`end_visits`) or circle
+in place, and scores each controller under lower step caps (:func:`capped`) and from the
+start it trained from: the ablations of docs/results.md.
 
 ``python -m enn_traffic.spin_rule [OUT]`` writes ``OUT/spin_rule.csv`` (default
 :data:`FOLDER`, the comparison's); ``python -m enn_traffic.spin_rule travel
@@ -158,7 +160,7 @@ def travel(folder: Path, situations: int = 32) -> pd.DataFrame:
         own_start = baseline.policy_lives(trained[run.scenario], act, validation[:1], 1,
                                           observation_dtype=dtype)
         long = lives[lives["steps"] > LONG]
-        visits = np.array([end_visits(path, ends_of[run.scenario]) for path in long["path"]])
+        visits = np.array([end_visits(lived, ends_of[run.scenario]) for lived in long["path"]])
         rows.append({"scenario": run.scenario, "method": run.method,
                      "budget_steps": run.budget_steps, "seed": run.seed,
                      "situations": situations, "long_lives": len(long),
@@ -182,8 +184,7 @@ RUN_KEYS = ("scenario", "method", "budget_steps", "seed")
 TRAVEL_COLUMNS = (*RUN_KEYS, "situations", "long_lives", "capped", "median_distance",
                   "least_tail_extent", "circling", "turned", "median_end_visits", "fitness",
                   *(f"fitness_cap_{cap}" for cap in CAPS), "training_start_fitness",
-                  "other_rule_fitness",
-                  "other_rule_spins")
+                  "other_rule_fitness", "other_rule_spins")
 
 
 def dead_ends(scenario: Scenario) -> np.ndarray:
