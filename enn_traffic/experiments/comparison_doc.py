@@ -312,13 +312,20 @@ def _travel(travel: pd.DataFrame, names: dict[str, str]) -> list[str]:
     return lines + [""]
 
 
+def _minus(mine: pd.Series, ga: pd.Series) -> str:
+    """A table cell: the difference of two groups' means with its 90% Welch t interval."""
+    from enn_traffic.report.stats import welch_contrast
+
+    estimate, low, high = welch_contrast([mine, ga], [1, -1])
+    return f"{estimate:+,.0f}" + ("" if np.isnan(low) else f" ({low:+,.0f} to {high:+,.0f})")
+
+
 def _ablations(travel: pd.DataFrame, names: dict[str, str]) -> list[str]:
     """The step cap and the start state as ablations: each group's validation fitness had
     lives been capped lower (:func:`enn_traffic.spin_rule.capped`) and its one life from the
     start it trained from, each with its difference from the GA at the same budget and a
     90% Welch t interval over seeds."""
     from enn_traffic import spin_rule
-    from enn_traffic.report.stats import welch_contrast
 
     columns = [*(f"fitness_cap_{cap}" for cap in spin_rule.CAPS), "fitness",
                "training_start_fitness"]
@@ -346,9 +353,7 @@ def _ablations(travel: pd.DataFrame, names: dict[str, str]) -> list[str]:
                 if theirs is None:
                     cells.append("–")
                     continue
-                estimate, low, high = welch_contrast([rows[column], theirs[column]], [1, -1])
-                cells.append(f"{estimate:+,.0f}" + (
-                    "" if np.isnan(low) else f" ({low:+,.0f} to {high:+,.0f})"))
+                cells.append(_minus(rows[column], theirs[column]))
             lines.append(f"| {names.get(name, name)} | {method}, {_steps(budget)} | "
                          + " | ".join(cells) + " |")
     return lines + [""]
@@ -359,12 +364,10 @@ def _stopping(curves: pd.DataFrame, names: dict[str, str], situations: int) -> l
     training ended with) against its chosen one (the best on validation), both on the
     validation situations; the last one's difference from the GA's last at the same budget,
     with a 90% Welch t interval over seeds."""
-    from enn_traffic.report.stats import welch_contrast
-
     keys = ["scenario", "method", "budget_steps", "seed"]
     runs = curves.sort_values("learner_steps").groupby(keys).agg(
         chosen=("validation_fitness", "max"),
-        last=("validation_fitness", "last")).reset_index()  # curves in learner-step order
+        last=("validation_fitness", "last")).reset_index()
     lines = [
         f"The stopping rule as an ablation (`curves.csv`, all {situations} validation "
         "situations): "
@@ -379,10 +382,7 @@ def _stopping(curves: pd.DataFrame, names: dict[str, str], situations: int) -> l
         ga = {budget: rows["last"] for budget, rows in
               scenario_runs[scenario_runs["method"] == "GA"].groupby("budget_steps")}
         for (method, budget), rows in scenario_runs.groupby(["method", "budget_steps"]):
-            cell = "–"
-            if method != "GA" and budget in ga:
-                estimate, low, high = welch_contrast([rows["last"], ga[budget]], [1, -1])
-                cell = f"{estimate:+,.0f} ({low:+,.0f} to {high:+,.0f})"
+            cell = _minus(rows["last"], ga[budget]) if method != "GA" and budget in ga else "–"
             lines.append(f"| {names.get(name, name)} | {method}, {_steps(budget)} | "
                          f"{rows['chosen'].mean():,.0f} | {rows['last'].mean():,.0f} | "
                          f"{cell} |")
