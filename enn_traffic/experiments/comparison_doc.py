@@ -36,10 +36,13 @@ def comparison(folder: Path) -> str:
     """The section, from ``folder``'s CSVs."""
     protocol = json.loads((folder / "protocol.json").read_text())
     runs = pd.read_csv(folder / "comparison.csv")
+    tuning = pd.read_csv(folder / "tuning.csv")
     rules = dict(zip(runs["scenario"], runs["spin_variance"], strict=False))
+    rules |= {name: shipped_scenario(name).episode.spin_variance  # searched, no run yet
+              for name in set(tuning["scenario"]) - set(rules)}
     names = {name: _name(name, rule) for name, rule in rules.items()}
     lines = _protocol(protocol, folder, names)
-    lines += _search(pd.read_csv(folder / "tuning.csv"), names)
+    lines += _search(tuning, names)
     lines += _fitness(runs, folder, names)
     lines += _differences(pd.read_csv(folder / "comparison_differences.csv"), names, runs)
     lines += _rule_changes(pd.read_csv(folder / "comparison_rules.csv"), names)
