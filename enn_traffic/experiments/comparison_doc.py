@@ -147,8 +147,10 @@ def _search(tuning: pd.DataFrame, names: dict[str, str]) -> list[str]:
         chosen = baseline.chosen_setting(tuning, name, method)
         best = rows.set_index("setting").loc[chosen, "validation_fitness"]
         fitness = rows["validation_fitness"]
-        lines.append(f"| {names.get(name, name)} | {method} | {best:,.0f} ({chosen}) | "
-                     f"{fitness.median():,.0f} | {fitness.min():,.0f} |")
+        searching = ("" if len(rows) == len(baseline.SEARCH[method]) else
+                     f", {len(rows)} of {len(baseline.SEARCH[method])} settings so far")
+        lines.append(f"| {names.get(name, name)} | {method} | {best:,.0f} ({chosen}"
+                     f"{searching}) | {fitness.median():,.0f} | {fitness.min():,.0f} |")
     return lines + [""]
 
 
