@@ -64,6 +64,7 @@ from enn_traffic.scenario import Scenario, TrackConfig, scenario_digest
 from enn_traffic.sim.world import SituationResults
 
 METHODS = ("GA", "PPO", "SAC")
+RUN_KEYS = ["scenario", "method", "budget_steps", "seed"]  # a run's row in every CSV
 # Keys of this comparison alone, never read by anything else (enn_traffic.keys). Its first
 # two rounds read the test keys from FIRST_ROUND_TEST_KEY and SECOND_ROUND_TEST_KEY on; this,
 # the third (issue 65), reads fresh ones, and no start of its validation situations is a
@@ -630,7 +631,7 @@ def compare(scenarios: list[Scenario], out: Path, plan: tuple[Planned, ...] = PL
     tuning = tune(scenarios, out, methods, workers, progress, budget)
     have = _read(out / "comparison.csv")
     done_before = set() if have.empty else set(
-        zip(have["scenario"], have["method"], have["budget_steps"], have["seed"], strict=True))
+        have[RUN_KEYS].itertuples(index=False, name=None))
     jobs = [(scenario, p.method, chosen_setting(tuning, scenario.name, p.method),
              p.budget_steps, seed, True)
             for scenario in scenarios for p in plan for seed in range(1, p.seeds + 1)
@@ -786,9 +787,8 @@ def summary(comparison: pd.DataFrame, curves: pd.DataFrame) -> pd.DataFrame:
     over the seeds, the learner-steps and wall time, how many candidates each run chose
     among (mean), how many runs chose their last one, and how far the chosen controllers'
     validation scores stood above their test scores (the choice's optimism)."""
-    run_keys = ["scenario", "method", "budget_steps", "seed"]
-    per_run = curves.groupby(run_keys)["learner_steps"].agg(["size", "max"])
-    runs_of = comparison.join(per_run, on=run_keys)
+    per_run = curves.groupby(RUN_KEYS)["learner_steps"].agg(["size", "max"])
+    runs_of = comparison.join(per_run, on=RUN_KEYS)
     rows = []
     for (name, method, budget), runs in runs_of.groupby(["scenario", "method", "budget_steps"]):
         low, high = t_interval(runs["test_fitness"].to_numpy())

@@ -145,9 +145,9 @@ def travel(folder: Path, situations: int = 32) -> pd.DataFrame:
                      for name, scenario in scored.items()}
     path = folder / "travel.csv"
     rows = _travelled(path, situations)
-    done = {tuple(row[key] for key in RUN_KEYS) for row in rows}
+    done = {tuple(row[key] for key in baseline.RUN_KEYS) for row in rows}
     pair_runs = [run for run in runs[runs["scenario"].isin(partner)].itertuples()
-                 if tuple(getattr(run, key) for key in RUN_KEYS) not in done]
+                 if tuple(getattr(run, key) for key in baseline.RUN_KEYS) not in done]
     for run in progress.bar(len(pair_runs), "travel", "run", iterable=pair_runs):
         scenario, other = scored[run.scenario], scored[partner[run.scenario]]
         validation = validation_of[run.scenario]
@@ -180,8 +180,7 @@ def travel(folder: Path, situations: int = 32) -> pd.DataFrame:
     return pd.DataFrame(rows, columns=TRAVEL_COLUMNS)
 
 
-RUN_KEYS = ("scenario", "method", "budget_steps", "seed")
-TRAVEL_COLUMNS = (*RUN_KEYS, "situations", "long_lives", "capped", "median_distance",
+TRAVEL_COLUMNS = (*baseline.RUN_KEYS, "situations", "long_lives", "capped", "median_distance",
                   "least_tail_extent", "circling", "turned", "median_end_visits", "fitness",
                   *(f"fitness_cap_{cap}" for cap in CAPS), "training_start_fitness",
                   "other_rule_fitness", "other_rule_spins")

@@ -50,7 +50,7 @@ def comparison(folder: Path) -> str:
         travel = pd.read_csv(folder / "travel.csv")
         lines += _travel(travel, names) + _ablations(travel, names)
     lines += _stopping(pd.read_csv(folder / "curves.csv").merge(
-        runs[["scenario", "method", "budget_steps", "seed"]]), names,
+        runs[baseline.RUN_KEYS]), names,
         protocol["validation_situations"])
     lines += ["", f"![GA, PPO and SAC](../{folder.parent.name}/{folder.name}/comparison.png)",
               ""]
@@ -157,10 +157,10 @@ def _search(tuning: pd.DataFrame, names: dict[str, str]) -> list[str]:
 def _fitness(runs: pd.DataFrame, folder: Path, names: dict[str, str]) -> list[str]:
     # from the runs' rows alone: a run's other rows are written before its comparison row,
     # so a run under way may have some (and comparison_summary.csv may be older)
-    run_keys = ["scenario", "method", "budget_steps", "seed"]
+    keys = baseline.RUN_KEYS
     summary = baseline.summary(runs, pd.read_csv(folder / "curves.csv").merge(
-        runs[run_keys], on=run_keys))
-    situations = pd.read_csv(folder / "situations.csv").merge(runs[run_keys], on=run_keys)
+        runs[keys], on=keys))
+    situations = pd.read_csv(folder / "situations.csv").merge(runs[keys], on=keys)
     planned = {(p.method, p.budget_steps): p.seeds for p in baseline.PLAN}
     lines = [
         "Test fitness (steps lived, 0 for a spin) of each run's chosen controller: the mean "
@@ -369,8 +369,7 @@ def _stopping(curves: pd.DataFrame, names: dict[str, str], situations: int) -> l
     training ended with) against its chosen one (the best on validation), both on the
     validation situations; the last one's difference from the GA's last at the same budget,
     with a 90% Welch t interval over seeds."""
-    keys = ["scenario", "method", "budget_steps", "seed"]
-    runs = curves.sort_values("learner_steps").groupby(keys).agg(
+    runs = curves.sort_values("learner_steps").groupby(baseline.RUN_KEYS).agg(
         chosen=("validation_fitness", "max"),
         last=("validation_fitness", "last")).reset_index()
     lines = [
