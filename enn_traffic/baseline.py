@@ -234,7 +234,7 @@ def chromosome_fitness(scenario: Scenario, chromosomes: np.ndarray, chosen_keys:
 
 def policy_lives(scenario: Scenario, act: Callable[[np.ndarray], np.ndarray],
                  keys: list[int], count: int | None = None, tail: int = 0,
-                 observation_dtype: str = "float32", paths: bool = False) -> pd.DataFrame:
+                 observation_dtype: str = "float32") -> pd.DataFrame:
     """The first ``count`` situations of ``keys`` in ``scenario`` (in order; every one by
     default), each driven once by ``act`` (observations (N, B) → actions (N, 2)) through the
     vector environment: each life's steps, outcome and fitness (0 for a spin). A GA
@@ -243,7 +243,7 @@ def policy_lives(scenario: Scenario, act: Callable[[np.ndarray], np.ndarray],
     :func:`observation_dtype`). With ``tail``,
     also where the learner went: ``distance`` (m) and ``tail_extent``, the larger of the x and
     y ranges of its last ``tail`` positions (m: a vehicle circling in place stays within its
-    circle's diameter), and with ``paths`` each life's positions (``path``, (steps, 2))."""
+    circle's diameter), and ``path``, its positions (steps, 2)."""
     if count is None:
         count = len(keys) * len(rangefinder_world(scenario).situations(keys[0]))
     env = RangefinderVectorEnv(scenario, count, observation_dtype=observation_dtype)
@@ -264,18 +264,16 @@ def policy_lives(scenario: Scenario, act: Callable[[np.ndarray], np.ndarray],
         lived = [path[i, :max(1, steps)] for i, steps in enumerate(ended["steps"])]
         table["distance"] = [np.linalg.norm(np.diff(p, axis=0), axis=1).sum() for p in lived]
         table["tail_extent"] = [np.ptp(p[-tail:], axis=0).max() for p in lived]
-        if paths:
-            table["path"] = lived
+        table["path"] = lived
     return table
 
 
 def policy_fitness(scenario: Scenario, act: Callable[[np.ndarray], np.ndarray],
-                   chosen_keys: list[int], count: int,
-                   observation_dtype: str = "float32") -> np.ndarray:
+                   chosen_keys: list[int], count: int) -> np.ndarray:
     """(count,): a policy's fitness per situation of ``chosen_keys`` (in order, the first
     ``count``) of :func:`scoring_scenario` (:func:`policy_lives`)."""
-    return policy_lives(scoring_scenario(scenario), act, chosen_keys, count,
-                        observation_dtype=observation_dtype)["fitness"].to_numpy()
+    return policy_lives(scoring_scenario(scenario), act, chosen_keys, count)[
+        "fitness"].to_numpy()
 
 
 def observation_dtype(method: str) -> str:

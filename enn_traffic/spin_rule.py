@@ -154,7 +154,7 @@ def travel(folder: Path, situations: int = 32) -> pd.DataFrame:
         act = controller_act(folder, scenario, run.method, run.budget_steps, run.seed)
         dtype = baseline.observation_dtype(run.method)
         lives = baseline.policy_lives(scenario, act, validation, situations, tail=TAIL,
-                                      observation_dtype=dtype, paths=True)
+                                      observation_dtype=dtype)
         crossed = baseline.policy_lives(other, act, validation, situations,
                                         observation_dtype=dtype)
         own_start = baseline.policy_lives(trained[run.scenario], act, validation[:1], 1,
