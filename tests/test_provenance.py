@@ -15,7 +15,7 @@ def test_kernels_version_moves_with_the_kernels_sources_only(tmp_path):
         with open(package / relative, "a") as handle:
             handle.write(text)
 
-    edit("experiments/results_doc.py", "\n# a report's edit\n")
+    edit("experiments/results_doc.py", "\nA_REPORTS_EDIT = 1\n")
     assert kernels_version.__wrapped__(package) == kernels
     assert code_version.__wrapped__(package) != code
     edit("sim/world.py", "\n# a constant kernels read may change here\n")
@@ -24,6 +24,25 @@ def test_kernels_version_moves_with_the_kernels_sources_only(tmp_path):
     edit("experiments/regime.py", "\nfrom numba import njit\n\n\n@njit\ndef kernel():\n"
          "    return 1\n")
     assert kernels_version.__wrapped__(package) != moved
+
+
+def test_the_rules_digest_follows_the_code_not_its_files(tmp_path):
+    """A comment, a docstring, an import or a move of code into another file leaves the rules'
+    digest (and so every run's fingerprint) as it was; a changed number moves it."""
+    from enn_traffic.provenance import rules_version
+
+    package = tmp_path / "enn_traffic"
+    shutil.copytree(PACKAGE, package, ignore=shutil.ignore_patterns("__pycache__"))
+    rules = rules_version.__wrapped__(package)
+    bicycle, step = package / "sim" / "bicycle.py", package / "sim" / "rules.py"
+    text = step.read_text()
+    step.write_text(text.replace('"""', '"""A docstring edited. ', 1) + "\n# a comment\n"
+                    + "import os  # an import\n" + bicycle.read_text())
+    bicycle.unlink()  # its code moved into rules.py
+    assert code_version.__wrapped__(package) != ""
+    assert rules_version.__wrapped__(package) == rules
+    step.write_text(step.read_text().replace("0.5", "0.25", 1))
+    assert rules_version.__wrapped__(package) != rules
 
 
 def test_numbas_cache_follows_the_users_cache_folder(tmp_path):

@@ -106,10 +106,10 @@ def test_a_run_made_by_other_rules_is_named_and_run_again(small, tmp_path):
 
 
 def test_only_the_deciding_code_moves_a_runs_fingerprint(tmp_path):
-    """issue 41: on a copy of the package, a docstring in report/ or cli.py leaves the rules'
-    digest as it was (a finished run is reused); a change in sim/rules.py or the GA moves it
-    (the run is made again). Every source's digest, the record of what wrote an output,
-    moves with any of them."""
+    """On a copy of the package, code added to report/ or cli.py leaves the rules' digest as
+    it was (a finished run is reused); code added to sim/rules.py or the GA moves it (the run is
+    made again). Every source's digest, the record of what wrote an output, moves with any of
+    them; a comment moves neither."""
     import shutil
 
     from enn_traffic.provenance import PACKAGE, code_version, rules_version
@@ -118,15 +118,16 @@ def test_only_the_deciding_code_moves_a_runs_fingerprint(tmp_path):
     shutil.copytree(PACKAGE, copy, ignore=shutil.ignore_patterns("__pycache__"))
     rules, code = rules_version(copy), code_version(copy)
     assert (rules, code) == (rules_version(), code_version())
-    steps = [("report/plots.py", False), ("cli.py", False), ("sim/rules.py", True),
-             ("evolution/ga.py", True)]
-    for name, decides in steps:
+    steps = [("report/plots.py", "AN_EDIT = 1", False), ("cli.py", "AN_EDIT = 1", False),
+             ("sim/rules.py", "# a comment", False), ("sim/rules.py", "AN_EDIT = 1", True),
+             ("evolution/ga.py", "AN_EDIT = 1", True)]
+    for name, text, decides in steps:
         with open(copy / name, "a") as source:
-            source.write("\n# an edit\n")
+            source.write(f"\n{text}\n")
         rules_version.cache_clear()
         code_version.cache_clear()
         assert (rules_version(copy) != rules) == decides, name
-        assert code_version(copy) != code, name
+        assert (code_version(copy) != code) == (text != "# a comment"), name
         rules, code = rules_version(copy), code_version(copy)
     rules_version.cache_clear()
     code_version.cache_clear()
