@@ -1,19 +1,21 @@
 """enn-traffic: evolve neural-network driving controllers in SUMO traffic (Eraqi et al., 2016)."""
 
 import os
+import sys
 from pathlib import Path
 
-from enn_traffic.cache import cache_folder, prune_kernel_folders
-from enn_traffic.provenance import kernels_version
+from enn_traffic.core.cache import cache_folder, prune_kernel_folders
+from enn_traffic.core.provenance import kernels_version
+from enn_traffic.core.registry import MovedModules
 
 __version__ = "0.1.0"
 
 
 def _numba_cache_dir() -> str:
     """numba's on-disk cache checks only each function's own file, not the modules it calls;
-    a cache folder per version of the kernels' sources (:func:`~enn_traffic.provenance.
+    a cache folder per version of the kernels' sources (:func:`~enn_traffic.core.provenance.
     kernels_version`) keeps a stale kernel from running. It lies in the project's cache folder
-    (:func:`~enn_traffic.cache.cache_folder`: ``$ENN_TRAFFIC_CACHE``, ``$XDG_CACHE_HOME``)."""
+    (:func:`~enn_traffic.core.cache.cache_folder`: ``$ENN_TRAFFIC_CACHE``, ``$XDG_CACHE_HOME``)."""
     return str(cache_folder() / f"numba-{kernels_version()}")
 
 
@@ -29,3 +31,18 @@ if "NUMBA_CACHE_DIR" not in os.environ:
 # stands.
 if "OMP_WAIT_POLICY" not in os.environ and "GOMP_SPINCOUNT" not in os.environ:
     os.environ["OMP_WAIT_POLICY"] = "PASSIVE"
+
+# Modules a user's code may import by their names before the package's folders became its
+# layers: they import, with a DeprecationWarning, for one release.
+MOVED = {
+    "enn_traffic.scenario": "enn_traffic.config",
+    "enn_traffic.shipped": "enn_traffic.config.shipped",
+    "enn_traffic.keys": "enn_traffic.core.keys",
+    "enn_traffic.neural": "enn_traffic.core.neural",
+    "enn_traffic.worlds": "enn_traffic.sim.world",
+    "enn_traffic.controller": "enn_traffic.runs.controller",
+    "enn_traffic.runner": "enn_traffic.runs.run",
+    "enn_traffic.deploy": "enn_traffic.runs.evaluate",
+    "enn_traffic.baseline": "enn_traffic.experiments.gradient_rl.campaign",
+}
+sys.meta_path.append(MovedModules(MOVED))

@@ -17,7 +17,7 @@ ARENAS = ("arena_strategy1", "arena_strategy2", "arena_strategy3", "arena_strate
 
 
 def _scenario(name: str, **overrides):
-    from enn_traffic.scenario import load_scenario
+    from enn_traffic.config import load_scenario
 
     return load_scenario(ROOT / "scenarios" / f"{name}.toml").with_overrides(**overrides)
 
@@ -33,9 +33,9 @@ def _results(prefix: str, results, out: dict) -> None:
 
 def behaviour() -> dict[str, np.ndarray]:
     """Lifetimes, outcomes, collisions suffered, traffic met and traces, world by world."""
-    from enn_traffic.lanekeeping.world import LaneKeepingWorld
     from enn_traffic.sim.arena import ArenaWorld as World
-    from enn_traffic.sim.sumo_world import SumoWorld
+    from enn_traffic.sim.lane_keeping.world import LaneKeepingWorld
+    from enn_traffic.sim.sumo.world import SumoWorld
 
     out: dict[str, np.ndarray] = {}
     for name in ARENAS:  # one learner per world among scripted or network traffic
@@ -67,8 +67,8 @@ def behaviour() -> dict[str, np.ndarray]:
 
 def _many_learners() -> dict[str, np.ndarray]:
     """Every vehicle of one arena driving at once, half of them learning as they drive."""
-    from enn_traffic.evolution.online import Evidence, OnlineLearning, VehicleGA
-    from enn_traffic.runner import ga_params
+    from enn_traffic.learning.online import Evidence, OnlineLearning, VehicleGA
+    from enn_traffic.runs.run import ga_params
     from enn_traffic.sim.arena import ArenaWorld as World
     from enn_traffic.sim.crowd import Crowd as Arena
 

@@ -11,7 +11,7 @@ from pathlib import Path
 
 import pytest
 
-from enn_traffic.scenario import load_scenario
+from enn_traffic.config import load_scenario
 from enn_traffic.sim.arena import ArenaWorld
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -72,7 +72,7 @@ FIG7_RUNS = ("runs/navigation_narrow/seed1", "runs/navigation_narrow/seed2")
 def local_and_spread(scenario, population, generation, evaluator):
     """The results of the local evaluator and of ``evaluator`` (closed afterwards) on the
     same population and generation."""
-    from enn_traffic.evolution.backends import LocalEvaluator
+    from enn_traffic.learning.evaluators import LocalEvaluator
 
     local = LocalEvaluator(scenario).evaluate(population, generation)
     try:

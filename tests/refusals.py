@@ -5,7 +5,7 @@ own refusals (argparse's) too."""
 from __future__ import annotations
 
 from enn_traffic import cli
-from enn_traffic.errors import shown
+from enn_traffic.core.errors import shown
 
 
 def refusal(capsys, argv: list, names: tuple | object = (), key: str | None = None) -> str:

@@ -8,12 +8,13 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from enn_traffic import baseline, keys
 from enn_traffic.cli import main
-from enn_traffic.controller import Controller
-from enn_traffic.errors import InputError
+from enn_traffic.config.shipped import shipped_scenario
+from enn_traffic.core import keys
+from enn_traffic.core.errors import InputError
+from enn_traffic.experiments.gradient_rl import campaign as baseline
 from enn_traffic.report.stats import t_interval
-from enn_traffic.shipped import shipped_scenario
+from enn_traffic.runs.controller import Controller
 
 
 def test_the_comparisons_keys_are_its_own_and_held_out(monkeypatch):

@@ -9,7 +9,7 @@ import pandas as pd
 import pytest
 
 from enn_traffic.cli import main
-from enn_traffic.errors import shown
+from enn_traffic.core.errors import shown
 
 CROWD = """
 [crowd]
@@ -144,8 +144,8 @@ def test_crowd_situations_on_ray_are_the_local_ones(crowd_run, tmp_path):
     """Each situation a Ray task of a local Ray (2 workers): the same table."""
     import ray
 
-    from enn_traffic.crowd import run_crowd
-    from enn_traffic.scenario import load_scenario
+    from enn_traffic.config import load_scenario
+    from enn_traffic.experiments.crowds.user import run_crowd
 
     scenario, out = crowd_run
     ray.init(num_cpus=2, include_dashboard=False, log_to_driver=False,

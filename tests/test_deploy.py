@@ -8,10 +8,10 @@ import pytest
 from conftest import ROOT
 
 from enn_traffic.cli import main
-from enn_traffic.controller import Controller
-from enn_traffic.deploy import evaluate_batch, fitness_matrix
-from enn_traffic.neural import NetworkSpec
-from enn_traffic.scenario import load_scenario
+from enn_traffic.config import load_scenario
+from enn_traffic.core.neural import NetworkSpec
+from enn_traffic.runs.controller import Controller
+from enn_traffic.runs.evaluate import evaluate_batch, fitness_matrix
 
 
 @pytest.fixture(scope="module")

@@ -12,20 +12,11 @@ import pytest
 
 PACKAGE = Path(__file__).resolve().parents[1] / "enn_traffic"
 
-# The layers, lowest first; within a layer too, a part imports only parts listed before it.
-LAYERS = {
-    "base": ["errors", "io", "progress", "provenance", "cache", "enn_traffic", "stopping",
-             "kinds", "keys", "geometry", "neural"],
-    "files": ["report", "roads"],
-    "settings": ["scenario", "scenario_reference", "shipped"],
-    "simulation": ["traffic", "sim", "lanekeeping"],
-    "worlds": ["worlds", "controller", "generations"],
-    "learning": ["evolution", "envs"],
-    "runs": ["runner", "deploy", "baseline", "spin_rule"],
-    "experiments": ["experiments"],
-    "commands": ["bench", "reproduce", "crowd", "cli", "__main__"],
-}
-ORDER = [part for parts in LAYERS.values() for part in parts]
+# The layers, lowest first: each a folder of the package (docs/design.md, "Architecture").
+LAYERS = ["core", "report", "roads", "config", "sumo", "sim", "learning", "envs", "runs",
+          "experiments", "bench", "cli"]
+# The package's ``__init__`` sets up numba's cache from core; ``__main__`` runs the command line.
+ORDER = ["core", "enn_traffic", *LAYERS[1:], "__main__"]
 
 
 def modules() -> dict[str, Path]:
@@ -62,6 +53,23 @@ def imported(module: str, path: Path, known: dict[str, Path]) -> set[str]:
             continue
         found.update(name for name in names if name in known and name != module)
     return found
+
+
+def test_every_folder_installs():
+    """Each folder of the package is one of the packages ``pyproject.toml`` installs."""
+    import tomllib
+
+    listed = set(tomllib.loads((PACKAGE.parent / "pyproject.toml").read_text())
+                 ["tool"]["setuptools"]["packages"])
+    folders = {".".join(("enn_traffic", *path.parent.relative_to(PACKAGE).parts))
+               for path in PACKAGE.rglob("__init__.py")}
+    assert folders <= listed, sorted(folders - listed)
+
+
+def test_the_package_holds_only_its_layers():
+    """``ls enn_traffic/`` shows the layers' folders and the package's two own files."""
+    names = {path.name for path in PACKAGE.iterdir() if path.name != "__pycache__"}
+    assert names == {*LAYERS, "__init__.py", "__main__.py"}
 
 
 def test_every_part_has_a_layer():
@@ -104,24 +112,24 @@ def test_no_import_circles_within_a_part():
 
 def test_the_checker_sees_an_import_that_runs_up(tmp_path):
     """The check itself: a lower part importing a higher one, inside a function, is found."""
-    source = tmp_path / "enn_traffic" / "geometry.py"
-    source.parent.mkdir()
+    source = tmp_path / "enn_traffic" / "core" / "geometry.py"
+    source.parent.mkdir(parents=True)
     source.write_text("def f():\n    from enn_traffic.sim import arena\n")
-    known = {"enn_traffic.geometry": source, "enn_traffic.sim.arena": source,
+    known = {"enn_traffic.core.geometry": source, "enn_traffic.sim.arena": source,
              "enn_traffic.sim": source}
-    assert imported("enn_traffic.geometry", source, known) == {"enn_traffic.sim.arena"}
-    assert ORDER.index("sim") > ORDER.index("geometry")
+    assert imported("enn_traffic.core.geometry", source, known) == {"enn_traffic.sim.arena"}
+    assert ORDER.index("sim") > ORDER.index(part_of("enn_traffic.core.geometry"))
 
 
-@pytest.mark.parametrize("module", ["enn_traffic.runner", "enn_traffic.worlds",
-                                    "enn_traffic.envs", "enn_traffic.deploy",
+@pytest.mark.parametrize("module", ["enn_traffic.runs.run", "enn_traffic.sim.world",
+                                    "enn_traffic.envs", "enn_traffic.runs.evaluate",
                                     "enn_traffic.experiments", "enn_traffic.cli"])
 def test_libsumo_loads_only_where_sumo_runs(module):
     """Importing a module that an arena run uses does not start libsumo (a SUMO world,
     environment or experiment loads it when it is first made)."""
     code = (f"import sys, {module}\n"
-            "from enn_traffic.worlds import make_world\n"
-            "from enn_traffic.shipped import shipped_scenario\n"
+            "from enn_traffic.sim.world import make_world\n"
+            "from enn_traffic.config.shipped import shipped_scenario\n"
             "make_world(shipped_scenario('navigation_narrow'))\n"
             "print('libsumo' in sys.modules)")
     result = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
@@ -131,13 +139,14 @@ def test_libsumo_loads_only_where_sumo_runs(module):
 
 
 def test_only_the_registry_imports_by_name():
-    """Code is imported by a name in a string only through :class:`enn_traffic.kinds.Registry`
-    (whose tables the next test checks), so that the import checks above see every edge."""
+    """Code is imported by a name in a string only through
+    :class:`enn_traffic.core.registry.Registry` (whose tables the next test checks), so that the
+    import checks above see every edge."""
     found = []
     for module, path in modules().items():
         source = path.read_text()
         for call in ("import_module(", "__import__("):
-            if call in source and module != "enn_traffic.kinds":
+            if call in source and module != "enn_traffic.core.registry":
                 found.append(f"{module} calls {call}")
     assert not found, found
 
@@ -193,3 +202,27 @@ def test_the_readme_test_install_pulls_no_torch():
     pulled = expanded(extras["dev"]) | expanded(project["dependencies"])
     assert not pulled & {"torch", "stable-baselines3", "triton"}
     assert "stable-baselines3" in expanded(extras["rl"])
+
+
+@pytest.mark.parametrize("old", ["enn_traffic.scenario", "enn_traffic.controller",
+                                 "enn_traffic.worlds", "enn_traffic.keys"])
+def test_old_module_names_still_import_with_a_warning(old):
+    """A user's ``from enn_traffic.scenario import load_scenario`` works for a release after
+    the move, warns, and gives the very objects of the new module; ``enn_traffic.envs`` never
+    moved."""
+    import importlib
+    import sys
+    import warnings
+
+    from enn_traffic import MOVED
+
+    sys.modules.pop(old, None)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        module = importlib.import_module(old)
+    new = importlib.import_module(MOVED[old])
+    assert any(issubclass(w.category, DeprecationWarning) and MOVED[old] in str(w.message)
+               for w in caught)
+    public = [name for name in vars(new) if not name.startswith("_")]
+    assert public and all(getattr(module, name) is getattr(new, name) for name in public)
+    assert importlib.import_module("enn_traffic.envs").__file__.endswith("envs/__init__.py")

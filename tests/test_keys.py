@@ -2,8 +2,8 @@
 
 from itertools import combinations
 
-from enn_traffic import keys
-from enn_traffic.scenario import GAConfig
+from enn_traffic.config import GAConfig
+from enn_traffic.core import keys
 
 
 def test_key_ranges_are_disjoint():
@@ -20,8 +20,9 @@ def test_no_training_run_reaches_a_held_out_key():
 
 
 def test_experiments_draw_from_their_named_ranges():
-    from enn_traffic import deploy
-    from enn_traffic.experiments import choosing, simultaneous
+    from enn_traffic.experiments import choosing
+    from enn_traffic.experiments.crowds import arena as simultaneous
+    from enn_traffic.runs import evaluate as deploy
 
     assert deploy.EVALUATION_KEY in keys.TEST
     assert choosing.VALIDATION_KEY in keys.VALIDATION
@@ -31,15 +32,17 @@ def test_experiments_draw_from_their_named_ranges():
 
 
 def test_the_sumo_crowds_read_the_fresh_crowd_ranges():
-    from enn_traffic.experiments import sumo_crowds
+    from enn_traffic.experiments.crowds import sumo as sumo_crowds
 
     assert sumo_crowds.SITUATION_KEY in keys.CROWD_TEST
     assert sumo_crowds.VALIDATION_KEY in keys.CROWD_VALIDATION
 
 
 def test_no_experiment_reads_a_retired_test_range():
-    from enn_traffic import deploy
-    from enn_traffic.experiments import choosing, lanekeeping, simultaneous, sumo_crowds
+    from enn_traffic.experiments import choosing, lanekeeping
+    from enn_traffic.experiments.crowds import arena as simultaneous
+    from enn_traffic.experiments.crowds import sumo as sumo_crowds
+    from enn_traffic.runs import evaluate as deploy
 
     used = [deploy.EVALUATION_KEY, lanekeeping.TEST_KEY, choosing.VALIDATION_KEY,
             choosing.ACCEPTANCE_KEY, simultaneous.VALIDATION_KEY, simultaneous.SITUATION_KEY,

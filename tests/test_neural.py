@@ -2,7 +2,7 @@ import math
 
 import numpy as np
 
-from enn_traffic.neural import NetworkSpec
+from enn_traffic.core.neural import NetworkSpec
 
 
 def sigmoid(z: float) -> float:

@@ -3,7 +3,7 @@ compile from changes, not when a report or an experiment does."""
 
 import shutil
 
-from enn_traffic.provenance import PACKAGE, code_version, kernels_version
+from enn_traffic.core.provenance import PACKAGE, code_version, kernels_version
 
 
 def test_kernels_version_moves_with_the_kernels_sources_only(tmp_path):
@@ -29,7 +29,7 @@ def test_kernels_version_moves_with_the_kernels_sources_only(tmp_path):
 def test_the_rules_digest_follows_the_code_not_its_files(tmp_path):
     """A comment, a docstring, an import or a move of code into another file leaves the rules'
     digest (and so every run's fingerprint) as it was; a changed number moves it."""
-    from enn_traffic.provenance import rules_version
+    from enn_traffic.core.provenance import rules_version
 
     package = tmp_path / "enn_traffic"
     shutil.copytree(PACKAGE, package, ignore=shutil.ignore_patterns("__pycache__"))
@@ -66,10 +66,11 @@ def test_numbas_cache_follows_the_users_cache_folder(tmp_path):
 
 # What the rules' modules import that decides no result: messages, files, the cache (keyed by
 # content), the saved controller, the generations table's columns, and the learning curve.
-DECIDES_NOTHING = {"enn_traffic", "enn_traffic.errors", "enn_traffic.io", "enn_traffic.progress",
-                   "enn_traffic.provenance", "enn_traffic.cache", "enn_traffic.controller",
-                   "enn_traffic.generations", "enn_traffic.report.plots",
-                   "enn_traffic.stopping"}
+DECIDES_NOTHING = {"enn_traffic", "enn_traffic.core.errors", "enn_traffic.core.io",
+                   "enn_traffic.core.progress", "enn_traffic.core.provenance",
+                   "enn_traffic.core.cache", "enn_traffic.runs.controller",
+                   "enn_traffic.runs.generations_csv", "enn_traffic.report.plots",
+                   "enn_traffic.core.interrupts"}
 
 
 def test_everything_the_rules_import_is_in_the_rules():
@@ -78,11 +79,11 @@ def test_everything_the_rules_import_is_in_the_rules():
     nothing."""
     from test_imports import imported, modules
 
-    from enn_traffic.provenance import RULES
+    from enn_traffic.core.provenance import PACKAGE as package
+    from enn_traffic.core.provenance import in_rules as rules_file
 
     def in_rules(module: str) -> bool:
-        names = module.split(".")
-        return len(names) > 1 and (names[1] in RULES or f"{names[1]}.py" in RULES)
+        return rules_file(known[module].relative_to(package).as_posix())
 
     known = modules()
     outside = {target for module, path in known.items() if in_rules(module)
@@ -98,7 +99,7 @@ def test_a_table_measured_again_replaces_its_lines_and_says_when_and_at_which_co
     import shutil
 
     from enn_traffic.experiments.protocol import SUMO
-    from enn_traffic.reproduce import _record_again
+    from enn_traffic.experiments.reproduce import _record_again
 
     paper = tmp_path / "paper"
     shutil.copytree(root / "results" / "paper", paper,
@@ -125,7 +126,7 @@ def test_old_kernel_folders_are_pruned_but_the_recent_ones(tmp_path):
     import os
     import time
 
-    from enn_traffic.cache import prune_kernel_folders
+    from enn_traffic.core.cache import prune_kernel_folders
 
     now = time.time()
     ages_h = {"a": 100, "b": 50, "c": 40, "d": 30, "e": 20, "recent": 0.1}

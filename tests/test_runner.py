@@ -3,10 +3,10 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from enn_traffic.errors import InputError
-from enn_traffic.evolution.ga import GAState
-from enn_traffic.runner import RunOutputs, evolve
-from enn_traffic.scenario import load_scenario
+from enn_traffic.config import load_scenario
+from enn_traffic.core.errors import InputError
+from enn_traffic.learning.ga import GAState
+from enn_traffic.runs.run import RunOutputs, evolve
 
 
 def test_target_fitness_stops_the_run_and_resume_keeps_it_stopped(small, tmp_path):
@@ -30,7 +30,7 @@ def test_initial_population_seeds_a_fresh_run(small, tmp_path):
     continued = evolve(small.with_overrides(ga={"generations": 1}), tmp_path / "b",
                        progress=False, initial_population=population)
     # its first generation is that population, evaluated as it stands
-    from enn_traffic.worlds import make_world
+    from enn_traffic.sim.world import make_world
 
     fitness = make_world(small).evaluate(population, 0).fitness
     assert continued["mean_fitness"].iloc[0] == pytest.approx(fitness.mean(), abs=1e-3)
@@ -86,8 +86,8 @@ def test_a_run_is_resumed_only_from_the_same_start_and_other_worlds(small, tmp_p
 def test_a_run_made_by_other_rules_is_named_and_run_again(small, tmp_path):
     """issue 26: a run's fingerprint holds the rules that ran it; reproduce reruns a run that
     other rules made, and says so."""
+    from enn_traffic.core.provenance import rules_version
     from enn_traffic.experiments.common import run_or_reuse
-    from enn_traffic.provenance import rules_version
 
     scenario = small.with_overrides(ga={"generations": 2})
     first = evolve(scenario, tmp_path, progress=False)
@@ -112,7 +112,7 @@ def test_only_the_deciding_code_moves_a_runs_fingerprint(tmp_path):
     them; a comment moves neither."""
     import shutil
 
-    from enn_traffic.provenance import PACKAGE, code_version, rules_version
+    from enn_traffic.core.provenance import PACKAGE, code_version, rules_version
 
     copy = tmp_path / "enn_traffic"
     shutil.copytree(PACKAGE, copy, ignore=shutil.ignore_patterns("__pycache__"))
@@ -120,7 +120,7 @@ def test_only_the_deciding_code_moves_a_runs_fingerprint(tmp_path):
     assert (rules, code) == (rules_version(), code_version())
     steps = [("report/plots.py", "AN_EDIT = 1", False), ("cli.py", "AN_EDIT = 1", False),
              ("sim/rules.py", "# a comment", False), ("sim/rules.py", "AN_EDIT = 1", True),
-             ("evolution/ga.py", "AN_EDIT = 1", True)]
+             ("learning/ga.py", "AN_EDIT = 1", True)]
     for name, text, decides in steps:
         with open(copy / name, "a") as source:
             source.write(f"\n{text}\n")
@@ -136,9 +136,9 @@ def test_only_the_deciding_code_moves_a_runs_fingerprint(tmp_path):
 def test_a_stopping_rule_from_an_experiment_is_part_of_the_fingerprint(small):
     """A run's deciders from outside the rules (an experiment's evaluator or stopping rule)
     move its fingerprint; those within the rules, or none, leave it as it was."""
-    from enn_traffic.evolution.backends import LocalEvaluator
     from enn_traffic.experiments.incremental import incremental_evolution
-    from enn_traffic.runner import fingerprint
+    from enn_traffic.learning.evaluators import LocalEvaluator
+    from enn_traffic.runs.run import fingerprint
 
     plain = fingerprint(small)
     assert fingerprint(small, deciders=[LocalEvaluator]) == plain
@@ -146,7 +146,7 @@ def test_a_stopping_rule_from_an_experiment_is_part_of_the_fingerprint(small):
 
 
 def test_a_changed_network_file_changes_the_fingerprint(small, tmp_path, root):
-    from enn_traffic.runner import fingerprint
+    from enn_traffic.runs.run import fingerprint
 
     net = tmp_path / "track.net.xml"
     net.write_bytes((root / "sumo_nets" / "track_narrow.net.xml").read_bytes())
@@ -159,7 +159,7 @@ def test_a_changed_network_file_changes_the_fingerprint(small, tmp_path, root):
 
 def test_a_registered_column_is_written_to_generations_csv(small, tmp_path):
     """A new column of generations.csv is one registered function (issue 41)."""
-    from enn_traffic import generations
+    from enn_traffic.runs import generations_csv as generations
 
     @generations.column
     def lives(evaluated):
@@ -179,7 +179,7 @@ def test_a_slow_step_speaks_on_stderr_where_no_logging_is_configured():
     import subprocess
     import sys
 
-    code = ("import time\nfrom enn_traffic.progress import slow_step\n"
+    code = ("import time\nfrom enn_traffic.core.progress import slow_step\n"
             "with slow_step('compiling something', after_s=0.05):\n    time.sleep(0.3)\n")
     done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
                           timeout=60)
@@ -191,7 +191,7 @@ def test_a_slow_step_speaks_on_stderr_where_no_logging_is_configured():
 def test_design_md_lists_every_generations_column_as_its_function_says(root):
     """docs/design.md's table of generations.csv is generated from the column functions'
     docstrings: a column added, renamed or redescribed shows there."""
-    from enn_traffic.generations import COLUMNS, columns_markdown
+    from enn_traffic.runs.generations_csv import COLUMNS, columns_markdown
 
     doc = (root / "docs" / "design.md").read_text()
     assert columns_markdown() in doc

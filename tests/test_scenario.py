@@ -1,8 +1,8 @@
 import numpy as np
 import pytest
 
-from enn_traffic.errors import InputError
-from enn_traffic.scenario import load_scenario
+from enn_traffic.config import load_scenario
+from enn_traffic.core.errors import InputError
 
 GOOD = """
 name = "t"
@@ -164,7 +164,7 @@ def test_every_network_shape_the_schema_accepts_runs(root, base, hidden):
     """``hidden = [8, 8]`` crashed every run of navigation_narrow: the arena put its (unused)
     random-network traffic, 19-3-2, inside the learner's network, where it does not fit. On
     arena_strategy2 (straight-driving traffic) the same shapes run among traffic."""
-    from enn_traffic.worlds import make_world
+    from enn_traffic.sim.world import make_world
 
     scenario = load_scenario(root / "scenarios" / f"{base}.toml").with_overrides(
         network={"hidden": hidden}, episode={"max_steps": 200})

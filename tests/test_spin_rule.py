@@ -7,10 +7,11 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from enn_traffic import baseline, spin_rule
+from enn_traffic.config import load_scenario
+from enn_traffic.config.shipped import shipped_scenario
 from enn_traffic.envs.rangefinder import rangefinder_world
-from enn_traffic.scenario import load_scenario
-from enn_traffic.shipped import shipped_scenario
+from enn_traffic.experiments.gradient_rl import campaign as baseline
+from enn_traffic.experiments.gradient_rl import spin_rule
 from enn_traffic.sim.world import SituationResults
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -135,7 +136,7 @@ def test_travel_scores_a_runs_controller_under_its_rule_and_the_other(tmp_path):
     keeps the row it wrote. From the start it trained from it lives as the GA's world says."""
     import shutil
 
-    from enn_traffic.controller import Controller
+    from enn_traffic.runs.controller import Controller
 
     second = baseline.scoring_scenario(shipped_scenario("navigation_narrow_spin40"))
     paper = baseline.scoring_scenario(shipped_scenario("navigation_narrow"))

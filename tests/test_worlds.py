@@ -3,9 +3,8 @@ what happened."""
 
 import pytest
 
-from enn_traffic.scenario import load_scenario
-from enn_traffic.sim.world import OUTCOMES, World
-from enn_traffic.worlds import make_world
+from enn_traffic.config import load_scenario
+from enn_traffic.sim.world import OUTCOMES, World, make_world
 
 
 @pytest.mark.parametrize("name, kind", [("navigation_narrow", "ArenaWorld"),

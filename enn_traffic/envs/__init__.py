@@ -32,9 +32,9 @@ import gymnasium as gym
 from gymnasium.envs.registration import register, registry
 from gymnasium.vector import AutoresetMode
 
-from enn_traffic.kinds import Registry
-from enn_traffic.scenario import EpisodeConfig, Scenario, load_scenario
-from enn_traffic.shipped import SCENARIOS, scenario_path
+from enn_traffic.config import EpisodeConfig, Scenario, load_scenario
+from enn_traffic.config.shipped import SCENARIOS, scenario_path
+from enn_traffic.core.registry import Registry
 
 NAMESPACE = "enn_traffic"
 # The shipped scenarios an id is registered for: the arena, navigation and SUMO training

@@ -22,18 +22,10 @@ import numba
 import numpy as np
 from numba import njit, prange
 
-from enn_traffic.kinds import ACTION
-from enn_traffic.progress import slow_step
+from enn_traffic.config.kinds import ACTION
+from enn_traffic.core.progress import slow_step
 from enn_traffic.sim.arena import ArenaWorld, settle, start_world
-from enn_traffic.sim.rules import (
-    Vehicles,
-    Work,
-    copy_row,
-    copy_rows,
-    drive_all,
-    sense,
-    wall_arrays,
-)
+from enn_traffic.sim.rules import Vehicles, Work, copy_row, copy_rows, drive_all, sense, wall_arrays
 from enn_traffic.sim.world import RUNNING, SPUN
 
 

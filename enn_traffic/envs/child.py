@@ -13,13 +13,13 @@ import os
 import weakref
 from collections.abc import Callable
 
-from enn_traffic.io import sweep_process_folders
+from enn_traffic.core.io import sweep_process_folders
 
 
 def _serve(connection, make: Callable, args: tuple, kwargs: dict, parent: int) -> None:
     import signal
 
-    from enn_traffic.traffic.fresh import end_with_parent
+    from enn_traffic.sumo.fresh import end_with_parent
 
     end_with_parent(parent)
     signal.signal(signal.SIGINT, signal.SIG_IGN)  # the parent hears Ctrl-C and ends us

@@ -23,6 +23,8 @@ import numpy as np
 from numba import njit
 from pettingzoo import ParallelEnv
 
+from enn_traffic.config import Scenario
+from enn_traffic.config.kinds import ACTION
 from enn_traffic.envs.batch import compiled
 from enn_traffic.envs.rangefinder import (
     TRAINING_KEYS,
@@ -35,8 +37,6 @@ from enn_traffic.envs.rangefinder import (
     spaces_of,
     steering_of,
 )
-from enn_traffic.kinds import ACTION
-from enn_traffic.scenario import Scenario
 from enn_traffic.sim.crowd import ALIVE, Crowd, crowd_events, step_once
 from enn_traffic.sim.rules import sense, wall_arrays
 from enn_traffic.sim.world import OUTCOMES, SPUN

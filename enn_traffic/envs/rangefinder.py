@@ -30,8 +30,8 @@ from gymnasium.error import ResetNeeded
 from gymnasium.vector import AutoresetMode, VectorEnv
 from gymnasium.vector.utils import batch_space
 
+from enn_traffic.config import Scenario, load_scenario
 from enn_traffic.envs.batch import Batch, Situations
-from enn_traffic.scenario import Scenario, load_scenario
 from enn_traffic.sim.arena import HIT, SUFFERED, ArenaWorld
 from enn_traffic.sim.sensors import COS, RANGE, SIN
 from enn_traffic.sim.world import CAPPED, OUTCOMES, RUNNING, SPUN

@@ -1,12 +1,12 @@
 """SUMO scenarios as a gymnasium environment: the learner among SUMO's traffic, replayed or
 live, shipped or the user's own ``.sumocfg`` (docs/envs.md, "SUMO").
 
-The world is :class:`~enn_traffic.sim.sumo_world.SumoWorld`'s and the step its own
-(:func:`~enn_traffic.sim.replay.learner_step`), in its two halves: the learner senses
-(:func:`~enn_traffic.sim.replay.learner_sense`, after the blame rule, exits, spin test and
-step cap), the action steers, the learner moves (:func:`~enn_traffic.sim.replay.learner_move`).
+The world is :class:`~enn_traffic.sim.sumo.world.SumoWorld`'s and the step its own
+(:func:`~enn_traffic.sim.sumo.replay.learner_step`), in its two halves: the learner senses
+(:func:`~enn_traffic.sim.sumo.replay.learner_sense`, after the blame rule, exits, spin test and
+step cap), the action steers, the learner moves (:func:`~enn_traffic.sim.sumo.replay.learner_move`).
 In replay mode the traffic is the situation's recorded SUMO run; in closed-loop mode a live
-SUMO per episode, the learner in it (:class:`~enn_traffic.sim.sumo_world.LiveTraffic`), so
+SUMO per episode, the learner in it (:class:`~enn_traffic.sim.sumo.world.LiveTraffic`), so
 SUMO's drivers react to it. Observation, action and reward are those of
 :mod:`enn_traffic.envs.rangefinder`; reaching an exit of the network ends the episode too
 (``terminated``, outcome ``left network``: its steps count, as in the GA's fitness).
@@ -21,6 +21,7 @@ import numpy as np
 from gymnasium.error import ResetNeeded
 from pettingzoo import ParallelEnv
 
+from enn_traffic.config import Scenario, load_scenario
 from enn_traffic.envs.batch import compiled
 from enn_traffic.envs.child import InChild
 from enn_traffic.envs.rangefinder import (
@@ -33,16 +34,21 @@ from enn_traffic.envs.rangefinder import (
     spaces_of,
     steering_of,
 )
-from enn_traffic.scenario import Scenario, load_scenario
-from enn_traffic.sim import sumo_world as recordings
 from enn_traffic.sim.crowd import ALIVE
-from enn_traffic.sim.replay import clear_start, learner_state, move_once, sense_once, with_slots
 from enn_traffic.sim.sensors import RANGE
-from enn_traffic.sim.sumo_crowd import SumoCrowd, observe
-from enn_traffic.sim.sumo_crowd import move_once as move_learners
-from enn_traffic.sim.sumo_world import LiveTraffic, SumoWorld
+from enn_traffic.sim.sumo import world as recordings
+from enn_traffic.sim.sumo.crowd import SumoCrowd, observe
+from enn_traffic.sim.sumo.crowd import move_once as move_learners
+from enn_traffic.sim.sumo.replay import (
+    clear_start,
+    learner_state,
+    move_once,
+    sense_once,
+    with_slots,
+)
+from enn_traffic.sim.sumo.world import LiveTraffic, SumoWorld
 from enn_traffic.sim.world import CAPPED, OUTCOMES, RUNNING, SPUN
-from enn_traffic.traffic.sumo import Simulation
+from enn_traffic.sumo.simulation import Simulation
 
 
 def sumo_world(scenario: str | Path | Scenario) -> SumoWorld:
@@ -75,7 +81,7 @@ class ReplayTraffic:
 
     def advance(self) -> None:
         """The next step; past the end of the recording, a recording
-        :data:`~enn_traffic.sim.sumo_world.RECORDING_GROWTH` times longer (which begins with
+        :data:`~enn_traffic.sim.sumo.world.RECORDING_GROWTH` times longer (which begins with
         this one: the life goes on unchanged), up to the step cap."""
         self.t += 1
         self.before, self.now = self.t - 1, self.t
@@ -185,7 +191,7 @@ class SumoEnv(gym.Env):
 
 class SumoCrowdEnv(ParallelEnv):
     """Several learners at once in a live SUMO (paper §5.5 among SUMO traffic), one agent per
-    learning vehicle: the :class:`~enn_traffic.sim.sumo_crowd.SumoCrowd` of the scenario's
+    learning vehicle: the :class:`~enn_traffic.sim.sumo.crowd.SumoCrowd` of the scenario's
     ``traffic.learners`` (or ``learners``), stepped by its own rules with the learners'
     steering given as actions. A learner whose life ends (collision, spin, an exit reached)
     is terminated and leaves SUMO, where the crowd of the SUMO tables re-enters it; all are

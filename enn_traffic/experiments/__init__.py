@@ -8,7 +8,7 @@ dynamic-traffic experiments share their protocol (:mod:`~enn_traffic.experiments
 the statistics of choosing controllers (:mod:`~enn_traffic.experiments.choosing`).
 """
 
-from enn_traffic.kinds import Registry
+from enn_traffic.core.registry import Registry
 
 # Imported when first run: an arena experiment does not load SUMO.
 EXPERIMENTS = Registry("experiment", {
@@ -19,8 +19,8 @@ EXPERIMENTS = Registry("experiment", {
     "fig11": "enn_traffic.experiments.fig11:fig11",
     "table1": "enn_traffic.experiments.table1:table1",
     "table2": "enn_traffic.experiments.table2:table2",
-    "table3": "enn_traffic.experiments.simultaneous:table3",
-    "table4": "enn_traffic.experiments.simultaneous:table4",
+    "table3": "enn_traffic.experiments.crowds.arena:table3",
+    "table4": "enn_traffic.experiments.crowds.arena:table4",
     "table4_ablation": "enn_traffic.experiments.ablation:table4_ablation",
     "regime": "enn_traffic.experiments.regime:regime",
     "departures": "enn_traffic.experiments.departures:departures",

@@ -39,13 +39,12 @@ import numpy as np
 import pandas as pd
 from tqdm import tqdm
 
-from enn_traffic import keys
-from enn_traffic.errors import InputError
-from enn_traffic.evolution import ga
-from enn_traffic.evolution.online import OnlineLearning, VehicleGA
-from enn_traffic.experiments.protocol import ARENA, SUMO, Family
-from enn_traffic.experiments.regime import AUTHORS_SPIN
-from enn_traffic.experiments.simultaneous import (
+from enn_traffic.config.shipped import shipped_scenario
+from enn_traffic.core import keys
+from enn_traffic.core.errors import InputError
+from enn_traffic.core.io import write_csv
+from enn_traffic.core.progress import terminal
+from enn_traffic.experiments.crowds.arena import (
     LEARNING,
     SECONDS,
     _broadcast,
@@ -53,19 +52,20 @@ from enn_traffic.experiments.simultaneous import (
     saved_inputs,
     situation_crowd,
 )
-from enn_traffic.experiments.study import Study
-from enn_traffic.experiments.sumo_crowds import (
+from enn_traffic.experiments.crowds.sumo import (
     SUMO_LEARNING,
     SumoLearning,
     saved_crowd_inputs,
     situation_result,
 )
-from enn_traffic.io import write_csv
-from enn_traffic.progress import terminal
+from enn_traffic.experiments.protocol import ARENA, SUMO, Family
+from enn_traffic.experiments.regime import AUTHORS_SPIN
+from enn_traffic.experiments.study import Study
+from enn_traffic.learning import ga
+from enn_traffic.learning.online import OnlineLearning, VehicleGA
 from enn_traffic.report.plots import save_figure
 from enn_traffic.report.stats import bootstrap_interval, t_interval
-from enn_traffic.runner import ga_params
-from enn_traffic.shipped import shipped_scenario
+from enn_traffic.runs.run import ga_params
 from enn_traffic.sim.arena import ArenaWorld, Situation
 from enn_traffic.sim.crowd import Crowd
 from enn_traffic.sim.strategies import NETWORK

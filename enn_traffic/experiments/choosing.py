@@ -1,8 +1,8 @@
 """Choosing and accepting controllers (paper §5.3–5.4): every choice on validation traffic,
-never on the test traffic the tables report (:mod:`enn_traffic.keys`).
+never on the test traffic the tables report (:mod:`enn_traffic.core.keys`).
 
 A run's candidates are its generations' champions and the elites it ends with, read from the
-files it leaves (:class:`enn_traffic.runner.RunOutputs`)."""
+files it leaves (:class:`enn_traffic.runs.run.RunOutputs`)."""
 
 from __future__ import annotations
 
@@ -11,11 +11,11 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from enn_traffic import keys
-from enn_traffic.deploy import EVALUATION_KEY
+from enn_traffic.core import keys
 from enn_traffic.experiments.common import distinct
 from enn_traffic.experiments.protocol import Family, family_runs, run_dir
-from enn_traffic.runner import RunOutputs
+from enn_traffic.runs.evaluate import EVALUATION_KEY
+from enn_traffic.runs.run import RunOutputs
 
 if TYPE_CHECKING:
     from enn_traffic.experiments.study import Study

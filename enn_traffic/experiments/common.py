@@ -11,13 +11,13 @@ import numpy as np
 import pandas as pd
 from tqdm import tqdm
 
-from enn_traffic.controller import Controller
-from enn_traffic.errors import InputError
-from enn_traffic.evolution.backends import connect_ray
-from enn_traffic.io import write_atomic
-from enn_traffic.progress import terminal
-from enn_traffic.runner import CHECKPOINT, evolve
-from enn_traffic.scenario import Scenario
+from enn_traffic.config import Scenario
+from enn_traffic.core.errors import InputError
+from enn_traffic.core.io import write_atomic
+from enn_traffic.core.progress import terminal
+from enn_traffic.learning.evaluators import connect_ray
+from enn_traffic.runs.controller import Controller
+from enn_traffic.runs.run import CHECKPOINT, evolve
 
 
 def save_controller(out: Path, name: str, scenario: Scenario, chromosome: np.ndarray,

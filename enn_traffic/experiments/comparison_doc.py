@@ -1,7 +1,8 @@
-"""docs/results.md's section on the GA against PPO and SAC (:mod:`enn_traffic.baseline`),
-written from a comparison folder's CSVs and its ``protocol.json`` (the folder's protocol, not
-today's): the protocol, the search, the test fitness, the differences from the GA with their
-family-corrected intervals, and how the gap changes between the spin rules (issue 65)."""
+"""docs/results.md's section on the GA against PPO and SAC
+(:mod:`enn_traffic.experiments.gradient_rl.campaign`), written from a comparison folder's CSVs and
+its ``protocol.json`` (the folder's protocol, not today's): the protocol, the search, the test
+fitness, the differences from the GA with their family-corrected intervals, and how the gap changes
+between the spin rules (issue 65)."""
 
 from __future__ import annotations
 
@@ -11,8 +12,8 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from enn_traffic import baseline
-from enn_traffic.shipped import shipped_scenario
+from enn_traffic.config.shipped import shipped_scenario
+from enn_traffic.experiments.gradient_rl import campaign as baseline
 
 TRACKS = {"navigation_narrow": "narrow track", "navigation_narrow_spin40": "narrow track",
           "arena_strategy1": "arena, strategy 1"}
@@ -283,11 +284,12 @@ def _rule_changes(changes: pd.DataFrame, names: dict[str, str]) -> list[str]:
 
 
 def _travel(travel: pd.DataFrame, names: dict[str, str]) -> list[str]:
-    from enn_traffic import spin_rule
+    from enn_traffic.experiments.gradient_rl import spin_rule
 
     situations = travel["situations"].iloc[0]
     lines = [
-        "Where the controllers drive (`travel.csv`, `python -m enn_traffic.spin_rule travel`): "
+        "Where the controllers drive (`travel.csv`, "
+        "`python -m enn_traffic.experiments.gradient_rl.spin_rule travel`): "
         f"each run's controller on the first {situations} validation situations. Long lives "
         f"pass {spin_rule.LONG:,} steps; their extent is the larger of the x and y ranges "
         f"of a life's last {spin_rule.TAIL:,} positions (a vehicle circling where the "
@@ -326,11 +328,11 @@ def _minus(mine: pd.Series, ga: pd.Series) -> str:
 
 
 def _ablations(travel: pd.DataFrame, names: dict[str, str]) -> list[str]:
-    """The step cap and the start state as ablations: each group's validation fitness had
-    lives been capped lower (:func:`enn_traffic.spin_rule.capped`) and its one life from the
-    start it trained from, each with its difference from the GA at the same budget and a
+    """The step cap and the start state as ablations: each group's validation fitness had lives been
+    capped lower (:func:`~enn_traffic.experiments.gradient_rl.spin_rule.capped`) and its one life
+    from the start it trained from, each with its difference from the GA at the same budget and a
     90% Welch t interval over seeds."""
-    from enn_traffic import spin_rule
+    from enn_traffic.experiments.gradient_rl import spin_rule
 
     columns = [*(f"fitness_cap_{cap}" for cap in spin_rule.CAPS), "fitness",
                "training_start_fitness"]

@@ -29,7 +29,11 @@ import numpy as np
 import pandas as pd
 from tqdm import tqdm
 
-from enn_traffic import keys
+from enn_traffic.config.kinds import STRATEGIES
+from enn_traffic.config.shipped import shipped_scenario
+from enn_traffic.core import keys
+from enn_traffic.core.io import write_csv
+from enn_traffic.core.progress import terminal
 from enn_traffic.experiments.ablation import (
     ABLATION,
     DRAWS,
@@ -39,14 +43,10 @@ from enn_traffic.experiments.ablation import (
     authors_arm,
     start_poses,
 )
+from enn_traffic.experiments.crowds.arena import SECONDS
 from enn_traffic.experiments.protocol import ARENA
-from enn_traffic.experiments.simultaneous import SECONDS
 from enn_traffic.experiments.study import Study
-from enn_traffic.io import write_csv
-from enn_traffic.kinds import STRATEGIES
-from enn_traffic.progress import terminal
 from enn_traffic.report.stats import bootstrap_interval
-from enn_traffic.shipped import shipped_scenario
 from enn_traffic.sim.arena import ArenaWorld
 from enn_traffic.sim.crowd import Crowd
 

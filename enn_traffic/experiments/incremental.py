@@ -11,7 +11,6 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from enn_traffic.evolution.backends import MeanOverWorlds
 from enn_traffic.experiments.choosing import (
     ACCEPTANCE_ERRORS,
     TOP_CANDIDATES,
@@ -21,8 +20,9 @@ from enn_traffic.experiments.choosing import (
 )
 from enn_traffic.experiments.common import run_or_reuse
 from enn_traffic.experiments.protocol import Family
-from enn_traffic.runner import RunOutputs
-from enn_traffic.worlds import make_world
+from enn_traffic.learning.evaluators import MeanOverWorlds
+from enn_traffic.runs.run import RunOutputs
+from enn_traffic.sim.world import make_world
 
 if TYPE_CHECKING:
     from enn_traffic.experiments.study import Study

@@ -10,21 +10,20 @@ import matplotlib.pyplot as plt
 import numpy as np
 import pandas as pd
 
-from enn_traffic import keys
-from enn_traffic.controller import Controller
-from enn_traffic.deploy import EVALUATION_KEY
-from enn_traffic.evolution.backends import ProcessEvaluator
+from enn_traffic.config import Scenario
+from enn_traffic.config.shipped import shipped_scenario
+from enn_traffic.core import keys
+from enn_traffic.core.io import write_csv
 from enn_traffic.experiments.choosing import candidates
 from enn_traffic.experiments.common import run_or_reuse, save_controller
 from enn_traffic.experiments.study import Runs, Study
-from enn_traffic.io import write_csv
-from enn_traffic.lanekeeping.world import LaneKeepingWorld
+from enn_traffic.learning.evaluators import ProcessEvaluator
 from enn_traffic.report.plots import draw_paths, learning_curves, save_figure
-from enn_traffic.scenario import Scenario
-from enn_traffic.shipped import shipped_scenario
-from enn_traffic.sim.world import CAPPED
-from enn_traffic.traffic.fresh import fresh_shares
-from enn_traffic.worlds import make_world
+from enn_traffic.runs.controller import Controller
+from enn_traffic.runs.evaluate import EVALUATION_KEY
+from enn_traffic.sim.lane_keeping.world import LaneKeepingWorld
+from enn_traffic.sim.world import CAPPED, make_world
+from enn_traffic.sumo.fresh import fresh_shares
 
 
 @dataclass(frozen=True)

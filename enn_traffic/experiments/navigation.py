@@ -12,14 +12,14 @@ import numpy as np
 import pandas as pd
 from tqdm import tqdm
 
-from enn_traffic.controller import Controller
-from enn_traffic.deploy import controller_trace
+from enn_traffic.config.shipped import shipped_scenario
+from enn_traffic.core.io import write_csv
+from enn_traffic.core.progress import terminal
 from enn_traffic.experiments.common import first_generation, save_controller
 from enn_traffic.experiments.study import Runs, Study, seed_runs
-from enn_traffic.io import write_csv
-from enn_traffic.progress import terminal
 from enn_traffic.report.plots import draw_paths, heat_map, learning_curves, save_figure
-from enn_traffic.shipped import shipped_scenario
+from enn_traffic.runs.controller import Controller
+from enn_traffic.runs.evaluate import controller_trace
 from enn_traffic.sim.world import CAPPED, OUTCOMES
 
 # Best fitness at which the vehicle has reached the far dead end of the narrow track

@@ -16,8 +16,8 @@ from typing import TYPE_CHECKING
 
 import pandas as pd
 
-from enn_traffic.scenario import Scenario
-from enn_traffic.shipped import shipped_scenario
+from enn_traffic.config import Scenario
+from enn_traffic.config.shipped import shipped_scenario
 from enn_traffic.sim.world import World
 
 if TYPE_CHECKING:

@@ -14,8 +14,8 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from enn_traffic.experiments.protocol import ARENA
-from enn_traffic.experiments.simultaneous import (
+from enn_traffic.config.shipped import shipped_scenario
+from enn_traffic.experiments.crowds.arena import (
     LEARNING,
     curve_ends,
     direction,
@@ -23,8 +23,8 @@ from enn_traffic.experiments.simultaneous import (
     reduction_interval,
     trend,
 )
+from enn_traffic.experiments.protocol import ARENA
 from enn_traffic.experiments.table1 import diagonal_pattern
-from enn_traffic.shipped import shipped_scenario
 
 BEGIN = "<!-- results table: written by python -m enn_traffic.experiments.readme_results -->"
 END = "<!-- end of results table -->"

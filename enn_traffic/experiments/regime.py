@@ -30,20 +30,15 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 
-from enn_traffic.evolution import ga
-from enn_traffic.evolution.online import OnlineLearning, VehicleGA
+from enn_traffic.config.shipped import shipped_scenario
+from enn_traffic.core.io import write_csv
+from enn_traffic.experiments.crowds.arena import LEARNING, SECONDS, SITUATION_KEY, situation_crowd
 from enn_traffic.experiments.protocol import ARENA
-from enn_traffic.experiments.simultaneous import (
-    LEARNING,
-    SECONDS,
-    SITUATION_KEY,
-    situation_crowd,
-)
 from enn_traffic.experiments.study import Study
-from enn_traffic.io import write_csv
+from enn_traffic.learning import ga
+from enn_traffic.learning.online import OnlineLearning, VehicleGA
 from enn_traffic.report.paper_tables import PAPER_TABLE3
-from enn_traffic.runner import ga_params
-from enn_traffic.shipped import shipped_scenario
+from enn_traffic.runs.run import ga_params
 from enn_traffic.sim.arena import ArenaWorld
 from enn_traffic.sim.crowd import Crowd
 from enn_traffic.sim.strategies import NETWORK

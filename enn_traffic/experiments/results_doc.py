@@ -17,12 +17,10 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from enn_traffic import keys
-from enn_traffic.controller import Controller
+from enn_traffic.config.shipped import shipped_scenario
+from enn_traffic.core import keys
 from enn_traffic.experiments.comparison_doc import _starts, _steps, _training_lives, comparison
-from enn_traffic.experiments.protocol import ARENA, CITY, SUMO, Family
-from enn_traffic.experiments.regime import PAPER_INITIAL
-from enn_traffic.experiments.simultaneous import (
+from enn_traffic.experiments.crowds.arena import (
     ARMS,
     LEARNING,
     SECONDS,
@@ -32,12 +30,14 @@ from enn_traffic.experiments.simultaneous import (
     reduction_interval,
     trend,
 )
-from enn_traffic.experiments.sumo_crowds import SITUATION_KEY as SUMO_SITUATION_KEY
-from enn_traffic.experiments.sumo_crowds import SUMO_LEARNING
+from enn_traffic.experiments.crowds.sumo import SITUATION_KEY as SUMO_SITUATION_KEY
+from enn_traffic.experiments.crowds.sumo import SUMO_LEARNING
+from enn_traffic.experiments.protocol import ARENA, CITY, SUMO, Family
+from enn_traffic.experiments.regime import PAPER_INITIAL
 from enn_traffic.report import generated
 from enn_traffic.report.paper_tables import PAPER_TABLE3, PAPER_TABLE4
 from enn_traffic.roads.network import read_net
-from enn_traffic.shipped import shipped_scenario
+from enn_traffic.runs.controller import Controller
 
 
 def _g(value: float) -> str:
@@ -327,7 +327,7 @@ def _time_bases(regime: pd.DataFrame, paper: tuple[float, float]) -> list[str]:
 
 
 def family_tables34(paper: Path, family: Family) -> str:
-    """A SUMO family's Tables 3–4 (:mod:`enn_traffic.experiments.sumo_crowds`): how they were
+    """A SUMO family's Tables 3–4 (:mod:`enn_traffic.experiments.crowds.sumo`): how they were
     measured, the rates, the paired comparisons, the learners and the learning curve."""
     folder = paper / family.folder
     table3 = pd.read_csv(folder / "table3.csv")
@@ -442,10 +442,10 @@ def closed_loop(paper: Path, family: Family) -> str:
 
 
 def baseline_round2(paper: Path) -> str:
-    """The comparison's second round (:mod:`enn_traffic.baseline` as it was then), from
-    ``results/baseline_round2`` beside ``paper``: the protocol, the search, the table and the
-    paired differences."""
-    from enn_traffic import baseline as comparison
+    """The comparison's second round (:mod:`enn_traffic.experiments.gradient_rl.campaign` as it was
+    then), from ``results/baseline_round2`` beside ``paper``: the protocol, the search, the table
+    and the paired differences."""
+    from enn_traffic.experiments.gradient_rl import campaign as comparison
 
     folder = paper.parent / "baseline_round2"
     protocol = json.loads((folder / "protocol.json").read_text())  # the folder's, not today's
@@ -828,9 +828,10 @@ def crowd_departures(paper: Path) -> str:
 
 
 def spin_rule(paper: Path) -> str:
-    """The narrow track's spin rule against centre keeping (:mod:`enn_traffic.spin_rule`),
-    from ``spin_rule.csv`` of the comparison's third round beside ``paper``."""
-    from enn_traffic import spin_rule as rule
+    """The narrow track's spin rule against centre keeping
+    (:mod:`enn_traffic.experiments.gradient_rl.spin_rule`), from ``spin_rule.csv`` of the
+    comparison's third round beside ``paper``."""
+    from enn_traffic.experiments.gradient_rl import spin_rule as rule
 
     table = pd.read_csv(paper.parent / Path(rule.FOLDER).name / "spin_rule.csv")
     gains = sorted(table["gain"].unique())

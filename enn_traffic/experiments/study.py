@@ -22,11 +22,10 @@ from typing import TypeVar
 import numpy as np
 import pandas as pd
 
+from enn_traffic.config import Scenario
+from enn_traffic.config.shipped import shipped_scenario
 from enn_traffic.experiments.common import Jobs, LocalRuns, RayRuns, distinct
-from enn_traffic.scenario import Scenario
-from enn_traffic.shipped import shipped_scenario
-from enn_traffic.sim.world import SituationResults, World
-from enn_traffic.worlds import make_world
+from enn_traffic.sim.world import SituationResults, World, make_world
 
 T = TypeVar("T")
 

@@ -8,16 +8,16 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 
-from enn_traffic.deploy import EVALUATION_KEY
+from enn_traffic.core.io import write_csv
 from enn_traffic.experiments.choosing import specialists
+from enn_traffic.experiments.crowds.sumo import sumo_tables
 from enn_traffic.experiments.fig11 import fig11
 from enn_traffic.experiments.protocol import CITY, SUMO, Family
 from enn_traffic.experiments.study import Study
-from enn_traffic.experiments.sumo_crowds import sumo_tables
 from enn_traffic.experiments.table1 import table1
 from enn_traffic.experiments.table2 import table2
-from enn_traffic.io import write_csv
-from enn_traffic.worlds import make_world
+from enn_traffic.runs.evaluate import EVALUATION_KEY
+from enn_traffic.sim.world import make_world
 
 
 def replay_against_closed_loop(study: Study, family: Family = SUMO) -> list[str]:

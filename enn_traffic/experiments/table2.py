@@ -8,12 +8,12 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from enn_traffic.core.io import write_csv
 from enn_traffic.experiments.choosing import fitness_on_test_traffic
 from enn_traffic.experiments.common import save_controller
 from enn_traffic.experiments.incremental import Iteration, incremental_evolution
 from enn_traffic.experiments.protocol import ARENA, Family
 from enn_traffic.experiments.study import Study
-from enn_traffic.io import write_csv
 
 
 def _rows(study: Study, family: Family, seed: int, iterations: list[Iteration]

@@ -21,9 +21,9 @@ from matplotlib.animation import FuncAnimation, PillowWriter  # noqa: E402
 from matplotlib.collections import LineCollection, PolyCollection  # noqa: E402
 from tqdm import tqdm  # noqa: E402
 
-from enn_traffic.errors import InputError  # noqa: E402
-from enn_traffic.geometry import body_polygon  # noqa: E402
-from enn_traffic.progress import terminal  # noqa: E402
+from enn_traffic.core.errors import InputError  # noqa: E402
+from enn_traffic.core.geometry import body_polygon  # noqa: E402
+from enn_traffic.core.progress import terminal  # noqa: E402
 from enn_traffic.report.plots import segments_within, square_view  # noqa: E402
 
 FRAMES = 150  # at most, spread evenly over the life

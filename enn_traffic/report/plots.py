@@ -12,7 +12,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 import pandas as pd  # noqa: E402
 
-from enn_traffic.io import write_atomic  # noqa: E402
+from enn_traffic.core.io import write_atomic  # noqa: E402
 
 
 def save_figure(figure, path: str | Path) -> None:

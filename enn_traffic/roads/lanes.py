@@ -10,7 +10,7 @@ vehicles: ``number``, or its span over ``period``, ``vehsPerHour`` or ``probabil
 without an ``end`` counts one hour). A lane carries the demand of its edge by the vehicle
 classes it allows (a vehicle's class is its type's ``vClass``, from the route and additional
 files; passenger when not given, as SUMO's). The counts are kept in the cache folder, named
-by the files' bytes (:mod:`enn_traffic.cache`).
+by the files' bytes (:mod:`enn_traffic.core.cache`).
 
 A lane whose edge ends at the network's fringe (an exit: the learner would leave the network
 within the lane's length) is never a learner's lane for ``auto``.
@@ -28,9 +28,9 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from enn_traffic.cache import cached_arrays, content_digest, key_of
-from enn_traffic.errors import InputError
-from enn_traffic.progress import slow_step
+from enn_traffic.core.cache import cached_arrays, content_digest, key_of
+from enn_traffic.core.errors import InputError
+from enn_traffic.core.progress import slow_step
 from enn_traffic.roads.network import LEARNER_CLASS, fringe_nodes, read_net
 from enn_traffic.roads.sumocfg import parse_time
 

@@ -10,7 +10,7 @@ leaves the map) is cut open across the road, and the cut lines become exits, not
 The surface is the learner's (``surface = "passenger"``, docs/sumo.md "Road surface"): the
 lanes that allow passenger cars, and the junctions they meet less their walking areas, so that
 sidewalks, bike lanes, tram tracks and railways are not road; ``"all"`` takes every lane and
-junction. A network's walls are built once and kept on disk (:mod:`enn_traffic.cache`).
+junction. A network's walls are built once and kept on disk (:mod:`enn_traffic.core.cache`).
 """
 
 from __future__ import annotations
@@ -28,12 +28,12 @@ import sumolib
 from shapely.geometry import LineString, MultiPolygon, Point, Polygon
 from shapely.ops import unary_union
 
-from enn_traffic import cache
-from enn_traffic.cache import file_stamp
-from enn_traffic.errors import InputError
-from enn_traffic.geometry import body_corners
-from enn_traffic.io import check_input_file
-from enn_traffic.progress import slow_step
+from enn_traffic.core import cache
+from enn_traffic.core.cache import file_stamp
+from enn_traffic.core.errors import InputError
+from enn_traffic.core.geometry import body_corners
+from enn_traffic.core.io import check_input_file
+from enn_traffic.core.progress import slow_step
 from enn_traffic.roads.sumocfg import xml_problem
 
 SLIVER_M = 0.2  # holes narrower than this are gaps between lanes, not walls
@@ -161,7 +161,7 @@ def lane_spots(net_file: Path, surface: Surface = "passenger", spacing: float = 
                ) -> np.ndarray:
     """(S, 3): x, y and heading every ``spacing`` metres along the centre line of every lane
     of the surface outside junctions, facing its direction of travel: where learners re-enter
-    a SUMO network (:class:`~enn_traffic.sim.sumo_crowd.SumoCrowd`), whatever share of its
+    a SUMO network (:class:`~enn_traffic.sim.sumo.crowd.SumoCrowd`), whatever share of its
     bounding box the roads fill."""
     spots = []
     for edge in read_net(net_file).getEdges():

@@ -27,9 +27,9 @@ from pathlib import Path
 
 import sumolib
 
-from enn_traffic.cache import file_stamp
-from enn_traffic.errors import InputError
-from enn_traffic.io import check_input_file
+from enn_traffic.core.cache import file_stamp
+from enn_traffic.core.errors import InputError
+from enn_traffic.core.io import check_input_file
 
 FILE_OPTIONS = ("net-file", "route-files", "additional-files")
 
@@ -266,7 +266,7 @@ def with_includes(files: list[Path] | tuple[Path, ...]) -> list[Path]:
 
 def check_included(files: list[Path] | tuple[Path, ...], source: Path, key: str) -> None:
     """``files`` and every file they ``<include>``, at any depth, checked as SUMO's XML inputs
-    before SUMO reads them: an included file as an input (:func:`~enn_traffic.io.
+    before SUMO reads them: an included file as an input (:func:`~enn_traffic.core.io.
     check_input_file`: no pipe, device, folder or oversized file, the error naming the
     including file), and every one as well-formed XML (:func:`xml_problem`), so that a cut or
     garbled file, an encoding no reader knows or an entity bomb, on which SUMO fails late or

@@ -24,13 +24,13 @@ import numba
 import numpy as np
 from numba import njit, prange
 
-from enn_traffic import keys
-from enn_traffic.errors import InputError
-from enn_traffic.kinds import NETWORK, STRATEGIES
-from enn_traffic.neural import NetworkSpec, network_buffers
+from enn_traffic.config import Scenario
+from enn_traffic.config.kinds import NETWORK, STRATEGIES
+from enn_traffic.core import keys
+from enn_traffic.core.errors import InputError
+from enn_traffic.core.neural import NetworkSpec, network_buffers
 from enn_traffic.roads import Track, load_track
 from enn_traffic.roads.network import anywhere_poses, lane_start_poses
-from enn_traffic.scenario import Scenario
 from enn_traffic.sim.rules import (
     NO_HIT,
     Work,
@@ -199,7 +199,7 @@ class LearnerWorld:
     """What every world of a rangefinder learner holds, whoever drives the traffic: the
     scenario, its track and wall grid, the learner's network and start poses, and the step's
     constants (:mod:`enn_traffic.sim.rules`). :class:`ArenaWorld` adds scripted traffic,
-    :class:`~enn_traffic.sim.sumo_world.SumoWorld` SUMO's."""
+    :class:`~enn_traffic.sim.sumo.world.SumoWorld` SUMO's."""
 
     def __init__(self, scenario: Scenario, track: Track | None = None):
         self.scenario = scenario

@@ -9,7 +9,7 @@ this is one world of V vehicles run for a stretch of simulated time, by the same
    for every network vehicle when asked: evolved drivers are held to §5.3's rule that rotating
    in place ends a life);
 2. every vehicle whose life ended respawns at a free spot; a learning vehicle first tells its
-   learning (:class:`Learning`, e.g. :class:`enn_traffic.evolution.online.OnlineLearning`), which
+   learning (:class:`Learning`, e.g. :class:`enn_traffic.learning.online.OnlineLearning`), which
    gives the chromosome of its next life;
 3. every vehicle senses walls and the other bodies, decides and moves.
 
@@ -30,8 +30,8 @@ from typing import NamedTuple, Protocol
 import numpy as np
 from numba import njit
 
-from enn_traffic.kinds import NETWORK
-from enn_traffic.neural import network_buffers
+from enn_traffic.config.kinds import NETWORK
+from enn_traffic.core.neural import network_buffers
 from enn_traffic.sim.arena import ArenaWorld
 from enn_traffic.sim.rules import (
     NO_HIT,

@@ -2,7 +2,7 @@
 
 Every loop that moves vehicles calls these compiled rules: the arena's life
 (:mod:`enn_traffic.sim.arena`), the learner among SUMO's traffic in replay and closed loop
-(:mod:`enn_traffic.sim.replay`) and many drivers at once (:mod:`enn_traffic.sim.crowd`). A step
+(:mod:`enn_traffic.sim.sumo.replay`) and many drivers at once (:mod:`enn_traffic.sim.crowd`). A step
 is:
 
 1. **blame** (:func:`responsible`): a vehicle is responsible for a collision if its body touches
@@ -27,15 +27,15 @@ from typing import NamedTuple
 import numpy as np
 from numba import njit
 
-from enn_traffic.geometry import (
+from enn_traffic.config.kinds import ACTION, NETWORK, NONE
+from enn_traffic.core.geometry import (
     body_corners,
     body_hits_walls,
     box_hits_segment,
     box_hits_walls,
     boxes_overlap,
 )
-from enn_traffic.kinds import ACTION, NETWORK, NONE
-from enn_traffic.neural import steering as network_steering
+from enn_traffic.core.neural import steering as network_steering
 from enn_traffic.sim.bicycle import bicycle_step
 from enn_traffic.sim.sensors import (
     COS,
@@ -119,7 +119,7 @@ def vehicles_at(count: int) -> Vehicles:
 
 class Work(NamedTuple):
     """A step's work arrays: one vehicle's readings, the networks' layer buffers
-    (:func:`~enn_traffic.neural.network_buffers`) and every vehicle's steering (V,)."""
+    (:func:`~enn_traffic.core.neural.network_buffers`) and every vehicle's steering (V,)."""
 
     readings: np.ndarray
     activation: np.ndarray
@@ -362,7 +362,7 @@ EDGE_MARGIN = 1e-9  # m²: an edge nearly in line with the sensing point counts 
 @njit(cache=True, inline="always")
 def facing_edges(body, x, y) -> int:
     """Bit i set when edge i (corner i to i + 1; corners counter-clockwise, as
-    :func:`~enn_traffic.geometry.body_corners` lists them) faces (x, y), that is (x, y) lies
+    :func:`~enn_traffic.core.geometry.body_corners` lists them) faces (x, y), that is (x, y) lies
     on or beyond its outer side; every edge when (x, y) is inside the body."""
     mask = 0
     for i in range(4):

@@ -1,7 +1,7 @@
 """Rangefinder (paper §3, §5.2; docs/design.md, "The authors' code" 3) and the wall-culling grid.
 
 Beam i points at heading + its angle from the pose at the front bumper (the scenario's rings
-of beams, :attr:`enn_traffic.scenario.Scenario.beams`); its reading is the distance to the
+of beams, :attr:`enn_traffic.config.Scenario.beams`); its reading is the distance to the
 nearest wall or vehicle-body edge it crosses, or its range when it crosses none. Readings are
 raw metres, as the authors feed them to the network.
 
@@ -17,9 +17,9 @@ from typing import NamedTuple
 import numpy as np
 from numba import njit
 
-from enn_traffic import cache
-from enn_traffic.errors import InputError
-from enn_traffic.progress import slow_step
+from enn_traffic.core import cache
+from enn_traffic.core.errors import InputError
+from enn_traffic.core.progress import slow_step
 
 GRID_VERSION = 1  # raised when the cells a grid lists change
 # A grid's cells (1.6 GB of offsets): a city 70 km across at 5 m cells. A network larger than
@@ -97,7 +97,7 @@ class WallGrid(NamedTuple):
     @classmethod
     def cached(cls, walls: np.ndarray, reach: float, cell_size: float = 5.0) -> WallGrid:
         """:meth:`build`, kept on disk by the walls' bytes, ``reach`` and ``cell_size``
-        (:mod:`enn_traffic.cache`)."""
+        (:mod:`enn_traffic.core.cache`)."""
         walls = np.ascontiguousarray(walls, dtype=np.float64).reshape(-1, 4)
         key = cache.key_of(walls.tobytes(), repr(reach), repr(cell_size), GRID_VERSION)
 

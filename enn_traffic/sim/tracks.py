@@ -14,7 +14,7 @@ from dataclasses import replace
 
 import numpy as np
 
-from enn_traffic.scenario import Scenario
+from enn_traffic.config import Scenario
 from enn_traffic.sim.world import SituationResults, World
 
 

@@ -2,9 +2,9 @@
 outcomes of a life and the :class:`SituationResults` a world's evaluation gives (paper §5, §5.3).
 
 Worlds: :class:`~enn_traffic.sim.arena.ArenaWorld` (the arena and the navigation tracks, with
-scripted or network traffic), :class:`~enn_traffic.sim.sumo_world.SumoWorld` (SUMO's traffic,
-replay or closed loop) and :class:`~enn_traffic.lanekeeping.world.LaneKeepingWorld`
-(highway-env). :func:`enn_traffic.worlds.make_world` gives the one a scenario describes.
+scripted or network traffic), :class:`~enn_traffic.sim.sumo.world.SumoWorld` (SUMO's traffic,
+replay or closed loop) and :class:`~enn_traffic.sim.lane_keeping.world.LaneKeepingWorld`
+(highway-env). :func:`enn_traffic.sim.world.make_world` gives the one a scenario describes.
 """
 
 from __future__ import annotations
@@ -14,8 +14,10 @@ from typing import Protocol, runtime_checkable
 
 import numpy as np
 
-from enn_traffic.neural import NetworkSpec
-from enn_traffic.scenario import Scenario
+from enn_traffic.config import Scenario, network_named
+from enn_traffic.core.neural import NetworkSpec
+from enn_traffic.core.registry import Registry
+from enn_traffic.roads import Track
 
 # How a life ended. LEFT_NETWORK: the learner reached the network's fringe (SUMO traffic,
 # docs/sumo.md "Walls and exits"); LEFT_LANE: the lane-keeping vehicle crossed a marking. A
@@ -44,7 +46,7 @@ class Drawn(Protocol):
 class World(Protocol):
     """A scenario's worlds, ready to evaluate populations of controllers.
 
-    ``key`` is a traffic key (:mod:`enn_traffic.keys`): a training generation's number, or a
+    ``key`` is a traffic key (:mod:`enn_traffic.core.keys`): a training generation's number, or a
     held-out key; the same key gives every chromosome the same traffic situations."""
 
     scenario: Scenario
@@ -171,3 +173,28 @@ class SituationResults:
             hit_vehicle=joined("hit_vehicle"), end_pose=joined("end_pose"))
 
 
+# Each world kind's class, imported when first made (an arena run does not load SUMO). A
+# world is made as ``World(scenario, track)``; several tracks as ``World(scenario, worlds)``.
+WORLDS = Registry("world kind", {
+    "arena": "enn_traffic.sim.arena:ArenaWorld",
+    "sumo": "enn_traffic.sim.sumo.world:SumoWorld",
+    "lane_keeping": "enn_traffic.sim.lane_keeping.world:LaneKeepingWorld",
+    "tracks": "enn_traffic.sim.tracks:TracksWorld",
+})
+
+
+def make_world(scenario: Scenario, track: Track | None = None) -> World:
+    """Arena and navigation worlds, SUMO traffic worlds, or a highway-env lane-keeping road;
+    with several tracks, one of these per track side by side
+    (:class:`~enn_traffic.sim.tracks.TracksWorld`). ``track``: the road already read, for a
+    scenario of one track."""
+    if isinstance(scenario.track, list) and len(scenario.track) == 1:
+        scenario = scenario.on_track(0)
+    kind = scenario.world_kind
+    if kind == "tracks":
+        if track is not None:
+            raise ValueError("a track may be given only for a single-track scenario")
+        return WORLDS[kind](scenario, [make_world(scenario.on_track(index))
+                                       for index in range(len(scenario.track))])
+    with network_named(scenario):
+        return WORLDS[kind](scenario, track)

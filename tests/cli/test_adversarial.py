@@ -31,7 +31,7 @@ import tomli_w
 from refusals import refusal
 
 from enn_traffic import cli
-from enn_traffic.io import MAX_INPUT_MB_VARIABLE, file_lock
+from enn_traffic.core.io import MAX_INPUT_MB_VARIABLE, file_lock
 
 ROOT = Path(__file__).resolve().parents[2]
 SCENARIOS = ROOT / "scenarios"
@@ -252,7 +252,7 @@ def test_toml_built_to_choke_a_reader_is_one_clear_message(capsys, tmp_path, mon
 # --- a controller's own values: reported as the controller's, not the scenario's -------------
 
 def _controller(tmp_path: Path, **edits) -> Path:
-    from enn_traffic.neural import NetworkSpec
+    from enn_traffic.core.neural import NetworkSpec
 
     with np.load(BEST) as saved:
         data = dict(saved)
@@ -406,8 +406,8 @@ def test_a_damaged_saved_warm_up_is_simulated_again(capsys, tmp_path, monkeypatc
     scenario.write_text(scenario.read_text().replace("max_steps = 400", "max_steps = 50")
                         .replace("episodes = 2", "episodes = 1") + 'mode = "closed-loop"\n')
     argv = ["evaluate", BEST, scenario, "--quiet"]
-    from enn_traffic.controller import Controller
-    from enn_traffic.scenario import load_scenario
+    from enn_traffic.config import load_scenario
+    from enn_traffic.runs.controller import Controller
 
     assert load_scenario(scenario).inputs == Controller.load(BEST).layer_sizes[0]
     assert cli.main([str(a) for a in argv]) == 0
@@ -469,8 +469,8 @@ def test_evaluate_refuses_two_scenarios_of_one_name(capsys, tmp_path, monkeypatc
 
 def test_baseline_refuses_a_scenario_whose_name_its_folder_knows_with_other_content(
         capsys, tmp_path, monkeypatch):
-    from enn_traffic import baseline
-    from enn_traffic.scenario import load_scenario
+    from enn_traffic.config import load_scenario
+    from enn_traffic.experiments.gradient_rl import campaign as baseline
 
     monkeypatch.chdir(tmp_path)
     out = tmp_path / "baseline"
@@ -500,9 +500,9 @@ def _read_options() -> list[str]:
 def test_every_file_a_sumocfg_option_names_keys_the_caches(tmp_path, road_net, option):
     """A ``load-state`` or ``weight-files`` replaced after a run left the cached warm-up
     and the resumed run stale: only network, routes, additional and included files counted."""
-    from enn_traffic.runner import fingerprint
-    from enn_traffic.scenario import load_scenario, read_files
-    from enn_traffic.traffic import sumo
+    from enn_traffic.config import load_scenario, read_files
+    from enn_traffic.runs.run import fingerprint
+    from enn_traffic.sumo import states
 
     scenario_path = _road(tmp_path, road_net)
     named = tmp_path / f"named_by_{option.replace('.', '_')}.xml"
@@ -512,12 +512,12 @@ def test_every_file_a_sumocfg_option_names_keys_the_caches(tmp_path, road_net, o
         "</input>", f'<{option} value="{named.name}"/></input>'))
     scenario = load_scenario(scenario_path)
     assert named in read_files(scenario)
-    before = (fingerprint(scenario), sumo.state_path(scenario, 1, True))
+    before = (fingerprint(scenario), states.state_path(scenario, 1, True))
     named.write_text("<y/>")
     os.utime(named, ns=(1, 1))
     scenario = load_scenario(scenario_path)
     assert fingerprint(scenario) != before[0]
-    assert sumo.state_path(scenario, 1, True) != before[1]
+    assert states.state_path(scenario, 1, True) != before[1]
 
 
 # --- every number of the command line --------------------------------------------------------
@@ -746,7 +746,7 @@ def test_ctrl_c_of_a_closed_loop_evaluation_leaves_no_sumo_folder(tmp_path, road
 def test_a_full_disk_leaves_no_partial_cache_entry(tmp_path):
     """A cache write that fails (here: a file-size limit, as a full disk gives) keeps no
     entry and leaves no ``*.partial.npz``; the arrays are still returned."""
-    code = ("import resource, signal, sys, numpy as np; from enn_traffic import cache; "
+    code = ("import resource, signal, sys, numpy as np; from enn_traffic.core import cache; "
             "signal.signal(signal.SIGXFSZ, signal.SIG_IGN); "
             "resource.setrlimit(resource.RLIMIT_FSIZE, (4096, 4096)); "
             "arrays = cache.cached_arrays('walls', 'k', lambda: {'w': np.ones(100_000)}); "

@@ -36,10 +36,10 @@ def test_run_writes_every_output(small_run):
         assert column in table
     # each generation's row is its population's: its champion, driven again in that
     # generation's situations, has the row's best fitness, and best.npz is the best of all
-    from enn_traffic.controller import Controller
-    from enn_traffic.runner import RunOutputs
-    from enn_traffic.scenario import load_scenario
-    from enn_traffic.worlds import make_world
+    from enn_traffic.config import load_scenario
+    from enn_traffic.runs.controller import Controller
+    from enn_traffic.runs.run import RunOutputs
+    from enn_traffic.sim.world import make_world
 
     world = make_world(load_scenario(small_run / "scenario.toml"))
     champions = RunOutputs.load(small_run).champions
@@ -104,9 +104,9 @@ def test_evaluate_reproduces_the_recorded_best_fitness(small_run, root, tmp_path
 def test_evaluate_on_another_traffic_seed(small_run, root, tmp_path):
     """``--traffic-seed`` draws the situations from another traffic seed: the CLI's lifetimes
     are those of the scenario with that seed, which are not the default seed's."""
-    from enn_traffic.controller import Controller
-    from enn_traffic.deploy import evaluate_controller
-    from enn_traffic.scenario import load_scenario
+    from enn_traffic.config import load_scenario
+    from enn_traffic.runs.controller import Controller
+    from enn_traffic.runs.evaluate import evaluate_controller
 
     scenario_file = root / "scenarios" / "arena_strategy1.toml"
     lifetimes = tmp_path / "lifetimes.csv"
@@ -202,7 +202,7 @@ def test_summary_sets_the_papers_tables_beside_ours(tmp_path):
 def test_the_summary_names_the_code_and_date_of_each_experiment(quick_fig7):
     import json
 
-    from enn_traffic.provenance import code_version
+    from enn_traffic.core.provenance import code_version
 
     record = json.loads((quick_fig7 / "summary.json").read_text())["fig7"]
     assert record["code"] == code_version() and record["date"].endswith("UTC")
@@ -215,7 +215,7 @@ def test_the_summary_names_the_code_and_date_of_each_experiment(quick_fig7):
 def test_the_command_lines_bounds_are_the_schemas():
     """cli.py writes the schema's bounds again (so that --help imports no schema)."""
     from enn_traffic import cli
-    from enn_traffic.scenario import EpisodeConfig, GAConfig, TrafficConfig
+    from enn_traffic.config import EpisodeConfig, GAConfig, TrafficConfig
 
     def upper(model, name):
         return next(m.le for m in model.model_fields[name].metadata if hasattr(m, "le"))

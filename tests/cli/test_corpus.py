@@ -39,7 +39,7 @@ SKIPPED = {("track", "traffic"), ("traffic", "drivers"), ("lane_keeping", "draw"
 
 
 def _model(section: str) -> type[BaseModel]:
-    import enn_traffic.scenario as schema
+    import enn_traffic.config as schema
 
     return getattr(schema, SECTIONS[section])
 

@@ -18,13 +18,13 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from enn_traffic import stopping
-from enn_traffic.cache import cache_folder
-from enn_traffic.controller import Controller
-from enn_traffic.evolution.backends import sigint_held_back
-from enn_traffic.runner import RunOutputs, evolve, fingerprint
-from enn_traffic.scenario import load_scenario
-from enn_traffic.traffic import sumo
+from enn_traffic.config import load_scenario
+from enn_traffic.core import interrupts as stopping
+from enn_traffic.core.cache import cache_folder
+from enn_traffic.learning.evaluators import sigint_held_back
+from enn_traffic.runs.controller import Controller
+from enn_traffic.runs.run import RunOutputs, evolve, fingerprint
+from enn_traffic.sumo import states
 
 ARENA = Path(__file__).resolve().parents[2] / "scenarios" / "arena_strategy1.toml"
 LONG = ["--population", "60", "--generations", "100000"]
@@ -316,18 +316,18 @@ def test_an_edited_include_changes_the_warm_up_cache_and_the_resume_check(tmp_pa
     config.write_text(config.read_text().replace(
         "</input>", '<additional-files value="extra.add.xml"/></input>'))
     scenario = load_scenario(path)
-    before = (sumo._inputs_key(scenario), fingerprint(scenario))
+    before = (states._inputs_key(scenario), fingerprint(scenario))
     included = tmp_path / "types.xml"
     stat = included.stat()
     included.write_text(INCLUDED.format(speed="12.0"))  # the same size
     os.utime(included, ns=(stat.st_atime_ns, stat.st_mtime_ns))
     assert included.stat().st_size == stat.st_size
     assert included.stat().st_mtime_ns == stat.st_mtime_ns
-    after = (sumo._inputs_key(scenario), fingerprint(scenario))
+    after = (states._inputs_key(scenario), fingerprint(scenario))
     assert after[0] != before[0], "the warm-up cache would return the old traffic"
     assert after[1] != before[1], "--resume would continue a run of other traffic"
 
 
 def test_saved_warm_ups_live_in_the_users_own_cache(monkeypatch):
-    monkeypatch.delenv(sumo.STATE_FOLDER_VARIABLE, raising=False)
-    assert sumo.state_folder() == cache_folder() / "sumo-states"
+    monkeypatch.delenv(states.STATE_FOLDER_VARIABLE, raising=False)
+    assert states.state_folder() == cache_folder() / "sumo-states"

@@ -15,11 +15,11 @@ from conftest import FIG7_RUNS, assert_same_run
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from enn_traffic.controller import Controller
-from enn_traffic.errors import InputError
-from enn_traffic.evolution.ga import GAState
-from enn_traffic.runner import CHECKPOINT
-from enn_traffic.scenario import load_scenario
+from enn_traffic.config import load_scenario
+from enn_traffic.core.errors import InputError
+from enn_traffic.learning.ga import GAState
+from enn_traffic.runs.controller import Controller
+from enn_traffic.runs.run import CHECKPOINT
 
 RUN = ("--population", 40, "--generations", 12, "--seed", 5, "--quiet")
 
@@ -209,7 +209,7 @@ def test_a_missing_path_is_never_read_as_the_shipped_scenario_of_its_name(tmp_pa
     """Only a bare name (no folder, no suffix) names a shipped scenario: a mistyped path is
     refused, not silently replaced."""
     from enn_traffic.cli import main
-    from enn_traffic.shipped import SCENARIOS, scenario_path
+    from enn_traffic.config.shipped import SCENARIOS, scenario_path
 
     monkeypatch.chdir(tmp_path)  # no scenarios/ folder here
     for typed in ("scenarios/navigation_narrow.toml", "navigation_narrow.toml",

@@ -12,10 +12,10 @@ import pytest
 from gymnasium.vector import AutoresetMode
 from pettingzoo.test import api_test, parallel_seed_test
 
-from enn_traffic import keys
+from enn_traffic.config.shipped import shipped_scenario
+from enn_traffic.core import keys
 from enn_traffic.envs import env, env_id, make_vector_env, parallel_env
 from enn_traffic.envs.rangefinder import END_KEYS, RangefinderEnv, forces
-from enn_traffic.shipped import shipped_scenario
 
 
 @pytest.mark.parametrize("name", ["navigation_narrow", "arena_strategy1"])

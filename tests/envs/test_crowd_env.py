@@ -6,10 +6,10 @@ import numpy as np
 import pytest
 from pettingzoo.test import parallel_api_test
 
-from enn_traffic import keys
+from enn_traffic.config.shipped import shipped_scenario
+from enn_traffic.core import keys
 from enn_traffic.envs.crowd import ArenaCrowdEnv
 from enn_traffic.envs.rangefinder import action_of
-from enn_traffic.shipped import shipped_scenario
 from enn_traffic.sim.crowd import Crowd
 from enn_traffic.sim.strategies import NETWORK
 

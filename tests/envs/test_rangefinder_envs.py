@@ -11,12 +11,12 @@ import numpy as np
 import pytest
 from gymnasium.utils.env_checker import check_env
 
-from enn_traffic import keys
-from enn_traffic.controller import Controller
+from enn_traffic.config import load_scenario
+from enn_traffic.config.shipped import shipped_scenario
+from enn_traffic.core import keys
 from enn_traffic.envs import REGISTERED, env_id, make_env
 from enn_traffic.envs.rangefinder import RangefinderEnv, RangefinderVectorEnv, action_of
-from enn_traffic.scenario import load_scenario
-from enn_traffic.shipped import shipped_scenario
+from enn_traffic.runs.controller import Controller
 from enn_traffic.sim.arena import ArenaWorld
 
 

@@ -13,9 +13,9 @@ import pytest
 pytest.importorskip("stable_baselines3")
 from stable_baselines3.common.env_checker import check_env  # noqa: E402
 
+from enn_traffic.config.shipped import shipped_scenario  # noqa: E402
 from enn_traffic.envs import REGISTERED, env_id, make_vector_env  # noqa: E402
 from enn_traffic.envs.sb3 import sb3_vec_env  # noqa: E402
-from enn_traffic.shipped import shipped_scenario  # noqa: E402
 
 DOCS = Path(__file__).resolve().parents[2] / "docs" / "envs.md"
 

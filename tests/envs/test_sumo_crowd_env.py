@@ -1,17 +1,17 @@
 """The SUMO crowd as a PettingZoo ParallelEnv, through the real libsumo: PettingZoo's API
 test, seeding, and the same trajectories as the SUMO crowd of the GA
-(:class:`~enn_traffic.sim.sumo_crowd.SumoCrowd`) for the same actions."""
+(:class:`~enn_traffic.sim.sumo.crowd.SumoCrowd`) for the same actions."""
 
 import numpy as np
 import pytest
 from pettingzoo.test import parallel_api_test, parallel_seed_test
 
-from enn_traffic import keys
+from enn_traffic.config.shipped import shipped_scenario
+from enn_traffic.core import keys
 from enn_traffic.envs import parallel_env
 from enn_traffic.envs.rangefinder import action_of
 from enn_traffic.envs.sumo import SumoCrowdEnv
-from enn_traffic.shipped import shipped_scenario
-from enn_traffic.sim.sumo_crowd import SumoCrowd
+from enn_traffic.sim.sumo.crowd import SumoCrowd
 
 
 @pytest.fixture

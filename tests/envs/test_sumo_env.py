@@ -3,11 +3,11 @@ and closed loop) for the same actions, and one live SUMO per process."""
 
 import pytest
 
-from enn_traffic import keys
-from enn_traffic.controller import Controller
+from enn_traffic.config.shipped import shipped_scenario
+from enn_traffic.core import keys
 from enn_traffic.envs.rangefinder import action_of
 from enn_traffic.envs.sumo import SumoEnv
-from enn_traffic.shipped import shipped_scenario
+from enn_traffic.runs.controller import Controller
 from enn_traffic.sim.world import OUTCOMES
 
 

@@ -1,7 +1,7 @@
 import numpy as np
 import pytest
 
-from enn_traffic.evolution import ga
+from enn_traffic.learning import ga
 
 
 def test_tournament_of_whole_population_always_picks_the_best():
@@ -125,7 +125,7 @@ def test_tell_breeds_as_next_generation_does():
 
 
 def test_checkpoint_round_trip_and_corruption(tmp_path):
-    from enn_traffic.errors import InputError
+    from enn_traffic.core.errors import InputError
 
     rng = np.random.default_rng(9)
     state = ga.GAState(generation=4, population=rng.random((6, 3)), rng=rng,

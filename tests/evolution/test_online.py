@@ -5,8 +5,8 @@ import numpy as np
 import pytest
 from conftest import two_cars
 
-from enn_traffic.evolution import ga
-from enn_traffic.evolution.online import Evidence, VehicleGA, global_elites
+from enn_traffic.learning import ga
+from enn_traffic.learning.online import Evidence, VehicleGA, global_elites
 
 
 @pytest.fixture
@@ -66,7 +66,7 @@ def test_the_authors_finishing_rule_keeps_a_chromosome_that_lived_2000_steps(wor
     """Reference §7.5: a life of ``finish_steps`` or more (not a spin) finishes the vehicle;
     it keeps that chromosome through later lives, breeds no more, and drives it after
     learning; a life still going that long at the end finishes it too."""
-    from enn_traffic.evolution.online import OnlineLearning
+    from enn_traffic.learning.online import OnlineLearning
 
     length = world.spec.chromosome_length
     params = ga.GAParams(population_size=3, tournament_size=2)

@@ -6,9 +6,9 @@ import pytest
 import ray  # the development install carries Ray: a missing Ray fails, never skips
 from conftest import FIG7_RUNS, assert_same_run, local_and_spread
 
-from enn_traffic.evolution.backends import RayEvaluator
-from enn_traffic.runner import evolve
-from enn_traffic.scenario import load_scenario
+from enn_traffic.config import load_scenario
+from enn_traffic.learning.evaluators import RayEvaluator
+from enn_traffic.runs.run import evolve
 
 
 @pytest.fixture(scope="module")
@@ -46,7 +46,7 @@ def test_a_run_on_ray_is_the_local_run(local_ray, root, tmp_path):
 def test_reproduce_with_whole_runs_on_ray_gives_the_local_runs(local_ray, quick_fig7, tmp_path):
     """``reproduce --executor ray``: each seed's run is a Ray task; the runs and the table are
     those of the local, one-after-another call."""
-    from enn_traffic.reproduce import reproduce
+    from enn_traffic.experiments.reproduce import reproduce
 
     out = tmp_path / "ray"
     reproduce(out, quick=True, only=["fig7"], progress=False, executor="ray")
@@ -58,8 +58,8 @@ def test_reproduce_with_whole_runs_on_ray_gives_the_local_runs(local_ray, quick_
 
 def test_batch_evaluation_on_ray_gives_the_local_table(local_ray, root, tmp_path):
     """``evaluate --executor ray``: every (controller, scenario) pair a Ray task."""
-    from enn_traffic.controller import Controller
-    from enn_traffic.deploy import evaluate_batch
+    from enn_traffic.runs.controller import Controller
+    from enn_traffic.runs.evaluate import evaluate_batch
 
     scenario = load_scenario(root / "scenarios" / "arena_strategy3.toml")
     genes = np.random.default_rng(4).uniform(-1, 1, (2, 68))

@@ -8,10 +8,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from enn_traffic.evolution.ga import GAState
 from enn_traffic.experiments import choosing, protocol
 from enn_traffic.experiments.study import Study
-from enn_traffic.runner import evolve
+from enn_traffic.learning.ga import GAState
+from enn_traffic.runs.run import evolve
 
 
 def test_candidates_are_every_generations_best_and_the_final_elites_each_once(small, tmp_path):

@@ -10,12 +10,12 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from enn_traffic.controller import Controller
+from enn_traffic.config.shipped import shipped_scenario
 from enn_traffic.experiments import EXPERIMENTS
 from enn_traffic.experiments.lanekeeping import TEST_KEY, road_world
 from enn_traffic.experiments.protocol import ARENA, CITY, SUMO
 from enn_traffic.experiments.study import Study
-from enn_traffic.shipped import shipped_scenario
+from enn_traffic.runs.controller import Controller
 
 FULL = pytest.mark.full
 
@@ -65,10 +65,10 @@ def test_the_first_generation_of_a_fig11_run_gives_its_row(family, strategy, tmp
     """Fig. 11's run of seed 1, its first generation evolved again: the committed row's
     first best and mean fitness, and that best chromosome's fitness on the test situations
     (a whole run is an hour's compute; its first generation is seconds)."""
-    from enn_traffic.deploy import EVALUATION_KEY
     from enn_traffic.experiments.choosing import mean_fitness
     from enn_traffic.experiments.common import run_or_reuse
-    from enn_traffic.runner import RunOutputs
+    from enn_traffic.runs.evaluate import EVALUATION_KEY
+    from enn_traffic.runs.run import RunOutputs
 
     paper = root / "results" / "paper"
     table = pd.read_csv(paper / family.folder / "fig11.csv")
@@ -104,7 +104,7 @@ def test_committed_table1_controllers_keep_the_pattern_on_unseen_traffic(root):
     training and no choice of controller drew (the scenarios' own seed is 1000): every entry
     of the committed ``table1_seed5000_matrix.csv`` (the README's ``evaluate`` command), and
     the paper's diagonal above the rest of every row."""
-    from enn_traffic.deploy import evaluate_batch, fitness_matrix
+    from enn_traffic.runs.evaluate import evaluate_batch, fitness_matrix
 
     paper = root / "results" / "paper"
     folder = paper / "controllers" / "table1"
@@ -185,8 +185,8 @@ def test_a_committed_controller_drives_its_closed_loop_rows(family, strategy, ro
     """A strategy's committed Table 1 controller on its test situations, traffic replayed and
     in closed loop (each SUMO start in a fresh process: the crossing flows' closed loop
     depends on it): every episode's two lifetimes in the committed ``closed_loop.csv``."""
-    from enn_traffic.deploy import EVALUATION_KEY
-    from enn_traffic.worlds import make_world
+    from enn_traffic.runs.evaluate import EVALUATION_KEY
+    from enn_traffic.sim.world import make_world
 
     paper = root / "results" / "paper"
     table = pd.read_csv(paper / family.folder / "closed_loop.csv")
@@ -207,7 +207,7 @@ def test_committed_arena_crowd_files_drive_their_first_situation(strategy, root)
     ``simultaneous_situations.csv`` row, every learner's ``table4_learners.csv`` row
     (generations bred, lives, chromosomes tried), its learning windows, and each vehicle's
     committed controller after learning."""
-    from enn_traffic.experiments.simultaneous import LEARNING, saved_inputs, situation_rates
+    from enn_traffic.experiments.crowds.arena import LEARNING, saved_inputs, situation_rates
     from enn_traffic.sim.arena import ArenaWorld
 
     paper = root / "results" / "paper"
@@ -239,7 +239,7 @@ def test_committed_ablation_files_drive_their_first_situation(strategy, root):
     winner and evolved population: every arm's row of ``table4_ablation_situations.csv``
     (its first span, the span after learning, the other arms over it, the learners)."""
     from enn_traffic.experiments.ablation import ABLATION, situation_arms
-    from enn_traffic.experiments.simultaneous import saved_inputs
+    from enn_traffic.experiments.crowds.arena import saved_inputs
     from enn_traffic.sim.arena import ArenaWorld
 
     paper = root / "results" / "paper"
@@ -278,7 +278,7 @@ def test_committed_sumo_crowd_files_drive_their_first_situation(family, strategy
     it, the SSM conflict rate after it (SUMO in a fresh process, as measured), and each
     learner's committed controller after learning. (The initial drivers' and the winner's
     arms, driven the same way, are left to the reproduction: 2 of the 3 arms' SUMO time.)"""
-    from enn_traffic.experiments.sumo_crowds import SUMO_LEARNING, crowd_world, learn_together
+    from enn_traffic.experiments.crowds.sumo import SUMO_LEARNING, crowd_world, learn_together
 
     paper = root / "results" / "paper"
     controllers = paper / "controllers" / family.folder
@@ -314,7 +314,7 @@ def test_committed_sumo_crowd_files_drive_their_first_situation(family, strategy
 def test_a_committed_generalization_controller_drives_its_table_row(trained, track, root):
     """A committed seed-2 controller on a test track it never trained on: the committed
     steps, outcome and share of the track covered (a spin, a collision, the step cap)."""
-    from enn_traffic.deploy import controller_trace
+    from enn_traffic.runs.evaluate import controller_trace
     from enn_traffic.sim.world import OUTCOMES
 
     paper = root / "results" / "paper"
@@ -335,8 +335,8 @@ def test_summary_md_is_what_its_records_and_csvs_give(root):
     import json
 
     from enn_traffic.experiments import regime
+    from enn_traffic.experiments.reproduce import summary_text
     from enn_traffic.experiments.sumo_family import closed_loop_line
-    from enn_traffic.reproduce import summary_text
 
     paper = root / "results" / "paper"
     summary = (paper / "summary.md").read_text()

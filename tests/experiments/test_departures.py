@@ -4,10 +4,10 @@ import numpy as np
 import pandas as pd
 import pytest
 
+from enn_traffic.config.shipped import shipped_scenario
 from enn_traffic.experiments.ablation import AuthorsRules, start_poses
 from enn_traffic.experiments.departures import MEASURES, VARIANTS, departures_table
 from enn_traffic.experiments.protocol import ARENA
-from enn_traffic.shipped import shipped_scenario
 from enn_traffic.sim.arena import ArenaWorld
 
 

@@ -5,15 +5,15 @@ import math
 import numpy as np
 import pandas as pd
 
-from enn_traffic.controller import Controller
+from enn_traffic.config.shipped import shipped_scenario
+from enn_traffic.core.neural import NetworkSpec
 from enn_traffic.experiments.navigation import (
     TEST_TRACKS,
     TRAINED,
     VALIDATION_TRACKS,
     unseen_matrix,
 )
-from enn_traffic.neural import NetworkSpec
-from enn_traffic.shipped import shipped_scenario
+from enn_traffic.runs.controller import Controller
 
 
 def test_the_matrix_counts_unseen_tracks_only():

@@ -12,7 +12,7 @@ def world(tmp_path, root):
 
 
 def test_evolved_population_puts_the_ranked_candidates_first_without_repeats():
-    from enn_traffic.experiments.simultaneous import _evolved_population
+    from enn_traffic.experiments.crowds.arena import _evolved_population
 
     a, b, c, d = (np.full(3, float(k)) for k in range(4))
     population = _evolved_population(np.stack([a, b]), np.stack([b, c, b, d]), size=3)
@@ -22,7 +22,7 @@ def test_evolved_population_puts_the_ranked_candidates_first_without_repeats():
 def test_reduction_interval_follows_the_situations():
     import pandas as pd
 
-    from enn_traffic.experiments.simultaneous import reduction_interval
+    from enn_traffic.experiments.crowds.arena import reduction_interval
 
     rng = np.random.default_rng(0)
     steady = pd.DataFrame({"strategy": [1, 1, 1, 2, 2], "initial": [1, 1, 1, 2, 2],
@@ -37,7 +37,7 @@ def test_reduction_interval_follows_the_situations():
 def test_ranking_puts_the_candidate_losing_fewest_lives_on_validation_first(world):
     """The winner of §5.5.1 is the candidate that lost fewest lives per step on the validation
     situations when it drove every vehicle."""
-    from enn_traffic.experiments import simultaneous
+    from enn_traffic.experiments.crowds import arena as simultaneous
 
     straight = np.zeros(world.spec.chromosome_length)
     circling = straight.copy()
@@ -58,7 +58,7 @@ def test_table4_pairs_the_arms_by_situation():
     alike, though each arm alone varies widely between situations."""
     import pandas as pd
 
-    from enn_traffic.experiments.simultaneous import table4_comparisons
+    from enn_traffic.experiments.crowds.arena import table4_comparisons
 
     base = np.array([0.01, 0.10, 0.05, 0.20, 0.02, 0.15])
     situations = pd.DataFrame({"strategy": 1, "situation": range(6), "population": base,
@@ -76,7 +76,7 @@ def test_table4_pairs_the_arms_by_situation():
 def test_learning_curve_averages_each_span_over_the_situations():
     import pandas as pd
 
-    from enn_traffic.experiments.simultaneous import learning_curve
+    from enn_traffic.experiments.crowds.arena import learning_curve
 
     windows = pd.DataFrame({"strategy": [1, 1, 1, 1], "situation": [0, 0, 1, 1],
                             "window_start_s": [0.0, 100.0, 0.0, 100.0],
@@ -90,7 +90,7 @@ def test_learning_curve_averages_each_span_over_the_situations():
 def test_tables_3_and_4_summary_lines():
     import pandas as pd
 
-    from enn_traffic.experiments.simultaneous import summary_lines
+    from enn_traffic.experiments.crowds.arena import summary_lines
 
     situations = pd.DataFrame({  # two strategies, two situations each
         "strategy": [1, 1, 2, 2], "situation": [0, 1, 0, 1],
@@ -119,7 +119,7 @@ def test_measure_writes_every_table_3_4_output_from_the_committed_inputs(tmp_pat
     the situations, their per-strategy means, the learners, the learning curve and plots."""
     import pandas as pd
 
-    from enn_traffic.experiments.simultaneous import (
+    from enn_traffic.experiments.crowds.arena import (
         CrowdLearning,
         measure,
         saved_inputs,
@@ -143,10 +143,10 @@ def test_measure_writes_every_table_3_4_output_from_the_committed_inputs(tmp_pat
 def test_the_papers_winner_is_the_best_chromosome_of_highest_ga_fitness(tmp_path, root):
     """§5.5.1 the paper's way: of the strategy's runs, the ``best.npz`` with the highest
     fitness, the first seed of equals; nothing the crowd showed."""
-    from enn_traffic.controller import Controller
+    from enn_traffic.config.shipped import shipped_scenario
+    from enn_traffic.experiments.crowds.arena import paper_winner
     from enn_traffic.experiments.protocol import ARENA, run_dir
-    from enn_traffic.experiments.simultaneous import paper_winner
-    from enn_traffic.shipped import shipped_scenario
+    from enn_traffic.runs.controller import Controller
 
     scenario = shipped_scenario(ARENA.name(2))
     length = len(Controller.load(root / "results" / "paper" / "controllers" / "table3"
@@ -163,7 +163,7 @@ def test_the_papers_winner_is_the_best_chromosome_of_highest_ga_fitness(tmp_path
 def test_table3_says_where_the_papers_winner_differs_from_ours():
     import pandas as pd
 
-    from enn_traffic.experiments.simultaneous import summary_lines
+    from enn_traffic.experiments.crowds.arena import summary_lines
 
     situations = pd.DataFrame({
         "strategy": [1, 1, 2, 2], "situation": [0, 1, 0, 1],

@@ -4,7 +4,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from enn_traffic.experiments.sumo_crowds import table
+from enn_traffic.experiments.crowds.sumo import table
 from enn_traffic.report.stats import bootstrap_interval as interval
 
 

@@ -49,8 +49,8 @@ def test_a_table1_entry_is_its_saved_controller_on_that_strategys_test_traffic(
         tiny, trained, deployed):
     """Row: the strategy trained on; column: the strategy deployed on. The controller saved
     for the row, driven again on the column strategy's test situations, gives the entry."""
-    from enn_traffic.controller import Controller
     from enn_traffic.experiments.choosing import fitness_on_test_traffic
+    from enn_traffic.runs.controller import Controller
 
     folder, _ = tiny
     table1 = pd.read_csv(folder / "table1.csv").set_index("training_strategy")
@@ -97,6 +97,6 @@ def test_tables_3_and_4_are_the_means_of_the_situations(tiny):
     assert len(learners) == len(situations) * count
     assert (learners["chromosomes_tried"] >= learners["lives"]).all()
     curve = pd.read_csv(folder / "table4_learning.csv")
-    from enn_traffic.experiments.sumo_crowds import SUMO_LEARNING
+    from enn_traffic.experiments.crowds.sumo import SUMO_LEARNING
     quick = Study(folder, quick=True).settings(SUMO_LEARNING)
     assert curve.groupby("strategy").size().tolist() == [quick.windows] * 4

@@ -55,7 +55,7 @@ def test_table2_reports_the_evolution_whose_last_controller_does_best_on_validat
     import subprocess
     import sys
 
-    from enn_traffic.controller import Controller
+    from enn_traffic.runs.controller import Controller
 
     path = tmp_path / "controllers" / "table2" / "last_iteration.npz"
     saved = Controller.load(path)

@@ -57,7 +57,7 @@ def test_sumo_tables_carry_paired_intervals_into_the_summary(tmp_path):
     differences (strategy 1: -0.2 and -0.3, so -0.25 with an interval inside [-0.3, -0.2]),
     Table 3 the same for the winner, and summary.md's SUMO Table 4 sets the paper's rates
     beside these."""
-    from enn_traffic.experiments.sumo_crowds import CONFLICTS, write_tables
+    from enn_traffic.experiments.crowds.sumo import CONFLICTS, write_tables
 
     arms = {"initial": [0.5, 0.7, 0.6, 0.6], "winner": [0.1, 0.2, 0.0, 0.0],
             "initial_after": [0.2, 0.4, 0.6, 0.6], "winner_after": [0.0, 0.0, 0.1, 0.1],
@@ -104,8 +104,8 @@ def test_the_learning_curves_verb_follows_its_paired_interval():
     situation "rises", one that falls in every situation "falls", and one that goes up in
     half and down in the other half is said to move neither way; the learners' words follow
     (``results_doc._trend``), with the why only where it rises."""
+    from enn_traffic.experiments.crowds.arena import learning_ends, trend
     from enn_traffic.experiments.results_doc import _trend
-    from enn_traffic.experiments.simultaneous import learning_ends, trend
 
     def windows(slopes):
         rows = []

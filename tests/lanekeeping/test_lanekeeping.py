@@ -7,13 +7,12 @@ import pandas as pd
 import pytest
 from conftest import local_and_spread
 
-from enn_traffic.errors import InputError
-from enn_traffic.evolution import ga
-from enn_traffic.lanekeeping.env import lane_markings, make_env
-from enn_traffic.runner import ga_params
-from enn_traffic.scenario import LaneKeepingConfig, load_scenario
-from enn_traffic.sim.world import LEFT_LANE
-from enn_traffic.worlds import make_world
+from enn_traffic.config import LaneKeepingConfig, load_scenario
+from enn_traffic.core.errors import InputError
+from enn_traffic.learning import ga
+from enn_traffic.runs.run import ga_params
+from enn_traffic.sim.lane_keeping.road import lane_markings, make_env
+from enn_traffic.sim.world import LEFT_LANE, make_world
 
 SCENARIO = """
 name = "lk"
@@ -85,7 +84,7 @@ def test_evaluate_with_a_traffic_seed_takes_a_lane_keeping_controller(tmp_path, 
     """``evaluate --traffic-seed`` on a lane-keeping scenario: no traffic to reseed, so the
     same lifetimes as without it (it once failed: "remove the [traffic] keys")."""
     from enn_traffic.cli import main
-    from enn_traffic.controller import Controller
+    from enn_traffic.runs.controller import Controller
 
     sc = scenario(tmp_path, "circle")
     genes = np.zeros(make_world(sc).spec.chromosome_length)
@@ -116,7 +115,7 @@ def test_evolution_learns_to_keep_the_lane(tmp_path):
 
 
 def test_process_pool_gives_the_local_lane_keeping_results(tmp_path):
-    from enn_traffic.evolution.backends import ProcessEvaluator
+    from enn_traffic.learning.evaluators import ProcessEvaluator
 
     sc = scenario(tmp_path)
     population = np.random.default_rng(0).uniform(-1, 1, (6, make_world(sc).spec.chromosome_length))
@@ -184,11 +183,11 @@ def test_a_bad_draw_range_is_named(tmp_path):
 def test_a_drawn_road_run_is_chosen_on_validation_roads(tmp_path):
     """Of a drawn-road run's candidates, the one kept is the best on validation roads: at
     least as good there as ``best.npz``, which only one generation's roads chose."""
-    from enn_traffic import keys
-    from enn_traffic.controller import Controller
+    from enn_traffic.core import keys
     from enn_traffic.experiments import lanekeeping
     from enn_traffic.experiments.choosing import candidates
-    from enn_traffic.runner import RunOutputs, evolve
+    from enn_traffic.runs.controller import Controller
+    from enn_traffic.runs.run import RunOutputs, evolve
 
     path = tmp_path / "lk.toml"
     path.write_text(SCENARIO.format(road="sine").replace("generations = 5", "generations = 3")

@@ -2,7 +2,7 @@ import numpy as np
 import pytest
 from shapely.geometry import LineString, Polygon
 
-from enn_traffic.errors import InputError
+from enn_traffic.core.errors import InputError
 from enn_traffic.roads import load_track
 
 # docs/design.md, "The authors' code" 1: the authors' narrow track, start vertex and 57 moves

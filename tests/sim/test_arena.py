@@ -2,9 +2,9 @@ import numpy as np
 import pytest
 from conftest import local_and_spread
 
-from enn_traffic.errors import InputError
-from enn_traffic.neural import NetworkSpec
-from enn_traffic.scenario import load_scenario
+from enn_traffic.config import load_scenario
+from enn_traffic.core.errors import InputError
+from enn_traffic.core.neural import NetworkSpec
 from enn_traffic.sim.arena import ArenaWorld
 from enn_traffic.sim.reference import reference_life
 from enn_traffic.sim.rules import spun
@@ -116,8 +116,8 @@ def test_learning_on_the_narrow_track_improves_fitness(root):
     """The real problem, small: 40 vehicles, 12 generations. Untrained, the best stalls
     before the first turns (location A, ~100 steps; paper §5.1); after learning, every one of
     the last four generations' best is past them and the population's mean has risen."""
-    from enn_traffic.evolution import ga
-    from enn_traffic.runner import ga_params
+    from enn_traffic.learning import ga
+    from enn_traffic.runs.run import ga_params
 
     scenario = load_scenario(root / "scenarios" / "navigation_narrow.toml").with_overrides(
         ga={"population_size": 40})
@@ -135,7 +135,7 @@ def test_learning_on_the_narrow_track_improves_fitness(root):
 
 
 def test_process_pool_gives_the_local_results(root):
-    from enn_traffic.evolution.backends import ProcessEvaluator
+    from enn_traffic.learning.evaluators import ProcessEvaluator
 
     scenario = load_scenario(root / "scenarios" / "navigation_narrow.toml")
     population = np.random.default_rng(5).uniform(-1, 1, (37, 68))
@@ -229,7 +229,7 @@ def test_traffic_networks_larger_than_the_learners_are_refused(root):
 def test_a_controller_keeps_its_rings(root, tmp_path):
     """A controller evolved with further rings carries them: fitted to the plain scenario it
     drives with its own 27 beams, as it did in its world."""
-    from enn_traffic.controller import Controller
+    from enn_traffic.runs.controller import Controller
 
     ringed = load_scenario(root / "scenarios" / "navigation_narrow.toml").with_overrides(
         sensor=REAR_RING)

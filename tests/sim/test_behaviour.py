@@ -16,7 +16,7 @@ def today() -> dict[str, np.ndarray]:
 
 
 def test_every_world_behaves_as_before(today):
-    from enn_traffic.lanekeeping.world import LEFT_LANE
+    from enn_traffic.sim.lane_keeping.world import LEFT_LANE
 
     with np.load(GOLDEN) as golden:
         assert sorted(today) == sorted(golden.files)

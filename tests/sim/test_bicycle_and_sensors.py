@@ -3,7 +3,7 @@ import math
 import numpy as np
 import pytest
 
-from enn_traffic.geometry import body_polygon, box_hits_segment, boxes_overlap
+from enn_traffic.core.geometry import body_polygon, box_hits_segment, boxes_overlap
 from enn_traffic.sim.bicycle import bicycle_step
 from enn_traffic.sim.rules import sense_bodies
 from enn_traffic.sim.sensors import (
@@ -146,7 +146,7 @@ def test_a_second_ring_behind_reads_what_every_beam_against_every_wall_reads():
     """Two rings (``[[sensor.rings]]``): the paper's 19 beams over 180° ahead, 25 m, and 5
     beams over 90° behind, 8 m (angles past ±π). Walls and bodies all around give bit for bit
     what each beam, with its own range, reads against every edge."""
-    from enn_traffic.scenario import fan
+    from enn_traffic.config import fan
 
     angles = np.array(fan(19, math.pi) + fan(5, math.pi / 2, math.pi))
     ranges = np.array([25.0] * 19 + [8.0] * 5)

@@ -4,8 +4,8 @@ import numpy as np
 import pytest
 from conftest import two_cars
 
-from enn_traffic.evolution import ga
-from enn_traffic.evolution.online import Evidence, OnlineLearning, VehicleGA
+from enn_traffic.learning import ga
+from enn_traffic.learning.online import Evidence, OnlineLearning, VehicleGA
 from enn_traffic.sim.crowd import Crowd
 from enn_traffic.sim.strategies import NETWORK, STRAIGHT
 

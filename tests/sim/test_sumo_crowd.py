@@ -5,13 +5,13 @@ x = 15 and 145, learners 1 m a step (10 m/s, 0.1 s)."""
 import numpy as np
 import pytest
 
-from enn_traffic import keys
-from enn_traffic.evolution import ga
-from enn_traffic.evolution.online import OnlineLearning, VehicleGA
-from enn_traffic.scenario import load_scenario
-from enn_traffic.shipped import shipped_scenario
-from enn_traffic.sim.sumo_crowd import SumoCrowd
-from enn_traffic.worlds import make_world
+from enn_traffic.config import load_scenario
+from enn_traffic.config.shipped import shipped_scenario
+from enn_traffic.core import keys
+from enn_traffic.learning import ga
+from enn_traffic.learning.online import OnlineLearning, VehicleGA
+from enn_traffic.sim.sumo.crowd import SumoCrowd
+from enn_traffic.sim.world import make_world
 
 SCENARIO = """
 name = "sumo_crowd_test"
@@ -96,7 +96,7 @@ def test_one_situation_of_the_sumo_tables_is_the_same_run_again(world):
     controllers; the random initial drivers lose lives in the first window and the window
     after learning, and so do the learners; learners with a 10-step cap and 4 chromosomes
     breed within 6 s."""
-    from enn_traffic.experiments.sumo_crowds import CONFLICTS, SumoLearning, situation_result
+    from enn_traffic.experiments.crowds.sumo import CONFLICTS, SumoLearning, situation_result
 
     winner = straight(world)[0]
     evolved = np.random.default_rng(0).uniform(-1, 1, (6, world.spec.chromosome_length))
@@ -117,7 +117,7 @@ def test_one_situation_of_the_sumo_tables_is_the_same_run_again(world):
     assert first.controllers.shape == (world.scenario.traffic.learners, len(winner))
     # breeding makes children: 3 of each generation's 4 beside the 1 elite, even where the
     # scenario's own GA keeps 4 elites
-    from enn_traffic.experiments.sumo_crowds import learn_together
+    from enn_traffic.experiments.crowds.sumo import learn_together
 
     four_elites = make_world(world.scenario.with_overrides(ga={"elite_count": 4}))
     *_, online = learn_together(four_elites, winner, evolved, 0, learning)
@@ -131,10 +131,10 @@ def test_a_sumo_vehicle_that_drives_into_a_learner_leaves_that_learners_world_on
     0.5 m behind the learner's old rear to 1 m into the learner's old body: the car is
     responsible (the learner suffers one collision, lives on) and leaves learner 0's world,
     not learner 1's."""
-    from enn_traffic.geometry import body_corners
+    from enn_traffic.core.geometry import body_corners
     from enn_traffic.sim.rules import Vehicles
-    from enn_traffic.sim.sumo_crowd import ALIVE, learner_events, learners_for
-    from enn_traffic.traffic import sumo
+    from enn_traffic.sim.sumo.crowd import ALIVE, learner_events, learners_for
+    from enn_traffic.sumo import recording
 
     length, width = world.scenario.vehicle.length, world.scenario.vehicle.width
 
@@ -146,7 +146,7 @@ def test_a_sumo_vehicle_that_drives_into_a_learner_leaves_that_learners_world_on
     pose = np.array([[80.0, 5.0, 0.0], [30.0, 5.0, 0.0]])
     now_bodies = [body(80.0), body(30.0)]
     before_bodies = [body(79.0), body(29.0)]
-    ids, corners, centres = sumo.slot_arrays(2, 4)
+    ids, corners, centres = recording.slot_arrays(2, 4)
     old_rear = 79.0 - length
     for row, front in ((0, old_rear - 0.5), (1, old_rear + 1.0)):  # before, now
         ids[row, 0] = 7
@@ -212,9 +212,9 @@ def test_a_crowds_conflicts_are_the_same_whatever_ran_before_in_the_process():
     and after a city closed-loop life ran SUMO in this process. Run in this process instead,
     the same spans count other conflicts (libsumo keeps state from one start to the next:
     docs/sumo.md, "One SUMO start, one process")."""
+    from enn_traffic.experiments.crowds.sumo import _driving_arm, crowd_world
     from enn_traffic.experiments.protocol import CITY, SUMO
-    from enn_traffic.experiments.sumo_crowds import _driving_arm, crowd_world
-    from enn_traffic.traffic.fresh import fresh
+    from enn_traffic.sumo.fresh import fresh
 
     world = crowd_world(SUMO, 3)
     genes = np.random.default_rng(0).uniform(-1, 1, (world.scenario.traffic.learners,

@@ -3,10 +3,9 @@ fitness is the mean over them."""
 
 import numpy as np
 
-from enn_traffic.scenario import load_scenario
+from enn_traffic.config import load_scenario
 from enn_traffic.sim.tracks import TracksWorld
-from enn_traffic.sim.world import COLLIDED
-from enn_traffic.worlds import make_world
+from enn_traffic.sim.world import COLLIDED, make_world
 
 TWO = """
 name = "two"
@@ -66,7 +65,7 @@ def test_a_trace_is_of_its_own_track(tmp_path, root):
 def test_a_process_pool_gives_the_same_fitness(tmp_path, root):
     from conftest import local_and_spread
 
-    from enn_traffic.evolution.backends import ProcessEvaluator
+    from enn_traffic.learning.evaluators import ProcessEvaluator
 
     sc = scenario(tmp_path, root)
     population = np.random.default_rng(4).uniform(-1, 1, (6, make_world(sc).spec.chromosome_length))

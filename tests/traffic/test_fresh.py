@@ -11,9 +11,9 @@ from pathlib import Path
 
 import pytest
 
-from enn_traffic.errors import InputError
-from enn_traffic.shipped import shipped_scenario
-from enn_traffic.traffic.fresh import fresh, fresh_map
+from enn_traffic.config.shipped import shipped_scenario
+from enn_traffic.core.errors import InputError
+from enn_traffic.sumo.fresh import fresh, fresh_map
 
 
 def test_a_call_runs_in_a_new_process_and_its_error_is_raised_here():
@@ -24,7 +24,7 @@ def test_a_call_runs_in_a_new_process_and_its_error_is_raised_here():
 
 
 def test_a_crash_is_reported_with_its_exit_status():
-    from enn_traffic.traffic.fresh import FreshProcessError
+    from enn_traffic.sumo.fresh import FreshProcessError
 
     with pytest.raises(FreshProcessError, match="_exit ended with exit status 3"):
         fresh(os._exit, 3)
@@ -54,7 +54,7 @@ def test_the_zygote_outlives_a_change_no_child_reads(monkeypatch):
 def test_a_script_without_a_main_guard_may_call_it(tmp_path):
     """multiprocessing's spawn would run the script again in the child; this does not."""
     script = tmp_path / "script.py"
-    script.write_text("import math\nfrom enn_traffic.traffic.fresh import fresh\n"
+    script.write_text("import math\nfrom enn_traffic.sumo.fresh import fresh\n"
                       "print(fresh(math.hypot, 6, 8))\n")
     done = subprocess.run([sys.executable, str(script)], capture_output=True, text=True,
                           timeout=120)
@@ -75,7 +75,7 @@ def test_an_error_that_does_not_pickle_keeps_its_type_and_message(monkeypatch):
     """libsumo's exceptions do not pickle: the caller still reads what went wrong."""
     from pathlib import Path
 
-    from enn_traffic.traffic.fresh import FreshProcessError
+    from enn_traffic.sumo.fresh import FreshProcessError
 
     monkeypatch.setenv("PYTHONPATH", str(Path(__file__).parent))
     with pytest.raises(FreshProcessError, match="_Unpicklable: Vehicle 'enn_learner' is not"):
@@ -86,7 +86,7 @@ def test_an_interrupted_caller_ends_its_fresh_processes_at_once(tmp_path):
     """``kill -INT`` sent to the caller alone (not its process group) while two fresh
     processes sleep for a minute: it ends within seconds, not when they would have."""
     script = tmp_path / "script.py"
-    script.write_text("import sys, time\nfrom enn_traffic.traffic.fresh import fresh_calls\n"
+    script.write_text("import sys, time\nfrom enn_traffic.sumo.fresh import fresh_calls\n"
                       "print('started', flush=True)\n"
                       "fresh_calls([(time.sleep, 60)] * 2, workers=2)\n")
     inherited = _signal_state(os.getpid())  # this test process's, for a failure's message

@@ -7,9 +7,9 @@ import pytest
 from sumo_road import road_scenario
 
 from enn_traffic.cli import main
-from enn_traffic.errors import InputError
+from enn_traffic.config import load_scenario
+from enn_traffic.core.errors import InputError
 from enn_traffic.roads.lanes import demand_per_edge, lane_table
-from enn_traffic.scenario import load_scenario
 
 # Every way a route file sends vehicles, with the vehicles each edge gets, by hand:
 #   route r1 (a b) twice by vehicles: a 2, b 2
@@ -110,7 +110,7 @@ def test_a_start_lane_shorter_than_the_offset_is_an_error_naming_both(tmp_path, 
     path.write_text(path.read_text().replace("start_offset = 20.0", "start_offset = 500.0"))
     with pytest.raises(InputError, match=r"lane 'me_0' is [\d.]+ m long, shorter than "
                                          r"start_offset = 500 m") as error:
-        from enn_traffic.worlds import make_world
+        from enn_traffic.sim.world import make_world
 
         make_world(load_scenario(path))
     assert "start_lane" in error.value.key

@@ -10,9 +10,9 @@ import pytest
 from sumo_road import CONFIG, road_scenario
 
 from enn_traffic.cli import main
-from enn_traffic.controller import Controller
+from enn_traffic.config import load_scenario
 from enn_traffic.roads import load_track
-from enn_traffic.scenario import load_scenario
+from enn_traffic.runs.controller import Controller
 
 # The road's .sumocfg as publishers ship theirs: a <sumoConfiguration> root, outputs, a log,
 # SUMO's verbose console, a detector writing its own file, and a GUI settings file that is not

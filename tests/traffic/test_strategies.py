@@ -6,9 +6,9 @@ import numpy as np
 import pytest
 from conftest import TWO_CARS, local_and_spread, two_cars
 
-from enn_traffic.errors import InputError
-from enn_traffic.geometry import body_polygon
-from enn_traffic.scenario import load_scenario
+from enn_traffic.config import load_scenario
+from enn_traffic.core.errors import InputError
+from enn_traffic.core.geometry import body_polygon
 from enn_traffic.sim.arena import ArenaWorld
 from enn_traffic.sim.rules import sense_bodies
 from enn_traffic.sim.sensors import beam_table
@@ -74,7 +74,7 @@ def test_traffic_changes_with_the_generation(arena):
 def test_fixed_traffic_holds_for_training_but_never_for_held_out_keys(arena):
     """vary = "fixed": every training generation meets generation 0's traffic, while the
     deployment key still draws other traffic, the same as without "fixed"."""
-    from enn_traffic.deploy import EVALUATION_KEY
+    from enn_traffic.runs.evaluate import EVALUATION_KEY
 
     fixed = ArenaWorld(arena.scenario.with_overrides(traffic={"vary": "fixed"}))
     varying = ArenaWorld(arena.scenario.with_overrides(traffic={"vary": "generation"}))
@@ -119,7 +119,7 @@ def test_traffic_start_off_the_area_is_refused(tmp_path, root):
 
 
 def test_process_pool_matches_local_with_traffic(root):
-    from enn_traffic.evolution.backends import ProcessEvaluator
+    from enn_traffic.learning.evaluators import ProcessEvaluator
 
     scenario = load_scenario(root / "scenarios" / "arena_strategy4.toml")
     population = np.random.default_rng(1).uniform(-1, 1, (9, 68))

@@ -9,12 +9,13 @@ import numpy as np
 import pytest
 from conftest import local_and_spread
 
-from enn_traffic.errors import InputError
-from enn_traffic.scenario import load_scenario
-from enn_traffic.sim.sumo_world import SumoWorld
-from enn_traffic.sim.world import COLLIDED
-from enn_traffic.traffic import sumo
-from enn_traffic.worlds import make_world
+from enn_traffic.config import load_scenario
+from enn_traffic.core.errors import InputError
+from enn_traffic.sim.sumo.world import SumoWorld
+from enn_traffic.sim.world import COLLIDED, make_world
+from enn_traffic.sumo import command, recording
+from enn_traffic.sumo.learners import add_learner, move_learner
+from enn_traffic.sumo.simulation import ROW_NUMBER, ROW_SLOT, Simulation, make_loadable
 
 SCENARIO = """
 name = "sumo_test"
@@ -74,10 +75,10 @@ def sumo_scenario(tmp_path, root, routes, mode="replay", lane="g0_0to1_0_2", off
 
 def test_heading_conversion_by_hand():
     """SUMO's navigation angle: 0 = north, clockwise, degrees; ours: 0 = east, anticlockwise."""
-    headings = [sumo.to_heading(angle) for angle in (90.0, 0.0, 180.0, 45.0, 270.0)]
+    headings = [command.to_heading(angle) for angle in (90.0, 0.0, 180.0, 45.0, 270.0)]
     assert np.allclose(headings, [0.0, math.pi / 2, -math.pi / 2, math.pi / 4, math.pi])
-    assert sumo.to_angle(math.pi / 2) == pytest.approx(0.0)
-    assert sumo.to_angle(-math.pi / 2) == pytest.approx(180.0)
+    assert command.to_angle(math.pi / 2) == pytest.approx(0.0)
+    assert command.to_angle(-math.pi / 2) == pytest.approx(180.0)
 
 
 def test_body_of_a_real_sumo_vehicle(tmp_path, root):
@@ -85,7 +86,7 @@ def test_body_of_a_real_sumo_vehicle(tmp_path, root):
     its front bumper is SUMO's position, its rear 4.5 m to the west, its sides 0.9 m either
     side of the lane centre y = -12.5."""
     scenario = sumo_scenario(tmp_path, root, FOLLOWER, warmup=0.0)
-    simulation = sumo.Simulation(scenario, seed=1)
+    simulation = Simulation(scenario, seed=1)
     try:
         simulation.step(30)  # 60 m along: the whole body on the straight edge
         rows = simulation.read()
@@ -95,10 +96,10 @@ def test_body_of_a_real_sumo_vehicle(tmp_path, root):
     finally:
         simulation.close()
     assert len(rows) == 1
-    ids, corners, centres = (array[0] for array in sumo.slot_arrays(1, 2))
-    radius = sumo.fill_frame(rows, ids, corners, centres)
-    slot = int(rows[0, sumo.ROW_SLOT])
-    assert ids[slot] == rows[0, sumo.ROW_NUMBER] and ids[1 - slot] == -1
+    ids, corners, centres = (array[0] for array in recording.slot_arrays(1, 2))
+    radius = recording.fill_frame(rows, ids, corners, centres)
+    slot = int(rows[0, ROW_SLOT])
+    assert ids[slot] == rows[0, ROW_NUMBER] and ids[1 - slot] == -1
     assert radius == pytest.approx(0.5 * math.hypot(4.5, 1.8))
     assert y == pytest.approx(-12.5)
     front_right, front_left, rear_left, rear_right = corners[slot]
@@ -115,18 +116,18 @@ def test_vehicles_keep_their_slots_while_out_of_the_learners_reach(tmp_path, roo
     reach, with the slot and number it had, so one that left the learner's world stays out of
     it. SUMO's built-in 135 m train type does not count as traffic."""
     scenario = sumo_scenario(tmp_path, root, CLOCKWISE, warmup=0.0)
-    simulation = sumo.Simulation(scenario, seed=1)
+    simulation = Simulation(scenario, seed=1)
     slot_of, entries, present = {}, {}, set()
     try:
         simulation.step(10)
         assert simulation.largest_radius() == pytest.approx(0.5 * math.hypot(5.0, 1.8))
-        sumo.add_learner(4.3, 2.5, 0.0)
+        add_learner(4.3, 2.5, 0.0)
         simulation.follow_learner(15.0)
         for _ in range(900):  # a lap takes about 50 s
-            sumo.move_learner(80.0, -2.5, 0.0)
+            move_learner(80.0, -2.5, 0.0)
             simulation.step()
             rows = simulation.read()
-            slots, numbers = rows[:, sumo.ROW_SLOT], rows[:, sumo.ROW_NUMBER]
+            slots, numbers = rows[:, ROW_SLOT], rows[:, ROW_NUMBER]
             for slot, number in zip(slots.tolist(), numbers.tolist(), strict=True):
                 assert slot_of.setdefault(number, slot) == slot
                 entries[number] = entries.get(number, 0) + (number not in present)
@@ -163,7 +164,7 @@ def test_replay_records_sumo_only_as_far_as_the_lives_reach(tmp_path, root, monk
     """A replay records 16 steps first (here), then 4 times more while a life outlives the
     recording: every life, trace and environment step is what a recording of the whole cap
     (2,000 steps) gives, and SUMO ran only as far as the longest life."""
-    from enn_traffic.sim import sumo_world
+    from enn_traffic.sim.sumo import world as sumo_world
 
     scenario = sumo_scenario(tmp_path, root, CLOCKWISE, steps=2000)
     sumo_world.forget_recordings()  # those of other tests in this process
@@ -256,7 +257,7 @@ def test_missing_route_file_names_the_key(tmp_path, root):
 
 def test_process_pool_with_one_libsumo_per_worker_gives_the_local_results(tmp_path, root):
     """Each worker process runs its own libsumo and records the same traffic."""
-    from enn_traffic.evolution.backends import ProcessEvaluator
+    from enn_traffic.learning.evaluators import ProcessEvaluator
 
     scenario = sumo_scenario(tmp_path, root, CLOCKWISE, steps=150, episodes=1)
     population = np.random.default_rng(2).uniform(-1, 1, (9, 68))
@@ -306,13 +307,14 @@ def test_the_learners_speed_factor_lets_them_go_their_speed_on_the_slowest_lane(
     one gets SUMO's usual 1 (in a fresh process: libsumo keeps state between starts)."""
     script = f"""
 import libsumo
-from enn_traffic.traffic import sumo
+from enn_traffic.sumo.command import LEARNER, LEARNER_TYPE
+from enn_traffic.sumo.learners import add_learner, learner_speed_factor
 libsumo.start(["sumo", "-n", {str(root / "sumo_nets" / "sumo_ring.net.xml")!r},
                "--no-step-log", "true"])
-print(sumo.learner_speed_factor(10.0), sumo.learner_speed_factor(3.0))
-sumo.add_learner(4.3, 1.7, 10.0)
+print(learner_speed_factor(10.0), learner_speed_factor(3.0))
+add_learner(4.3, 1.7, 10.0)
 libsumo.simulationStep()
-print(libsumo.vehicletype.getSpeedFactor(sumo.LEARNER_TYPE), libsumo.vehicle.getSpeed(sumo.LEARNER))
+print(libsumo.vehicletype.getSpeedFactor(LEARNER_TYPE), libsumo.vehicle.getSpeed(LEARNER))
 libsumo.close()
 """
     done = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True)
@@ -338,7 +340,7 @@ def test_a_saved_state_is_made_loadable(tmp_path):
     path = tmp_path / "state.xml.gz"
     with gzip.open(path, "wt") as file:
         file.write(saved)
-    sumo.make_loadable(path)
+    make_loadable(path)
     with gzip.open(path, "rt") as file:
         assert file.read() == kept.format("") + "</snapshot>\n"
 
@@ -363,10 +365,10 @@ def test_sumo_outputs_of_every_vehicle_without_a_sumocfg(tmp_path, root):
     starts = list((tmp_path / "sumo" / "outputs").iterdir())  # the check for traffic, the life
     vehicles = {start: {v.get("id") for v in ElementTree.parse(start / "fcd.xml").iter("vehicle")}
                 for start in starts}
-    [start] = [start for start in starts if sumo.LEARNER in vehicles[start]]
+    [start] = [start for start in starts if command.LEARNER in vehicles[start]]
     assert "leader" in vehicles[start]
     assert {p.name for p in start.iterdir()} == {"tripinfo.xml", "fcd.xml", "ssm.xml"}
     assert ElementTree.parse(start / "tripinfo.xml").getroot().find("tripinfo") is not None
     conflicts = ElementTree.parse(start / "ssm.xml").getroot().findall("conflict")
-    assert {c.get("ego") for c in conflicts} <= {sumo.LEARNER, "leader"}
-    assert len([c for c in conflicts if c.get("ego") == sumo.LEARNER]) == own[0, 0, 1] == 1
+    assert {c.get("ego") for c in conflicts} <= {command.LEARNER, "leader"}
+    assert len([c for c in conflicts if c.get("ego") == command.LEARNER]) == own[0, 0, 1] == 1

@@ -7,10 +7,12 @@ from contextlib import contextmanager
 import libsumo
 import pytest
 
-from enn_traffic.errors import InputError
-from enn_traffic.scenario import load_scenario
-from enn_traffic.shipped import shipped_scenario
-from enn_traffic.traffic import sumo
+from enn_traffic.config import load_scenario
+from enn_traffic.config.shipped import shipped_scenario
+from enn_traffic.core.errors import InputError
+from enn_traffic.sumo import command, states
+from enn_traffic.sumo.learners import add_learner
+from enn_traffic.sumo.simulation import Simulation
 
 # The ring road of sumo_strategy1: 32 cars of one type ("car": Krauss, sigma 0.5, tau 1).
 DRIVERS = {"imperfection": 0.9, "tau_s": 0.6, "accel": 1.5, "decel": 3.0, "speed_factor": 1.2,
@@ -26,12 +28,12 @@ def ring(**drivers):
 def traffic_after(scenario, steps: int = 20, learner: bool = False):
     """Start the scenario's SUMO (with a learner when asked), step it, give its vehicles;
     SUMO closes on leaving."""
-    simulation = sumo.Simulation(scenario, seed=1)
+    simulation = Simulation(scenario, seed=1)
     try:
         if learner:
-            sumo.add_learner(4.5, 1.7, 10.0)
+            add_learner(4.5, 1.7, 10.0)
         simulation.step(steps)
-        yield [v for v in libsumo.vehicle.getIDList() if v != sumo.LEARNER]
+        yield [v for v in libsumo.vehicle.getIDList() if v != command.LEARNER]
     finally:
         simulation.close()
 
@@ -50,9 +52,9 @@ def test_driver_values_reach_every_traffic_vehicle_but_not_the_learner():
                 vehicle, "laneChangeModel.lcCooperative")) == pytest.approx(0.2)
         assert libsumo.vehicletype.getSpeedFactor("car") == pytest.approx(1.2)
         # The learner keeps its own type: a perfect driver, SUMO's default lane-change values.
-        assert libsumo.vehicle.getImperfection(sumo.LEARNER) == 0.0
+        assert libsumo.vehicle.getImperfection(command.LEARNER) == 0.0
         assert float(libsumo.vehicle.getParameter(
-            sumo.LEARNER, "laneChangeModel.lcSpeedGain")) == 1.0
+            command.LEARNER, "laneChangeModel.lcSpeedGain")) == 1.0
 
 
 def test_without_drivers_the_route_files_values_stand():
@@ -75,9 +77,9 @@ def test_a_warm_up_is_kept_per_driver_model_and_loads_with_it():
     """Warm-ups saved on disk are named by the drivers too (a stale warm-up of other drivers
     is never loaded), and a run from a saved warm-up drives with the scenario's drivers."""
     calm, dawdling = ring(), ring(imperfection=0.9)
-    state = sumo.warm_state(dawdling, seed=1, keep_rng=False)
-    assert state != sumo.warm_state(calm, seed=1, keep_rng=False)
-    simulation = sumo.Simulation(dawdling, seed=2, state=state)
+    state = states.warm_state(dawdling, seed=1, keep_rng=False)
+    assert state != states.warm_state(calm, seed=1, keep_rng=False)
+    simulation = Simulation(dawdling, seed=2, state=state)
     try:
         vehicles = libsumo.vehicle.getIDList()
         assert len(vehicles) == 32
@@ -123,13 +125,13 @@ def test_a_scaled_city_state_loads(tmp_path):
     scenario = shipped_scenario("city_cologne3").with_overrides(
         traffic={"drivers": {"demand_scale": 1.5}})
     state = tmp_path / "state.xml.gz"
-    simulation = sumo.Simulation(scenario, seed=3)
+    simulation = Simulation(scenario, seed=3)
     try:
         simulation.step(6000)  # 600 s: seed 3 then leaves a copy's route out (checked)
         simulation.save_state(state)
     finally:
         simulation.close()
-    simulation = sumo.Simulation(scenario, seed=3, state=state)
+    simulation = Simulation(scenario, seed=3, state=state)
     try:
         assert any(v.endswith(".1") for v in libsumo.vehicle.getIDList())
         simulation.step(60)

@@ -9,12 +9,12 @@ import pytest
 from sumo_road import CONFIG, road_scenario, straight
 
 from enn_traffic.cli import main
-from enn_traffic.errors import InputError
+from enn_traffic.config import episode_steps, learner_start_time, load_scenario
+from enn_traffic.core.errors import InputError
 from enn_traffic.roads import load_track
-from enn_traffic.scenario import episode_steps, learner_start_time, load_scenario
-from enn_traffic.sim.world import COLLIDED, LEFT_NETWORK, MET_START
-from enn_traffic.traffic import sumo
-from enn_traffic.worlds import make_world
+from enn_traffic.sim.world import COLLIDED, LEFT_NETWORK, MET_START, make_world
+from enn_traffic.sumo import states
+from enn_traffic.sumo.simulation import Simulation
 
 
 def test_sumocfg_begin_time_and_network_are_used(tmp_path, road_net):
@@ -237,7 +237,7 @@ def test_a_life_ends_where_the_sumocfg_ends(tmp_path, road_net):
 def test_shared_warmups_are_simulated_once_and_reused(tmp_path, road_net, monkeypatch):
     """``warmup_states = 2``: over three generations of two situations, two warm-ups are
     simulated and saved; a second world reuses them and gets the same results."""
-    monkeypatch.setenv(sumo.STATE_FOLDER_VARIABLE, str(tmp_path / "states"))
+    monkeypatch.setenv(states.STATE_FOLDER_VARIABLE, str(tmp_path / "states"))
     path = road_scenario(tmp_path, road_net, warmup=30.0, extra="warmup_states = 2")
     scenario = load_scenario(path)
     population = np.random.default_rng(3).uniform(-1, 1, (6, 19 * 3 + 3 + 3 * 2 + 2))
@@ -316,7 +316,7 @@ def test_sumo_traffic_on_several_tracks(tmp_path, root):
 
 def test_a_route_file_named_only_by_the_sumocfg_is_part_of_the_fingerprint(tmp_path, road_net):
     """A run is redone when the traffic its .sumocfg names changes, not only its settings."""
-    from enn_traffic.runner import fingerprint
+    from enn_traffic.runs.run import fingerprint
 
     scenario = load_scenario(road_scenario(tmp_path, road_net))
     before = fingerprint(scenario)
@@ -329,7 +329,7 @@ def test_training_generations_take_the_shared_warmups_in_turn(tmp_path, road_net
     """``warmup_states = 3`` and two situations a generation: generations 0, 1, 2 load warm-ups
     0 1, 2 0, 1 2 (each twice in three generations), as generations.csv says; a held-out
     situation draws its warm-up by its own seed."""
-    from enn_traffic.sim.sumo_situations import shared_warmup, situation_seed
+    from enn_traffic.sim.sumo.situations import shared_warmup, situation_seed
 
     path = road_scenario(tmp_path, road_net, warmup=30.0, extra="warmup_states = 3")
     run = tmp_path / "run"
@@ -365,11 +365,11 @@ def test_a_warm_up_with_actuated_lights_loads(tmp_path, monkeypatch):
                     "road.edg.xml", "-o", "lights.net.xml", "--no-turnarounds", "true",
                     "--tls.default-type", "actuated", "--tls.min-dur", "5", "--tls.max-dur",
                     "5"], cwd=tmp_path, check=True, capture_output=True)
-    monkeypatch.setenv(sumo.STATE_FOLDER_VARIABLE, str(tmp_path / "states"))
+    monkeypatch.setenv(states.STATE_FOLDER_VARIABLE, str(tmp_path / "states"))
     path = road_scenario(tmp_path, tmp_path / "lights.net.xml", warmup=30.0,
                          extra="warmup_states = 2")
     scenario = load_scenario(path)
-    simulation = sumo.Simulation(scenario, seed=1)
+    simulation = Simulation(scenario, seed=1)
     try:
         simulation.step(10)
         libsumo.simulation.saveState("raw.xml")  # into the start's folder

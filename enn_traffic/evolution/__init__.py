@@ -1,1 +1,0 @@
-"""The GA, the chromosome layout, and the evaluators that connect them to a problem."""

@@ -1,1 +1,0 @@
-"""Background traffic: free-moving kinematic strategies, and SUMO through libsumo."""
