@@ -68,7 +68,6 @@ def behaviour() -> dict[str, np.ndarray]:
 def _many_learners() -> dict[str, np.ndarray]:
     """Every vehicle of one arena driving at once, half of them learning as they drive."""
     from enn_traffic.learning.online import Evidence, OnlineLearning, VehicleGA
-    from enn_traffic.runs.run import ga_params
     from enn_traffic.sim.arena import ArenaWorld as World
     from enn_traffic.sim.crowd import Crowd as Arena
 
@@ -90,7 +89,7 @@ def _many_learners() -> dict[str, np.ndarray]:
         learners = [VehicleGA(pool.copy(), np.random.default_rng(v)) if v % 2 else None
                     for v in range(world.vehicles)]
         evidence = Evidence()
-        learning = OnlineLearning(learners, ga_params(world.scenario), share_elites=True,
+        learning = OnlineLearning(learners, world.scenario.ga, share_elites=True,
                                   elite_count=2, evidence=evidence)
         run = arena_.run(30.0, np.tile(pool[0], (world.vehicles, 1)), learning)
         out[f"many_{name}/learning_collisions"] = run.collisions

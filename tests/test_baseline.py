@@ -12,19 +12,19 @@ from enn_traffic.cli import main
 from enn_traffic.config.shipped import shipped_scenario
 from enn_traffic.core import keys
 from enn_traffic.core.errors import InputError
-from enn_traffic.experiments.gradient_rl import campaign as baseline
-from enn_traffic.report.stats import t_interval
+from enn_traffic.experiments.gradient_rl import campaign, policy, protocol, runs, scoring, stats
+from enn_traffic.report.stats import holm, t_interval
 from enn_traffic.runs.controller import Controller
 
 
 def test_the_comparisons_keys_are_its_own_and_held_out(monkeypatch):
     monkeypatch.undo()  # the real test keys, as the command reads them
-    assert baseline.VALIDATION_KEY in keys.VALIDATION and baseline.TEST_KEY in keys.TEST
-    assert baseline.TEST_KEY not in (baseline.FIRST_ROUND_TEST_KEY,
-                                     baseline.SECOND_ROUND_TEST_KEY)
-    validation, test = baseline.held_out_keys(shipped_scenario("arena_strategy1"))
+    assert protocol.VALIDATION_KEY in keys.VALIDATION and protocol.TEST_KEY in keys.TEST
+    assert protocol.TEST_KEY not in (protocol.FIRST_ROUND_TEST_KEY,
+                                     protocol.SECOND_ROUND_TEST_KEY)
+    validation, test = scoring.held_out_keys(shipped_scenario("arena_strategy1"))
     assert (len(validation), len(test)) == (32, 64)  # 4 situations a key: 128 and 256
-    assert validation[0] == baseline.VALIDATION_KEY and test[0] == baseline.TEST_KEY
+    assert validation[0] == protocol.VALIDATION_KEY and test[0] == protocol.TEST_KEY
 
 
 def test_no_validation_start_of_the_narrow_track_is_a_test_start():
@@ -34,18 +34,18 @@ def test_no_validation_start_of_the_narrow_track_is_a_test_start():
     from enn_traffic.envs.rangefinder import rangefinder_world
 
     narrow = shipped_scenario("navigation_narrow")
-    validation, test = baseline.held_out_keys(narrow)
-    world = rangefinder_world(baseline.scoring_scenario(narrow))
-    starts = {name: [baseline.start_of(world.situations(key)[0]) for key in chosen]
+    validation, test = scoring.held_out_keys(narrow)
+    world = rangefinder_world(scoring.scoring_scenario(narrow))
+    starts = {name: [scoring.start_of(world.situations(key)[0]) for key in chosen]
               for name, chosen in (("validation", validation), ("test", test))}
     assert len(set(starts["validation"])) == len(starts["validation"]) == 128
     assert len(set(starts["test"])) == len(starts["test"]) == 256
     assert set(starts["validation"]).isdisjoint(starts["test"])
     # the second round's draw, kept for its committed folder: starts repeat and are shared
-    old = {"validation_key": baseline.keys.VALIDATION.start + 530_000,
-           "test_key": baseline.SECOND_ROUND_TEST_KEY, "validation_situations": 32,
+    old = {"validation_key": keys.VALIDATION.start + 530_000,
+           "test_key": protocol.SECOND_ROUND_TEST_KEY, "validation_situations": 32,
            "test_situations": 64}
-    old_validation, old_test = baseline.held_out_keys(narrow, old)
+    old_validation, old_test = scoring.held_out_keys(narrow, old)
     assert old_test == list(range(old["test_key"], old["test_key"] + 64))
     assert len(old_validation) == 32
 
@@ -56,40 +56,40 @@ def test_the_narrow_track_is_scored_from_starts_all_along_it():
     from enn_traffic.envs.rangefinder import rangefinder_world
 
     narrow = shipped_scenario("navigation_narrow")
-    scored = baseline.scoring_scenario(narrow)
+    scored = scoring.scoring_scenario(narrow)
     assert scored.track.start_anywhere and scored.track.net == narrow.track.net
     world = rangefinder_world(scored)
-    starts = {baseline.start_of(world.situations(key)[0])
-              for key in baseline.situation_keys(scored, keys.VALIDATION.start, 64)}
+    starts = {scoring.start_of(world.situations(key)[0])
+              for key in scoring.situation_keys(scored, keys.VALIDATION.start, 64)}
     assert len(starts) > 50  # 64 draws from every 5 m of 1.3 km, facing either way
     arena = shipped_scenario("arena_strategy1")
-    assert baseline.scoring_scenario(arena) is arena
+    assert scoring.scoring_scenario(arena) is arena
 
 
 @pytest.fixture(autouse=True)
 def _no_sealed_keys(monkeypatch):
     """The tests score on design-trial keys: the comparison's test keys are read once, by
     the committed runs."""
-    monkeypatch.setattr(baseline, "TEST_KEY", keys.DESIGN_TRIALS.start + 520_000)
+    monkeypatch.setattr(protocol, "TEST_KEY", keys.DESIGN_TRIALS.start + 520_000)
 
 
 def test_a_ga_run_spends_its_budget_and_chooses_on_validation():
     scenario = shipped_scenario("arena_strategy1").with_overrides(
         ga={"population_size": 20, "elite_count": 2})
-    result = baseline.ga_run(scenario, 40_000, seed=1)
+    result = runs.ga_run(scenario, 40_000, seed=1)
     steps = result.curve["learner_steps"]
     # it learns from every generation that ends within the budget, and from none past it
     assert steps.iloc[-1] == result.learner_steps == result.training_lives.sum() <= 40_000
     assert result.learner_steps > 30_000  # generations of 20 × 4 lives: about 8 k steps
     # a candidate at each checkpoint (every 2,000 steps) a generation reached, and the last
-    assert 2 <= len(steps) <= baseline.CHECKPOINTS + 1 and steps.is_monotonic_increasing
+    assert 2 <= len(steps) <= protocol.CHECKPOINTS + 1 and steps.is_monotonic_increasing
     assert result.chosen == int(np.argmax(result.curve["validation_fitness"]))
-    assert len(result.test_fitness) == baseline.TEST_SITUATIONS
+    assert len(result.test_fitness) == protocol.TEST_SITUATIONS
     assert (result.test_fitness > 0).any()
     # the chosen controller, scored again: its validation score
-    again = baseline.chromosome_fitness(scenario, result.controller.chromosome[None],
-                                        baseline.held_out_keys(scenario)[0],
-                                        baseline.VALIDATION_SITUATIONS).mean()
+    again = scoring.chromosome_fitness(scenario, result.controller.chromosome[None],
+                                        scoring.held_out_keys(scenario)[0],
+                                        protocol.VALIDATION_SITUATIONS).mean()
     assert again == result.curve["validation_fitness"].iloc[result.chosen]
 
 
@@ -102,8 +102,8 @@ def test_a_policy_and_its_chromosome_score_alike():
     spec = rangefinder_world(scenario).spec
     chromosome = np.random.default_rng(3).uniform(-1, 1, (1, spec.chromosome_length))
     chosen = [keys.VALIDATION.start, keys.VALIDATION.start + 1]  # 4 situations each
-    ga = baseline.chromosome_fitness(scenario, chromosome, chosen, 8)[0]
-    env = baseline.policy_fitness(
+    ga = scoring.chromosome_fitness(scenario, chromosome, chosen, 8)[0]
+    env = scoring.policy_fitness(
         scenario, lambda o: action_of(spec.forward(np.repeat(chromosome, len(o), 0), o)),
         chosen, 8)
     assert ga.std() > 0  # situations that tell the scorers apart
@@ -114,16 +114,16 @@ def test_the_command_lines_default_plan_is_the_modules():
     from enn_traffic.cli import build_parser
 
     default = build_parser().parse_args(["baseline", "navigation_narrow"]).plan
-    assert baseline.parse_plan(default) == baseline.PLAN
-    assert all(len(search) >= 12 for search in baseline.SEARCH.values())
+    assert protocol.parse_plan(default) == protocol.PLAN
+    assert all(len(search) >= 12 for search in protocol.SEARCH.values())
 
 
 def test_plans_are_read_and_bad_ones_refused():
-    assert baseline.parse_plan("GA:1M:5, ppo:250k:2") == (
-        baseline.Planned("GA", 1_000_000, 5), baseline.Planned("PPO", 250_000, 2))
+    assert protocol.parse_plan("GA:1M:5, ppo:250k:2") == (
+        protocol.Planned("GA", 1_000_000, 5), protocol.Planned("PPO", 250_000, 2))
     for bad in ("GA:1M", "DQN:1M:3", "GA:0:3", "GA:1M:0", "GA:lots:3", ""):
         with pytest.raises(InputError):
-            baseline.parse_plan(bad)
+            protocol.parse_plan(bad)
 
 
 def test_bad_command_lines_exit_2(capsys):
@@ -142,14 +142,14 @@ def test_the_summary_and_the_differences_carry_the_seeds_spread():
     curves = pd.DataFrame({"scenario": "s", "method": ["GA"] * 4 + ["PPO"] * 2,
                            "budget_steps": 100, "seed": [1, 1, 2, 2, 1, 2],
                            "learner_steps": [50, 100, 50, 100, 100, 100]})
-    table = baseline.summary(runs, curves).set_index("method")
+    table = stats.summary(runs, curves).set_index("method")
     ga = table.loc["GA"]
     assert ga["test_fitness"] == 3.0 and ga["seeds"] == 2 and ga["candidates"] == 2
     assert ga["last_chosen"] == 1 and ga["validation_minus_test"] == 1.5
     # Student's t over 2 seeds: 3 ± t(0.95, 1) · 1.414 / 1.414
     assert ga["seeds_high"] - 3.0 == pytest.approx(3.0 - ga["seeds_low"]) == pytest.approx(
         6.3138, abs=1e-3)
-    difference = baseline.differences(runs).iloc[0]
+    difference = stats.differences(runs).iloc[0]
     # Welch over 2 + 2 seeds of spread 1.414: 7 ± t(0.95, 2) · 1.414
     assert difference["minus_ga"] == 7.0 and difference["above_ga"] == 1.0
     assert difference["minus_ga_high"] - 7.0 == pytest.approx(2.9200 * np.sqrt(2), abs=1e-3)
@@ -158,9 +158,9 @@ def test_the_summary_and_the_differences_carry_the_seeds_spread():
 def test_holm_adjusts_a_family_of_p_values_step_down():
     """Hand-computed: sorted 0.01, 0.03, 0.04 times 3, 2, 1 is 0.03, 0.06, 0.04; each at
     least the one before: 0.03, 0.06, 0.06. A missing p-value stays out of the family."""
-    adjusted = baseline.holm(pd.Series([0.01, 0.04, np.nan, 0.03]))
+    adjusted = holm(pd.Series([0.01, 0.04, np.nan, 0.03]))
     np.testing.assert_allclose(adjusted, [0.03, 0.06, np.nan, 0.06])
-    assert baseline.holm(pd.Series([0.5, 0.9])).tolist() == [1.0, 1.0]  # capped at 1
+    assert holm(pd.Series([0.5, 0.9])).tolist() == [1.0, 1.0]  # capped at 1
 
 
 def test_a_scenarios_differences_are_corrected_for_their_family():
@@ -168,7 +168,7 @@ def test_a_scenarios_differences_are_corrected_for_their_family():
     intervals are Welch's at 95% (90% shared by 2), wider than each one's 90%; p-values are
     exact permutation ones (hand-computed: PPO's 3 values are the top 3 of the 6, 1 of the
     20 ways to split them, and so are the GA's on the other side: p = 2/20)."""
-    from scipy import stats
+    from scipy import stats as scipy_stats
 
     from enn_traffic.report.stats import permutation_p
 
@@ -176,10 +176,10 @@ def test_a_scenarios_differences_are_corrected_for_their_family():
     runs = pd.DataFrame([{"scenario": "s", "method": m, "budget_steps": 100, "seed": i,
                           "test_fitness": f} for m, values in fitness.items()
                          for i, f in enumerate(values)])
-    table = baseline.differences(runs).set_index("method")
+    table = stats.differences(runs).set_index("method")
     assert (table["family"] == 2).all()
     for method in ("PPO", "SAC"):
-        test = stats.ttest_ind(fitness[method], fitness["GA"], equal_var=False)
+        test = scipy_stats.ttest_ind(fitness[method], fitness["GA"], equal_var=False)
         row = table.loc[method]
         assert row["p_value"] == pytest.approx(permutation_p(fitness[method], fitness["GA"]))
         assert row["minus_ga_low_simultaneous"] == pytest.approx(
@@ -195,56 +195,56 @@ def test_a_longer_run_is_no_continuation_of_the_shorter_one_of_its_seed():
     Each run's stream now comes from its seed and its budget."""
     scenario = shipped_scenario("arena_strategy1").with_overrides(
         ga={"population_size": 20, "elite_count": 2})
-    short, long = (baseline.ga_run(scenario, budget, seed=1, test=False)
+    short, long = (runs.ga_run(scenario, budget, seed=1, test=False)
                    for budget in (4_000, 8_000))
     assert short.training_lives.tolist() != long.training_lives[:len(short.training_lives)]\
         .tolist()
-    again = baseline.ga_run(scenario, 4_000, seed=1, test=False)
+    again = runs.ga_run(scenario, 4_000, seed=1, test=False)
     assert again.training_lives.tolist() == short.training_lives.tolist()
 
 
 def test_a_folder_of_runs_made_another_way_is_refused(tmp_path, monkeypatch):
     """Runs are skipped by (scenario, method, budget, seed): a folder made with other keys or
     counts would have its rows mixed with new ones, so it is refused."""
-    baseline.check_protocol(tmp_path)  # a new folder: its protocol written
+    protocol.check_protocol(tmp_path)  # a new folder: its protocol written
     written = json.loads((tmp_path / "protocol.json").read_text())
-    assert written["test_key"] == baseline.TEST_KEY
-    baseline.check_protocol(tmp_path)  # the same protocol: on
-    monkeypatch.setattr(baseline, "VALIDATION_SITUATIONS", 16)
+    assert written["test_key"] == protocol.TEST_KEY
+    protocol.check_protocol(tmp_path)  # the same protocol: on
+    monkeypatch.setattr(protocol, "VALIDATION_SITUATIONS", 16)
     with pytest.raises(InputError, match="validation_situations"):
-        baseline.check_protocol(tmp_path)
+        protocol.check_protocol(tmp_path)
     older = tmp_path / "older"
     older.mkdir()
     (older / "comparison.csv").write_text("scenario\n")
     with pytest.raises(InputError, match="no protocol.json"):
-        baseline.check_protocol(older)
+        protocol.check_protocol(older)
 
 
 def test_the_comparison_resumes_without_running_a_finished_run_again(tmp_path, monkeypatch):
     pytest.importorskip("stable_baselines3")
     # a search of two settings each, PPO's with rollouts of 2,048 steps (the zoo's are
     # 65,536): what is checked here is the resume, not the search's size
-    monkeypatch.setitem(baseline.SEARCH, "PPO", {
-        name: baseline.SEARCH["PPO"][name] | {"n_envs": 8}
-        for name in list(baseline.SEARCH["PPO"])[:2]})
-    monkeypatch.setitem(baseline.SEARCH, "GA", {
+    monkeypatch.setitem(protocol.SEARCH, "PPO", {
+        name: protocol.SEARCH["PPO"][name] | {"n_envs": 8}
+        for name in list(protocol.SEARCH["PPO"])[:2]})
+    monkeypatch.setitem(protocol.SEARCH, "GA", {
         "P 10": {"population_size": 10}, "P 12": {"population_size": 12}})
     scenario = shipped_scenario("navigation_narrow").with_overrides(
         episode={"max_steps": 300})
-    plan = baseline.parse_plan("GA:20k:2,PPO:16k:1")
-    baseline.compare([scenario], tmp_path, plan, workers=1, progress=False,
+    plan = protocol.parse_plan("GA:20k:2,PPO:16k:1")
+    campaign.compare([scenario], tmp_path, plan, workers=1, progress=False,
                      search_budget=8_192)
     tuning = pd.read_csv(tmp_path / "tuning.csv")
-    assert sorted(tuning["setting"]) == sorted([*baseline.SEARCH["GA"], *baseline.SEARCH["PPO"]])
+    assert sorted(tuning["setting"]) == sorted([*protocol.SEARCH["GA"], *protocol.SEARCH["PPO"]])
     assert set(tuning["budget_steps"]) == {8_192}
     first = pd.read_csv(tmp_path / "comparison.csv")
-    assert len(first) == 3 and set(first["test_situations"]) == {baseline.TEST_SITUATIONS}
+    assert len(first) == 3 and set(first["test_situations"]) == {protocol.TEST_SITUATIONS}
     assert set(first["spin_variance"]) == {scenario.episode.spin_variance}
-    ga_setting = baseline.chosen_setting(tuning, scenario.name, "GA")
+    ga_setting = campaign.chosen_setting(tuning, scenario.name, "GA")
     assert set(first[first["method"] == "GA"]["setting"]) == {ga_setting}
     ppo = first[first["method"] == "PPO"].iloc[0]
-    assert ppo["setting"] == baseline.chosen_setting(tuning, scenario.name, "PPO")
-    ppo_setting = baseline.SEARCH["PPO"][ppo["setting"]]
+    assert ppo["setting"] == campaign.chosen_setting(tuning, scenario.name, "PPO")
+    ppo_setting = protocol.SEARCH["PPO"][ppo["setting"]]
     rollout = ppo_setting["n_envs"] * ppo_setting["n_steps"]
     # whole rollouts within the budget, at least one
     assert ppo["learner_steps"] == max(rollout, 16_000 // rollout * rollout)
@@ -254,24 +254,24 @@ def test_the_comparison_resumes_without_running_a_finished_run_again(tmp_path, m
     curves = pd.read_csv(tmp_path / "curves.csv")
     assert curves[curves["method"] == "PPO"]["learner_steps"].max() == ppo["learner_steps"]
     # every run's controller is saved, and scores on test what the run's row says
-    policy = baseline.NumpyPolicy.load(baseline.controller_path(
+    saved = policy.NumpyPolicy.load(campaign.controller_path(
         tmp_path, scenario.name, "PPO", 16_000, 1))
-    test_keys = baseline.held_out_keys(scenario)[1]
-    tested = baseline.policy_fitness(scenario, policy, test_keys, baseline.TEST_SITUATIONS)
+    test_keys = scoring.held_out_keys(scenario)[1]
+    tested = scoring.policy_fitness(scenario, saved, test_keys, protocol.TEST_SITUATIONS)
     assert tested.mean() == pytest.approx(ppo["test_fitness"])
-    controller = Controller.load(baseline.controller_path(
+    controller = Controller.load(campaign.controller_path(
         tmp_path, scenario.name, "GA", 20_000, 1))
     ga = first[first["method"] == "GA"].iloc[0]
-    assert baseline.chromosome_fitness(scenario, controller.chromosome[None], test_keys,
-                                       baseline.TEST_SITUATIONS).mean() == pytest.approx(
+    assert scoring.chromosome_fitness(scenario, controller.chromosome[None], test_keys,
+                                       protocol.TEST_SITUATIONS).mean() == pytest.approx(
         ga["test_fitness"])
     # a second call with one more seed makes that run alone
-    baseline.compare([scenario], tmp_path, baseline.parse_plan("GA:20k:3,PPO:16k:1"),
+    campaign.compare([scenario], tmp_path, protocol.parse_plan("GA:20k:3,PPO:16k:1"),
                      workers=1, progress=False, search_budget=8_192)
     second = pd.read_csv(tmp_path / "comparison.csv")
     pd.testing.assert_frame_equal(second.iloc[:3], first)
     assert len(second) == 4 and second.iloc[3]["seed"] == 3
-    assert len(pd.read_csv(tmp_path / "situations.csv")) == 4 * baseline.TEST_SITUATIONS
+    assert len(pd.read_csv(tmp_path / "situations.csv")) == 4 * protocol.TEST_SITUATIONS
     assert (tmp_path / "comparison.png").stat().st_size > 0
     lives = pd.read_csv(tmp_path / "training_lives.csv").set_index("method")
     assert sorted(lives.index) == ["GA", "PPO"] and (lives["lives"] > 0).all()
@@ -288,17 +288,17 @@ def test_numpy_actor_is_the_sb3_policy_of_ppo_and_sac_after_learning(tmp_path):
 
     scenario = shipped_scenario("arena_strategy1")
     for method in ("SAC", "PPO"):
-        setting = next(iter(baseline.SEARCH[method]))
-        settings = baseline.SEARCH[method][setting] | {"learning_starts": 100}
+        setting = next(iter(protocol.SEARCH[method]))
+        settings = protocol.SEARCH[method][setting] | {"learning_starts": 100}
         venv = VecNormalize(sb3_vec_env(RangefinderVectorEnv(scenario, settings["n_envs"])))
-        model = baseline.rl_model(method, venv, settings, seed=1)
+        model = runs.rl_model(method, venv, settings, seed=1)
         model.learn(2_000)
-        act = baseline.numpy_actor(model, venv.obs_rms)
+        act = policy.numpy_actor(model, venv.obs_rms)
         observation = np.random.default_rng(0).uniform(0, 25, (7, 19)).astype(np.float32)
         expected, _ = model.predict(venv.normalize_obs(observation), deterministic=True)
         np.testing.assert_allclose(act(observation), expected, atol=1e-5)
         act.save(tmp_path / f"{method}.npz")
-        loaded = baseline.NumpyPolicy.load(tmp_path / f"{method}.npz")
+        loaded = policy.NumpyPolicy.load(tmp_path / f"{method}.npz")
         assert [kind for kind, _, _ in loaded.layers] == [kind for kind, _, _ in act.layers]
         assert ("clip" in [kind for kind, _, _ in act.layers]) == (method == "SAC")
         np.testing.assert_array_equal(loaded(observation), act(observation))
@@ -316,7 +316,7 @@ def test_a_committed_ga_run_of_the_comparison_comes_out_the_same(monkeypatch):
     results = Path(__file__).resolve().parents[1] / "results"
     folders = [folder for folder in (results / "baseline", results / "baseline_round2")
                if (folder / "protocol.json").is_file()
-               and json.loads((folder / "protocol.json").read_text()) == baseline.protocol()]
+               and json.loads((folder / "protocol.json").read_text()) == protocol.protocol()]
     assert folders, "no committed comparison folder under today's protocol"
     runs = pd.read_csv(folders[0] / "comparison.csv")
     ga = runs[(runs["method"] == "GA") & (runs["budget_steps"] == 1_000_000)
@@ -324,8 +324,8 @@ def test_a_committed_ga_run_of_the_comparison_comes_out_the_same(monkeypatch):
     if ga.empty:
         pytest.skip(f"{folders[0].name}: no GA run at 1 M steps yet (the round is under way)")
     committed = ga.iloc[0]
-    result = baseline.ga_run(shipped_scenario(committed["scenario"]), 1_000_000, seed=1,
-                             settings=baseline.SEARCH["GA"][committed["setting"]])
+    result = runs.ga_run(shipped_scenario(committed["scenario"]), 1_000_000, seed=1,
+                             settings=protocol.SEARCH["GA"][committed["setting"]])
     best = result.curve.iloc[result.chosen]
     assert int(result.learner_steps) == committed["learner_steps"]
     assert int(best["learner_steps"]) == committed["chosen_at_steps"]
@@ -336,7 +336,7 @@ def test_a_rules_change_of_the_gap_is_a_contrast_of_four_groups_of_seeds():
     """Hand-computed: under the paper's rule PPO − GA = 2 − 10 = −8, under the second
     7 − 11 = −4: the gap changes by +4; its interval is Welch's when three groups have no
     spread (the fourth's alone counts)."""
-    from scipy import stats
+    from scipy import stats as scipy_stats
 
     fitness = {("paper", "GA"): [10.0, 10.0, 10.0], ("paper", "PPO"): [2.0, 2.0, 2.0],
                ("second", "GA"): [11.0, 11.0, 11.0], ("second", "PPO"): [5.0, 7.0, 9.0]}
@@ -344,14 +344,14 @@ def test_a_rules_change_of_the_gap_is_a_contrast_of_four_groups_of_seeds():
                           "seed": i, "test_fitness": f}
                          for (name, method), values in fitness.items()
                          for i, f in enumerate(values)])
-    row = baseline.rule_changes(runs, pairs=(("paper", "second"),)).iloc[0]
+    row = stats.rule_changes(runs, pairs=(("paper", "second"),)).iloc[0]
     assert (row["minus_ga_paper_rule"], row["minus_ga_second_rule"]) == (-8.0, -4.0)
     assert row["change"] == pytest.approx(4.0)
-    half = stats.t.ppf(0.95, 2) * stats.sem(fitness[("second", "PPO")])
+    half = scipy_stats.t.ppf(0.95, 2) * scipy_stats.sem(fitness[("second", "PPO")])
     assert (row["change_low"], row["change_high"]) == pytest.approx((4.0 - half, 4.0 + half))
     assert (row["above_ga_paper_rule"], row["above_ga_second_rule"]) == (0.0, 0.0)
     assert row["family"] == 1 and row["change_low_simultaneous"] == row["change_low"]
-    assert baseline.rule_changes(runs, pairs=(("paper", "other"),)).empty
+    assert stats.rule_changes(runs, pairs=(("paper", "other"),)).empty
 
 
 def test_seeds_piled_at_the_cap_give_a_point_not_a_missing_interval():
@@ -360,7 +360,7 @@ def test_seeds_piled_at_the_cap_give_a_point_not_a_missing_interval():
     runs = pd.DataFrame([{"scenario": "s", "method": method, "budget_steps": 100, "seed": i,
                           "test_fitness": 20_000.0}
                          for method in ("GA", "SAC") for i in range(3)])
-    row = baseline.differences(runs).iloc[0]
+    row = stats.differences(runs).iloc[0]
     assert row[["minus_ga", "minus_ga_low", "minus_ga_high", "minus_ga_low_simultaneous",
                 "minus_ga_high_simultaneous"]].tolist() == [0.0] * 5
     assert row["p_value"] == 1.0 and row["p_holm"] == 1.0 and row["above_ga"] == 0.5

@@ -5,6 +5,7 @@ import subprocess
 import pytest
 
 from enn_traffic import bench
+from enn_traffic.bench.measure import generated
 
 
 def test_a_generated_network_is_made_once_and_a_failed_one_leaves_nothing(tmp_path,
@@ -16,8 +17,8 @@ def test_a_generated_network_is_made_once_and_a_failed_one_leaves_nothing(tmp_pa
         made.append(folder)
         (folder / "city.net.xml").write_text("<net/>")
 
-    first = bench._generated("city", make)
-    assert bench._generated("city", make) == first and len(made) == 1
+    first = generated("city", make)
+    assert generated("city", make) == first and len(made) == 1
     assert (first / "city.net.xml").read_text() == "<net/>"
 
     def broken(folder):
@@ -25,7 +26,7 @@ def test_a_generated_network_is_made_once_and_a_failed_one_leaves_nothing(tmp_pa
         raise subprocess.CalledProcessError(1, "netgenerate")
 
     with pytest.raises(subprocess.CalledProcessError):
-        bench._generated("broken", broken)
+        generated("broken", broken)
     assert sorted(path.name for path in first.parent.iterdir()) == ["city"]
 
 

@@ -1,6 +1,10 @@
-"""Every traffic-key range is named once and no two overlap (docs/design.md, "Traffic keys")."""
+"""Every traffic key a use reads is in the ledger (docs/design.md, "Traffic keys"): the ranges
+and each use's allocation in them, none sharing a key with another."""
 
+import ast
 from itertools import combinations
+
+from test_imports import PACKAGE
 
 from enn_traffic.config import GAConfig
 from enn_traffic.core import keys
@@ -12,6 +16,37 @@ def test_key_ranges_are_disjoint():
         assert len(overlap) == 0, f"{a} and {b} share keys"
 
 
+def test_every_allocation_lies_in_one_range_and_shares_no_key():
+    assert len(keys.ALLOCATIONS) >= 10
+    for name, allocation in keys.ALLOCATIONS.items():
+        holders = [r for r, block in keys.RANGES.items()
+                   if allocation.keys.start in block and allocation.keys[-1] in block]
+        assert len(holders) == 1, name
+        assert holders[0] not in ("training", "retired test", "retired crowd test",
+                                  "spent crowd test", "design trials"), name
+    for (a, first), (b, second) in combinations(keys.ALLOCATIONS.items(), 2):
+        overlap = range(max(first.keys.start, second.keys.start),
+                        min(first.keys.stop, second.keys.stop))
+        assert len(overlap) == 0, f"{a} and {b} share keys"
+
+
+def test_no_module_writes_a_key_of_its_own():
+    """A key is an allocation of the ledger, never ``keys.RANGE.start + offset`` written
+    elsewhere (a use the ledger would not know)."""
+    written = []
+    for path in PACKAGE.rglob("*.py"):
+        if path.name == "keys.py":
+            continue
+        for node in ast.walk(ast.parse(path.read_text())):
+            if (isinstance(node, ast.BinOp) and isinstance(node.op, ast.Add)
+                    and isinstance(node.left, ast.Attribute) and node.left.attr == "start"
+                    and isinstance(node.left.value, ast.Attribute)
+                    and node.left.value.attr in {name.upper().replace(" ", "_")
+                                                 for name in keys.RANGES}):
+                written.append(f"{path.relative_to(PACKAGE)}:{node.lineno}")
+    assert not written, written
+
+
 def test_no_training_run_reaches_a_held_out_key():
     most = GAConfig.model_fields["generations"].metadata
     limit = next(m.le for m in most if hasattr(m, "le"))
@@ -19,55 +54,18 @@ def test_no_training_run_reaches_a_held_out_key():
     assert not keys.is_training(keys.TEST.start) and keys.is_training(limit)
 
 
-def test_experiments_draw_from_their_named_ranges():
-    from enn_traffic.experiments import choosing
-    from enn_traffic.experiments.crowds import arena as simultaneous
-    from enn_traffic.runs import evaluate as deploy
+def test_the_experiments_read_the_ledgers_keys():
+    """The experiments' keys are the ledger's allocations (a sample of the uses)."""
+    from enn_traffic.experiments import ablation, choosing, departures, lanekeeping
+    from enn_traffic.experiments.crowds import arena, sumo
+    from enn_traffic.experiments.gradient_rl import protocol
+    from enn_traffic.runs import evaluate
 
-    assert deploy.EVALUATION_KEY in keys.TEST
-    assert choosing.VALIDATION_KEY in keys.VALIDATION
-    assert choosing.ACCEPTANCE_KEY in keys.ACCEPTANCE
-    assert simultaneous.VALIDATION_KEY in keys.CROWD_VALIDATION
-    assert simultaneous.SITUATION_KEY in keys.CROWD_TEST
-
-
-def test_the_sumo_crowds_read_the_fresh_crowd_ranges():
-    from enn_traffic.experiments.crowds import sumo as sumo_crowds
-
-    assert sumo_crowds.SITUATION_KEY in keys.CROWD_TEST
-    assert sumo_crowds.VALIDATION_KEY in keys.CROWD_VALIDATION
-
-
-def test_no_experiment_reads_a_retired_test_range():
-    from enn_traffic.experiments import choosing, lanekeeping
-    from enn_traffic.experiments.crowds import arena as simultaneous
-    from enn_traffic.experiments.crowds import sumo as sumo_crowds
-    from enn_traffic.runs import evaluate as deploy
-
-    used = [deploy.EVALUATION_KEY, lanekeeping.TEST_KEY, choosing.VALIDATION_KEY,
-            choosing.ACCEPTANCE_KEY, simultaneous.VALIDATION_KEY, simultaneous.SITUATION_KEY,
-            sumo_crowds.SITUATION_KEY, sumo_crowds.VALIDATION_KEY]
-    for retired in (keys.RETIRED_TEST, keys.RETIRED_CROWD_TEST, keys.DESIGN_TRIALS,
-                    keys.SPENT_CROWD_TEST):
-        assert not any(key in retired for key in used)
-    assert lanekeeping.TEST_KEY in keys.TEST
-
-
-def test_the_ablation_reads_its_own_sealed_range():
-    """Past the keys its first design read (10·10⁹ + 0…19), apart from the SUMO strategy's."""
-    from enn_traffic.experiments import ablation
-
-    first_reading = range(keys.ABLATION_CROWD_TEST.start, keys.ABLATION_CROWD_TEST.start + 20)
-    for key in (ablation.ABLATION_KEY, ablation.SUMO_KEY):
-        assert key in keys.ABLATION_CROWD_TEST and key not in first_reading
-    assert abs(ablation.SUMO_KEY - ablation.ABLATION_KEY) >= ablation.ABLATION.situations
-
-
-def test_the_departures_read_keys_no_other_measurement_read():
-    from enn_traffic.experiments import ablation, departures
-
-    key = departures.DEPARTURE_KEY
-    assert key in keys.ABLATION_CROWD_TEST
-    for other in (keys.ABLATION_CROWD_TEST.start, ablation.ABLATION_KEY, ablation.SUMO_KEY):
-        assert abs(key - other) >= max(departures.DEPARTURES.situations,
-                                       ablation.ABLATION.situations)
+    starts = {allocation.start for allocation in keys.ALLOCATIONS.values()}
+    used = [evaluate.EVALUATION_KEY, lanekeeping.TEST_KEY, choosing.VALIDATION_KEY,
+            choosing.ACCEPTANCE_KEY, arena.VALIDATION_KEY, arena.SITUATION_KEY,
+            sumo.SITUATION_KEY, sumo.VALIDATION_KEY, ablation.ABLATION_KEY, ablation.SUMO_KEY,
+            departures.DEPARTURE_KEY, protocol.TEST_KEY, protocol.VALIDATION_KEY]
+    assert set(used) <= starts
+    assert max(ablation.ABLATION.situations, departures.DEPARTURES.situations) <= len(
+        keys.ABLATION_ARENA.keys)

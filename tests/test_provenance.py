@@ -98,7 +98,7 @@ def test_a_table_measured_again_replaces_its_lines_and_says_when_and_at_which_co
     import json
     import shutil
 
-    from enn_traffic.experiments.protocol import SUMO
+    from enn_traffic.experiments.families import SUMO
     from enn_traffic.experiments.reproduce import _record_again
 
     paper = tmp_path / "paper"

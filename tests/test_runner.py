@@ -106,10 +106,10 @@ def test_a_run_made_by_other_rules_is_named_and_run_again(small, tmp_path):
 
 
 def test_only_the_deciding_code_moves_a_runs_fingerprint(tmp_path):
-    """On a copy of the package, code added to report/ or cli.py leaves the rules' digest as
-    it was (a finished run is reused); code added to sim/rules.py or the GA moves it (the run is
-    made again). Every source's digest, the record of what wrote an output, moves with any of
-    them; a comment moves neither."""
+    """On a copy of the package, code added to report/ or the command line leaves the rules' digest
+    as it was (a finished run is reused); code added to sim/rules.py or the GA moves it (the run is
+    made again). Every source's digest, the record of what wrote an output, moves with any of them;
+    a comment moves neither."""
     import shutil
 
     from enn_traffic.core.provenance import PACKAGE, code_version, rules_version
@@ -118,7 +118,7 @@ def test_only_the_deciding_code_moves_a_runs_fingerprint(tmp_path):
     shutil.copytree(PACKAGE, copy, ignore=shutil.ignore_patterns("__pycache__"))
     rules, code = rules_version(copy), code_version(copy)
     assert (rules, code) == (rules_version(), code_version())
-    steps = [("report/plots.py", "AN_EDIT = 1", False), ("cli.py", "AN_EDIT = 1", False),
+    steps = [("report/plots.py", "AN_EDIT = 1", False), ("cli/run.py", "AN_EDIT = 1", False),
              ("sim/rules.py", "# a comment", False), ("sim/rules.py", "AN_EDIT = 1", True),
              ("learning/ga.py", "AN_EDIT = 1", True)]
     for name, text, decides in steps:

@@ -10,8 +10,7 @@ import pytest
 from enn_traffic.config import load_scenario
 from enn_traffic.config.shipped import shipped_scenario
 from enn_traffic.envs.rangefinder import rangefinder_world
-from enn_traffic.experiments.gradient_rl import campaign as baseline
-from enn_traffic.experiments.gradient_rl import spin_rule
+from enn_traffic.experiments.gradient_rl import campaign, protocol, scoring, spin_rule
 from enn_traffic.sim.world import SituationResults
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -35,8 +34,8 @@ def test_the_papers_rule_rules_centre_keeping_a_spin_and_the_second_rule_does_no
     """On 16 of the narrow track's validation situations: under 64 m² most centre-keeping
     lives end as a spin (the double bend), under 40 m² none does, and they live longer."""
     narrow = shipped_scenario("navigation_narrow")
-    validation, _ = baseline.held_out_keys(narrow)
-    table = spin_rule.spin_table(baseline.scoring_scenario(narrow), validation[:16],
+    validation, _ = scoring.held_out_keys(narrow)
+    table = spin_rule.spin_table(scoring.scoring_scenario(narrow), validation[:16],
                                  candidates=(64.0, 40.0), gains=(1.0,)).set_index(
         "spin_variance")
     assert table.loc[64.0, "spins"] >= 8
@@ -48,9 +47,9 @@ def test_the_papers_rule_rules_centre_keeping_a_spin_and_the_second_rule_does_no
 def test_from_the_registered_ids_one_start_centre_keeping_spins_only_under_the_papers_rule():
     """docs/envs.md: from NavigationNarrow-v0's one start, centre keeping is ruled a spin at
     the first turn under 64 m² (within the first 100 steps), and drives on under 40 m²."""
-    lives = {name: baseline.policy_lives(shipped_scenario(name),
+    lives = {name: scoring.policy_lives(shipped_scenario(name),
                                          spin_rule.centre_keeping(1.0, 25.0),
-                                         [baseline.VALIDATION_KEY]).iloc[0]
+                                         [protocol.VALIDATION_KEY]).iloc[0]
              for name in ("navigation_narrow", "navigation_narrow_spin40")}
     assert lives["navigation_narrow"]["outcome"] == "spin"
     assert lives["navigation_narrow"]["steps"] < 100
@@ -70,9 +69,9 @@ def test_the_shipped_second_rule_is_the_committed_choice():
     """``navigation_narrow_spin40`` is the narrow track with the spin_variance that the
     committed table chose (validation situations only), and nothing else changed."""
     table = pd.read_csv(COMMITTED)
-    assert set(table["first_key"]) == {baseline.held_out_keys(
+    assert set(table["first_key"]) == {scoring.held_out_keys(
         shipped_scenario("navigation_narrow"))[0][0]}
-    assert (table["situations"] == baseline.VALIDATION_SITUATIONS).all()
+    assert (table["situations"] == protocol.VALIDATION_SITUATIONS).all()
     second = load_scenario(ROOT / "scenarios" / "navigation_narrow_spin40.toml")
     paper = shipped_scenario("navigation_narrow")
     assert second.episode.spin_variance == spin_rule.chosen_variance(table)
@@ -117,9 +116,9 @@ def test_a_straight_life_travels_a_metre_a_step():
     """Steering 0 (both outputs alike): each step carries the learner speed × dt = 1 m, so
     a life of n steps covers n − 1 m between its first and last recorded positions, and its
     last 50 positions span at least 49 m / √2 on one axis."""
-    narrow = baseline.scoring_scenario(shipped_scenario("navigation_narrow_spin40"))
-    validation, _ = baseline.held_out_keys(narrow)
-    lives = baseline.policy_lives(narrow, lambda o: np.zeros((len(o), 2), np.float32),
+    narrow = scoring.scoring_scenario(shipped_scenario("navigation_narrow_spin40"))
+    validation, _ = scoring.held_out_keys(narrow)
+    lives = scoring.policy_lives(narrow, lambda o: np.zeros((len(o), 2), np.float32),
                                   validation, 8, tail=50)
     assert (lives["outcome"] == "collision").all()
     np.testing.assert_allclose(lives["distance"], lives["steps"] - 1, rtol=1e-6)
@@ -138,20 +137,20 @@ def test_travel_scores_a_runs_controller_under_its_rule_and_the_other(tmp_path):
 
     from enn_traffic.runs.controller import Controller
 
-    second = baseline.scoring_scenario(shipped_scenario("navigation_narrow_spin40"))
-    paper = baseline.scoring_scenario(shipped_scenario("navigation_narrow"))
-    path = baseline.controller_path(tmp_path, second.name, "GA", 1_000_000, 1)
+    second = scoring.scoring_scenario(shipped_scenario("navigation_narrow_spin40"))
+    paper = scoring.scoring_scenario(shipped_scenario("navigation_narrow"))
+    path = campaign.controller_path(tmp_path, second.name, "GA", 1_000_000, 1)
     path.parent.mkdir()
-    shutil.copy(baseline.controller_path(ROOT / spin_rule.FOLDER, second.name, "GA",
+    shutil.copy(campaign.controller_path(ROOT / spin_rule.FOLDER, second.name, "GA",
                                          1_000_000, 1), path)
     pd.DataFrame([{"scenario": second.name, "method": "GA", "budget_steps": 1_000_000,
                    "seed": 1}]).to_csv(tmp_path / "comparison.csv", index=False)
     row = spin_rule.travel(tmp_path, situations=4).iloc[0]
     chromosome = Controller.load(path).chromosome[None]
-    validation, _ = baseline.held_out_keys(second)
+    validation, _ = scoring.held_out_keys(second)
     for scenario, column in ((second, "fitness"), (paper, "other_rule_fitness")):
         assert row[column] == pytest.approx(
-            baseline.chromosome_fitness(scenario, chromosome, validation, 4).mean())
+            scoring.chromosome_fitness(scenario, chromosome, validation, 4).mean())
     assert row["fitness"] > 10 * row["other_rule_fitness"]
     from_start = rangefinder_world(shipped_scenario(second.name)).evaluate(chromosome, 7)
     assert row["training_start_fitness"] == SituationResults.lifetime_fitness(

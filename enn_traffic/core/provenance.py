@@ -26,7 +26,7 @@ PACKAGE = Path(__file__).resolve().parents[1]
 # settings (tests/test_provenance.py checks that everything these import is here or named
 # as deciding nothing).
 RULES = ("sim", "learning", "sumo", "roads", "core/geometry.py", "core/neural.py",
-         "core/keys.py", "core/registry.py", "config/__init__.py", "config/kinds.py",
+         "core/keys.py", "core/registry.py", "config",
          "runs/run.py")
 
 

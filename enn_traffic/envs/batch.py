@@ -22,7 +22,7 @@ import numba
 import numpy as np
 from numba import njit, prange
 
-from enn_traffic.config.kinds import ACTION
+from enn_traffic.config.traffic import ACTION
 from enn_traffic.core.progress import slow_step
 from enn_traffic.sim.arena import ArenaWorld, settle, start_world
 from enn_traffic.sim.rules import Vehicles, Work, copy_row, copy_rows, drive_all, sense, wall_arrays

@@ -24,7 +24,7 @@ from numba import njit
 from pettingzoo import ParallelEnv
 
 from enn_traffic.config import Scenario
-from enn_traffic.config.kinds import ACTION
+from enn_traffic.config.traffic import ACTION
 from enn_traffic.envs.batch import compiled
 from enn_traffic.envs.rangefinder import (
     TRAINING_KEYS,

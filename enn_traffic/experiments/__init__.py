@@ -4,7 +4,7 @@
 ``(study: Study) -> list[str]`` that return summary lines
 (:class:`~enn_traffic.experiments.study.Study`: the folder, the settings, the executor and
 what experiments compute once and share). The
-dynamic-traffic experiments share their protocol (:mod:`~enn_traffic.experiments.protocol`) and
+dynamic-traffic experiments share their protocol (:mod:`~enn_traffic.experiments.families`) and
 the statistics of choosing controllers (:mod:`~enn_traffic.experiments.choosing`).
 """
 

@@ -58,20 +58,18 @@ from enn_traffic.experiments.crowds.sumo import (
     saved_crowd_inputs,
     situation_result,
 )
-from enn_traffic.experiments.protocol import ARENA, SUMO, Family
+from enn_traffic.experiments.families import ARENA, SUMO, Family
 from enn_traffic.experiments.regime import AUTHORS_SPIN
 from enn_traffic.experiments.study import Study
 from enn_traffic.learning import ga
 from enn_traffic.learning.online import OnlineLearning, VehicleGA
 from enn_traffic.report.plots import save_figure
 from enn_traffic.report.stats import bootstrap_interval, t_interval
-from enn_traffic.runs.run import ga_params
 from enn_traffic.sim.arena import ArenaWorld, Situation
 from enn_traffic.sim.crowd import Crowd
 from enn_traffic.sim.strategies import NETWORK
 
-# Fresh keys: 10·10⁹ + 0…19 were read by the first design (module docstring)
-ABLATION_KEY = keys.ABLATION_CROWD_TEST.start + 2_000_000
+ABLATION_KEY = keys.ABLATION_ARENA.start
 FINISH_STEPS = 2000  # reference §7.5: GA.goodFitness
 AUTHORS_GENERATIONS = 100  # reference §7.5: GA.nbrOfGenerations_max
 STARTS = ("random", "evolved")
@@ -167,7 +165,7 @@ def authors_arm(world: ArenaWorld, situation: int, ablation: Ablation, key: int,
         population = authors.spec.in_source_layout(ga.initial_population(
             rng, sc.ga.population_size, authors.spec.chromosome_length, sc.ga.init_range))
         learners.append(VehicleGA(population, rng))
-    online = OnlineLearning(learners, ga_params(sc), share_elites=True,
+    online = OnlineLearning(learners, sc.ga, share_elites=True,
                             elite_count=sc.ga.elite_count, finish_steps=FINISH_STEPS,
                             breed_from_best=rules.breed_from_best)
     genes = np.stack([learner.current for learner in learners])
@@ -433,7 +431,7 @@ def carrier(factors: pd.DataFrame, outcome: str = "after") -> str:
 # start population, table4_ablation_factors.csv), on keys of its own in the ablation range.
 SUMO_STRATEGY = 1
 SUMO_ARMS = (("evolved", "cap"), ("random", "cap"))
-SUMO_KEY = keys.ABLATION_CROWD_TEST.start + 1_000_000
+SUMO_KEY = keys.ABLATION_SUMO.start
 
 
 def sumo_situations(out: Path, family: Family, learning: SumoLearning,

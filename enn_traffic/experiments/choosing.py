@@ -13,7 +13,7 @@ import numpy as np
 
 from enn_traffic.core import keys
 from enn_traffic.experiments.common import distinct
-from enn_traffic.experiments.protocol import Family, family_runs, run_dir
+from enn_traffic.experiments.families import Family, family_runs, run_dir
 from enn_traffic.runs.evaluate import EVALUATION_KEY
 from enn_traffic.runs.run import RunOutputs
 
@@ -21,7 +21,7 @@ if TYPE_CHECKING:
     from enn_traffic.experiments.study import Study
 
 # Candidates are chosen on validation traffic, never on the test traffic of Tables 1 and 2.
-VALIDATION_KEY = keys.VALIDATION.start
+VALIDATION_KEY = keys.CHOOSING.start
 # Table 2 (§5.4.1): a strategy is added once the fitness on every strategy included so far
 # exceeds 80% of the accepted fitness, judged on validation traffic for the TOP_CANDIDATES
 # fittest of a generation, since a generation's best fitness alone is mostly luck: a candidate
@@ -29,7 +29,7 @@ VALIDATION_KEY = keys.VALIDATION.start
 # (ACCEPTANCE_KEY) by its mean less ACCEPTANCE_ERRORS standard errors, so that a candidate just
 # under the threshold seldom passes by the luck of one of the many checks a run makes.
 TOP_CANDIDATES = 5
-ACCEPTANCE_KEY = keys.ACCEPTANCE.start
+ACCEPTANCE_KEY = keys.TABLE2_ACCEPTANCE.start
 ACCEPTANCE_ERRORS = 2.0
 # The best of a few hundred candidates on test_situations situations is partly luck too: the
 # RECHECKED best are scored again on recheck_situations validation situations before the choice.

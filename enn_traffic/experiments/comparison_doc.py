@@ -13,7 +13,8 @@ import numpy as np
 import pandas as pd
 
 from enn_traffic.config.shipped import shipped_scenario
-from enn_traffic.experiments.gradient_rl import campaign as baseline
+from enn_traffic.experiments.gradient_rl import campaign, scoring, stats
+from enn_traffic.experiments.gradient_rl import protocol as round_protocol
 
 TRACKS = {"navigation_narrow": "narrow track", "navigation_narrow_spin40": "narrow track",
           "arena_strategy1": "arena, strategy 1"}
@@ -26,9 +27,9 @@ def _steps(budget: float) -> str:
 def _name(scenario: str, spin_variance: float) -> str:
     """A scenario as the tables name it: its track, and its spin rule where it has two."""
     track = TRACKS.get(scenario, scenario)
-    if not any(scenario in pair for pair in baseline.RULE_PAIRS):
+    if not any(scenario in pair for pair in stats.RULE_PAIRS):
         return track
-    paper = (" (the paper's)" if any(scenario == pair[0] for pair in baseline.RULE_PAIRS)
+    paper = (" (the paper's)" if any(scenario == pair[0] for pair in stats.RULE_PAIRS)
              else "")
     return f"{track}, spin ≤ {spin_variance:g} m²{paper}"
 
@@ -51,7 +52,7 @@ def comparison(folder: Path) -> str:
         travel = pd.read_csv(folder / "travel.csv")
         lines += _travel(travel, names) + _ablations(travel, names)
     lines += _stopping(pd.read_csv(folder / "curves.csv").merge(
-        runs[baseline.RUN_KEYS]), names,
+        runs[round_protocol.RUN_KEYS]), names,
         protocol["validation_situations"])
     lines += ["", f"![GA, PPO and SAC](../{folder.parent.name}/{folder.name}/comparison.png)",
               ""]
@@ -63,7 +64,7 @@ def _protocol(protocol: dict, folder: Path, names: dict[str, str]) -> list[str]:
     starts = _starts(protocol)
     scenarios = " ".join(json.loads((folder / "scenarios.json").read_text()))
     planned = ", ".join(f"{p.method} {_steps(p.budget_steps)} × {p.seeds} seeds"
-                        for p in baseline.PLAN)
+                        for p in round_protocol.PLAN)
     return [
         f"`enn-traffic baseline {scenarios}` (PPO and SAC need the `[rl]` extra and a CPU "
         "torch: docs/envs.md). Every method learns on training keys: the GA meets a new key "
@@ -104,15 +105,15 @@ def _starts(protocol: dict) -> dict:
     from enn_traffic.envs.rangefinder import rangefinder_world
 
     narrow = shipped_scenario("navigation_narrow")
-    training = baseline.start_of(rangefinder_world(narrow).situations(0)[0])
-    scored = baseline.scoring_scenario(narrow)
+    training = scoring.start_of(rangefinder_world(narrow).situations(0)[0])
+    scored = scoring.scoring_scenario(narrow)
     world = rangefinder_world(scored)
 
     def starts(chosen: list[int], count: int) -> list[tuple]:
-        return [baseline.start_of(situation) for key in chosen
+        return [scoring.start_of(situation) for key in chosen
                 for situation in world.situations(key)][:count]
 
-    validation_keys, test_keys = baseline.held_out_keys(scored, protocol)
+    validation_keys, test_keys = scoring.held_out_keys(scored, protocol)
     validation = set(starts(validation_keys, protocol["validation_situations"]))
     test = starts(test_keys, protocol["test_situations"])
     def nearest(start: tuple, among: set) -> float:  # facing the same way
@@ -135,7 +136,7 @@ def _search(tuning: pd.DataFrame, names: dict[str, str]) -> list[str]:
                 ", ".join(f"{count} settings of {method}" for method, count in counts.items()))
     lines = [
         "The search (`tuning.csv`, every setting in `enn_traffic/baseline.py`'s `SEARCH`): "
-        f"{searched}, one run each per scenario (seed {baseline.TUNING_SEED}, "
+        f"{searched}, one run each per scenario (seed {round_protocol.TUNING_SEED}, "
         f"{_steps(budget)} learner-steps at most) scored on validation keys; the best is "
         "each method's setting in the comparison, a tie going to the setting listed first "
         "(PPO and SAC start at RL Zoo's BipedalWalker-v3 entries; the GA's other settings "
@@ -145,11 +146,11 @@ def _search(tuning: pd.DataFrame, names: dict[str, str]) -> list[str]:
         "| scenario | method | validation fitness: best (its setting) | median | worst |",
         "|---|---|---|---|---|"]
     for (name, method), rows in tuning.groupby(["scenario", "method"]):
-        chosen = baseline.chosen_setting(tuning, name, method)
+        chosen = campaign.chosen_setting(tuning, name, method)
         best = rows.set_index("setting").loc[chosen, "validation_fitness"]
         fitness = rows["validation_fitness"]
-        searching = ("" if len(rows) == len(baseline.SEARCH[method]) else
-                     f", {len(rows)} of {len(baseline.SEARCH[method])} settings so far")
+        searching = ("" if len(rows) == len(round_protocol.SEARCH[method]) else
+                     f", {len(rows)} of {len(round_protocol.SEARCH[method])} settings so far")
         lines.append(f"| {names.get(name, name)} | {method} | {best:,.0f} ({chosen}"
                      f"{searching}) | {fitness.median():,.0f} | {fitness.min():,.0f} |")
     return lines + [""]
@@ -158,11 +159,11 @@ def _search(tuning: pd.DataFrame, names: dict[str, str]) -> list[str]:
 def _fitness(runs: pd.DataFrame, folder: Path, names: dict[str, str]) -> list[str]:
     # from the runs' rows alone: a run's other rows are written before its comparison row,
     # so a run under way may have some (and comparison_summary.csv may be older)
-    keys = baseline.RUN_KEYS
-    summary = baseline.summary(runs, pd.read_csv(folder / "curves.csv").merge(
+    keys = round_protocol.RUN_KEYS
+    summary = stats.summary(runs, pd.read_csv(folder / "curves.csv").merge(
         runs[keys], on=keys))
     situations = pd.read_csv(folder / "situations.csv").merge(runs[keys], on=keys)
-    planned = {(p.method, p.budget_steps): p.seeds for p in baseline.PLAN}
+    planned = {(p.method, p.budget_steps): p.seeds for p in round_protocol.PLAN}
     lines = [
         "Test fitness (steps lived, 0 for a spin) of each run's chosen controller: the mean "
         "over seeds with its 90% Student's t interval over seeds (cut to the fitness a run "
@@ -371,7 +372,7 @@ def _stopping(curves: pd.DataFrame, names: dict[str, str], situations: int) -> l
     training ended with) against its chosen one (the best on validation), both on the
     validation situations; the last one's difference from the GA's last at the same budget,
     with a 90% Welch t interval over seeds."""
-    runs = curves.sort_values("learner_steps").groupby(baseline.RUN_KEYS).agg(
+    runs = curves.sort_values("learner_steps").groupby(round_protocol.RUN_KEYS).agg(
         chosen=("validation_fitness", "max"),
         last=("validation_fitness", "last")).reset_index()
     lines = [

@@ -29,8 +29,8 @@ import numpy as np
 import pandas as pd
 from tqdm import tqdm
 
-from enn_traffic.config.kinds import STRATEGIES
 from enn_traffic.config.shipped import shipped_scenario
+from enn_traffic.config.traffic import STRATEGIES
 from enn_traffic.core import keys
 from enn_traffic.core.io import write_csv
 from enn_traffic.core.progress import terminal
@@ -44,14 +44,13 @@ from enn_traffic.experiments.ablation import (
     start_poses,
 )
 from enn_traffic.experiments.crowds.arena import SECONDS
-from enn_traffic.experiments.protocol import ARENA
+from enn_traffic.experiments.families import ARENA
 from enn_traffic.experiments.study import Study
 from enn_traffic.report.stats import bootstrap_interval
 from enn_traffic.sim.arena import ArenaWorld
 from enn_traffic.sim.crowd import Crowd
 
-# Fresh and sealed: the ablation's range from + 3·10⁶ (keys.ABLATION_CROWD_TEST), read once
-DEPARTURE_KEY = keys.ABLATION_CROWD_TEST.start + 3_000_000
+DEPARTURE_KEY = keys.DEPARTURES.start
 VARIANTS = {
     "ours": AuthorsRules(),
     "blame after a respawn": AuthorsRules(blame_all_after_respawn=True),

@@ -7,7 +7,7 @@ import pandas as pd
 
 from enn_traffic.core.io import write_csv
 from enn_traffic.experiments.choosing import held_out
-from enn_traffic.experiments.protocol import ARENA, Family, family_runs, title
+from enn_traffic.experiments.families import ARENA, Family, family_runs, title
 from enn_traffic.experiments.study import Study
 from enn_traffic.report.figures import fig11_figure
 

@@ -19,7 +19,7 @@ from enn_traffic.experiments.choosing import (
     scored_pick,
 )
 from enn_traffic.experiments.common import run_or_reuse
-from enn_traffic.experiments.protocol import Family
+from enn_traffic.experiments.families import Family
 from enn_traffic.learning.evaluators import MeanOverWorlds
 from enn_traffic.runs.run import RunOutputs
 from enn_traffic.sim.world import make_world

@@ -20,7 +20,6 @@ from enn_traffic.experiments.study import Runs, Study
 from enn_traffic.learning.evaluators import ProcessEvaluator
 from enn_traffic.report.plots import draw_paths, learning_curves, save_figure
 from enn_traffic.runs.controller import Controller
-from enn_traffic.runs.evaluate import EVALUATION_KEY
 from enn_traffic.sim.lane_keeping.world import LaneKeepingWorld
 from enn_traffic.sim.world import CAPPED, make_world
 from enn_traffic.sumo.fresh import fresh_shares
@@ -78,7 +77,7 @@ FRESH = {
 }
 ROADS = READ_BEFORE | FRESH
 # The camera's noise is drawn from a test key no earlier design read (the sealed test range).
-TEST_KEY = EVALUATION_KEY + 2
+TEST_KEY = keys.LANE_KEEPING_TEST.start
 NOISES = [0.0, 0.1]  # the camera's noise when measured (m)
 # The keys of a road, which ROADS change from the one-road training's (highway-env's) road.
 ROAD_KEYS = ["road", "amplitude", "period", "radius", "mirrored", "draw"]
@@ -188,7 +187,7 @@ def chosen(scenario: Scenario, run_dir: Path, roads: int = RUNS.validation_roads
     validation = scenario.with_overrides(lane_keeping={"episodes": roads})
     evaluator = ProcessEvaluator(validation)
     try:
-        fitness = evaluator.evaluate(pool, keys.VALIDATION.start).fitness
+        fitness = evaluator.evaluate(pool, keys.CHOOSING.start).fitness
     finally:
         evaluator.close()
     return pool[int(np.argmax(fitness))]

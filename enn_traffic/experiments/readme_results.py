@@ -23,7 +23,7 @@ from enn_traffic.experiments.crowds.arena import (
     reduction_interval,
     trend,
 )
-from enn_traffic.experiments.protocol import ARENA
+from enn_traffic.experiments.families import ARENA
 from enn_traffic.experiments.table1 import diagonal_pattern
 
 BEGIN = "<!-- results table: written by python -m enn_traffic.experiments.readme_results -->"

@@ -33,18 +33,16 @@ import pandas as pd
 from enn_traffic.config.shipped import shipped_scenario
 from enn_traffic.core.io import write_csv
 from enn_traffic.experiments.crowds.arena import LEARNING, SECONDS, SITUATION_KEY, situation_crowd
-from enn_traffic.experiments.protocol import ARENA
+from enn_traffic.experiments.families import ARENA
 from enn_traffic.experiments.study import Study
 from enn_traffic.learning import ga
 from enn_traffic.learning.online import OnlineLearning, VehicleGA
-from enn_traffic.report.paper_tables import PAPER_TABLE3
-from enn_traffic.runs.run import ga_params
+from enn_traffic.report.paper import PAPER_INITIAL
 from enn_traffic.sim.arena import ArenaWorld
 from enn_traffic.sim.crowd import Crowd
 from enn_traffic.sim.strategies import NETWORK
 
 AUTHORS_SPIN = {"spin_window": 49, "spin_variance": 64.0}  # reference §6.2
-PAPER_INITIAL = [initial for initial, _ in PAPER_TABLE3]  # the paper's initial rates
 UNTRAINED = [  # (configuration, respawn at own start, learning, the authors' spin rule)
     ("untrained networks", False, False, False),
     ("untrained networks, respawn at own start", True, False, False),
@@ -95,7 +93,7 @@ def untrained_run(world: ArenaWorld, situation: int, at_start: bool, learns: boo
         learning = OnlineLearning(
             [VehicleGA(p, np.random.default_rng([sc.seed, situation, v]))
              for v, p in enumerate(populations)],
-            ga_params(sc), share_elites=True, elite_count=sc.ga.elite_count)
+            sc.ga, share_elites=True, elite_count=sc.ga.elite_count)
     return crowd.run(SECONDS, np.stack([p[0] for p in populations]), learning,
                      check_spins=True)
 

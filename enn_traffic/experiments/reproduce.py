@@ -27,7 +27,7 @@ from enn_traffic.report.paper_tables import paper_tables
 if TYPE_CHECKING:
     import pandas as pd
 
-    from enn_traffic.experiments.protocol import Family
+    from enn_traffic.experiments.families import Family
 
 
 def reproduce(out: Path, quick: bool = False, only: list[str] | None = None,

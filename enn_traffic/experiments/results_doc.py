@@ -32,10 +32,9 @@ from enn_traffic.experiments.crowds.arena import (
 )
 from enn_traffic.experiments.crowds.sumo import SITUATION_KEY as SUMO_SITUATION_KEY
 from enn_traffic.experiments.crowds.sumo import SUMO_LEARNING
-from enn_traffic.experiments.protocol import ARENA, CITY, SUMO, Family
-from enn_traffic.experiments.regime import PAPER_INITIAL
+from enn_traffic.experiments.families import ARENA, CITY, SUMO, Family
 from enn_traffic.report import generated
-from enn_traffic.report.paper_tables import PAPER_TABLE3, PAPER_TABLE4
+from enn_traffic.report.paper import PAPER_INITIAL, PAPER_TABLE3, PAPER_TABLE4
 from enn_traffic.roads.network import read_net
 from enn_traffic.runs.controller import Controller
 
@@ -445,7 +444,7 @@ def baseline_round2(paper: Path) -> str:
     """The comparison's second round (:mod:`enn_traffic.experiments.gradient_rl.campaign` as it was
     then), from ``results/baseline_round2`` beside ``paper``: the protocol, the search, the table
     and the paired differences."""
-    from enn_traffic.experiments.gradient_rl import campaign as comparison
+    from enn_traffic.experiments.gradient_rl import protocol as comparison
 
     folder = paper.parent / "baseline_round2"
     protocol = json.loads((folder / "protocol.json").read_text())  # the folder's, not today's

@@ -11,8 +11,8 @@ import pandas as pd
 from enn_traffic.core.io import write_csv
 from enn_traffic.experiments.choosing import specialists
 from enn_traffic.experiments.crowds.sumo import sumo_tables
+from enn_traffic.experiments.families import CITY, SUMO, Family
 from enn_traffic.experiments.fig11 import fig11
-from enn_traffic.experiments.protocol import CITY, SUMO, Family
 from enn_traffic.experiments.study import Study
 from enn_traffic.experiments.table1 import table1
 from enn_traffic.experiments.table2 import table2

@@ -11,7 +11,7 @@ import pandas as pd
 from enn_traffic.core.io import write_csv
 from enn_traffic.experiments.choosing import fitness_on_test_traffic, specialists
 from enn_traffic.experiments.common import save_controller
-from enn_traffic.experiments.protocol import ARENA, Family, strategy_world
+from enn_traffic.experiments.families import ARENA, Family, strategy_world
 from enn_traffic.experiments.study import Study
 from enn_traffic.report.figures import fig12_figure, specialist_paths
 from enn_traffic.runs.evaluate import EVALUATION_KEY

@@ -11,8 +11,8 @@ import pandas as pd
 from enn_traffic.core.io import write_csv
 from enn_traffic.experiments.choosing import fitness_on_test_traffic
 from enn_traffic.experiments.common import save_controller
+from enn_traffic.experiments.families import ARENA, Family
 from enn_traffic.experiments.incremental import Iteration, incremental_evolution
-from enn_traffic.experiments.protocol import ARENA, Family
 from enn_traffic.experiments.study import Study
 
 

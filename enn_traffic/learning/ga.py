@@ -1,8 +1,9 @@
 """The genetic algorithm of paper §5: pure operators over the population array.
 
-Defaults (paper §5): population 200, tournaments of 10, one-point crossover with probability 1
+Its settings are a scenario's ``[ga]`` (:class:`~enn_traffic.config.GAConfig`, whose defaults
+are the paper's §5: population 200, tournaments of 10, one-point crossover with probability 1
 and the cut at round(Normal(0.95, 0.05) × length), per-gene mutation with probability 0.1 that
-replaces the gene by U[-1, 1], children replace their parents. Elitism is an option.
+replaces the gene by U[-1, 1], children replace their parents). Elitism is an option.
 
 The GA never knows how fitness is computed: a run asks for the chromosomes to evaluate
 (:func:`ask`), evaluates them however it likes and tells the GA their fitness (:func:`tell`),
@@ -21,20 +22,9 @@ from pathlib import Path
 
 import numpy as np
 
+from enn_traffic.config import GAConfig
 from enn_traffic.core.errors import InputError
 from enn_traffic.core.io import write_atomic
-
-
-@dataclass(frozen=True)
-class GAParams:
-    population_size: int = 200
-    tournament_size: int = 10
-    crossover_probability: float = 1.0
-    crossover_cut_mean: float = 0.95
-    crossover_cut_std: float = 0.05
-    mutation_probability: float = 0.1
-    init_range: float = 1.0
-    elite_count: int = 0
 
 
 def initial_population(
@@ -87,7 +77,7 @@ def mutate(
 
 
 def next_generation(
-    rng: np.random.Generator, population: np.ndarray, fitness: np.ndarray, params: GAParams
+    rng: np.random.Generator, population: np.ndarray, fitness: np.ndarray, params: GAConfig
 ) -> np.ndarray:
     """Selection, crossover and mutation; the children (after ``elite_count`` unchanged elites)
     replace the parents."""
@@ -174,7 +164,7 @@ def ask(state: GAState) -> np.ndarray:
     return state.population
 
 
-def tell(state: GAState, fitness: np.ndarray, params: GAParams) -> GAState:
+def tell(state: GAState, fitness: np.ndarray, params: GAConfig) -> GAState:
     """The state after the generation of ``ask(state)`` scored ``fitness``: its best
     chromosome recorded as the generation's champion (and as the best so far when it beats
     it), the next generation bred from it (:func:`next_generation`, drawing from the state's
@@ -194,7 +184,7 @@ def tell(state: GAState, fitness: np.ndarray, params: GAParams) -> GAState:
 
 
 def generations(state: GAState, evaluate: Callable[[np.ndarray, int], object],
-                params: GAParams) -> Iterator[tuple[GAState, np.ndarray, object]]:
+                params: GAConfig) -> Iterator[tuple[GAState, np.ndarray, object]]:
     """Ask, evaluate, tell, without end: after each generation, the new state, the
     population just evaluated and what ``evaluate(population, generation)`` returned (its
     ``fitness`` is what the GA is told). The caller stops when it has seen enough."""

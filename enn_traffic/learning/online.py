@@ -11,10 +11,11 @@ GA: it calls back :class:`OnlineLearning` when a learning vehicle's life ends.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 
 import numpy as np
 
+from enn_traffic.config import GAConfig
 from enn_traffic.learning import ga
 
 
@@ -60,7 +61,7 @@ class VehicleGA:
     def exhausted(self) -> bool:
         return self.index >= len(self.population)
 
-    def advance(self, params: ga.GAParams, global_elites: np.ndarray | None = None,
+    def advance(self, params: GAConfig, global_elites: np.ndarray | None = None,
                 from_best: bool = False) -> None:
         """The next generation; ``global_elites`` (the best chromosomes of all vehicles,
         reference §7.4) replace its own elites when given. ``from_best``: the authors'
@@ -71,7 +72,7 @@ class VehicleGA:
         if from_best and elites:
             best = np.argsort(-self.fitness, kind="stable")[: len(self.population) - elites]
             children = ga.next_generation(self.rng, self.population[best], self.fitness[best],
-                                          replace(params, elite_count=0))
+                                          params.model_copy(update={"elite_count": 0}))
             population = np.concatenate([global_elites, children])
         else:
             population = ga.tell(ga.GAState(self.generation, self.population, self.rng),
@@ -134,7 +135,7 @@ class OnlineLearning:
     stops learning; it still loses lives and respawns. ``breed_from_best``: the authors'
     breeding (:meth:`VehicleGA.advance`)."""
 
-    def __init__(self, learners: list[VehicleGA | None], params: ga.GAParams,
+    def __init__(self, learners: list[VehicleGA | None], params: GAConfig,
                  share_elites: bool = False, elite_count: int = 0,
                  evidence: Evidence | None = None, life_cap: int = 0, finish_steps: int = 0,
                  breed_from_best: bool = False):

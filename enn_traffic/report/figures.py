@@ -1,5 +1,5 @@
-"""The dynamic-traffic experiments' figures (paper Fig. 11, Fig. 12, Table 1 as paths): drawing
-only; the experiments compute what is drawn."""
+"""The experiments' figures (paper Fig. 11, Fig. 12, Table 1 as paths; the GA against PPO and SAC):
+drawing only; the experiments compute what is drawn."""
 
 from __future__ import annotations
 
@@ -10,6 +10,7 @@ import numpy as np
 import pandas as pd
 
 from enn_traffic.report.plots import draw_paths, learning_curves, save_figure
+from enn_traffic.report.stats import t_interval
 
 
 def fig11_figure(panels: dict[int, dict[int, pd.DataFrame]],
@@ -70,4 +71,53 @@ def specialist_paths(traces: dict[tuple[int, int], np.ndarray], walls: dict[int,
                     f"strategy's traffic (grey, by column),\nfirst {steps} steps of a test "
                     "episode (x: where a vehicle's path ends)")
     figure.tight_layout()
+    save_figure(figure, path)
+
+
+# The comparison's methods (enn_traffic.experiments.gradient_rl), one colour each.
+METHOD_COLOURS = {"GA": "tab:blue", "PPO": "tab:orange", "SAC": "tab:green"}
+
+
+def comparison_figure(curves: pd.DataFrame, comparison: pd.DataFrame, path: Path) -> None:
+    """Per scenario: the validation fitness of each run's controllers against learner-steps
+    (a line per run, the longest budgets), and each method's test fitness per run."""
+    import matplotlib.pyplot as plt
+
+    scenarios = sorted(comparison["scenario"].unique())
+    figure, axes = plt.subplots(len(scenarios), 2, figsize=(12, 4.4 * len(scenarios)),
+                                squeeze=False, gridspec_kw={"wspace": 0.35, "hspace": 0.35})
+    for row, name in zip(axes, scenarios, strict=True):
+        mine = curves[curves["scenario"] == name]
+        for (method, budget, _), run in mine.groupby(["method", "budget_steps", "seed"]):
+            row[0].plot(run["learner_steps"], run["validation_fitness"],
+                        color=METHOD_COLOURS.get(method, "gray"), alpha=0.5,
+                        linestyle="-" if budget > 1_000_000 else ":",
+                        label=f"{method}, {budget / 1e6:g} M")
+        row[0].set_xscale("log")
+        row[0].set_xlabel("learner-steps simulated")
+        row[0].set_ylabel(f"{name}\nvalidation fitness (steps lived)")
+        handles, labels = row[0].get_legend_handles_labels()
+        unique = dict(zip(labels, handles, strict=True))
+        row[0].legend(unique.values(), unique.keys(), fontsize=7)
+        runs = comparison[comparison["scenario"] == name].sort_values(
+            ["method", "budget_steps"])
+        groups = list(runs.groupby(["method", "budget_steps"], sort=False))
+        for x, ((method, _), group) in enumerate(groups):
+            row[1].errorbar(np.full(len(group), x) + np.linspace(-0.2, 0.2, len(group)),
+                            group["test_fitness"],
+                            yerr=[group["test_fitness"] - group["test_fitness_low"],
+                                  group["test_fitness_high"] - group["test_fitness"]],
+                            fmt="o", color=METHOD_COLOURS.get(method, "gray"), capsize=2,
+                            alpha=0.6)
+            mean = group["test_fitness"].mean()
+            low, high = t_interval(group["test_fitness"].to_numpy())
+            low = max(low, 0.0)  # no fitness is below 0 (the tables cut alike)
+            row[1].errorbar([x + 0.3], [mean], yerr=[[mean - low], [high - mean]], fmt="D",
+                            color="black", capsize=3)
+        row[1].set_xticks(range(len(groups)),
+                          [f"{m}\n{b / 1e6:g} M" for (m, b), _ in groups])
+        row[1].set_ylim(bottom=0)
+        row[1].set_ylabel("test fitness (steps lived)")
+        row[1].set_title("each run: 90% interval over its test situations; black: the "
+                         "seeds' mean, 90% t interval", fontsize=8)
     save_figure(figure, path)

@@ -6,12 +6,7 @@ from pathlib import Path
 
 import pandas as pd
 
-# Eraqi et al. (2016), §5.4–5.5.
-PAPER_TABLE1 = [[2115, 544, 558, 432], [595, 2305, 136, 931], [159, 351, 3050, 460],
-                [559, 334, 1080, 2560]]
-PAPER_TABLE2 = [[1936], [2380, 1452], [1970, 2123, 1467]]
-PAPER_TABLE3 = [(16.33, 3.90), (20.05, 4.59), (16.82, 8.00), (13.49, 12.27)]
-PAPER_TABLE4 = [(16.33, 2.11), (20.05, 1.58), (16.82, 1.76), (13.49, 1.90)]
+from enn_traffic.report.paper import PAPER_TABLE1, PAPER_TABLE2, PAPER_TABLE3, PAPER_TABLE4
 
 
 def _pair(paper, here) -> str:

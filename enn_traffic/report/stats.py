@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import numpy as np
+import pandas as pd
 
 
 def bootstrap_interval(values: np.ndarray, rng: np.random.Generator, draws: int = 2000,
@@ -70,3 +71,12 @@ def above_share(first: np.ndarray, second: np.ndarray) -> float:
     ties counting half: a difference that no rescaling of the scores changes."""
     first, second = (np.asarray(v, dtype=np.float64)[:, None] for v in (first, second))
     return float(((first > second.T) + 0.5 * (first == second.T)).mean())
+
+
+def holm(p_values: pd.Series) -> pd.Series:
+    """Holm's step-down adjustment of a family of p-values (missing ones left out of the
+    family and missing in the result)."""
+    known = p_values.dropna().sort_values()
+    size = len(known)
+    adjusted = np.maximum.accumulate((size - np.arange(size)) * known.to_numpy())
+    return pd.Series(np.minimum(adjusted, 1.0), index=known.index).reindex(p_values.index)

@@ -39,7 +39,7 @@ from enn_traffic.sim.world import (
 # Evaluation episodes draw the test traffic (:mod:`enn_traffic.core.keys`), so a controller is never
 # deployed on the traffic it was trained on, whether its training drew new traffic every
 # generation or kept one set, nor on the traffic any choice was made on.
-EVALUATION_KEY = keys.TEST.start
+EVALUATION_KEY = keys.EVALUATION.start
 MAX_LABELLED = 9  # vehicles drawn with a legend entry each
 
 

@@ -88,11 +88,6 @@ class RunOutputs:
             raise InputError(f"not a run's outputs ({exc})", path) from None
 
 
-def ga_params(scenario: Scenario) -> ga.GAParams:
-    settings = scenario.ga.model_dump(exclude={"generations", "target_fitness"})
-    return ga.GAParams(**settings)
-
-
 def fingerprint(scenario: Scenario, others: Sequence[Scenario] = (),
                 population: np.ndarray | None = None, deciders: Sequence[object] = ()) -> str:
     """Identifies a run: its settings (everything but the number of generations) and the
@@ -361,7 +356,7 @@ def _evolve(scenario: Scenario, out: Path, evaluator: Evaluator | None, resume: 
         return done  # nothing to compute
     rows = done.to_dict("records")
     write_text(out / "scenario.toml", scenario.to_toml())
-    params = ga_params(scenario)
+    params = scenario.ga
     own_evaluator = evaluator is None
     evaluator = evaluator or make_evaluator(scenario)
     # The bar opens after this process's first generation, which may compile the kernels:

@@ -25,7 +25,7 @@ import numpy as np
 from numba import njit, prange
 
 from enn_traffic.config import Scenario
-from enn_traffic.config.kinds import NETWORK, STRATEGIES
+from enn_traffic.config.traffic import NETWORK, STRATEGIES
 from enn_traffic.core import keys
 from enn_traffic.core.errors import InputError
 from enn_traffic.core.neural import NetworkSpec, network_buffers

@@ -30,7 +30,7 @@ from typing import NamedTuple, Protocol
 import numpy as np
 from numba import njit
 
-from enn_traffic.config.kinds import NETWORK
+from enn_traffic.config.traffic import NETWORK
 from enn_traffic.core.neural import network_buffers
 from enn_traffic.sim.arena import ArenaWorld
 from enn_traffic.sim.rules import (

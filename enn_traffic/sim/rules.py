@@ -27,7 +27,7 @@ from typing import NamedTuple
 import numpy as np
 from numba import njit
 
-from enn_traffic.config.kinds import ACTION, NETWORK, NONE
+from enn_traffic.config.traffic import ACTION, NETWORK, NONE
 from enn_traffic.core.geometry import (
     body_corners,
     body_hits_walls,

@@ -19,27 +19,13 @@ from numba import njit
 from enn_traffic.config import Scenario, begin_time, route_files, sumo_config
 
 LEARNER = "enn_learner"
-
-
 LEARNER_TYPE = LEARNER + "_type"  # the learners' vehicle type (:func:`add_learner`)
-
-
 # The files of a SUMO start's own folder that are enn-traffic's, not the scenario's outputs.
 CONSOLE_LOG = "console.log"  # what SUMO printed
-
-
 ERROR_LOG = "errors.log"  # SUMO's errors, for messages
-
-
 SSM_FILE = "enn_learner_ssm.xml"  # the learners' SSM devices (closed loop)
-
-
 STATE_FILE = "enn_state.xml.gz"  # a warm-up being saved
-
-
 OWN_FILES = (CONSOLE_LOG, ERROR_LOG, SSM_FILE, STATE_FILE)
-
-
 RUN_LOG = "sumo.log"  # in the scenario's sumo_folder: every start's console, one after another
 
 
@@ -121,8 +107,6 @@ def listed(path: Path, folder: Path) -> str:
 
 # ``traffic.outputs`` that are SUMO options of their own (``ssm`` is a device, below).
 OUTPUT_OPTIONS = {"tripinfo": "tripinfo-output", "fcd": "fcd-output"}
-
-
 CLIMB = 64  # more folders deep than any place SUMO resolves an output from
 
 

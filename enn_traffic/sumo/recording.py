@@ -68,8 +68,6 @@ class Recording:
 
 
 RECORDED_BYTES = 8 + 8 * 8 + 2 * 8  # a vehicle's slot, its corners and its centre, a step
-
-
 MAX_RECORDING_BYTES = 4 * 2**30
 
 

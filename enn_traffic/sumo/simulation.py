@@ -37,21 +37,11 @@ from enn_traffic.sumo.command import (
 from enn_traffic.sumo.ssm import ssm_options
 
 FAR = 1e12  # where an empty slot's centre is put, out of every range
-
-
 _POSITION, _ANGLE = libsumo.VAR_POSITION, libsumo.VAR_ANGLE
-
-
 _VARIABLES = [_POSITION, _ANGLE]  # a vehicle's length and width are read once
-
-
 MAX_SLOTS = 4096  # vehicles on the network at once
-
-
 # Columns of the rows :meth:`Simulation.read` gives.
 ROW_SLOT, ROW_NUMBER, ROW_LENGTH, ROW_WIDTH, ROW_X, ROW_Y, ROW_ANGLE = range(7)
-
-
 MATCH_M = 10.0  # first radius in which SUMO maps the learner's position to a lane
 
 
@@ -310,8 +300,6 @@ class Simulation:
 
 
 EMPTY_TL_STATE = re.compile(r'(<tlLogic\b[^>]*?) state=""')
-
-
 DRIVE_WAYS = re.compile(r'^[ \t]*<(?:sub)?[dD]riveWay\b[^>]*/>[ \t]*\n', re.M)
 
 

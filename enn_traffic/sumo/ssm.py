@@ -15,8 +15,6 @@ from enn_traffic.sumo.command import LEARNER, SSM_FILE
 # where time-to-collision falls below 1.5 s, the deceleration to avoid a crash exceeds
 # 3 m/s², or the post-encroachment time falls below 2 s (docs/sumo.md, "Safety figures").
 SSM_THRESHOLDS = {"TTC": 1.5, "DRAC": 3.0, "PET": 2.0}
-
-
 SSM_RANGE_M = 50.0
 
 

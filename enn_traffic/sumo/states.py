@@ -67,8 +67,6 @@ def _departures(files: tuple[Path, ...]) -> tuple[float, float] | None:
 
 
 STATE_FOLDER_VARIABLE = "ENN_TRAFFIC_SUMO_STATES"
-
-
 STATE_VERSION = 6  # raised when the code that simulates and saves a warm-up changes
 
 

@@ -470,13 +470,13 @@ def test_evaluate_refuses_two_scenarios_of_one_name(capsys, tmp_path, monkeypatc
 def test_baseline_refuses_a_scenario_whose_name_its_folder_knows_with_other_content(
         capsys, tmp_path, monkeypatch):
     from enn_traffic.config import load_scenario
-    from enn_traffic.experiments.gradient_rl import campaign as baseline
+    from enn_traffic.experiments.gradient_rl import protocol
 
     monkeypatch.chdir(tmp_path)
     out = tmp_path / "baseline"
     out.mkdir()
-    baseline.check_protocol(out)
-    baseline.check_scenarios(out, [load_scenario(NARROW)])
+    protocol.check_protocol(out)
+    protocol.check_scenarios(out, [load_scenario(NARROW)])
     data = tomllib.loads(NARROW.read_text())
     data["track"]["net"] = str((SCENARIOS / "navigation_wide.toml").parent
                                / tomllib.loads((SCENARIOS / "navigation_wide.toml")
@@ -529,8 +529,7 @@ def _numeric_options() -> list[tuple[str, str]]:
     for name, command in commands.choices.items():
         for action in command._actions:
             kind = getattr(action.type, "__qualname__", "")
-            if action.option_strings and (kind.startswith("_int_in") or kind in (
-                    "_count", "_non_negative", "_positive", "_episodes", "_steps", "_seed")):
+            if action.option_strings and kind.startswith("int_in"):
                 found.append((name, action.option_strings[0]))
     return found
 

@@ -213,17 +213,17 @@ def test_the_summary_names_the_code_and_date_of_each_experiment(quick_fig7):
 
 
 def test_the_command_lines_bounds_are_the_schemas():
-    """cli.py writes the schema's bounds again (so that --help imports no schema)."""
-    from enn_traffic import cli
+    """cli/args.py writes the schema's bounds again (so that --help imports no schema)."""
+    from enn_traffic.cli import args
     from enn_traffic.config import EpisodeConfig, GAConfig, TrafficConfig
 
     def upper(model, name):
         return next(m.le for m in model.model_fields[name].metadata if hasattr(m, "le"))
 
-    for parse, bound in [(cli._count, upper(GAConfig, "generations")),
-                         (cli._count, upper(GAConfig, "population_size")),
-                         (cli._steps, upper(EpisodeConfig, "max_steps")),
-                         (cli._episodes, upper(TrafficConfig, "episodes"))]:
+    for parse, bound in [(args.count, upper(GAConfig, "generations")),
+                         (args.count, upper(GAConfig, "population_size")),
+                         (args.steps, upper(EpisodeConfig, "max_steps")),
+                         (args.episodes, upper(TrafficConfig, "episodes"))]:
         assert parse(str(bound)) == bound
         with pytest.raises(argparse.ArgumentTypeError):
             parse(str(bound + 1))

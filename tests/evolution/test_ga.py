@@ -1,6 +1,7 @@
 import numpy as np
 import pytest
 
+from enn_traffic.config import GAConfig
 from enn_traffic.learning import ga
 
 
@@ -54,7 +55,7 @@ def test_elites_survive_unchanged():
     rng = np.random.default_rng(5)
     population = rng.uniform(-1, 1, (20, 8))
     fitness = rng.random(20)
-    params = ga.GAParams(population_size=20, elite_count=2, mutation_probability=1.0)
+    params = GAConfig(population_size=20, elite_count=2, mutation_probability=1.0)
     child = ga.next_generation(rng, population, fitness, params)
     assert child.shape == population.shape
     top = np.argsort(-fitness)[:2]
@@ -65,7 +66,8 @@ def test_same_seed_same_generation():
     def one(seed):
         rng = np.random.default_rng(seed)
         population = ga.initial_population(rng, 30, 12, 1.0)
-        return ga.next_generation(rng, population, population.sum(axis=1), ga.GAParams(30, 5))
+        params = GAConfig(population_size=30, tournament_size=5)
+        return ga.next_generation(rng, population, population.sum(axis=1), params)
 
     np.testing.assert_array_equal(one(7), one(7))
     assert not np.array_equal(one(7), one(8))
@@ -75,7 +77,7 @@ def test_ga_improves_fitness_on_a_small_problem():
     """Maximise -||x - target||^2 over 10 genes: the paper's operators must make progress."""
     rng = np.random.default_rng(6)
     target = rng.uniform(-1, 1, 10)
-    params = ga.GAParams(population_size=60, tournament_size=4, elite_count=1)
+    params = GAConfig(population_size=60, tournament_size=4, elite_count=1)
     population = ga.initial_population(rng, 60, 10, 1.0)
     first = None
     for _ in range(60):
@@ -98,7 +100,7 @@ def test_ask_and_tell_drive_a_run_to_the_target_and_keep_its_best():
             self.fitness = -((population - target) ** 2).sum(axis=1)
             self.generation = generation
 
-    params = ga.GAParams(population_size=60, tournament_size=4, elite_count=1)
+    params = GAConfig(population_size=60, tournament_size=4, elite_count=1)
     state = ga.GAState(generation=0, population=ga.initial_population(rng, 60, 10, 1.0), rng=rng)
     seen, run = [], ga.generations(state, Scored, params)
     for number in range(60):
@@ -117,7 +119,7 @@ def test_tell_breeds_as_next_generation_does():
     """tell's children are next_generation's from the same generator state."""
     population = ga.initial_population(np.random.default_rng(1), 30, 12, 1.0)
     fitness = population.sum(axis=1)
-    params = ga.GAParams(30, 5, elite_count=2)
+    params = GAConfig(population_size=30, tournament_size=5, elite_count=2)
     told = ga.tell(ga.GAState(4, population, np.random.default_rng(9)), fitness, params)
     bred = ga.next_generation(np.random.default_rng(9), population, fitness, params)
     np.testing.assert_array_equal(told.population, bred)

@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 from conftest import two_cars
 
-from enn_traffic.learning import ga
+from enn_traffic.config import GAConfig
 from enn_traffic.learning.online import Evidence, VehicleGA, global_elites
 
 
@@ -25,7 +25,7 @@ def test_exhausted_population_breeds_with_the_global_elites(world):
     np.testing.assert_array_equal(elites[0], learners[1].population[0])
     np.testing.assert_array_equal(elites[1], learners[0].population[5])
     learners[0].index = 6
-    learners[0].advance(ga.GAParams(population_size=6, tournament_size=2, elite_count=2), elites)
+    learners[0].advance(GAConfig(population_size=6, tournament_size=2, elite_count=2), elites)
     np.testing.assert_array_equal(learners[0].population[:2], elites)
     assert learners[0].generation == 1 and learners[0].index == 0
 
@@ -56,7 +56,7 @@ def test_after_learning_a_vehicle_drives_the_fittest_of_its_last_whole_generatio
     np.testing.assert_array_equal(learner.evolved(), population[1])
     for fitness in (7.0, 9.0):
         learner.record(fitness)
-    learner.advance(ga.GAParams(population_size=4, tournament_size=2, elite_count=1))
+    learner.advance(GAConfig(population_size=4, tournament_size=2, elite_count=1))
     learner.record(100.0)  # the new generation's first: not whole yet
     np.testing.assert_array_equal(learner.evolved(), population[1])  # first of the two 9s
     assert (learner.generation, learner.tried) == (1, 5)
@@ -69,7 +69,7 @@ def test_the_authors_finishing_rule_keeps_a_chromosome_that_lived_2000_steps(wor
     from enn_traffic.learning.online import OnlineLearning
 
     length = world.spec.chromosome_length
-    params = ga.GAParams(population_size=3, tournament_size=2)
+    params = GAConfig(population_size=3, tournament_size=2)
 
     def learning() -> OnlineLearning:
         population = np.arange(3 * length, dtype=float).reshape(3, length)
@@ -103,7 +103,7 @@ def test_the_authors_breeding_never_takes_a_parent_from_the_worst(world):
     at random) no child carries a gene of the worst E, whose genes are all 5 (a value that
     mutation, drawing from [−1, 1], never writes); drawing from all P, children do."""
     length = world.spec.chromosome_length
-    params = ga.GAParams(population_size=20, tournament_size=1, elite_count=4)
+    params = GAConfig(population_size=20, tournament_size=1, elite_count=4)
     elites = np.full((4, length), 0.5)
 
     def children(from_best: bool) -> np.ndarray:

@@ -8,7 +8,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from enn_traffic.experiments import choosing, protocol
+from enn_traffic.experiments import choosing, families
 from enn_traffic.experiments.study import Study
 from enn_traffic.learning.ga import GAState
 from enn_traffic.runs.run import evolve
@@ -31,9 +31,9 @@ def test_candidates_are_every_generations_best_and_the_final_elites_each_once(sm
 def test_the_pick_rechecks_its_short_list_and_keeps_the_best_worst_strategy():
     """Table 1 and 2 choose by the worst included strategy, on more traffic for the short list."""
 
-    family = replace(protocol.ARENA, test_situations=2, recheck_situations=3)
+    family = replace(families.ARENA, test_situations=2, recheck_situations=3)
     study = Study(Path("unused"))
-    length = protocol.strategy_world(study, family, 1).spec.chromosome_length
+    length = families.strategy_world(study, family, 1).spec.chromosome_length
     candidates = np.random.default_rng(0).uniform(-1, 1, size=(16, length))
     strategies = [1, 3]
     picked = choosing.pick(study, family, candidates, strategies)
@@ -50,9 +50,9 @@ def test_table2_accepts_by_the_mean_less_standard_errors_on_other_situations():
     a threshold between a candidate's bound and its mean there is refused."""
     from enn_traffic.sim.world import SPUN
 
-    family = replace(protocol.ARENA, test_situations=2, recheck_situations=6)
+    family = replace(families.ARENA, test_situations=2, recheck_situations=6)
     study = Study(Path("unused"))
-    world = protocol.strategy_world(study, family, 1, 6)
+    world = families.strategy_world(study, family, 1, 6)
     candidate = np.random.default_rng(3).uniform(-1, 1, size=(1, world.spec.chromosome_length))
     results = world.evaluate(candidate, choosing.ACCEPTANCE_KEY)
     fitness = np.where(results.outcome[0] == SPUN, 0.0, results.steps[0])
@@ -69,9 +69,9 @@ def test_table2_accepts_by_the_mean_less_standard_errors_on_other_situations():
 def test_a_chromosome_is_driven_once_and_answers_as_a_fresh_world(monkeypatch):
     """The choice's lifetimes are the world's, whatever the order and repeats of the
     candidates; a chromosome asked about again is not driven again."""
-    family = replace(protocol.ARENA, test_situations=3, recheck_situations=4)
+    family = replace(families.ARENA, test_situations=3, recheck_situations=4)
     study = Study(Path("unused"))
-    world = protocol.strategy_world(study, family, 2)
+    world = families.strategy_world(study, family, 2)
     pool = np.random.default_rng(5).uniform(-1, 1, size=(4, world.spec.chromosome_length))
     fresh = world.evaluate(pool, choosing.VALIDATION_KEY)
     asked = pool[[2, 0, 2, 1]]
@@ -85,5 +85,5 @@ def test_a_chromosome_is_driven_once_and_answers_as_a_fresh_world(monkeypatch):
     np.testing.assert_array_equal(again, fresh.fitness[[3, 1, 0]])
     assert driven == [1]  # only pool[3] was new
     # a study of its own shares nothing with this one
-    assert protocol.strategy_world(Study(Path("unused")), family, 2) is not world
+    assert families.strategy_world(Study(Path("unused")), family, 2) is not world
     assert len(set(np.round(fresh.fitness, 6))) > 1  # the candidates drive differently

@@ -12,8 +12,8 @@ import pytest
 
 from enn_traffic.config.shipped import shipped_scenario
 from enn_traffic.experiments import EXPERIMENTS
+from enn_traffic.experiments.families import ARENA, CITY, SUMO
 from enn_traffic.experiments.lanekeeping import TEST_KEY, road_world
-from enn_traffic.experiments.protocol import ARENA, CITY, SUMO
 from enn_traffic.experiments.study import Study
 from enn_traffic.runs.controller import Controller
 

@@ -7,7 +7,7 @@ import pytest
 from enn_traffic.config.shipped import shipped_scenario
 from enn_traffic.experiments.ablation import AuthorsRules, start_poses
 from enn_traffic.experiments.departures import MEASURES, VARIANTS, departures_table
-from enn_traffic.experiments.protocol import ARENA
+from enn_traffic.experiments.families import ARENA
 from enn_traffic.sim.arena import ArenaWorld
 
 

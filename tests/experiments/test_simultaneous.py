@@ -145,7 +145,7 @@ def test_the_papers_winner_is_the_best_chromosome_of_highest_ga_fitness(tmp_path
     fitness, the first seed of equals; nothing the crowd showed."""
     from enn_traffic.config.shipped import shipped_scenario
     from enn_traffic.experiments.crowds.arena import paper_winner
-    from enn_traffic.experiments.protocol import ARENA, run_dir
+    from enn_traffic.experiments.families import ARENA, run_dir
     from enn_traffic.runs.controller import Controller
 
     scenario = shipped_scenario(ARENA.name(2))

@@ -7,7 +7,7 @@ from dataclasses import replace
 import pandas as pd
 import pytest
 
-from enn_traffic.experiments.protocol import SUMO
+from enn_traffic.experiments.families import SUMO
 from enn_traffic.experiments.study import Study
 from enn_traffic.experiments.sumo_family import family_experiments
 

@@ -5,7 +5,7 @@ from pathlib import Path
 
 import pandas as pd
 
-from enn_traffic.experiments import choosing, protocol, table2
+from enn_traffic.experiments import choosing, families, table2
 from enn_traffic.experiments.study import Study
 
 
@@ -13,20 +13,20 @@ def test_table2_evolves_a_wider_network_than_table1():
     """Table 2's one controller must hold every strategy's skill: its worlds are built with the
     family's incremental hidden layer, Table 1's with the scenarios' own (Figure 1's count)."""
 
-    incremental = protocol.ARENA.incremental()
-    (hidden,) = protocol.ARENA.incremental_hidden
-    assert protocol.ARENA.scenario(2).network.hidden == [3] and hidden != 3
+    incremental = families.ARENA.incremental()
+    (hidden,) = families.ARENA.incremental_hidden
+    assert families.ARENA.scenario(2).network.hidden == [3] and hidden != 3
     # (19 beams + bias) x hidden + (hidden + bias) x 2 outputs
     study = Study(Path("unused"))
-    assert protocol.strategy_world(study, incremental, 2, 1).spec.chromosome_length == (
+    assert families.strategy_world(study, incremental, 2, 1).spec.chromosome_length == (
         20 * hidden + (hidden + 1) * 2)
-    assert protocol.strategy_world(study, protocol.ARENA, 2, 1).spec.chromosome_length == (
+    assert families.strategy_world(study, families.ARENA, 2, 1).spec.chromosome_length == (
         20 * 3 + 4 * 2)
 
 
 # The arena family on a small budget: short lives, a small GA, few situations.
-SMALL_ARENA = replace(protocol.ARENA, quick={
-    **protocol.ARENA.quick, "incremental_seeds": (1, 2), "test_situations": 4,
+SMALL_ARENA = replace(families.ARENA, quick={
+    **families.ARENA.quick, "incremental_seeds": (1, 2), "test_situations": 4,
     "recheck_situations": 4,
     "ga": {"population_size": 16, "generations": 4, "elite_count": 2},
     "scenario_overrides": {"episode": {"max_steps": 300}}})
@@ -61,7 +61,7 @@ def test_table2_reports_the_evolution_whose_last_controller_does_best_on_validat
     saved = Controller.load(path)
     assert saved.layer_sizes == (19, *family.incremental_hidden, 2)
     assert round(saved.fitness, 1) == expected["average"].iloc[-1]
-    scenario = protocol.ARENA.scenario(4).source
+    scenario = families.ARENA.scenario(4).source
     result = subprocess.run([sys.executable, "-m", "enn_traffic", "evaluate", str(path),
                              str(scenario), "--quiet"], capture_output=True, text=True)
     assert result.returncode == 0, result.stderr

@@ -10,7 +10,6 @@ from conftest import local_and_spread
 from enn_traffic.config import LaneKeepingConfig, load_scenario
 from enn_traffic.core.errors import InputError
 from enn_traffic.learning import ga
-from enn_traffic.runs.run import ga_params
 from enn_traffic.sim.lane_keeping.road import lane_markings, make_env
 from enn_traffic.sim.world import LEFT_LANE, make_world
 
@@ -102,7 +101,7 @@ def test_evolution_learns_to_keep_the_lane(tmp_path):
     sc = scenario(tmp_path)
     world = make_world(sc)
     rng = np.random.default_rng(sc.seed)
-    params = ga_params(sc)
+    params = sc.ga
     population = ga.initial_population(rng, params.population_size,
                                        world.spec.chromosome_length, params.init_range)
     best = []

@@ -117,7 +117,6 @@ def test_learning_on_the_narrow_track_improves_fitness(root):
     before the first turns (location A, ~100 steps; paper §5.1); after learning, every one of
     the last four generations' best is past them and the population's mean has risen."""
     from enn_traffic.learning import ga
-    from enn_traffic.runs.run import ga_params
 
     scenario = load_scenario(root / "scenarios" / "navigation_narrow.toml").with_overrides(
         ga={"population_size": 40})
@@ -129,7 +128,7 @@ def test_learning_on_the_narrow_track_improves_fitness(root):
         fitness = world.evaluate(population).fitness
         bests.append(fitness.max())
         means.append(fitness.mean())
-        population = ga.next_generation(rng, population, fitness, ga_params(scenario))
+        population = ga.next_generation(rng, population, fitness, scenario.ga)
     assert bests[0] < 100 < min(bests[-4:])
     assert means[-1] > 3 * means[0]
 

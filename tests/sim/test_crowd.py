@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 from conftest import two_cars
 
-from enn_traffic.learning import ga
+from enn_traffic.config import GAConfig
 from enn_traffic.learning.online import Evidence, OnlineLearning, VehicleGA
 from enn_traffic.sim.crowd import Crowd
 from enn_traffic.sim.strategies import NETWORK, STRAIGHT
@@ -38,7 +38,7 @@ def test_learning_vehicle_moves_through_its_population(world):
     starts = np.array([[80.0, 50.0, 0.0], [20.0, 20.0, np.pi / 2]])
     arena = Crowd(world, starts, np.array([NETWORK, STRAIGHT]), seed=1)
     arena.run(3.0, np.zeros((2, length)), OnlineLearning(
-        [learner, None], ga.GAParams(population_size=3, tournament_size=2)))
+        [learner, None], GAConfig(population_size=3, tournament_size=2)))
     assert learner.index >= 1
     assert learner.fitness[0] == pytest.approx(20.0, abs=1.0)  # 20 m to the wall at x = 100
 
@@ -54,7 +54,7 @@ def test_learners_record_every_step_they_drove(world):
     arena = Crowd(world, starts, np.array([NETWORK, NETWORK]), seed=2)
     evidence = Evidence()
     run = arena.run(3.0, np.zeros((2, length)), OnlineLearning(
-        learners, ga.GAParams(population_size=4, tournament_size=2), evidence=evidence))
+        learners, GAConfig(population_size=4, tournament_size=2), evidence=evidence))
     assert sum(evidence.steps.values()) == 2 * 30
     assert sum(evidence.losses.values()) == run.collisions.sum() + run.spins.sum() >= 1
     driven = {row.tobytes() for learner in learners
@@ -72,7 +72,7 @@ def test_each_learner_ends_with_a_controller_of_its_own_lives(world):
                 for v in range(2)]
     starts = np.array([[80.0, 50.0, 0.0], [20.0, 50.0, np.pi]])
     arena = Crowd(world, starts, np.array([NETWORK, NETWORK]), seed=2)
-    learning = OnlineLearning(learners, ga.GAParams(population_size=4, tournament_size=2))
+    learning = OnlineLearning(learners, GAConfig(population_size=4, tournament_size=2))
     arena.run(6.0, np.zeros((2, length)), learning)  # each loses at least one life
     controllers = learning.own_controllers()
     assert controllers.shape == (2, length)
@@ -109,7 +109,7 @@ def test_a_life_at_the_cap_ends_its_chromosome_trial_without_a_respawn(world):
     starts = np.array([[10.0, 50.0, 0.0], [20.0, 10.0, np.pi / 2]])
     arena = Crowd(world, starts, np.array([NETWORK, STRAIGHT]), seed=1)
     learning = OnlineLearning([learner, None],
-                              ga.GAParams(population_size=2, tournament_size=2), life_cap=10)
+                              GAConfig(population_size=2, tournament_size=2), life_cap=10)
     run = arena.run(2.5, np.zeros((2, length)), learning)
     assert run.collisions[0] == 0 and learner.lives == 0
     assert learner.generation == 1 and learner.tried == 2

@@ -5,10 +5,9 @@ x = 15 and 145, learners 1 m a step (10 m/s, 0.1 s)."""
 import numpy as np
 import pytest
 
-from enn_traffic.config import load_scenario
+from enn_traffic.config import GAConfig, load_scenario
 from enn_traffic.config.shipped import shipped_scenario
 from enn_traffic.core import keys
-from enn_traffic.learning import ga
 from enn_traffic.learning.online import OnlineLearning, VehicleGA
 from enn_traffic.sim.sumo.crowd import SumoCrowd
 from enn_traffic.sim.world import make_world
@@ -80,7 +79,7 @@ def test_learners_move_through_their_populations(world):
     21 steps for the learner heading south), its fitness recorded, the next one takes over."""
     length = world.spec.chromosome_length
     learners = [VehicleGA(np.zeros((3, length)), np.random.default_rng(k)) for k in range(2)]
-    learning = OnlineLearning(learners, ga.GAParams(population_size=3, tournament_size=2))
+    learning = OnlineLearning(learners, GAConfig(population_size=3, tournament_size=2))
     starts = np.array([[80.0, 5.5, -np.pi / 2], [30.0, 5.0, 0.0]])
     with SumoCrowd(world, seed=1, starts=starts) as crowd:
         run = crowd.run(2.5, straight(world), learning)
@@ -195,7 +194,7 @@ def test_a_learner_at_the_cap_drives_on_with_its_next_chromosome(world):
     starts = np.array([[20.0, 5.0, 0.0], [20.0, -5.0, 0.0]])
     length = world.spec.chromosome_length
     learners = [VehicleGA(np.zeros((2, length)), np.random.default_rng(k)) for k in range(2)]
-    learning = OnlineLearning(learners, ga.GAParams(population_size=2, tournament_size=2),
+    learning = OnlineLearning(learners, GAConfig(population_size=2, tournament_size=2),
                               life_cap=10)
     with SumoCrowd(world, seed=1, starts=starts) as crowd:
         run = crowd.run(2.5, straight(world), learning)
@@ -213,7 +212,7 @@ def test_a_crowds_conflicts_are_the_same_whatever_ran_before_in_the_process():
     the same spans count other conflicts (libsumo keeps state from one start to the next:
     docs/sumo.md, "One SUMO start, one process")."""
     from enn_traffic.experiments.crowds.sumo import _driving_arm, crowd_world
-    from enn_traffic.experiments.protocol import CITY, SUMO
+    from enn_traffic.experiments.families import CITY, SUMO
     from enn_traffic.sumo.fresh import fresh
 
     world = crowd_world(SUMO, 3)

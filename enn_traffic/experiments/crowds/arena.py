@@ -54,35 +54,31 @@ import pandas as pd
 from tqdm import tqdm
 
 from enn_traffic.config import Scenario
-from enn_traffic.config.kinds import STRATEGIES
 from enn_traffic.config.shipped import shipped_scenario
+from enn_traffic.config.traffic import STRATEGIES
 from enn_traffic.core import keys
 from enn_traffic.core.io import write_csv
 from enn_traffic.core.progress import slow_step, terminal
 from enn_traffic.experiments.choosing import evolved_candidates, final_population
 from enn_traffic.experiments.common import distinct, save_arrays, save_controller
-from enn_traffic.experiments.protocol import ARENA, run_dir
+from enn_traffic.experiments.families import ARENA, run_dir
 from enn_traffic.experiments.study import Study
 from enn_traffic.learning import ga
 from enn_traffic.learning.online import Evidence, OnlineLearning, VehicleGA
-from enn_traffic.report.paper_tables import PAPER_TABLE3, PAPER_TABLE4
+from enn_traffic.report.paper import PAPER_REDUCTION
 from enn_traffic.runs.controller import Controller
-from enn_traffic.runs.run import ga_params
 from enn_traffic.sim.arena import ArenaWorld
 from enn_traffic.sim.crowd import Crowd, CrowdRun
 from enn_traffic.sim.strategies import NETWORK
 from enn_traffic.sumo.fresh import fresh_shares
 
 SECONDS = 100.0  # the paper's training time; each measured span and learning-curve window
-SITUATION_KEY = keys.CROWD_TEST.start  # the situations whose rates are reported
-VALIDATION_KEY = keys.CROWD_VALIDATION.start  # the situations that choose the winner
+SITUATION_KEY = keys.ARENA_CROWD_TEST.start  # the situations whose rates are reported
+VALIDATION_KEY = keys.CROWD_CHOICE.start  # the situations that choose the winner
 VALIDATION_SITUATIONS = 20
 DRAWN_SECONDS = 20.0
 # Table 3's paper-way winner against ours: 90% for the four strategies together (Bonferroni)
 PAPER_WAY_LEVEL = 1 - 0.1 / 4
-# Mean reduction of the collision rate over the four strategies in the paper's Tables 3 and 4.
-PAPER_REDUCTION = {name: float(np.mean([1 - after / before for before, after in table]))
-                   for name, table in (("table3", PAPER_TABLE3), ("table4", PAPER_TABLE4))}
 # Table 4's arms over the span after learning, and the column each is compared with
 ARMS = {"population": "each vehicle's evolved controller",
         "initial_after": "the initial drivers driving on",
@@ -197,7 +193,7 @@ def learn_together(world: ArenaWorld, situation: int, winner: np.ndarray, evolve
                 learner.rng, sc.ga.population_size, world.spec.chromosome_length,
                 sc.ga.init_range))
             learner.fitness = np.zeros(len(learner.population))
-    online = OnlineLearning(learners, ga_params(sc), share_elites=True,
+    online = OnlineLearning(learners, sc.ga, share_elites=True,
                             elite_count=sc.ga.elite_count, life_cap=learning.life_cap_steps,
                             finish_steps=learning.finish_steps)
     genes = np.tile(winner, (world.vehicles, 1))

@@ -46,7 +46,7 @@ import hashlib
 import json
 import os
 from collections.abc import Mapping
-from dataclasses import asdict, dataclass, field, replace
+from dataclasses import asdict, dataclass, field
 from pathlib import Path
 
 import numpy as np
@@ -67,24 +67,21 @@ from enn_traffic.experiments.crowds.arena import (
     learning_ends,
     table4_comparisons,
 )
-from enn_traffic.experiments.protocol import SUMO, Family
+from enn_traffic.experiments.families import SUMO, Family
 from enn_traffic.experiments.study import Study
 from enn_traffic.learning import ga
 from enn_traffic.learning.online import OnlineLearning, VehicleGA
 from enn_traffic.report.stats import bootstrap_interval
 from enn_traffic.runs.controller import Controller
-from enn_traffic.runs.run import ga_params
 from enn_traffic.sim.sumo.crowd import SumoCrowd
 from enn_traffic.sim.sumo.world import SumoWorld
 from enn_traffic.sim.world import make_world
 from enn_traffic.sumo.fresh import fresh, fresh_calls
 
-# The situations whose rates are reported: fresh in CROWD_TEST, past those that two designs
-# measured before this one (values not read; docs/departures.md): learners that re-entered
-# from the network's bounding box (a crash in the city, from + 0), and learners whose GA kept
-# its whole population of 20 as elites, so bred no children (from + 10^6).
-SITUATION_KEY = keys.CROWD_TEST.start + 2_000_000
-VALIDATION_KEY = keys.CROWD_VALIDATION.start  # the situations that chose SUMO_LEARNING
+# The situations whose rates are reported, and those that chose SUMO_LEARNING (the ledger,
+# enn_traffic.core.keys)
+SITUATION_KEY = keys.SUMO_CROWD_TEST.start
+VALIDATION_KEY = keys.CROWD_CHOICE.start
 # Table 4's paired differences among SUMO traffic (no re-ranked arm: a live SUMO has no fork)
 CONTRASTS = [("population", "initial_after"), ("population", "winner_after")]
 CONFLICTS = ["initial", "winner", "initial_after", "winner_after", "population"]
@@ -135,7 +132,7 @@ def _learning(world: SumoWorld, evolved: np.ndarray, situation: int, learning: S
                 learner.rng, learning.population_size, world.spec.chromosome_length,
                 scenario.ga.init_range))
             learner.fitness = np.zeros(len(learner.population))
-    params = replace(ga_params(scenario), elite_count=learning.elite_count)
+    params = scenario.ga.model_copy(update={"elite_count": learning.elite_count})
     return OnlineLearning(learners, params, share_elites=True,
                           elite_count=learning.elite_count, life_cap=learning.life_cap_steps,
                           finish_steps=learning.finish_steps)

@@ -34,7 +34,7 @@ from enn_traffic.config import Scenario
 from enn_traffic.config.shipped import shipped_scenario
 from enn_traffic.core import progress
 from enn_traffic.core.io import write_atomic
-from enn_traffic.experiments.gradient_rl import campaign as baseline
+from enn_traffic.experiments.gradient_rl import campaign, policy, protocol, scoring, stats
 from enn_traffic.roads.network import read_net
 
 # Candidate ``spin_variance`` values (m²), the paper's first; gains of the centre-keeping
@@ -71,7 +71,7 @@ def spin_table(scenario: Scenario, keys: list[int], candidates=CANDIDATES,
     for variance in candidates:
         ruled = scenario.with_overrides(episode={"spin_variance": variance})
         for gain in gains:
-            table = baseline.policy_lives(ruled, centre_keeping(gain, beam_range), keys)
+            table = scoring.policy_lives(ruled, centre_keeping(gain, beam_range), keys)
             rows.append({"scenario": scenario.name, "spin_variance": variance, "gain": gain,
                          "situations": len(table),
                          "spins": int((table["outcome"] == "spin").sum()),
@@ -96,8 +96,8 @@ def write(out: Path) -> pd.DataFrame:
     """``out/spin_rule.csv``: the narrow track's table on the comparison's validation
     situations."""
     narrow = shipped_scenario("navigation_narrow")
-    validation, _ = baseline.held_out_keys(narrow)
-    table = spin_table(baseline.scoring_scenario(narrow), validation)
+    validation, _ = scoring.held_out_keys(narrow)
+    table = spin_table(scoring.scoring_scenario(narrow), validation)
     out.mkdir(parents=True, exist_ok=True)
     write_atomic(out / "spin_rule.csv", lambda handle: table.to_csv(handle, index=False))
     return table
@@ -110,9 +110,9 @@ def controller_act(folder: Path, scenario: Scenario, method: str, budget: int,
     from enn_traffic.envs.rangefinder import action_of, rangefinder_world
     from enn_traffic.runs.controller import Controller
 
-    path = baseline.controller_path(folder, scenario.name, method, budget, seed)
+    path = campaign.controller_path(folder, scenario.name, method, budget, seed)
     if method != "GA":
-        return baseline.NumpyPolicy.load(path)
+        return policy.NumpyPolicy.load(path)
     chromosome = Controller.load(path).chromosome[None]
     spec = rangefinder_world(scenario).spec
     return lambda observation: action_of(
@@ -138,28 +138,28 @@ def travel(folder: Path, situations: int = 32) -> pd.DataFrame:
     keys only, ``folder/travel.csv``, a row written as each run ends: a stopped travel goes
     on from the runs it has (:func:`_travelled`)."""
     runs = pd.read_csv(folder / "comparison.csv")
-    partner = {name: other for pair in baseline.RULE_PAIRS
+    partner = {name: other for pair in stats.RULE_PAIRS
                for name, other in (pair, pair[::-1])}
     trained = {name: shipped_scenario(name) for name in partner}
-    scored = {name: baseline.scoring_scenario(scenario) for name, scenario in trained.items()}
+    scored = {name: scoring.scoring_scenario(scenario) for name, scenario in trained.items()}
     ends_of = {name: dead_ends(scenario) for name, scenario in trained.items()}
-    validation_of = {name: baseline.held_out_keys(scenario)[0]  # once a scenario, not a run
+    validation_of = {name: scoring.held_out_keys(scenario)[0]  # once a scenario, not a run
                      for name, scenario in scored.items()}
     path = folder / "travel.csv"
     rows = _travelled(path, situations)
-    done = {tuple(row[key] for key in baseline.RUN_KEYS) for row in rows}
+    done = {tuple(row[key] for key in protocol.RUN_KEYS) for row in rows}
     pair_runs = [run for run in runs[runs["scenario"].isin(partner)].itertuples()
-                 if tuple(getattr(run, key) for key in baseline.RUN_KEYS) not in done]
+                 if tuple(getattr(run, key) for key in protocol.RUN_KEYS) not in done]
     for run in progress.bar(len(pair_runs), "travel", "run", iterable=pair_runs):
         scenario, other = scored[run.scenario], scored[partner[run.scenario]]
         validation = validation_of[run.scenario]
         act = controller_act(folder, scenario, run.method, run.budget_steps, run.seed)
-        dtype = baseline.observation_dtype(run.method)
-        lives = baseline.policy_lives(scenario, act, validation, situations, tail=TAIL,
+        dtype = scoring.observation_dtype(run.method)
+        lives = scoring.policy_lives(scenario, act, validation, situations, tail=TAIL,
                                       observation_dtype=dtype)
-        crossed = baseline.policy_lives(other, act, validation, situations,
+        crossed = scoring.policy_lives(other, act, validation, situations,
                                         observation_dtype=dtype)
-        own_start = baseline.policy_lives(trained[run.scenario], act, validation[:1], 1,
+        own_start = scoring.policy_lives(trained[run.scenario], act, validation[:1], 1,
                                           observation_dtype=dtype)
         long = lives[lives["steps"] > LONG]
         visits = np.array([end_visits(lived, ends_of[run.scenario]) for lived in long["path"]])
@@ -182,7 +182,7 @@ def travel(folder: Path, situations: int = 32) -> pd.DataFrame:
     return pd.DataFrame(rows, columns=TRAVEL_COLUMNS)
 
 
-TRAVEL_COLUMNS = (*baseline.RUN_KEYS, "situations", "long_lives", "capped", "median_distance",
+TRAVEL_COLUMNS = (*protocol.RUN_KEYS, "situations", "long_lives", "capped", "median_distance",
                   "least_tail_extent", "circling", "turned", "median_end_visits", "fitness",
                   *(f"fitness_cap_{cap}" for cap in CAPS), "training_start_fitness",
                   "other_rule_fitness", "other_rule_spins")

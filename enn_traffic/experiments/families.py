@@ -1,4 +1,4 @@
-"""The protocol of the dynamic-traffic experiments (paper §5.3–5.4): families of traffic
+"""The families of the dynamic-traffic experiments (paper §5.3–5.4): sets of traffic
 strategies (four, as the paper's), the settings each experiment runs them with, and where each
 run lives.
 
