@@ -10,6 +10,12 @@ from enn_traffic.core.registry import MovedModules
 
 __version__ = "0.1.0"
 
+# The package's folders, its layers, lowest first: a module imports only from its own folder
+# and the folders before it (tests/test_imports.py checks every import; docs/design.md,
+# "Architecture", is rendered from this list and each folder's docstring).
+LAYERS = ("core", "report", "roads", "config", "sumo", "sim", "learning", "envs", "runs",
+          "experiments", "bench", "cli")
+
 
 def _numba_cache_dir() -> str:
     """numba's on-disk cache checks only each function's own file, not the modules it calls;
@@ -25,8 +31,8 @@ if "NUMBA_CACHE_DIR" not in os.environ:
         prune_kernel_folders(Path(os.environ["NUMBA_CACHE_DIR"]))
 # numba's parallel loops run on OpenMP (libgomp), whose idle threads spin by default: beside
 # other busy processes (pytest -n 2, a process pool, a second user) a parallel region then
-# waits for a descheduled spinner, and two threads ran slower than one. Idle threads
-# that sleep cost little on a quiet machine (docs/bench.md, "Sharing the cores"; issue 62).
+# waits for a descheduled spinner, and two threads run slower than one. Idle threads
+# that sleep cost little on a quiet machine (docs/bench.md, "Sharing the cores").
 # Read once, when libgomp loads, so before any kernel runs; a user's own setting of either
 # stands.
 if "OMP_WAIT_POLICY" not in os.environ and "GOMP_SPINCOUNT" not in os.environ:

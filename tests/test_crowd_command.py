@@ -76,7 +76,7 @@ def test_a_resumed_crowd_measures_nothing_again_and_another_folder_is_refused(cr
     assert main(["crowd", str(scenario), "--out", str(out), "--resume", "--quiet"]) == 0
     assert {p: p.stat().st_mtime_ns for p in kept} == kept
     situation = json.loads((out / "crowds" / "strategy1_situation0.json").read_text())
-    assert situation["settings"]["seconds"] == 10.0
+    assert situation["settings"]["learning_s"] == 10.0
 
 
 def test_a_scenario_without_sumo_traffic_is_refused(root, tmp_path, capsys):

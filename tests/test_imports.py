@@ -1,6 +1,7 @@
 """The import graph runs one way (docs/design.md, "Architecture"): every module of the package
-belongs to a part (a top-level module or folder), the parts stand in layers, and a module
-imports only from its own part or from parts listed before its own. Checked over every
+belongs to a part (a folder, or the package's own ``__init__`` and ``__main__``), the parts
+stand in layers (``enn_traffic.LAYERS``), and a module imports only from its own part or from
+parts listed before its own. Checked over every
 module's every import (at the top or inside a function), so that no circle can form."""
 
 import ast
@@ -10,11 +11,9 @@ from pathlib import Path
 
 import pytest
 
-PACKAGE = Path(__file__).resolve().parents[1] / "enn_traffic"
+from enn_traffic import LAYERS  # the layers, lowest first: the package's folders
 
-# The layers, lowest first: each a folder of the package (docs/design.md, "Architecture").
-LAYERS = ["core", "report", "roads", "config", "sumo", "sim", "learning", "envs", "runs",
-          "experiments", "bench", "cli"]
+PACKAGE = Path(__file__).resolve().parents[1] / "enn_traffic"
 # The package's ``__init__`` sets up numba's cache from core; ``__main__`` runs the command line.
 ORDER = ["core", "enn_traffic", *LAYERS[1:], "__main__"]
 

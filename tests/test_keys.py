@@ -12,7 +12,8 @@ from enn_traffic.core import keys
 
 def test_key_ranges_are_disjoint():
     for (a, first), (b, second) in combinations(keys.RANGES.items(), 2):
-        overlap = range(max(first.start, second.start), min(first.stop, second.stop))
+        overlap = range(max(first.keys.start, second.keys.start),
+                        min(first.keys.stop, second.keys.stop))
         assert len(overlap) == 0, f"{a} and {b} share keys"
 
 
@@ -20,7 +21,7 @@ def test_every_allocation_lies_in_one_range_and_shares_no_key():
     assert len(keys.ALLOCATIONS) >= 10
     for name, allocation in keys.ALLOCATIONS.items():
         holders = [r for r, block in keys.RANGES.items()
-                   if allocation.keys.start in block and allocation.keys[-1] in block]
+                   if allocation.keys.start in block.keys and allocation.keys[-1] in block.keys]
         assert len(holders) == 1, name
         assert holders[0] not in ("training", "retired test", "retired crowd test",
                                   "spent crowd test", "design trials"), name

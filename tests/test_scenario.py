@@ -178,3 +178,31 @@ def test_random_network_traffic_that_does_not_fit_is_refused(root):
     with pytest.raises(InputError, match="traffic.network_hidden"):
         load_scenario(root / "scenarios" / "arena_strategy1.toml").with_overrides(
             network={"hidden": [2]})
+
+
+def test_every_scenario_key_is_described():
+    """docs/scenarios.md is written from the schema's descriptions: none may be missing."""
+    from typing import get_args
+
+    from pydantic import BaseModel
+
+    from enn_traffic.config import Scenario
+
+    def models(annotation) -> list[type[BaseModel]]:
+        if isinstance(annotation, type) and issubclass(annotation, BaseModel):
+            return [annotation]
+        return [model for argument in get_args(annotation) for model in models(argument)]
+
+    def missing(model: type[BaseModel], prefix: str) -> list[str]:
+        found = []
+        for name, field in model.model_fields.items():
+            if field.exclude:
+                continue
+            sections = models(field.annotation)
+            if field.description is None and not sections:
+                found.append(prefix + name)
+            for section in sections[:1]:
+                found += missing(section, f"{prefix}{name}.")
+        return found
+
+    assert missing(Scenario, "") == []

@@ -40,9 +40,10 @@ class SensorConfig(Section):
 
     @model_serializer(mode="wrap")
     def _without_empty_rings(self, handler):
-        """Leave ``rings`` out when there are none: a scenario written before rings existed
-        keeps its settings' text (its ``scenario.toml``, which ``--resume`` compares, and the
-        name of its run folder in a study, experiments/study.py)."""
+        """Leave ``rings`` out when there are none, so that a scenario of one fan of beams
+        reads the same whether or not it names ``rings = []`` (its ``scenario.toml``, which
+        ``--resume`` compares, and the name of its run folder in a study,
+        experiments/study.py)."""
         data = handler(self)
         if not self.rings:
             data.pop("rings", None)

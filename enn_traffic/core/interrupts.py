@@ -3,7 +3,7 @@
 The command's signal handlers (``enn_traffic.cli``) raise the stop where the main thread is
 and record it here; a long loop looks here between its steps (:func:`raise_if_requested`), so
 that it stops even when Python swallowed that exception on the way (one raised inside a
-finaliser is printed and dropped: a run once went on for minutes after its Ctrl-C).
+finaliser is printed and dropped, and the loop would go on).
 """
 
 from __future__ import annotations

@@ -196,12 +196,13 @@ def _same_file(one: str | Path, other: str | Path) -> bool:
         return False
 
 
-def check_output_folder(path: str | Path, key: str | None = "--out") -> None:
-    """Could a command write its files into the folder ``path`` (made if missing)?"""
+def check_output_folder(path: str | Path) -> None:
+    """Could a command write its files into the folder ``path`` (made if missing; its
+    ``--out``)?"""
     path = Path(path)
     if path.exists() and not path.is_dir():
-        raise InputError("is a file, not a folder", path, key)
-    _writable(path, path, key)
+        raise InputError("is a file, not a folder", path, "--out")
+    _writable(path, path, "--out")
 
 
 _held: dict[Path, tuple[int, int]] = {}  # locked folder: (descriptor, times entered)
@@ -280,7 +281,7 @@ def folder_lock(folder: str | Path) -> Iterator[None]:
 
 
 @contextlib.contextmanager
-def file_lock(path: str | Path, key: str | None = "--out") -> Iterator[None]:
+def file_lock(path: str | Path) -> Iterator[None]:
     """Hold a lock on the output file ``path`` while the block runs, so that a second command
     writing the same file is refused (exit 2, naming the process) instead of one result
     silently replacing the other's. The lock is a hidden file beside it, ``.NAME.lock``,
@@ -292,7 +293,7 @@ def file_lock(path: str | Path, key: str | None = "--out") -> Iterator[None]:
             path.parent.mkdir(parents=True, exist_ok=True)
             descriptor = os.open(lock, os.O_RDWR | os.O_CREAT | os.O_NOFOLLOW, 0o644)
         except OSError as exc:
-            raise InputError(f"cannot lock the file: {exc.strerror or exc}", path, key) \
+            raise InputError(f"cannot lock the file: {exc.strerror or exc}", path, "--out") \
                 from None
         try:
             fcntl.flock(descriptor, fcntl.LOCK_EX | fcntl.LOCK_NB)
@@ -300,9 +301,9 @@ def file_lock(path: str | Path, key: str | None = "--out") -> Iterator[None]:
             os.close(descriptor)
             if exc.errno in (errno.EWOULDBLOCK, errno.EACCES):
                 raise InputError(f"another command is writing this file ({_holder(lock)}); "
-                                 "wait for it to end, or give another file", path, key) \
+                                 "wait for it to end, or give another file", path, "--out") \
                     from None
-            raise InputError(f"cannot lock the file: {exc.strerror}", path, key) from None
+            raise InputError(f"cannot lock the file: {exc.strerror}", path, "--out") from None
         try:  # the lock file its last holder removed between our open and our lock: again
             if os.fstat(descriptor).st_ino == os.stat(lock, follow_symlinks=False).st_ino:
                 break
@@ -317,14 +318,14 @@ def file_lock(path: str | Path, key: str | None = "--out") -> Iterator[None]:
         os.close(descriptor)
 
 
-SUMO_FOLDER_PREFIX = "enn-sumo-"  # a SUMO start's own folder (traffic.sumo.Simulation)
+SUMO_FOLDER_PREFIX = "enn-sumo-"  # a SUMO start's own folder (sumo.simulation.Simulation)
 
 
-def process_folder(prefix: str = SUMO_FOLDER_PREFIX) -> Path:
-    """A new folder in the system's temporary folder, named ``PREFIX<pid>-...`` by the
+def process_folder() -> Path:
+    """A new folder in the system's temporary folder, named ``enn-sumo-<pid>-...`` by the
     process that makes it, so that :func:`sweep_process_folders` can tell one whose process
     was killed before it could remove it."""
-    return Path(tempfile.mkdtemp(prefix=f"{prefix}{os.getpid()}-"))
+    return Path(tempfile.mkdtemp(prefix=f"{SUMO_FOLDER_PREFIX}{os.getpid()}-"))
 
 
 def _ended(pid: int) -> bool:
@@ -342,8 +343,7 @@ def _ended(pid: int) -> bool:
         return False
 
 
-def sweep_process_folders(prefix: str = SUMO_FOLDER_PREFIX, pid: int | None = None,
-                          wait_s: float = 0.0) -> list[Path]:
+def sweep_process_folders(pid: int | None = None, wait_s: float = 0.0) -> list[Path]:
     """Remove this user's folders of :func:`process_folder` whose process has ended (a
     fresh process or worker killed on Ctrl-C, a SIGKILL); with ``pid``, that process's
     only, waiting up to ``wait_s`` seconds for it to end. Returns the folders removed."""
@@ -351,6 +351,7 @@ def sweep_process_folders(prefix: str = SUMO_FOLDER_PREFIX, pid: int | None = No
     import time
 
     base = Path(tempfile.gettempdir())
+    prefix = SUMO_FOLDER_PREFIX
     pattern = f"{prefix}{pid}-*" if pid is not None else f"{prefix}*-*"
     deadline = time.monotonic() + wait_s
     while pid is not None and not _ended(pid) and time.monotonic() < deadline:

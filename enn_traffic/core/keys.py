@@ -35,13 +35,6 @@ RETIRED_CROWD_TEST = range(5 * SPAN, 6 * SPAN)
 # network"): no result is reported on them and no experiment reads them; tests draw here.
 DESIGN_TRIALS = range(8 * SPAN, 9 * SPAN)
 
-RANGES = {"training": TRAINING, "test": TEST, "validation": VALIDATION,
-          "acceptance": ACCEPTANCE, "crowd validation": CROWD_VALIDATION,
-          "crowd test": CROWD_TEST, "ablation crowd test": ABLATION_CROWD_TEST,
-          "spent crowd test": SPENT_CROWD_TEST, "retired test": RETIRED_TEST,
-          "retired crowd test": RETIRED_CROWD_TEST, "design trials": DESIGN_TRIALS}
-
-
 @dataclass(frozen=True)
 class Allocation:
     """The keys one use reads (at most), in one of :data:`RANGES`, and who reads them."""
@@ -52,6 +45,30 @@ class Allocation:
     @property
     def start(self) -> int:
         return self.keys.start
+
+
+# Every range, with who reads it.
+RANGES = {
+    "training": Allocation(TRAINING, "generation g draws key g"),
+    "validation": Allocation(VALIDATION, "choosing a controller among a run's candidates"),
+    "acceptance": Allocation(ACCEPTANCE, "Table 2: a candidate's acceptance by its lower "
+                             "bound"),
+    "crowd validation": Allocation(CROWD_VALIDATION, "Tables 3–4: choosing the winning "
+                                   "chromosome, the learning time and life cap"),
+    "test": Allocation(TEST, "what is reported: `evaluate`, Tables 1–2, the figures"),
+    "crowd test": Allocation(CROWD_TEST, "Tables 3–4 and `regime.csv`: the situations whose "
+                             "rates are reported"),
+    "ablation crowd test": Allocation(ABLATION_CROWD_TEST, "Table 4's ablation and the "
+                                      "departures from the authors' rules"),
+    "spent crowd test": Allocation(SPENT_CROWD_TEST, "read twice by earlier designs of Table "
+                                   "4; nothing reads it any more"),
+    "retired test": Allocation(RETIRED_TEST, "read while the design was still being chosen; "
+                               "never used again"),
+    "retired crowd test": Allocation(RETIRED_CROWD_TEST, "read while the design was still "
+                                     "being chosen; never used again"),
+    "design trials": Allocation(DESIGN_TRIALS, "situations design trials were scored on; "
+                                "nothing reported, no experiment reads them (tests draw here)"),
+}
 
 
 def _within(block: range, offset: int, count: int) -> range:
@@ -93,7 +110,7 @@ DEPARTURES = Allocation(_within(ABLATION_CROWD_TEST, 3_000_000, 1_000_000),
                         "the departures from the authors' rules")
 
 ALLOCATIONS = {name: value for name, value in globals().items()
-               if isinstance(value, Allocation)}
+               if isinstance(value, Allocation) and name.isupper()}
 
 
 def is_training(key: int) -> bool:

@@ -87,8 +87,8 @@ def make_env(scenario: str | Path | Scenario | None = None, render_mode: str | N
     (:class:`~enn_traffic.envs.rangefinder.RangefinderEnv`) or of a SUMO scenario
     (:class:`~enn_traffic.envs.sumo.SumoEnv`); ``track`` picks one of a scenario of several
     (``navigation_mixed``); ``observation_dtype="float64"``: the readings unrounded, to
-    replay the GA's lives exactly (float32 moved a saved controller's life by two steps of
-    1,371, docs/envs.md)."""
+    replay the GA's lives exactly (float32 readings part from them over long lives,
+    docs/envs.md)."""
     if scenario is None:
         raise ValueError(f"{NAMESPACE}/Scenario-v0 needs scenario=PATH (a scenario file) or a "
                          "shipped scenario's name")

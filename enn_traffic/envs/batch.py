@@ -26,6 +26,7 @@ from enn_traffic.config.traffic import ACTION
 from enn_traffic.core.progress import slow_step
 from enn_traffic.sim.arena import ArenaWorld, settle, start_world
 from enn_traffic.sim.rules import Vehicles, Work, copy_row, copy_rows, drive_all, sense, wall_arrays
+from enn_traffic.sim.sensors import reading_count
 from enn_traffic.sim.world import RUNNING, SPUN
 
 
@@ -83,7 +84,7 @@ class Worlds(NamedTuple):
     @classmethod
     def empty(cls, count: int, world: ArenaWorld, genes: int) -> Worlds:
         """Room for ``count`` worlds of ``world`` whose drivers have ``genes`` genes."""
-        vehicles, beams = world.vehicles, len(world.geometry.beams)
+        vehicles, beams = world.vehicles, reading_count(world.geometry.beams)
         width = max(int(world.layer_sizes.max()), 2)
         shape = (count, vehicles)
         return cls(

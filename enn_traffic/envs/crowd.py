@@ -39,6 +39,7 @@ from enn_traffic.envs.rangefinder import (
 )
 from enn_traffic.sim.crowd import ALIVE, Crowd, crowd_events, step_once
 from enn_traffic.sim.rules import sense, wall_arrays
+from enn_traffic.sim.sensors import reading_count
 from enn_traffic.sim.world import OUTCOMES, SPUN
 
 
@@ -113,7 +114,7 @@ class ArenaCrowdEnv(ParallelEnv):
     def _observe(self) -> np.ndarray:
         """The live learners' readings (L, B): rows 0..L-1 of the crowd are the learners."""
         crowd = self.crowd
-        out = np.empty((len(self.agents), len(crowd.geometry.beams)))
+        out = np.empty((len(self.agents), reading_count(crowd.geometry.beams)))
         observe(len(self.agents), crowd.vehicles, crowd.physics, crowd.geometry, out)
         return observation_of(out, self._observation_space)
 

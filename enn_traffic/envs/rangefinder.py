@@ -33,7 +33,7 @@ from gymnasium.vector.utils import batch_space
 from enn_traffic.config import Scenario, load_scenario
 from enn_traffic.envs.batch import Batch, Situations
 from enn_traffic.sim.arena import HIT, SUFFERED, ArenaWorld
-from enn_traffic.sim.sensors import COS, RANGE, SIN
+from enn_traffic.sim.sensors import COS, SIN, reading_bounds
 from enn_traffic.sim.world import CAPPED, OUTCOMES, RUNNING, SPUN
 
 TRAINING_KEYS = 1_000_000  # reset draws its traffic key among the first training keys
@@ -62,8 +62,9 @@ def spaces_of(world: ArenaWorld, observation_dtype: str = "float32"
     if observation_dtype not in OBSERVATION_DTYPES:
         raise ValueError(f"observation_dtype {observation_dtype!r}: expected one of "
                          f"{', '.join(OBSERVATION_DTYPES)}")
-    ranges = world.geometry.beams[:, RANGE].astype(observation_dtype)
-    observation = spaces.Box(np.zeros_like(ranges), ranges, ranges.shape, observation_dtype)
+    low, high = reading_bounds(world.geometry.beams)
+    observation = spaces.Box(low.astype(observation_dtype), high.astype(observation_dtype),
+                             low.shape, observation_dtype)
     return observation, spaces.Box(-1.0, 1.0, (2,), np.float32)
 
 

@@ -1,4 +1,6 @@
-"""The paper's experiments; each writes its tables and figures into the reproduce folder.
+"""The paper's experiments, each writing its tables, figures and facts into the reproduce
+folder; the crowds (:mod:`enn_traffic.experiments.crowds`) and the GA against gradient RL
+(:mod:`enn_traffic.experiments.gradient_rl`).
 
 ``EXPERIMENTS`` maps the names that ``enn-traffic reproduce --only`` takes to functions
 ``(study: Study) -> list[str]`` that return summary lines

@@ -52,9 +52,9 @@ from enn_traffic.experiments.crowds.arena import (
     saved_inputs,
     situation_crowd,
 )
+from enn_traffic.experiments.crowds.settings import CrowdSettings
 from enn_traffic.experiments.crowds.sumo import (
     SUMO_LEARNING,
-    SumoLearning,
     saved_crowd_inputs,
     situation_result,
 )
@@ -94,10 +94,10 @@ DRAWS = 20000  # bootstrap draws: the family's level leaves about 0.1% in each t
 class Ablation:
     """How long each arm learns (the authors' set-up: until every car finished, at most
     ``authors_seconds``), in how many situations per strategy, and what ``--quick`` changes
-    of them; Table 4's learning time (``simultaneous.LEARNING``) by default."""
+    of them; Table 4's learning time (``crowds.arena.LEARNING``) by default."""
 
-    seconds: float = LEARNING.seconds
-    authors_seconds: float = 4 * LEARNING.seconds
+    seconds: float = LEARNING.learning_s
+    authors_seconds: float = 4 * LEARNING.learning_s
     situations: int = LEARNING.situations
     quick: dict = field(default_factory=lambda: {"seconds": 300.0, "authors_seconds": 600.0,
                                                  "situations": 2})
@@ -217,7 +217,7 @@ def situation_arms(world: ArenaWorld, situation: int, winner: np.ndarray,
                 (learnt, after), online, seconds = (frozen_arm(world, situation, evolved, spans,
                                                                key), None, ablation.seconds)
             else:
-                learning = replace(LEARNING, seconds=ablation.seconds, start_population=start,
+                learning = replace(LEARNING, learning_s=ablation.seconds, start_population=start,
                                    **STOPPINGS[stopping])
                 arena, online, learnt = learn_together(world, situation, winner, evolved,
                                                        learning, key)
@@ -434,7 +434,7 @@ SUMO_ARMS = (("evolved", "cap"), ("random", "cap"))
 SUMO_KEY = keys.ABLATION_SUMO.start
 
 
-def sumo_situations(out: Path, family: Family, learning: SumoLearning,
+def sumo_situations(out: Path, family: Family, learning: CrowdSettings,
                     strategy: int = SUMO_STRATEGY, progress: bool = False) -> pd.DataFrame:
     """``SUMO_ARMS`` among the SUMO traffic of ``family``'s ``strategy``, from the winner
     and evolved population saved under ``out/controllers``: a row per situation and arm, the
@@ -455,7 +455,7 @@ def sumo_situations(out: Path, family: Family, learning: SumoLearning,
                          "early_spans": float(np.mean([w["learning"] for w in
                                                        result.windows[EARLY_SPANS]])),
                          "after": result.rates["population"], "after_spins": float("nan"),
-                         "learning_s": learning.seconds,
+                         "learning_s": learning.learning_s,
                          "initial_first": result.rates["initial"],
                          "initial_after": result.rates["initial_after"],
                          "winner_first": result.rates["winner"],

@@ -149,7 +149,7 @@ def tables34(paper: Path) -> str:
     _, rise_low, rise_high = trend(pd.read_csv(paper / "table4_learning_ends.csv"))
     verb = direction(rise_low, rise_high, neither="goes, its interval spanning no change,")
     return (f"per vehicle-second: {_percent(mean_reduction(table, 'winner'))} by the winner; "
-            f"after learning together for {LEARNING.seconds / 3600:.3g} h of simulated time "
+            f"after learning together for {LEARNING.learning_s / 3600:.3g} h of simulated time "
             f"(median {learners['generations_bred'].median():g} generations bred per vehicle), "
             f"each vehicle its evolved controller: "
             f"{_percent(mean_reduction(table, 'population', 'initial_after'))} below the "

@@ -19,7 +19,7 @@ from enn_traffic.core.errors import InputError
 from enn_traffic.core.io import write_csv, write_text
 from enn_traffic.core.progress import terminal
 from enn_traffic.core.provenance import code_version, commit
-from enn_traffic.experiments import EXPERIMENTS
+from enn_traffic.experiments import EXPERIMENTS, facts
 from enn_traffic.experiments.common import executor as runs_on
 from enn_traffic.experiments.study import Study
 from enn_traffic.report.paper_tables import paper_tables
@@ -60,6 +60,7 @@ def reproduce(out: Path, quick: bool = False, only: list[str] | None = None,
         write_text(record_path, json.dumps(records, indent=1))
         tqdm.write("\n".join(lines))
     write_summary(out, records)
+    facts.write_all(out, "paper")
     for name in names:
         print(f"{name:>16}: {records[name]['seconds']:7.1f} s")
     return records

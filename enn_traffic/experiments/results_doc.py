@@ -58,7 +58,7 @@ def tables34(paper: Path) -> str:
     curve = pd.read_csv(paper / "table4_learning.csv")
     regime = pd.read_csv(paper / "regime.csv")
     count = situations.groupby("strategy")["situation"].nunique().iloc[0]
-    spans = round(LEARNING.seconds / SECONDS)
+    spans = round(LEARNING.learning_s / SECONDS)
     lines = [
         f"`enn-traffic reproduce --only table3,table4,regime`: for each arena strategy, {count} "
         f"traffic situations (sealed keys {keys.CROWD_TEST.start // 10**9}·10⁹ + 0…{count - 1}, "
@@ -66,13 +66,13 @@ def tables34(paper: Path) -> str:
         f"and drives in spans of {SECONDS:g} s: the strategy's initial drivers, and the winning "
         "chromosome driving every vehicle (Table 3 compares their first span), each for "
         f"{spans + 1} spans; and the vehicles learning together for {spans} spans "
-        f"({LEARNING.seconds / 3600:.3g} h of simulated time), each from its own copy of the "
+        f"({LEARNING.learning_s / 3600:.3g} h of simulated time), each from its own copy of the "
         "evolved population, a chromosome per life, breeding when it has tried its population "
         "with the best chromosomes of all vehicles as its elites; a chromosome whose life "
         f"reaches {LEARNING.life_cap_steps} steps scores that and the vehicle drives on with "
         "its next. After learning each vehicle drives the fittest chromosome of its last whole "
         "generation (the authors' rule), and Table 4 sets every arm side by side over that "
-        f"same span, from {LEARNING.seconds:g} s on, paired by situation. The learning time "
+        f"same span, from {LEARNING.learning_s:g} s on, paired by situation. The learning time "
         "and the cap "
         f"were chosen on {validation['situation'].nunique()} crowd validation situations per "
         "strategy (`table4_validation_learners.csv`), where every learner bred "
@@ -129,7 +129,7 @@ def tables34(paper: Path) -> str:
               f"{len(_CONTRASTS) * strategies} intervals at 90%, about "
               f"{0.1 * len(_CONTRASTS) * strategies:.0f} of which may miss by chance; the "
               "arms of a pair share the situation (start poses, headings, random draws), not "
-              f"a state, after {LEARNING.seconds / 3600:.3g} h apart (the re-ranked "
+              f"a state, after {LEARNING.learning_s / 3600:.3g} h apart (the re-ranked "
               "controllers alone start from the learners' own state). Spins are counted apart "
               "from collisions (`simultaneous_situations.csv`).", ""]
     lines += _paper_way(pd.read_csv(paper / "table3.csv"))
@@ -346,10 +346,10 @@ def family_tables34(paper: Path, family: Family) -> str:
         f"{keys.CROWD_TEST.start // 10**9}·10⁹ + {first_key:,} + 0…{count - 1}, "
         "`sumo_crowds.SITUATION_KEY`, read once by this design). Three arms start from the "
         "situation's SUMO seed and warm-up, each in a SUMO of its own, and drive in windows of "
-        f"{learning.window_seconds:g} s: random "
+        f"{learning.window_s:g} s: random "
         "networks (the initial drivers) and the strategy's Table 1 controller driving every "
         f"learner (the winner), each for {learning.windows + 1} windows, and the learners "
-        f"learning together for {learning.seconds:g} s, each from its own copy of the first "
+        f"learning together for {learning.learning_s:g} s, each from its own copy of the first "
         f"{learning.population_size} rows of the winner's run's final population (its elites "
         f"first), {learning.elite_count} shared elites, a chromosome per life and lives capped "
         f"at {learning.life_cap_steps} steps; then each drives the fittest chromosome of its "
@@ -745,7 +745,7 @@ def _sumo_ablation(paper: Path) -> list[str]:
             f"strategy {ablation.SUMO_STRATEGY}, {int(rows[0]['situations'])} situations on "
             f"sealed keys {keys.ABLATION_CROWD_TEST.start // 10**9}·10⁹ + "
             f"{ablation.SUMO_KEY - keys.ABLATION_CROWD_TEST.start:,} + 0…"
-            f"{int(rows[0]['situations']) - 1}, read once; {learning.seconds:g} SUMO seconds of "
+            f"{int(rows[0]['situations']) - 1}, read once; {learning.learning_s:g} SUMO seconds of "
             f"learning with the {learning.life_cap_steps}-step cap, random populations of "
             f"{learning.population_size}), collisions per learner-second: "
             + "; ".join(arm(row) for row in rows)

@@ -40,14 +40,6 @@ def column(function: Callable[[Generation], object]) -> Callable[[Generation], o
     return function
 
 
-def columns_markdown() -> str:
-    """The columns as a markdown table, from their docstrings (docs/design.md's table)."""
-    lines = ["| column | meaning |", "|---|---|"]
-    for name, function in COLUMNS.items():
-        lines.append(f"| `{name}` | {' '.join(function.__doc__.split())} |")
-    return "\n".join(lines)
-
-
 def row(evaluated: Generation) -> dict[str, object]:
     """The generation's row of ``generations.csv``."""
     return {name: value(evaluated) for name, value in COLUMNS.items()}

@@ -49,7 +49,7 @@ from enn_traffic.sim.rules import (
     wall_arrays,
     within_range,
 )
-from enn_traffic.sim.sensors import WallGrid
+from enn_traffic.sim.sensors import WallGrid, reading_count
 from enn_traffic.sim.strategies import reset_memory, strategy_settings
 from enn_traffic.sim.world import CAPPED, COLLIDED, RUNNING, SPUN, SituationResults
 
@@ -149,7 +149,7 @@ def run_life(genes, layer_sizes, start, kinds, traffic_genes, physics, geometry,
     rng = np.empty(1, dtype=np.uint64)
     tally = np.empty(4, dtype=np.int64)
     activation, scratch = network_buffers(layer_sizes)
-    work = Work(np.empty(geometry.beams.shape[0]), activation, scratch, np.zeros(count))
+    work = Work(np.empty(reading_count(geometry.beams)), activation, scratch, np.zeros(count))
     recent = np.empty((physics.spin_window, 2))
     start_world(start, kinds, vehicles, rng, seed, physics, tally)
     steps = 0
@@ -201,11 +201,11 @@ class LearnerWorld:
     constants (:mod:`enn_traffic.sim.rules`). :class:`ArenaWorld` adds scripted traffic,
     :class:`~enn_traffic.sim.sumo.world.SumoWorld` SUMO's."""
 
-    def __init__(self, scenario: Scenario, track: Track | None = None):
+    def __init__(self, scenario: Scenario):
         self.scenario = scenario
         listed = listed_starts(scenario)  # a wrong start lane is refused before any geometry
-        self.track = track or load_track(scenario.track.net, exits=scenario.fringe_exits,
-                                         surface=scenario.track.surface)
+        self.track = load_track(scenario.track.net, exits=scenario.fringe_exits,
+                                surface=scenario.track.surface)
         self.exits = self.track.exits if scenario.fringe_exits else np.empty((0, 4))
         self.spec = NetworkSpec(scenario.layer_sizes, scenario.network.layout)
         vehicle, traffic = scenario.vehicle, scenario.traffic
@@ -252,8 +252,8 @@ class ArenaWorld(LearnerWorld):
     """A scenario's worlds: its track, learner and scripted traffic, ready to evaluate
     populations."""
 
-    def __init__(self, scenario: Scenario, track: Track | None = None):
-        super().__init__(scenario, track)
+    def __init__(self, scenario: Scenario):
+        super().__init__(scenario)
         self.traffic_spec = NetworkSpec(scenario.traffic_layer_sizes, scenario.network.layout)
         self.traffic_starts = [tuple(xy) for xy in scenario.traffic.starts_xy]
         for index, (x, y) in enumerate(self.traffic_starts):

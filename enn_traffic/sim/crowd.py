@@ -47,6 +47,7 @@ from enn_traffic.sim.rules import (
     vehicles_at,
     wall_arrays,
 )
+from enn_traffic.sim.sensors import reading_count
 from enn_traffic.sim.strategies import reset_memory
 from enn_traffic.sim.world import COLLIDED, SPUN
 
@@ -212,8 +213,8 @@ class Crowd:
         self.lives = Lives(np.zeros(count, dtype=np.bool_), np.zeros(count, dtype=np.int64),
                            np.zeros((count, p.spin_window, 2)), np.empty(count, dtype=np.int64))
         self.geometry = world.geometry
-        self.work = Work(np.empty(len(self.geometry.beams)), *network_buffers(world.layer_sizes),
-                         np.zeros(count))
+        self.work = Work(np.empty(reading_count(self.geometry.beams)),
+                         *network_buffers(world.layer_sizes), np.zeros(count))
 
     @property
     def pose(self) -> np.ndarray:

@@ -109,8 +109,8 @@ def reference_life(world: ArenaWorld, chromosome: np.ndarray) -> tuple[int, int]
 def reference_wall_grid(walls: np.ndarray, reach: float, cell_size: float = 5.0
                         ) -> tuple[np.ndarray, np.ndarray]:
     """The wall grid's cell lists (``cell_start``, ``cell_walls`` of
-    :class:`~enn_traffic.sim.sensors.WallGrid`) the obvious way, as they were built until issue
-    39: the distance from every cell's centre to every wall, cells × walls."""
+    :class:`~enn_traffic.sim.sensors.WallGrid`) the obvious way, the oracle of their binning:
+    the distance from every cell's centre to every wall, cells × walls."""
     low = np.minimum(walls[:, :2], walls[:, 2:]).min(axis=0) - reach
     high = np.maximum(walls[:, :2], walls[:, 2:]).max(axis=0) + reach
     nx, ny = np.ceil((high - low) / cell_size).astype(int)

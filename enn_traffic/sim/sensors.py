@@ -22,6 +22,7 @@ from enn_traffic.core.errors import InputError
 from enn_traffic.core.progress import slow_step
 
 GRID_VERSION = 1  # raised when the cells a grid lists change
+CELL_SIZE = 5.0  # m: the side of a wall grid's cells
 # A grid's cells (1.6 GB of offsets): a city 70 km across at 5 m cells. A network larger than
 # that is refused with the reason, not left to fail allocating (coordinates of 1e12 m).
 MAX_GRID_CELLS = 200_000_000
@@ -44,7 +45,7 @@ class WallGrid(NamedTuple):
     all_walls: np.ndarray  # arange(S): the fallback outside the grid
 
     @classmethod
-    def build(cls, walls: np.ndarray, reach: float, cell_size: float = 5.0) -> WallGrid:
+    def build(cls, walls: np.ndarray, reach: float, cell_size: float = CELL_SIZE) -> WallGrid:
         """The grid over ``walls`` whose cells list every wall within ``reach`` of any point
         of the cell (a wall within ``reach`` plus half the cell's diagonal of its centre).
 
@@ -95,9 +96,10 @@ class WallGrid(NamedTuple):
         )
 
     @classmethod
-    def cached(cls, walls: np.ndarray, reach: float, cell_size: float = 5.0) -> WallGrid:
-        """:meth:`build`, kept on disk by the walls' bytes, ``reach`` and ``cell_size``
-        (:mod:`enn_traffic.core.cache`)."""
+    def cached(cls, walls: np.ndarray, reach: float) -> WallGrid:
+        """:meth:`build` with cells of :data:`CELL_SIZE`, kept on disk by the walls' bytes and
+        ``reach`` (:mod:`enn_traffic.core.cache`)."""
+        cell_size = CELL_SIZE
         walls = np.ascontiguousarray(walls, dtype=np.float64).reshape(-1, 4)
         key = cache.key_of(walls.tobytes(), repr(reach), repr(cell_size), GRID_VERSION)
 
@@ -207,6 +209,20 @@ def beam_table(beams: list[tuple[float, float]]) -> np.ndarray:
     order = np.argsort(angles, kind="stable")
     table[:, FAN_ANGLE], table[:, FAN_BEAM] = angles[order], order
     return table
+
+
+@njit(cache=True)
+def reading_count(beams: np.ndarray) -> int:
+    """Readings a vehicle's sensor gives each step, the network's inputs: one per beam of its
+    :func:`beam_table` (every world, environment and buffer asks here, compiled kernels
+    too)."""
+    return beams.shape[0]
+
+
+def reading_bounds(beams: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Each reading's least and greatest value: 0 (a body at the sensor) and the beam's range
+    (nothing within it), what an environment's observation space holds."""
+    return np.zeros(reading_count(beams)), beams[:, RANGE].copy()
 
 
 @njit(cache=True, inline="always")

@@ -17,7 +17,6 @@ import numpy as np
 from enn_traffic.config import Scenario, network_named
 from enn_traffic.core.neural import NetworkSpec
 from enn_traffic.core.registry import Registry
-from enn_traffic.roads import Track
 
 # How a life ended. LEFT_NETWORK: the learner reached the network's fringe (SUMO traffic,
 # docs/sumo.md "Walls and exits"); LEFT_LANE: the lane-keeping vehicle crossed a marking. A
@@ -174,7 +173,7 @@ class SituationResults:
 
 
 # Each world kind's class, imported when first made (an arena run does not load SUMO). A
-# world is made as ``World(scenario, track)``; several tracks as ``World(scenario, worlds)``.
+# world is made as ``World(scenario)``; several tracks as ``World(scenario, worlds)``.
 WORLDS = Registry("world kind", {
     "arena": "enn_traffic.sim.arena:ArenaWorld",
     "sumo": "enn_traffic.sim.sumo.world:SumoWorld",
@@ -183,18 +182,15 @@ WORLDS = Registry("world kind", {
 })
 
 
-def make_world(scenario: Scenario, track: Track | None = None) -> World:
+def make_world(scenario: Scenario) -> World:
     """Arena and navigation worlds, SUMO traffic worlds, or a highway-env lane-keeping road;
     with several tracks, one of these per track side by side
-    (:class:`~enn_traffic.sim.tracks.TracksWorld`). ``track``: the road already read, for a
-    scenario of one track."""
+    (:class:`~enn_traffic.sim.tracks.TracksWorld`)."""
     if isinstance(scenario.track, list) and len(scenario.track) == 1:
         scenario = scenario.on_track(0)
     kind = scenario.world_kind
     if kind == "tracks":
-        if track is not None:
-            raise ValueError("a track may be given only for a single-track scenario")
         return WORLDS[kind](scenario, [make_world(scenario.on_track(index))
                                        for index in range(len(scenario.track))])
     with network_named(scenario):
-        return WORLDS[kind](scenario, track)
+        return WORLDS[kind](scenario)

@@ -312,7 +312,7 @@ def make_loadable(path: Path) -> None:
       empty attribute is left out: SUMO then takes the state of the saved phase.
     - The drive ways of rail signals (a city with trams or trains) load once or twice, and
       then crash libsumo at the next start in the same process (a segmentation fault in
-      ``simulation.start``, issue 60). They are left out: SUMO builds them again as the
+      ``simulation.start``). They are left out: SUMO builds them again as the
       trains come, and only which train had reserved a track block at the moment of saving
       is lost.
     - With a demand scaled above 1 (``--scale``), SUMO's copies of a vehicle share its

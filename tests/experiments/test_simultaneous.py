@@ -117,16 +117,18 @@ def test_measure_writes_every_table_3_4_output_from_the_committed_inputs(tmp_pat
     """A short measurement (200 s of learning, one situation) from the committed winners and
     evolved populations writes what ``--only table3`` or ``--only table4`` alone needs:
     the situations, their per-strategy means, the learners, the learning curve and plots."""
+    from dataclasses import replace
+
     import pandas as pd
 
     from enn_traffic.experiments.crowds.arena import (
-        CrowdLearning,
+        LEARNING,
         measure,
         saved_inputs,
         strategy_means,
     )
 
-    learning = CrowdLearning(seconds=200.0, situations=1)
+    learning = replace(LEARNING, learning_s=200.0, situations=1)
     measured = measure(tmp_path, saved_inputs(root / "results" / "paper"), learning)
     files = {p.name for p in tmp_path.iterdir()}
     assert {"simultaneous.csv", "simultaneous_situations.csv", "table4_learners.csv",

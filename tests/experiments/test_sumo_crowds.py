@@ -29,3 +29,21 @@ def test_table_gives_each_strategys_means_over_its_situations():
     assert result.loc[1, "winner_collisions_per_s"] == pytest.approx(0.05)
     assert result.loc[2, "initial_low"] == result.loc[2, "initial_high"] == pytest.approx(0.5)
     assert result.loc[1, "initial_low"] <= 0.2 <= result.loc[1, "initial_high"]
+
+
+def test_the_crowd_settings_are_the_crowd_keys():
+    """One record of how crowds learn, named as ``[crowd]`` names it: every key of the
+    section is a setting of the same name and default, and a scenario's keys become the
+    settings unchanged."""
+    from dataclasses import fields
+
+    from enn_traffic.config import CrowdConfig
+    from enn_traffic.experiments.crowds.settings import CrowdSettings
+
+    keys = set(CrowdConfig.model_fields) - {"counting"}
+    assert keys <= {f.name for f in fields(CrowdSettings)}
+    assert all(getattr(CrowdSettings(), key) == getattr(CrowdConfig(), key) for key in keys)
+    chosen = CrowdConfig(learning_s=300.0, window_s=50.0, situations=3)
+    settings = CrowdSettings.of(chosen)
+    assert (settings.learning_s, settings.window_s, settings.situations, settings.windows) == (
+        300.0, 50.0, 3, 6)

@@ -95,12 +95,13 @@ def test_one_situation_of_the_sumo_tables_is_the_same_run_again(world):
     controllers; the random initial drivers lose lives in the first window and the window
     after learning, and so do the learners; learners with a 10-step cap and 4 chromosomes
     breed within 6 s."""
-    from enn_traffic.experiments.crowds.sumo import CONFLICTS, SumoLearning, situation_result
+    from enn_traffic.experiments.crowds.settings import CrowdSettings
+    from enn_traffic.experiments.crowds.sumo import CONFLICTS, situation_result
 
     winner = straight(world)[0]
     evolved = np.random.default_rng(0).uniform(-1, 1, (6, world.spec.chromosome_length))
-    learning = SumoLearning(seconds=6.0, window_seconds=3.0, life_cap_steps=10,
-                            population_size=4, elite_count=1, situations=1)
+    learning = CrowdSettings(learning_s=6.0, window_s=3.0, life_cap_steps=10,
+                             population_size=4, elite_count=1, situations=1)
     first = situation_result(world, winner, evolved, 0, learning)
     assert set(first.rates) == {"initial", "winner", "initial_after", "winner_after",
                                 "population", "learning"} | {f"{arm}_conflicts"

@@ -1,7 +1,7 @@
 """Paper §5.5: simultaneous collision avoidance — every vehicle of the arena driven by an
 evolved network, spreading what individual learning (§5.3) found to all of them.
 
-For each arena strategy and each of the ``CrowdLearning.situations`` traffic situations (the 8
+For each arena strategy and each of the ``LEARNING.situations`` traffic situations (the 8
 start poses of ``scenarios/arena_strategyN``, headings drawn per situation), every arm drives
 from the start poses in spans of ``SECONDS`` (100 s, the paper's):
 
@@ -18,7 +18,7 @@ from the start poses in spans of ``SECONDS`` (100 s, the paper's):
   winner's run's final population) and all learn at once, each its own GA a chromosome per
   life, breeding when it has tried its population, with the best chromosomes of all vehicles
   as its elites (reference §7.4). A life that reaches the cap ends its chromosome's trial
-  without a respawn. Learning lasts ``CrowdLearning.seconds``, long enough that every learner
+  without a respawn. Learning lasts ``LEARNING.learning_s``, long enough that every learner
   breeds several generations (chosen on the validation situations, docs/results.md); then
   each vehicle drives "a customized solution": the fittest chromosome of its last whole
   generation (the authors' rule, :meth:`~enn_traffic.learning.online.VehicleGA.evolved`),
@@ -46,7 +46,7 @@ from __future__ import annotations
 import textwrap
 import time
 from collections.abc import Mapping
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
@@ -61,6 +61,7 @@ from enn_traffic.core.io import write_csv
 from enn_traffic.core.progress import slow_step, terminal
 from enn_traffic.experiments.choosing import evolved_candidates, final_population
 from enn_traffic.experiments.common import distinct, save_arrays, save_controller
+from enn_traffic.experiments.crowds.settings import CrowdSettings
 from enn_traffic.experiments.families import ARENA, run_dir
 from enn_traffic.experiments.study import Study
 from enn_traffic.learning import ga
@@ -87,26 +88,14 @@ CONTRASTS = [("population", "initial_after"), ("population", "winner_after"),
              ("population", "reranked")]
 
 
-@dataclass(frozen=True)
-class CrowdLearning:
-    """How long the vehicles learn together (simulated seconds, a multiple of ``SECONDS``),
-    the life cap of a chromosome's trial (steps; 0: none), how many situations each strategy
-    is measured in, and what ``--quick`` changes of them. The learning time and the cap were
-    chosen on the crowd validation situations so that every learner breeds at least 3
-    generations (``table4_validation_learners.csv``; docs/results.md, "All vehicles at
-    once"). The authors' procedure, which Table 4's ablation sets beside ours
-    (:mod:`enn_traffic.experiments.ablation`): every learner from a ``random`` population
-    (``start_population``), no cap, and ``finish_steps`` = 2000 (reference §7.5)."""
-
-    seconds: float = 15000.0
-    life_cap_steps: int = 300
-    situations: int = 20
-    start_population: str = "evolved"  # or "random": the GA's first generation, per learner
-    finish_steps: int = 0
-    quick: Mapping[str, object] = field(default_factory=dict)
-
-
-LEARNING = CrowdLearning(quick={"seconds": 200.0, "situations": 2})
+# The arena's crowds: learning long enough that every learner breeds at least 3 generations,
+# with a life cap of 300 steps, chosen on the crowd validation situations
+# (table4_validation_learners.csv; docs/results.md, "All vehicles at once"); each vehicle
+# copies the whole evolved population of the arena's GA (its [ga]: 200 rows, 20 elites).
+LEARNING = CrowdSettings(learning_s=15000.0, window_s=SECONDS, life_cap_steps=300,
+                         population_size=200, elite_count=20, situations=20,
+                         validation_situations=2,
+                         quick={"learning_s": 200.0, "situations": 2})
 
 
 def situation_crowd(world: ArenaWorld, situation: int, kinds=None, key: int = SITUATION_KEY
@@ -178,10 +167,10 @@ class SituationResult:
 
 
 def learn_together(world: ArenaWorld, situation: int, winner: np.ndarray, evolved: np.ndarray,
-                   learning: CrowdLearning, key: int = SITUATION_KEY
+                   learning: CrowdSettings, key: int = SITUATION_KEY
                    ) -> tuple[Crowd, OnlineLearning, list[CrowdRun]]:
     """Every vehicle of one situation learning from its own copy of ``evolved`` for
-    ``learning.seconds``, span by span: the crowd after it, the learning and each span's run.
+    ``learning.learning_s``, span by span: the crowd after it, the learning and each span's run.
     ``winner`` (G,) and ``evolved`` (N, G) in the source layout."""
     sc = world.scenario
     arena, _ = situation_crowd(world, situation, np.full(world.vehicles, NETWORK), key)
@@ -197,16 +186,16 @@ def learn_together(world: ArenaWorld, situation: int, winner: np.ndarray, evolve
                             elite_count=sc.ga.elite_count, life_cap=learning.life_cap_steps,
                             finish_steps=learning.finish_steps)
     genes = np.tile(winner, (world.vehicles, 1))
-    spans = round(learning.seconds / SECONDS)
+    spans = round(learning.learning_s / SECONDS)
     return arena, online, [arena.run(SECONDS, genes, online) for _ in range(spans)]
 
 
 def situation_rates(world: ArenaWorld, situation: int, winner: np.ndarray, evolved: np.ndarray,
-                    learning: CrowdLearning = LEARNING, key: int = SITUATION_KEY
+                    learning: CrowdSettings = LEARNING, key: int = SITUATION_KEY
                     ) -> SituationResult:
     """One situation's every arm. ``winner`` (G,) and ``evolved`` (N, G) in the source
     layout."""
-    spans = round(learning.seconds / SECONDS)
+    spans = round(learning.learning_s / SECONDS)
     counting = world.scenario.crowd.counting
     arena, genes = situation_crowd(world, situation, key=key)
     initial = [arena.run(SECONDS, genes) for _ in range(spans + 1)]
@@ -241,7 +230,7 @@ class Measured:
 
 
 def measure_strategy(world: ArenaWorld, strategy: int, winner: np.ndarray,
-                     population: np.ndarray, learning: CrowdLearning, progress: bool = False
+                     population: np.ndarray, learning: CrowdSettings, progress: bool = False
                      ) -> tuple[list[dict], list[dict], list[dict], SituationResult]:
     """One strategy's rows (situations, windows, learners) and its first situation."""
     winner_genes = world.spec.in_source_layout(winner)[0]
@@ -260,7 +249,7 @@ def measure_strategy(world: ArenaWorld, strategy: int, winner: np.ndarray,
 
 
 def validation_learners(inputs: dict[int, tuple[np.ndarray, np.ndarray]],
-                        learning: CrowdLearning, situations: int = 2) -> pd.DataFrame:
+                        learning: CrowdSettings, situations: int = 2) -> pd.DataFrame:
     """The learners' counts in ``situations`` crowd validation situations per strategy: what
     chose ``learning``'s time and cap (every learner breeds 3 generations or more)."""
     rows = []
@@ -277,7 +266,7 @@ def validation_learners(inputs: dict[int, tuple[np.ndarray, np.ndarray]],
 
 
 def measure(out: Path, inputs: dict[int, tuple[np.ndarray, np.ndarray]],
-            learning: CrowdLearning, progress: bool = False,
+            learning: CrowdSettings, progress: bool = False,
             paper_winners: Mapping[int, np.ndarray] | None = None) -> Measured:
     """Tables 3–4's every strategy from its winner and evolved population (``inputs``:
     strategy -> (winner, population), world layout), written under ``out``: the situations,
@@ -313,7 +302,7 @@ def measure(out: Path, inputs: dict[int, tuple[np.ndarray, np.ndarray]],
     write_csv(out / "table4_learning.csv", curve)
     write_csv(out / "table4_learning_ends.csv", learning_ends(measured.windows))
     _draw_crowds(paths, out / "simultaneous_paths.png")
-    draw_learning(curve, measured.situations, out / "table4_learning.png", learning.seconds)
+    draw_learning(curve, measured.situations, out / "table4_learning.png", learning.learning_s)
     return measured
 
 

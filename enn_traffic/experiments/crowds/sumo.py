@@ -3,7 +3,7 @@ or the city's; docs/sumo.md), by the arena's method (:mod:`enn_traffic.experimen
 
 ``traffic.learners`` learners (8) drive at once in one live SUMO, among its own traffic
 (:mod:`enn_traffic.sim.sumo.crowd`). For each strategy and each of ``SUMO_LEARNING``'s
-situations, three arms drive from the same SUMO state, in windows of ``window_seconds``:
+situations, three arms drive from the same SUMO state, in windows of ``window_s``:
 
 - initial drivers: every learner a random network (drawn per situation);
 - Table 3 (§5.5.1): every learner drives the winning chromosome. The winner is the strategy's
@@ -45,8 +45,7 @@ from __future__ import annotations
 import hashlib
 import json
 import os
-from collections.abc import Mapping
-from dataclasses import asdict, dataclass, field
+from dataclasses import asdict
 from pathlib import Path
 
 import numpy as np
@@ -67,6 +66,7 @@ from enn_traffic.experiments.crowds.arena import (
     learning_ends,
     table4_comparisons,
 )
+from enn_traffic.experiments.crowds.settings import CrowdSettings
 from enn_traffic.experiments.families import SUMO, Family
 from enn_traffic.experiments.study import Study
 from enn_traffic.learning import ga
@@ -87,39 +87,13 @@ CONTRASTS = [("population", "initial_after"), ("population", "winner_after")]
 CONFLICTS = ["initial", "winner", "initial_after", "winner_after", "population"]
 
 
-@dataclass(frozen=True)
-class SumoLearning:
-    """Learning together among SUMO traffic: how long (SUMO seconds, a multiple of
-    ``window_seconds``), each chromosome's life cap (steps), how many rows of the evolved
-    population each learner copies and how many of the best are elites (a learner's own
-    breeding keeps that many, which the best of all learners then replace), the
-    situations measured per strategy and the validation situations that chose these
-    settings, and what ``--quick`` changes of them. Table 4's ablation
-    (:mod:`enn_traffic.experiments.ablation`) varies the start (``start_population``:
-    ``random`` populations of ``population_size`` instead of the evolved rows) and the
-    stopping (``finish_steps``: the authors' finishing rule, with ``life_cap_steps`` 0)."""
-
-    seconds: float = 1000.0
-    window_seconds: float = 100.0
-    life_cap_steps: int = 150
-    population_size: int = 20
-    elite_count: int = 4
-    situations: int = 10
-    validation_situations: int = 2
-    start_population: str = "evolved"
-    finish_steps: int = 0
-    quick: Mapping[str, object] = field(default_factory=dict)
-
-    @property
-    def windows(self) -> int:
-        return round(self.seconds / self.window_seconds)
+# The SUMO and city families' crowds: the [crowd] keys' defaults, chosen on the crowd
+# validation situations (docs/results.md).
+SUMO_LEARNING = CrowdSettings(quick={"learning_s": 20.0, "window_s": 10.0, "situations": 2,
+                                     "validation_situations": 1})
 
 
-SUMO_LEARNING = SumoLearning(quick={"seconds": 20.0, "window_seconds": 10.0, "situations": 2,
-                                    "validation_situations": 1})
-
-
-def _learning(world: SumoWorld, evolved: np.ndarray, situation: int, learning: SumoLearning
+def _learning(world: SumoWorld, evolved: np.ndarray, situation: int, learning: CrowdSettings
               ) -> OnlineLearning:
     """Every learner its own GA on a copy of ``evolved`` (N, G, source layout)."""
     scenario = world.scenario
@@ -139,7 +113,7 @@ def _learning(world: SumoWorld, evolved: np.ndarray, situation: int, learning: S
 
 
 def learn_together(world: SumoWorld, winner: np.ndarray, evolved: np.ndarray, situation: int,
-                   learning: SumoLearning, key: int = SITUATION_KEY):
+                   learning: CrowdSettings, key: int = SITUATION_KEY):
     """The learning arm of one situation: each window's run while the learners learn, the run
     of the window after it (each learner its evolved controller) and the learning.
     ``winner`` (G,) and ``evolved`` (N, G) in the source layout. SUMO runs in a fresh process
@@ -153,21 +127,21 @@ def _learning_arm(scenario, winner, evolved, situation, learning, key):
     count = scenario.traffic.learners
     online = _learning(world, evolved, situation, learning)
     with SumoCrowd(world, world.seeds(key + situation)[0]) as crowd:
-        learnt = [crowd.run(learning.window_seconds, np.tile(winner, (count, 1)), online)
+        learnt = [crowd.run(learning.window_s, np.tile(winner, (count, 1)), online)
                   for _ in range(learning.windows)]
-        after = crowd.run(learning.window_seconds, online.evolved_controllers())
+        after = crowd.run(learning.window_s, online.evolved_controllers())
     return learnt, after, online
 
 
-def _driving_arm(scenario, seed: int, genes: np.ndarray, window_seconds: float, windows: int):
+def _driving_arm(scenario, seed: int, genes: np.ndarray, window_s: float, windows: int):
     """An arm whose drivers keep their controllers: a run per window, SUMO in this process."""
     world = make_world(scenario)
     with SumoCrowd(world, seed) as crowd:
-        return [crowd.run(window_seconds, genes) for _ in range(windows)]
+        return [crowd.run(window_s, genes) for _ in range(windows)]
 
 
 def situation_result(world: SumoWorld, winner: np.ndarray, evolved: np.ndarray, situation: int,
-                     learning: SumoLearning, key: int = SITUATION_KEY) -> SituationResult:
+                     learning: CrowdSettings, key: int = SITUATION_KEY) -> SituationResult:
     """One situation's every arm, from its SUMO seed alone, each arm's SUMO in a fresh process
     of its own (the three at once, on up to three cores). ``winner`` (G,) and ``evolved``
     (N, G) in the source layout; the controllers after learning in the source layout."""
@@ -178,8 +152,8 @@ def situation_result(world: SumoWorld, winner: np.ndarray, evolved: np.ndarray, 
     drivers = world.spec.in_source_layout(
         rng.uniform(-1, 1, (count, world.spec.chromosome_length)))
     initial, winning, learning_arm = fresh_calls([
-        (_driving_arm, scenario, seed, drivers, learning.window_seconds, windows + 1),
-        (_driving_arm, scenario, seed, np.tile(winner, (count, 1)), learning.window_seconds,
+        (_driving_arm, scenario, seed, drivers, learning.window_s, windows + 1),
+        (_driving_arm, scenario, seed, np.tile(winner, (count, 1)), learning.window_s,
          windows + 1),
         (_learning_arm, scenario, winner, evolved, situation, learning, key)],
         workers=min(3, os.cpu_count() or 1))
@@ -192,7 +166,7 @@ def situation_result(world: SumoWorld, winner: np.ndarray, evolved: np.ndarray, 
     rates = {arm: run.rate(counting) for arm, run in measured.items()}
     rates["learning"] = float(np.mean([run.rate(counting) for run in learnt]))
     rates |= {f"{arm}_conflicts": measured[arm].conflict_rate for arm in CONFLICTS}
-    window_rows = [{"window_start_s": w * learning.window_seconds,
+    window_rows = [{"window_start_s": w * learning.window_s,
                     "learning": learnt[w].rate(counting),
                     "initial_drivers": arms["initial"][w].rate(counting),
                     "winner_driving_on": arms["winner"][w].rate(counting)}
@@ -231,7 +205,7 @@ def _digest(winner: np.ndarray, evolved: np.ndarray) -> str:
 
 
 def validation_learners(world: SumoWorld, winner: np.ndarray, evolved: np.ndarray,
-                        learning: SumoLearning) -> list[dict[str, int]]:
+                        learning: CrowdSettings) -> list[dict[str, int]]:
     """The learners' counts in a strategy's crowd validation situations: what chose
     ``learning`` (every learner breeds 3 generations or more)."""
     rows = []
@@ -276,7 +250,7 @@ def saved_crowd_inputs(out: Path, family: Family
     return inputs
 
 
-def _settings(learning: SumoLearning) -> dict:
+def _settings(learning: CrowdSettings) -> dict:
     """What a kept situation was measured with: ``learning``, the simulation's rules and the
     sources outside them that measure a situation."""
     settings = asdict(learning) | {"rules": rules_version(),
@@ -286,7 +260,7 @@ def _settings(learning: SumoLearning) -> dict:
 
 
 def validation(folder: Path, inputs: dict[int, tuple[SumoWorld, np.ndarray, np.ndarray]],
-               learning: SumoLearning, identity: dict | None = None) -> pd.DataFrame:
+               learning: CrowdSettings, identity: dict | None = None) -> pd.DataFrame:
     """Every strategy's learners in its validation situations, written to
     ``table4_validation_learners.csv`` (kept under ``crowds/`` like the situations, with
     ``identity`` among their settings)."""
@@ -303,7 +277,7 @@ def validation(folder: Path, inputs: dict[int, tuple[SumoWorld, np.ndarray, np.n
     return table
 
 
-def measure(study: Study, family: Family, learning: SumoLearning,
+def measure(study: Study, family: Family, learning: CrowdSettings,
             inputs: dict[int, tuple[SumoWorld, np.ndarray, np.ndarray]] | None = None
             ) -> Measured:
     """Every strategy's situations, their learning windows and learners, written under the
@@ -328,7 +302,7 @@ def _situation_task(scenario, winner, evolved, situation, learning) -> Situation
 
 
 def measure_situations(folder: Path, inputs: dict[int, tuple[SumoWorld, np.ndarray, np.ndarray]],
-                       learning: SumoLearning, progress: bool, title: str,
+                       learning: CrowdSettings, progress: bool, title: str,
                        save_learner=None, ray=None, identity: dict | None = None) -> Measured:
     """Each input's validation (:func:`validation`) and situations, their learning windows and
     learners, written into ``folder`` (the module's list): each situation kept under
@@ -338,7 +312,7 @@ def measure_situations(folder: Path, inputs: dict[int, tuple[SumoWorld, np.ndarr
     connect_ray`'s module) the situations run side by side as Ray tasks; a situation's result
     depends on its seed alone, so it is the same wherever it ran. ``identity``: what else a
     kept situation must have been measured with (a user's scenario: its fingerprint)."""
-    with slow_step(f"{folder.name}: the crowd's validation situations ({learning.seconds:g} s "
+    with slow_step(f"{folder.name}: the crowd's validation situations ({learning.learning_s:g} s "
                    "of SUMO time learning in each)"):
         validation(folder, inputs, learning, identity)
     settings = _settings(learning) | (identity or {})
@@ -371,7 +345,7 @@ def measure_situations(folder: Path, inputs: dict[int, tuple[SumoWorld, np.ndarr
             for label in list(jobs):
                 world, winner, evolved = inputs[label[0]]
                 with slow_step(f"situation {label[1] + 1} of {learning.situations}: three "
-                               f"arms of {learning.seconds + learning.window_seconds:g} s of "
+                               f"arms of {learning.learning_s + learning.window_s:g} s of "
                                "SUMO time each, side by side"):
                     keep(label, situation_result(world, winner, evolved, label[1], learning))
                 bar.update(1)
@@ -396,8 +370,8 @@ def measure_situations(folder: Path, inputs: dict[int, tuple[SumoWorld, np.ndarr
     write_csv(folder / "table4_learners.csv", measured.learners)
     write_csv(folder / "table4_learning.csv", curve)
     write_csv(folder / "table4_learning_ends.csv", learning_ends(measured.windows))
-    draw_learning(curve, measured.situations, folder / "table4_learning.png", learning.seconds,
-                  f"{title}, mean of the situations in {learning.window_seconds:g} s windows",
+    draw_learning(curve, measured.situations, folder / "table4_learning.png", learning.learning_s,
+                  f"{title}, mean of the situations in {learning.window_s:g} s windows",
                   "collisions per learner-second")
     return measured
 

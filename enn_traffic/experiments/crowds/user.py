@@ -32,11 +32,12 @@ from enn_traffic.core.cache import key_of
 from enn_traffic.core.errors import InputError
 from enn_traffic.core.io import check_not_source, folder_lock, write_text
 from enn_traffic.core.progress import slow_step
+from enn_traffic.experiments import facts
 from enn_traffic.experiments.common import save_controller
+from enn_traffic.experiments.crowds.settings import CrowdSettings
 from enn_traffic.experiments.crowds.sumo import (
     SITUATION_KEY,
     SUMO_LEARNING,
-    SumoLearning,
     measure_situations,
     write_tables,
 )
@@ -51,19 +52,8 @@ INDIVIDUAL = "individual"
 PACKING = 0.5
 
 
-# Each [crowd] key and the SumoLearning field it sets
-FIELDS = {"learning_s": "seconds", "window_s": "window_seconds",
-          "life_cap_steps": "life_cap_steps", "population_size": "population_size",
-          "elite_count": "elite_count", "situations": "situations",
-          "validation_situations": "validation_situations"}
-# --quick: the shipped families' quick spans and situations (SUMO_LEARNING.quick), as keys
-QUICK = {key: SUMO_LEARNING.quick[field] for key, field in FIELDS.items()
-         if field in SUMO_LEARNING.quick}
-
-
-def learning_settings(scenario: Scenario) -> SumoLearning:
-    """The scenario's ``[crowd]`` keys as the families' settings."""
-    return SumoLearning(**{field: getattr(scenario.crowd, key) for key, field in FIELDS.items()})
+# --quick: the shipped families' quick spans and situations
+QUICK = dict(SUMO_LEARNING.quick)
 
 
 def crowd_scenario(scenario: Scenario, learners: int | None = None, quick: bool = False
@@ -149,7 +139,7 @@ def run_crowd(scenario: Scenario, out: Path, executor: str = "local",
         evolved = RunOutputs.load(individual).population
         world = make_world(scenario.with_overrides(traffic={"mode": "closed-loop"}))
         source = world.spec.in_source_layout(np.vstack([winner, evolved]))
-        learning = learning_settings(scenario)
+        learning = CrowdSettings.of(scenario.crowd)
 
         def save_learner(strategy: int, k: int, crowd_scenario: Scenario, genes) -> None:
             save_controller(out, f"learner{k}", crowd_scenario, genes, float("nan"))
@@ -164,6 +154,7 @@ def run_crowd(scenario: Scenario, out: Path, executor: str = "local",
             if index.isdigit() and int(index) >= scenario.traffic.learners:
                 kept.unlink()
         write_tables(out, measured.situations, measured.learners)
+        facts.write_all(out, "crowd")
         draw_crowd(world, out, progress)
     return summary(out)
 

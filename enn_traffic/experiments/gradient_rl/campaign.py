@@ -18,6 +18,7 @@ from enn_traffic.core import interrupts as stopping
 from enn_traffic.core.errors import InputError
 from enn_traffic.core.io import write_atomic
 from enn_traffic.core.progress import log, terminal
+from enn_traffic.experiments import facts
 from enn_traffic.experiments.gradient_rl.protocol import (
     PLAN,
     RUN_KEYS,
@@ -253,6 +254,7 @@ def write_summary(out: Path) -> pd.DataFrame:
     write_atomic(out / "comparison_rules.csv", partial(rule_changes(runs).to_csv, index=False))
     comparison_figure(_read(out / "curves.csv"), _read(out / "comparison.csv"),
                       out / "comparison.png")
+    facts.write_all(out, "baseline")
     return table
 
 

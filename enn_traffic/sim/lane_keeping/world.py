@@ -39,9 +39,7 @@ class LaneKeepingWorld:
 
     vehicles = 1
 
-    def __init__(self, scenario: Scenario, track: None = None):
-        if track is not None:
-            raise ValueError("a lane-keeping world draws its own road; it takes no track")
+    def __init__(self, scenario: Scenario):
         self.scenario = scenario
         self.config = scenario.lane_keeping
         self.spec = NetworkSpec(scenario.layer_sizes, scenario.network.layout)

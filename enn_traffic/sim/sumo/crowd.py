@@ -51,6 +51,7 @@ from enn_traffic.sim.rules import (
     vehicles_at,
     wall_arrays,
 )
+from enn_traffic.sim.sensors import reading_count
 from enn_traffic.sim.strategies import NETWORK
 from enn_traffic.sim.sumo.replay import mark_absent, struck_by_traffic, visible_centres
 from enn_traffic.sim.sumo.world import SumoWorld
@@ -329,7 +330,7 @@ class SumoCrowd:
         self.physics = world._learner_physics(simulation.largest_radius())
         self.slots = recording.slot_arrays(2, 64)
         self.before, self.now = 0, 1  # rows of the slot arrays; they swap every step
-        self.lives = lives = _Lives(self.count, self.physics, len(world.geometry.beams),
+        self.lives = lives = _Lives(self.count, self.physics, reading_count(world.geometry.beams),
                                     world.layer_sizes, self.slots[0].shape[1], self.seed)
         self._read()
         for k in range(self.count):

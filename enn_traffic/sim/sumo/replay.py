@@ -47,6 +47,7 @@ from enn_traffic.sim.rules import (
     wall_arrays,
     within_range,
 )
+from enn_traffic.sim.sensors import reading_count
 from enn_traffic.sim.world import CAPPED, COLLIDED, LEFT_NETWORK, RUNNING, SPUN
 from enn_traffic.sumo.simulation import FAR
 
@@ -228,7 +229,8 @@ def run_replay_life(genes, layer_sizes, physics, geometry, start, ids, corners, 
     within sensor range, most at once, what it hit: ``NO_HIT``, ``HIT_WALL`` or the vehicle's
     id); ``trace`` (n, 3) receives the learner's poses of steps 0..n-1 when n > 0, ``end``
     (3,) its pose as the life ended (where it collided, left or was capped)."""
-    state = learner_state(start, physics, geometry.beams.shape[0], layer_sizes, ids.shape[1])
+    state = learner_state(start, physics, reading_count(geometry.beams), layer_sizes,
+                          ids.shape[1])
     pose, suffered, met = state.learner.pose, state.suffered, state.met
     clear_start(state.learner.centres, ids[0], centres[0], state.gone, physics.clearance)
     t = 0

@@ -29,10 +29,10 @@ import numpy as np
 
 from enn_traffic.config import Scenario, episode_steps
 from enn_traffic.core.progress import slow_step
-from enn_traffic.roads import Track
 from enn_traffic.roads.network import lane_spots
 from enn_traffic.sim.arena import LearnerWorld
 from enn_traffic.sim.rules import Physics
+from enn_traffic.sim.sensors import reading_count
 from enn_traffic.sim.sumo.replay import (
     RUNNING,
     clear_start,
@@ -119,8 +119,8 @@ FIRST_RECORDING, RECORDING_GROWTH = 256, 4
 class SumoWorld(LearnerWorld):
     """A scenario whose traffic is SUMO's: evaluate populations, trace one life."""
 
-    def __init__(self, scenario: Scenario, track: Track | None = None):
-        super().__init__(scenario, track)
+    def __init__(self, scenario: Scenario):
+        super().__init__(scenario)
         self._traffic_seen: list[float] = []  # the last replay's mean SUMO vehicles
         self.max_steps = episode_steps(scenario)  # or where the .sumocfg ends
         self._checked = False  # closed loop: has some traffic been seen on the network?
@@ -485,7 +485,7 @@ class LiveTraffic:
             self.physics = world._learner_physics(simulation.largest_radius())
             self.ids, self.corners, self.centres = recording.slot_arrays(2, 64)
             self.before, self.now = 0, 1
-            self.state = learner_state(start, self.physics, len(world.geometry.beams),
+            self.state = learner_state(start, self.physics, reading_count(world.geometry.beams),
                                        world.layer_sizes, self.ids.shape[1])
             self._read()
             self.at_start = int((self.ids[self.now] >= 0).sum())

@@ -1,0 +1,41 @@
+"""docs/design.md: the layers (the package's folders, each described by its docstring), the
+traffic keys' ledger, and generations.csv's columns, as the package declares them."""
+
+from __future__ import annotations
+
+import importlib
+import re
+from pathlib import Path
+
+from enn_traffic import LAYERS
+from enn_traffic.core import keys
+from enn_traffic.runs.generations_csv import COLUMNS
+
+BILLION = 1_000_000_000
+
+
+def summary(docstring: str) -> str:
+    """A docstring's first paragraph as Markdown: one line, reST roles as code."""
+    first = " ".join(docstring.split("\n\n")[0].split())
+    return re.sub(r":\w+:`~?([^`]+)`", lambda m: f"`{m[1].rsplit('.', 1)[-1]}`", first).replace(
+        "``", "`")
+
+
+def key(number: int) -> str:
+    """A traffic key as the ledger writes it: 6·10⁹ + 540,000."""
+    whole, rest = divmod(number, BILLION)
+    head = "0" if whole == 0 else "10⁹" if whole == 1 else f"{whole}·10⁹"
+    return head if rest == 0 else f"{rest:,}" if whole == 0 else f"{head} + {rest:,}"
+
+
+def context(root: Path) -> dict:
+    layers = [{"name": name, "summary": summary(importlib.import_module(
+        f"enn_traffic.{name}").__doc__)} for name in LAYERS]
+    ranges = [{"name": name, "first": key(r.keys.start), "use": r.read_by}
+              for name, r in sorted(keys.RANGES.items(), key=lambda item: item[1].start)]
+    allocations = [{"name": name, "first": key(a.keys.start),
+                    "last": key(a.keys[-1]), "read_by": a.read_by}
+                   for name, a in sorted(keys.ALLOCATIONS.items(), key=lambda i: i[1].start)]
+    return {"layers": layers, "key_ranges": ranges, "key_allocations": allocations,
+            "generations_columns": [{"name": name, "meaning": " ".join(
+                function.__doc__.split())} for name, function in COLUMNS.items()]}
