@@ -225,3 +225,16 @@ def test_old_module_names_still_import_with_a_warning(old):
     public = [name for name in vars(new) if not name.startswith("_")]
     assert public and all(getattr(module, name) is getattr(new, name) for name in public)
     assert importlib.import_module("enn_traffic.envs").__file__.endswith("envs/__init__.py")
+
+
+def test_only_the_sumo_package_imports_libsumo():
+    """SUMO lives in one package: no module outside ``enn_traffic/sumo/`` imports libsumo."""
+    outside = []
+    for module, path in modules().items():
+        for node in ast.walk(ast.parse(path.read_text())):
+            names = ([alias.name for alias in node.names] if isinstance(node, ast.Import)
+                     else [node.module or ""] if isinstance(node, ast.ImportFrom) else [])
+            if any(name.split(".")[0] == "libsumo" for name in names) \
+                    and part_of(module) != "sumo":
+                outside.append(module)
+    assert not outside, outside

@@ -15,7 +15,7 @@ def test_kernels_version_moves_with_the_kernels_sources_only(tmp_path):
         with open(package / relative, "a") as handle:
             handle.write(text)
 
-    edit("experiments/results_doc.py", "\nA_REPORTS_EDIT = 1\n")
+    edit("experiments/study.py", "\nA_REPORTS_EDIT = 1\n")
     assert kernels_version.__wrapped__(package) == kernels
     assert code_version.__wrapped__(package) != code
     edit("sim/world.py", "\n# a constant kernels read may change here\n")

@@ -105,6 +105,26 @@ def test_a_run_made_by_other_rules_is_named_and_run_again(small, tmp_path):
                                   first.drop(columns="elapsed_s"))
 
 
+def test_a_run_made_under_an_earlier_digest_of_the_same_rules_resumes(small, tmp_path):
+    """A checkpoint whose fingerprint holds an earlier digest of these same rules
+    (provenance.SAME_RULES: the last version digested files, not code) continues, and
+    takes today's digest; its generations are those of an uninterrupted run."""
+    from enn_traffic.core.provenance import SAME_RULES, rules_version
+    from enn_traffic.runs.run import fingerprint
+
+    scenario = small.with_overrides(ga={"generations": 3})
+    whole = evolve(scenario, tmp_path / "whole", progress=False)
+    evolve(scenario.with_overrides(ga={"generations": 1}), tmp_path / "old", progress=False)
+    state = GAState.load(tmp_path / "old" / "checkpoint.npz")
+    state.fingerprint = fingerprint(scenario, rules=SAME_RULES[0])
+    state.extra["rules"] = SAME_RULES[0]
+    state.save(tmp_path / "old" / "checkpoint.npz")
+    resumed = evolve(scenario, tmp_path / "old", resume=True, progress=False)
+    assert GAState.load(tmp_path / "old" / "checkpoint.npz").extra["rules"] == rules_version()
+    pd.testing.assert_frame_equal(resumed.drop(columns="elapsed_s"),
+                                  whole.drop(columns="elapsed_s"))
+
+
 def test_only_the_deciding_code_moves_a_runs_fingerprint(tmp_path):
     """On a copy of the package, code added to report/ or the command line leaves the rules' digest
     as it was (a finished run is reused); code added to sim/rules.py or the GA moves it (the run is

@@ -51,10 +51,16 @@ def context(root: Path, parts: tuple) -> dict:
     return merged
 
 
+NOTE = ("<!-- Rendered from docs/_generate/templates/{template} by "
+        "python docs/_generate/render.py: edit the template, not this file. -->\n")
+
+
 def render(root: Path = ROOT, only: list[str] | None = None) -> dict[str, str]:
-    """Every document (or those ``only`` names, by their path) as its template renders it."""
+    """Every document (or those ``only`` names, by their path) as its template renders it,
+    under a line that says so."""
     env = environment()
-    return {path: env.get_template(template).render(**context(root, parts))
+    return {path: NOTE.format(template=template)
+            + env.get_template(template).render(**context(root, parts))
             for path, (template, parts) in DOCUMENTS.items()
             if only is None or path in only}
 

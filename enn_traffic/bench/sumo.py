@@ -4,7 +4,6 @@ SUMO start in a fresh process."""
 
 from __future__ import annotations
 
-import math
 import os
 import subprocess
 import sys
@@ -27,8 +26,7 @@ from enn_traffic.config.shipped import shipped_scenario
 from enn_traffic.learning import ga
 from enn_traffic.sim.sumo.crowd import SumoCrowd
 from enn_traffic.sim.world import make_world
-from enn_traffic.sumo import command, ssm, states
-from enn_traffic.sumo.learners import add_learner, learner_id, move_learner
+from enn_traffic.sumo import states
 from enn_traffic.sumo.simulation import Simulation
 
 
@@ -199,68 +197,17 @@ def _city_replay(world, label: str, generations: int) -> tuple:
             steps, learner_steps, total, warmup / total, best)
 
 
-def sumo_step_seconds(source: list[str], learners: int, steps: int, warmup_steps: int,
-                      speed_factor: float | None = None) -> tuple[float, int, int]:
-    """Seconds per SUMO step (moving the learners included) after ``warmup_steps`` steps of
-    0.1 s, of SUMO started on ``source`` (``["-c", "city.sumocfg"]``, or a network and route
-    files), with ``learners`` learners in SUMO as the closed loop puts them there
-    (:func:`sumo.add_learner`, SSM devices, each moved along a lane of its own at 10 m/s by
-    :func:`sumo.move_learner`); their vehicle type's speed factor ``speed_factor`` (default:
-    :func:`sumo.add_learner`'s, :func:`sumo.learner_speed_factor`). Also the
-    network's lanes (internal lanes excepted) and the vehicles on it when the timing
-    starts."""
-    import libsumo
-
-    with tempfile.TemporaryDirectory(prefix="enn-bench-sumo-") as folder:
-        libsumo.start(["sumo", *source, "--seed", "1", "--step-length", "0.1",
-                       "--no-step-log", "true", "--no-warnings", "true", "--verbose", "false",
-                       "--duration-log.statistics", "false", "--gui-settings-file", "",
-                       "--collision.action", "none",
-                       "--output-prefix", command.output_prefix(Path(folder)),
-                       *ssm.ssm_options(tuple(learner_id(k) for k in range(learners)))])
-        try:
-            for _ in range(warmup_steps):
-                libsumo.simulationStep()
-            lanes = sorted(lane for lane in libsumo.lane.getIDList()
-                           if not lane.startswith(":") and libsumo.lane.getLength(lane) > 60
-                           and (not libsumo.lane.getAllowed(lane)  # every class
-                                or "passenger" in libsumo.lane.getAllowed(lane)))
-            paths = []
-            for k in range(learners):
-                lane = lanes[k * len(lanes) // max(learners, 1)]
-                edge, index = lane.rsplit("_", 1)
-                paths.append((edge, int(index), libsumo.lane.getLength(lane)))
-                add_learner(4.3, 1.7, 10.0, learner_id(k))
-            if learners and speed_factor is not None:
-                libsumo.vehicletype.setSpeedFactor(command.LEARNER_TYPE, speed_factor)
-            vehicles = libsumo.vehicle.getIDCount() - learners
-            started = time.perf_counter()
-            for t in range(steps):
-                for k, (edge, index, length) in enumerate(paths):
-                    along = 1.0 + t % (length - 2.0)  # back and forth along the lane
-                    x, y = libsumo.simulation.convert2D(edge, along, index)
-                    ahead = libsumo.simulation.convert2D(edge, along + 1.0, index)
-                    move_learner(x, y, math.atan2(ahead[1] - y, ahead[0] - x),
-                                      learner_id(k))
-                libsumo.simulationStep()
-            seconds = (time.perf_counter() - started) / steps
-            lanes = sum(not lane.startswith(":") for lane in libsumo.lane.getIDList())
-            return seconds, lanes, vehicles
-        finally:
-            libsumo.close()
-
-
 def sumo_step_table(source: list[str], name: str, steps: int, warmup_steps: int,
                     repeats: int) -> pd.DataFrame:
-    """:func:`sumo_step_seconds` without a learner, with one and with eight, one after another
-    ``repeats`` times (the median kept, and the fastest and slowest run: machine drift hits
-    every count alike, but a run's step time on a shared machine varies by a quarter and
-    more), each start in a fresh process (libsumo keeps state between starts in one
-    process)."""
+    """:func:`~enn_traffic.sumo.timing.step_seconds` without a learner, with one and with eight, one
+    after another ``repeats`` times (the median kept, and the fastest and slowest run: machine drift
+    hits every count alike, but a run's step time on a shared machine varies by a quarter and more),
+    each start in a fresh process (libsumo keeps state between starts in one process)."""
     from enn_traffic.sumo.fresh import fresh_calls
+    from enn_traffic.sumo.timing import step_seconds
 
     counts = (0, 1, 8)
-    calls = [(sumo_step_seconds, source, learners, steps, warmup_steps)
+    calls = [(step_seconds, source, learners, steps, warmup_steps)
              for _ in range(repeats) for learners in counts]
     measured = fresh_calls(calls)
     lanes, vehicles = measured[0][1:]

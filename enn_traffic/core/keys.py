@@ -31,8 +31,8 @@ SPENT_CROWD_TEST = range(7 * SPAN, 8 * SPAN)  # read twice by earlier designs of
 # Test ranges read while the design was still being chosen: never used again, for anything.
 RETIRED_TEST = range(SPAN, 2 * SPAN)
 RETIRED_CROWD_TEST = range(5 * SPAN, 6 * SPAN)
-# Situations design trials were scored on (docs/results.md, "Why Table 2 evolves a wider
-# network"): no result is reported on them and no experiment reads them; tests draw here.
+# Situations design trials were scored on (docs/history.md, "Dynamic vehicles"): no result is
+# reported on them and no experiment reads them; tests draw here.
 DESIGN_TRIALS = range(8 * SPAN, 9 * SPAN)
 
 @dataclass(frozen=True)

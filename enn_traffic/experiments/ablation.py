@@ -501,3 +501,16 @@ def table4_ablation(study: Study) -> list[str]:
     """Table 4's ablation from the controllers Tables 3–4 saved in the study's folder."""
     table = measure(study.out, study.settings(ABLATION), study.progress)
     return summary_lines(table, pd.read_csv(study.out / "table4_ablation_factors.csv"))
+
+
+def facts(folder: Path) -> dict:
+    """Facts (docs/_generate/README.md) of Table 4's ablation in a reproduce folder: per
+    contrast, the rows below and above 0 by Student-t intervals at the table's simultaneous
+    level (:func:`t_interval_counts`, over ``table4_ablation_situations.csv``), and the arms
+    whose learners bred no generation (:func:`idle_arms`, over ``table4_ablation.csv``)."""
+    situations = pd.read_csv(folder / "table4_ablation_situations.csv")
+    counts = {contrast: t_interval_counts(situations, contrast) for contrast in CONTRASTS}
+    return {"t_intervals": [{"contrast": contrast, "below": below, "above": above}
+                            for contrast, (below, above) in counts.items()],
+            "idle_arms": [{"start_population": start, "stopping": stopping} for start, stopping
+                          in idle_arms(pd.read_csv(folder / "table4_ablation.csv"))]}

@@ -22,6 +22,20 @@ from enn_traffic.core.registry import Registry
 # Each facts file by "KIND/NAME": the function that computes it from a results folder of that
 # kind (``reproduce``'s, ``baseline``'s, ``crowd``'s), ``(folder: Path) -> dict`` of JSON values.
 FACTS = Registry("facts", {
+    "paper/table1": "enn_traffic.experiments.table1:facts",
+    "paper/lane_keeping": "enn_traffic.experiments.lanekeeping:road_facts",
+    "paper/tables34": "enn_traffic.experiments.crowds.arena:facts",
+    "paper/table4_ablation": "enn_traffic.experiments.ablation:facts",
+    "paper/sumo_tables34": "enn_traffic.experiments.crowds.sumo:sumo_facts",
+    "paper/city_tables34": "enn_traffic.experiments.crowds.sumo:city_facts",
+    "baseline/plan": "enn_traffic.experiments.gradient_rl.facts:plan",
+    "baseline/starts": "enn_traffic.experiments.gradient_rl.facts:starts",
+    "baseline/track": "enn_traffic.experiments.gradient_rl.facts:track",
+    "baseline/spin_rule": "enn_traffic.experiments.gradient_rl.facts:spin_rule",
+    "baseline/search": "enn_traffic.experiments.gradient_rl.facts:search",
+    "baseline/fitness": "enn_traffic.experiments.gradient_rl.facts:fitness",
+    "baseline/ablations": "enn_traffic.experiments.gradient_rl.facts:ablations",
+    "baseline/stopping": "enn_traffic.experiments.gradient_rl.facts:stopping",
 })
 # The committed results folder of each kind, under the repository's results/.
 FOLDERS = {"paper": "paper", "baseline": "baseline", "crowd": "crowd_brunswick"}

@@ -20,6 +20,7 @@ from enn_traffic.experiments.study import Runs, Study
 from enn_traffic.learning.evaluators import ProcessEvaluator
 from enn_traffic.report.plots import draw_paths, learning_curves, save_figure
 from enn_traffic.runs.controller import Controller
+from enn_traffic.sim.lane_keeping.road import SPEED, CameraLaneKeepingEnv
 from enn_traffic.sim.lane_keeping.world import LaneKeepingWorld
 from enn_traffic.sim.world import CAPPED, make_world
 from enn_traffic.sumo.fresh import fresh_shares
@@ -180,7 +181,7 @@ def chosen(scenario: Scenario, run_dir: Path, roads: int = RUNS.validation_roads
     from the validation key; the earliest of equals. (``best.npz`` is the first chromosome to
     reach the highest fitness on one generation's few roads, and the final elites are the
     fittest on the last generation's: measured on validation roads, both weak choices;
-    docs/results.md.)"""
+    docs/history.md, "Lane keeping".)"""
     if scenario.lane_keeping.draw is None:
         return Controller.load(run_dir / "best.npz").chromosome
     pool = candidates(run_dir, whole_population=True)
@@ -218,3 +219,28 @@ def _draw_roads(paths: dict, path: Path, name: str, noise: float) -> None:
     save_figure(figure, path)
     plt.close(figure)
 
+
+
+def road_facts(folder: Path) -> dict:
+    """Facts (docs/_generate/README.md): the fixed roads ``lane_keeping.csv`` measured, each
+    as ``ROADS`` makes it of highway-env's road (kind, amplitude and period of a sine, radius
+    of a circle, mirrored or not), with its peak curvature in 1/m (a sine ``A sin(2 pi x /
+    P)``: ``A (2 pi / P)^2``, at its crests; a circle: ``1 / radius``) and the radius of its
+    sharpest bend; and a capped episode in steps and metres (highway-env's speed and policy
+    frequency)."""
+    table = pd.read_csv(folder / "lane_keeping.csv")
+    base = shipped_scenario(TRAININGS[0])
+    roads = {}
+    for name in table["road"].unique():
+        road = base.lane_keeping.model_copy(update=ROADS[name])
+        curvature = (road.amplitude * (2 * np.pi / road.period) ** 2 if road.road == "sine"
+                     else 1 / road.radius)
+        roads[name] = {"kind": road.road, "mirrored": road.mirrored,
+                       **({"amplitude": road.amplitude, "period": road.period}
+                          if road.road == "sine" else {"radius": road.radius}),
+                       "peak_curvature": round(float(curvature), 6),
+                       "sharpest_radius": round(float(1 / curvature), 3)}
+    steps = base.episode.max_steps
+    frequency = CameraLaneKeepingEnv.default_config()["policy_frequency"]
+    return {"roads": roads, "episode_steps": steps,
+            "episode_m": round(steps * SPEED / frequency, 3)}

@@ -67,3 +67,19 @@ def summary_line(matrix: np.ndarray, label: str) -> str:
     return (f"{label}: mean diagonal {own:.0f}, mean off-diagonal {rest:.0f} "
             f"(ratio {own / rest:.2f}; paper 4.9); diagonal above the rest "
             f"of its row in {rows_ok} of {len(matrix)} rows (paper: 4 of 4)")
+
+
+def facts(folder: Path) -> dict:
+    """Facts (docs/_generate/README.md): how much one lifetime says, from the committed Table 1
+    controllers' lives on traffic seed 5000 (``table1_seed5000.csv``, the README's
+    ``evaluate`` command): the lowest and highest standard deviation of an entry's lifetimes
+    (fitness, steps), and what that gives as the standard error of an entry's mean on Fig.
+    11's test situations and on Table 1's (``ARENA.test_situations``,
+    ``ARENA.table_situations``)."""
+    lives = pd.read_csv(folder / "table1_seed5000.csv")
+    spread = lives.groupby(["controller", "scenario"])["fitness"].std()
+    low, high = float(spread.min()), float(spread.max())
+    return {"lifetime_std": {"low": round(low, 3), "high": round(high, 3)},
+            "standard_error": [{"situations": n, "low": round(low / np.sqrt(n), 3),
+                                "high": round(high / np.sqrt(n), 3)}
+                               for n in (ARENA.test_situations, ARENA.table_situations)]}

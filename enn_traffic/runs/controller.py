@@ -156,8 +156,8 @@ class Controller:
     def fit(self, scenario: Scenario, path: str | Path | None = None) -> Scenario:
         """``scenario`` with this controller's network and sensor, and the spin rule it was
         evolved under: a controller is measured by the rules it learnt by (the paper's rule,
-        4.9 s within 8 m, calls a turn round in a narrow dead end a spin; docs/results.md,
-        "Generalisation across tracks"). A clear error if the scenario's rangefinder has another
+        4.9 s within 8 m, calls a turn round in a narrow dead end a spin; docs/history.md,
+        "Navigation"). A clear error if the scenario's rangefinder has another
         number of beams than the network has inputs."""
         if scenario.lane_keeping is not None:
             if self.layer_sizes[0] != scenario.inputs:

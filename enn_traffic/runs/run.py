@@ -15,7 +15,7 @@ import os
 import time
 import tomllib
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 import numpy as np
@@ -28,7 +28,7 @@ from enn_traffic.core.errors import InputError
 from enn_traffic.core.io import check_not_source, folder_lock, write_atomic, write_csv, write_text
 from enn_traffic.core.neural import NetworkSpec
 from enn_traffic.core.progress import slow_step, terminal
-from enn_traffic.core.provenance import rules_version, sources_of
+from enn_traffic.core.provenance import SAME_RULES, rules_version, sources_of
 from enn_traffic.learning import ga
 from enn_traffic.learning.evaluators import Evaluator, make_evaluator
 from enn_traffic.runs import generations_csv as generations
@@ -89,14 +89,16 @@ class RunOutputs:
 
 
 def fingerprint(scenario: Scenario, others: Sequence[Scenario] = (),
-                population: np.ndarray | None = None, deciders: Sequence[object] = ()) -> str:
+                population: np.ndarray | None = None, deciders: Sequence[object] = (),
+                rules: str | None = None) -> str:
     """Identifies a run: its settings (everything but the number of generations) and the
     contents of the files they name, with the other scenarios its evaluator runs (their
     worlds: not their own number of generations), the population it started from, where there
     are such, and the code that decides its result: the rules
     (:func:`~enn_traffic.core.provenance.rules_version`) and the files of its ``deciders`` (an
-    evaluator or stopping rule from elsewhere, :func:`~enn_traffic.core.provenance.sources_of`)."""
-    digest = hashlib.sha256(rules_version().encode())
+    evaluator or stopping rule from elsewhere, :func:`~enn_traffic.core.provenance.sources_of`);
+    ``rules``: another digest of the rules than this code's."""
+    digest = hashlib.sha256((rules or rules_version()).encode())
     digest.update(sources_of(*deciders).encode())
     for one in (scenario, *others):
         digest.update(one.with_overrides(ga={"generations": 1}).to_toml().encode())
@@ -167,8 +169,18 @@ ALREADY_A_RUN = ("the folder already holds a run; pass --resume to continue it o
                  "start over")
 
 
+def earlier_keys(scenario: Scenario, others: Sequence[Scenario] = (),
+                 population: np.ndarray | None = None, deciders: Sequence[object] = ()
+                 ) -> frozenset[str]:
+    """The fingerprints the same run had under the earlier digests of these same rules
+    (:data:`~enn_traffic.core.provenance.SAME_RULES`): a run made under one resumes."""
+    return frozenset(fingerprint(scenario, others, population, deciders, rules)
+                     for rules in SAME_RULES)
+
+
 def _open_state(scenario: Scenario, out: Path, resume: bool, force: bool,
-                population: np.ndarray | None, key: str) -> ga.GAState:
+                population: np.ndarray | None, key: str,
+                earlier: frozenset[str] = frozenset()) -> ga.GAState:
     checkpoint = out / CHECKPOINT
     if not checkpoint.exists() or force:
         _check_fresh_folder(scenario, out, force)
@@ -179,6 +191,8 @@ def _open_state(scenario: Scenario, out: Path, resume: bool, force: bool,
     if not resume:
         raise InputError(ALREADY_A_RUN, out)
     state = ga.GAState.load(checkpoint)
+    if state.fingerprint in earlier:  # these rules, digested the earlier way
+        state = replace(state, fingerprint=key, extra={**state.extra, "rules": rules_version()})
     if state.fingerprint != key:
         made_by = state.extra.get("rules", "older")
         if made_by != rules_version():
@@ -247,7 +261,8 @@ def check_folder(scenario: Scenario, out: str | Path, resume: bool = False,
     before any world is built, so that a folder holding another run is said at once."""
     out = Path(out)
     if (out / CHECKPOINT).exists() and not force:
-        _open_state(scenario, out, resume, force, None, fingerprint(scenario))
+        _open_state(scenario, out, resume, force, None, fingerprint(scenario),
+                    earlier_keys(scenario))
     else:
         _check_fresh_folder(scenario, out, force)
 
@@ -346,7 +361,8 @@ def _evolve(scenario: Scenario, out: Path, evaluator: Evaluator | None, resume: 
     """:func:`evolve`, its folder locked."""
     deciders = [d for d in (evaluator, stop) if d is not None]
     key = fingerprint(scenario, others, initial_population, deciders)
-    state = _open_state(scenario, out, resume, force, initial_population, key)
+    state = _open_state(scenario, out, resume, force, initial_population, key,
+                        earlier_keys(scenario, others, initial_population, deciders))
     table_path = out / "generations.csv"
     done = _finished_rows(table_path, state.generation)
     total = scenario.ga.generations

@@ -197,7 +197,7 @@ def u_turn(straight: int, radius: float) -> np.ndarray:
     (300, 300.0, 150, False),  # the arena's: 300 m cannot stay within 17 m of a dead end
 ])
 def test_a_turn_round_in_a_dead_end_and_the_spin_rules(window, variance, straight, spin):
-    # docs/results.md, "Generalisation across tracks": turning round within 14 m
+    # docs/history.md, "Navigation": turning round within 14 m
     path = u_turn(straight, radius=3.0)[:window]
     recent = np.empty((window, 2))
     flags = [spun(recent, step, x, y, variance) for step, (x, y) in enumerate(path)]

@@ -13,4 +13,5 @@ DOCUMENTS = {
     "docs/sumo.md": ("sumo.md.j2", (sumo,)),
     "docs/scenarios.md": ("scenarios.md.j2", (scenarios,)),
     "docs/design.md": ("design.md.j2", (design,)),
+    "docs/history.md": ("history.md.j2", (bench,)),
 }

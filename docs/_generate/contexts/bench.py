@@ -1,9 +1,80 @@
-"""The context of the document bench renders (docs/_generate/README.md)."""
+"""docs/bench.md (and the README's timings): the committed bench tables of ``results/bench``,
+each written by its ``enn-traffic bench --only NAME`` run, the wall times the committed
+reproduction keeps in ``results/paper/summary.json``, and the cap on learners in one SUMO
+that the scenario schema declares."""
 
 from __future__ import annotations
 
+import json
 from pathlib import Path
+
+import pandas as pd
+
+from enn_traffic.config.base import MAX_LEARNERS
+
+
+def rows(table: pd.DataFrame) -> list[dict]:
+    """A table's rows, each a dict of its columns."""
+    return table.to_dict("records")
+
+
+def contention(table: pd.DataFrame) -> dict:
+    """The rows, and the default threads' median rates of the second wait policy over the
+    first's, per workload."""
+    policies = list(dict.fromkeys(table["implementation"]))
+    several = table[table["threads"] > 1].set_index(["workload", "implementation"])
+    ratios = [{"workload": workload,
+               "ratio": several.loc[(workload, policies[1]), "vehicle_steps_per_s"]
+               / several.loc[(workload, policies[0]), "vehicle_steps_per_s"]}
+              for workload in dict.fromkeys(several.index.get_level_values(0))]
+    return {"rows": rows(table), "ratios": ratios, "threads": int(several["threads"].iloc[0])}
+
+
+def crowd_scale(table: pd.DataFrame) -> dict:
+    """The rows, each with its learner count and what the learners add to a step beyond
+    SUMO's own, per learner (µs)."""
+    table = table.assign(learners=(table["learner_steps"] / table["steps"]).astype(int))
+    table["rest_us"] = (1000 * (table["ms_per_step"] - table["sumo_ms_per_step"])
+                        / table["learners"])
+    return {"rows": rows(table), "workload": table["workload"].iloc[0],
+            "steps": int(table["steps"].iloc[0])}
+
+
+def recording(table: pd.DataFrame) -> dict:
+    """The GA's generations and the environment's life, each recorded over the whole cap
+    first (``whole``) and as far as the lives reach (``reach``)."""
+    def arms(prefix: str) -> dict:
+        rows = table[table["workload"].str.startswith(prefix)]
+        whole = rows["implementation"].str.startswith("the whole cap")
+        return {"whole": rows[whole].iloc[0].to_dict(), "reach": rows[~whole].iloc[0].to_dict()}
+
+    return {"generations": arms("sumo default cap:"), "life": arms("sumo env:")}
+
+
+def reproduce_quick(table: pd.DataFrame) -> dict:
+    """Each experiment's row, and the whole command's seconds."""
+    whole = table["implementation"] == "the whole command"
+    return {"rows": rows(table[~whole]), "whole": float(table[whole]["seconds"].iloc[0])}
 
 
 def context(root: Path) -> dict:
-    return {}
+    folder = root / "results" / "bench"
+
+    def read(name: str) -> pd.DataFrame:
+        return pd.read_csv(folder / f"{name}.csv")
+
+    summary = json.loads((root / "results" / "paper" / "summary.json").read_text())
+    return {"bench": {
+        "first_run": rows(read("first_run_issue62")),
+        "contention": contention(read("contention_issue62")),
+        "reproduce_quick": reproduce_quick(read("reproduce_quick_issue62")),
+        "bench_quick": rows(read("bench_quick_issue62"))[0],
+        "test_suite": rows(read("test_suite_issue62")),
+        "fresh": rows(read("fresh_issue62")),
+        "sumo_step": rows(read("sumo_step_issue60")),
+        "published": rows(read("published_issue60")),
+        "crowd_scale": crowd_scale(read("crowd_scale_issue63")),
+        "crowd_ray": rows(read("crowd_ray_issue63")),
+        "recording": recording(read("recording_issue50")),
+        "sb3": rows(read("sb3_issue52")),
+        "summary": summary, "max_learners": MAX_LEARNERS}}

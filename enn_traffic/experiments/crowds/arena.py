@@ -622,3 +622,61 @@ def table4(study: Study) -> list[str]:
     measured = _measured(study)
     write_csv(study.out / "table4.csv", table4_comparisons(measured.situations))
     return summary_lines(measured.situations, measured.learners, "table4")
+
+
+# The arms' columns of table4_learning.csv, whose first and last tenth the documents state
+CURVE_COLUMNS = ["collisions_per_vehicle_s", "initial_drivers", "winner_driving_on"]
+# The mean reductions (after, before) the documents state with their intervals
+REDUCTIONS = [("winner", "initial"), ("population", "initial_after"), ("population", "initial"),
+              ("winner_after", "initial_after")]
+
+
+def curve_facts(curve: pd.DataFrame) -> dict:
+    """Each arm's first and last tenth of the learning (:func:`curve_ends`) in a learning
+    curve (``table4_learning.csv``), per strategy and over every strategy together."""
+    def ends(rows: pd.DataFrame) -> dict:
+        return {column: dict(zip(("first", "last"), curve_ends(rows, column), strict=True))
+                for column in CURVE_COLUMNS}
+
+    return {"strategies": [{"strategy": int(strategy)} | ends(rows)
+                           for strategy, rows in curve.groupby("strategy")],
+            "all": ends(curve)}
+
+
+def trend_facts(ends: pd.DataFrame) -> dict:
+    """The learners' :func:`trend` over ``table4_learning_ends.csv``: the mean change from the
+    first to the last tenth of the learning and its 90% interval over the situations."""
+    change, low, high = trend(ends)
+    return {"change": change, "low": low, "high": high}
+
+
+def facts(folder: Path) -> dict:
+    """Facts (docs/_generate/README.md) of the arena's Tables 3–4 in a reproduce folder: the
+    mean reductions of ``REDUCTIONS`` (:func:`mean_reduction` over ``simultaneous.csv``) with
+    their 90% intervals over the situations (:func:`reduction_interval`, seed 0, over
+    ``simultaneous_situations.csv``); the learning curve's ends (:func:`curve_facts`) and the
+    learners' trend (:func:`trend_facts`); and, per strategy, how many of the first
+    situation's controllers after learning (``controllers/table4``) are chromosomes of the
+    evolved population the vehicles started from, and how many are distinct."""
+    situations = pd.read_csv(folder / "simultaneous_situations.csv")
+    means = pd.read_csv(folder / "simultaneous.csv")
+    reductions = {}
+    for after, before in REDUCTIONS:
+        low, high = reduction_interval(situations, after, np.random.default_rng(0), before)
+        reductions[f"{after}_vs_{before}"] = {"mean": mean_reduction(means, after, before),
+                                              "low": low, "high": high}
+    saved = folder / "controllers" / "table4"
+    kept = []
+    for strategy in ARENA.strategies:
+        with np.load(saved / f"strategy{strategy}_evolved.npz") as evolved:
+            start = {row.tobytes() for row in evolved["population"]}
+        controllers = [Controller.load(path).chromosome
+                       for path in sorted(saved.glob(f"strategy{strategy}_vehicle*.npz"))]
+        kept.append({"strategy": strategy,
+                     "kept": sum(chromosome.tobytes() in start for chromosome in controllers),
+                     "distinct": len({chromosome.tobytes() for chromosome in controllers}),
+                     "vehicles": len(controllers)})
+    return {"reductions": reductions,
+            "curve": curve_facts(pd.read_csv(folder / "table4_learning.csv")),
+            "trend": trend_facts(pd.read_csv(folder / "table4_learning_ends.csv")),
+            "kept": kept}

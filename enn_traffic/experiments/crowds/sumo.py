@@ -61,13 +61,15 @@ from enn_traffic.experiments.common import save_arrays, save_controller
 from enn_traffic.experiments.crowds.arena import (
     Measured,
     SituationResult,
+    curve_facts,
     draw_learning,
     learning_curve,
     learning_ends,
     table4_comparisons,
+    trend_facts,
 )
 from enn_traffic.experiments.crowds.settings import CrowdSettings
-from enn_traffic.experiments.families import SUMO, Family
+from enn_traffic.experiments.families import CITY, SUMO, Family
 from enn_traffic.experiments.study import Study
 from enn_traffic.learning import ga
 from enn_traffic.learning.online import OnlineLearning, VehicleGA
@@ -439,3 +441,39 @@ def sumo_tables(study: Study, family: Family = SUMO) -> list[str]:
     family = study.settings(family)
     measured = measure(study, family, study.settings(SUMO_LEARNING))
     return write_tables(study.out / family.folder, measured.situations, measured.learners)
+
+
+def lane_facts(family: Family) -> dict:
+    """The lanes a passenger car may drive on in ``family``'s strategy 1's network: their
+    mean width weighted by length, and what it leaves on each side of the scenario's car."""
+    from enn_traffic.roads.network import read_net
+
+    scenario = family.scenario(1)
+    lanes = [(lane.getWidth(), lane.getLength()) for edge in read_net(scenario.track.net)
+             .getEdges() if edge.getFunction() != "internal" for lane in edge.getLanes()
+             if lane.allows("passenger")]
+    width = float(np.average([w for w, _ in lanes], weights=[length for _, length in lanes]))
+    return {"scenario": scenario.name, "width": width, "car_width": scenario.vehicle.width,
+            "margin": (width - scenario.vehicle.width) / 2}
+
+
+def family_facts(folder: Path, family: Family) -> dict:
+    """Facts (docs/_generate/README.md) of a SUMO family's Tables 3–4, from its subfolder of
+    a reproduce folder: the learning curve's ends
+    (:func:`~enn_traffic.experiments.crowds.arena.curve_facts`, ``table4_learning.csv``), the
+    learners' trend (:func:`~enn_traffic.experiments.crowds.arena.trend_facts`,
+    ``table4_learning_ends.csv``) and the lanes of its network (:func:`lane_facts`)."""
+    tables = folder / family.folder
+    return {"curve": curve_facts(pd.read_csv(tables / "table4_learning.csv")),
+            "trend": trend_facts(pd.read_csv(tables / "table4_learning_ends.csv")),
+            "lanes": lane_facts(family)}
+
+
+def sumo_facts(folder: Path) -> dict:
+    """:func:`family_facts` of the SUMO family (``sumo/``)."""
+    return family_facts(folder, SUMO)
+
+
+def city_facts(folder: Path) -> dict:
+    """:func:`family_facts` of the city (``city/``)."""
+    return family_facts(folder, CITY)
