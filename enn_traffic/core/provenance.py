@@ -23,7 +23,7 @@ PACKAGE = Path(__file__).resolve().parents[1]
 # What decides a GA run's result: the step rules and worlds, the GA and its loop, the traffic,
 # the roads' walls, lane keeping, the network, the geometry, the keys that draw traffic, the
 # strategies' driver kinds, and the scenario schema that resolves a scenario file into
-# settings (tests/test_provenance.py checks that everything these import is here or named
+# settings (tests/core/test_provenance.py checks that everything these import is here or named
 # as deciding nothing).
 RULES = ("sim", "learning", "sumo", "roads", "core/geometry.py", "core/neural.py",
          "core/keys.py", "core/registry.py", "config",

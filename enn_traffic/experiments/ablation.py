@@ -1,4 +1,4 @@
-"""Table 4 as an ablation (paper §5.5.2; issue 61): which procedural choice carries the pattern.
+"""Table 4 as an ablation (paper §5.5.2): which procedural choice carries the pattern.
 
 Table 4 differs from the authors' procedure (reference §7) in two choices that this experiment
 crosses (docs/departures.md, "Learning while driving"): our learners start from the evolved

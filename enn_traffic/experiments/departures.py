@@ -1,4 +1,4 @@
-"""The crowds' last departures from the authors' rules, measured (issue 61; docs/departures.md).
+"""The crowds' last departures from the authors' rules, measured (docs/departures.md).
 
 Three rules of the authors' code that the crowds do not follow even in Table 4's ablation's
 authors' set-up (:class:`~enn_traffic.experiments.ablation.AuthorsRules`):

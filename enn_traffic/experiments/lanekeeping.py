@@ -38,7 +38,7 @@ RUNS = LaneKeepingRuns(seeds=(1, 2, 3), quick={"seeds": (1,), "validation_roads"
                                                "ga": {"population_size": 12, "generations": 5,
                                                       "elite_count": 2}})
 DRAWN_STEPS = 400
-# Trained on highway-env's road alone, or on roads drawn per situation (issue 25).
+# Trained on highway-env's road alone, or on roads drawn per situation.
 TRAININGS = ["lane_keeping", "lane_keeping_mixed"]
 # Measured on fixed roads: highway-env's training road and roads neither training drove (the
 # mixed training draws sizes from ranges that hold most of these, never these roads

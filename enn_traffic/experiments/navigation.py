@@ -29,7 +29,7 @@ REACHED_B = 1200
 RUNS = Runs(seeds=(1, 2, 3, 4, 5), quick={"seeds": (1, 2), "ga": {"population_size": 60,
                                                                    "generations": 20}})
 SENSOR_RUNS = replace(RUNS, quick={**RUNS.quick, "seeds": (1,)})  # Fig. 9: six sensors
-# Generalisation (issue 25): the scenarios controllers train on, and the tracks they are
+# Generalisation: the scenarios controllers train on, and the tracks they are
 # measured on, narrowest first. The validation tracks (unseen_*, 12-30 m) were read once as a
 # test, then decided the design of training across tracks; the test tracks (test_*, 12-30 m)
 # were built then and are read by the final configuration alone. Each has the step cap

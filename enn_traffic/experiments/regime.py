@@ -22,7 +22,7 @@ ours to the authors' set-up one step at a time, so that each step's factor is me
 Collisions and spins are counted apart; ``lives_lost_per_s`` is both (a spin also ends a life
 in the authors' code). Written to ``regime.csv``, with the same rates in other time bases
 (:func:`time_bases`: per step, per 100 steps), as the paper may have counted per step of
-0.1 s rather than per second (issue 61's time-base hypothesis).
+0.1 s rather than per second (a hypothesis about the paper's time base).
 """
 
 from __future__ import annotations

@@ -3,6 +3,7 @@ drawing only; the experiments compute what is drawn."""
 
 from __future__ import annotations
 
+import textwrap
 from pathlib import Path
 
 import matplotlib.pyplot as plt
@@ -120,4 +121,56 @@ def comparison_figure(curves: pd.DataFrame, comparison: pd.DataFrame, path: Path
         row[1].set_ylabel("test fitness (steps lived)")
         row[1].set_title("each run: 90% interval over its test situations; black: the "
                          "seeds' mean, 90% t interval", fontsize=8)
+    save_figure(figure, path)
+
+
+def crowd_paths_figure(paths: dict, path: Path, seconds: float) -> None:
+    """Each strategy of the arena's crowds: the first ``seconds`` of its initial drivers, the
+    broadcast winner and the vehicles after simultaneous learning."""
+    figure, axes = plt.subplots(3, 4, figsize=(16, 12))
+    steps = round(seconds * 10)
+    titles = ["initial drivers", "winning chromosome (Table 3)", "after learning (Table 4)"]
+    for column, (strategy, traces) in enumerate(sorted(paths.items())):
+        walls = traces[-1]
+        for row, trace in enumerate(traces[:3]):
+            ax = axes[row, column]
+            draw_paths(ax, walls, [trace[:steps, v] for v in range(trace.shape[1])],
+                       colors=[f"C{v}" for v in range(trace.shape[1])])
+            ax.set_xticks([])
+            ax.set_yticks([])
+            ax.set_title(f"strategy {strategy}: {titles[row]}", fontsize=9)
+    figure.suptitle(f"All 8 vehicles, first {seconds:g} s of simulated time "
+                    "(after learning: the first seconds after it)")
+    figure.tight_layout()
+    save_figure(figure, path)
+
+
+def crowd_learning_figure(curve: pd.DataFrame, situations: pd.DataFrame, path: Path,
+                          seconds: float, title: str,
+                          unit: str = "collisions per vehicle-second") -> None:
+    """Per strategy: collisions per vehicle-second in each span while the vehicles learn,
+    beside the initial drivers and the winner over the same spans, and each arm over the
+    span after learning (the markers at its end: Table 4)."""
+    strategies = sorted(curve["strategy"].unique())
+    width = max(6, 4 * len(strategies))  # one panel (a user's crowd) holds its labels
+    figure, axes = plt.subplots(1, len(strategies), figsize=(width, 3.8), sharey=True,
+                                squeeze=False)
+    arms = [("collisions_per_vehicle_s", "learning together", "C3", "population"),
+            ("initial_drivers", "initial drivers", "C0", "initial_after"),
+            ("winner_driving_on", "winner driving on", "C2", "winner_after")]
+    for ax, strategy in zip(axes[0], strategies, strict=True):
+        rows = curve[curve["strategy"] == strategy]
+        after = situations[situations["strategy"] == strategy]
+        for column, label, color, arm in arms:
+            ax.plot(rows["window_start_s"] / 60, rows[column], color=color, label=label,
+                    linewidth=1)
+            ax.plot([seconds / 60], [after[arm].mean()], "o", color=color)
+        if len(strategies) > 1:
+            ax.set_title(f"strategy {strategy}", fontsize=10)
+        ax.set_xlabel("simulated minutes (dots: the span after learning)")
+    axes[0, 0].set_ylabel(unit)
+    axes[0, 0].legend(fontsize=8)
+    figure.suptitle("\n".join(textwrap.wrap(f"Learning while driving (paper §5.5.2): {title}",
+                                           round(width * 11))), fontsize=10)
+    figure.tight_layout()
     save_figure(figure, path)

@@ -616,7 +616,7 @@ def test_a_file_whose_own_name_holds_a_comma_is_refused_naming_it(capsys, tmp_pa
                                                                   road_net, kind):
     """SUMO splits a list of files at commas (the network's option too), so it failed at its
     start, a network named as ``traffic.routes`` (a folder so named is passed through a
-    link: tests/traffic/test_sumo_scenarios.py)."""
+    link: tests/sumo/test_sumo_scenarios.py)."""
     monkeypatch.chdir(tmp_path)
     scenario = _road(tmp_path, road_net)
     if kind == "route":

@@ -22,7 +22,7 @@ def test_evolved_population_puts_the_ranked_candidates_first_without_repeats():
 def test_reduction_interval_follows_the_situations():
     import pandas as pd
 
-    from enn_traffic.experiments.crowds.arena import reduction_interval
+    from enn_traffic.experiments.crowds.stats import reduction_interval
 
     rng = np.random.default_rng(0)
     steady = pd.DataFrame({"strategy": [1, 1, 1, 2, 2], "initial": [1, 1, 1, 2, 2],
@@ -58,7 +58,7 @@ def test_table4_pairs_the_arms_by_situation():
     alike, though each arm alone varies widely between situations."""
     import pandas as pd
 
-    from enn_traffic.experiments.crowds.arena import table4_comparisons
+    from enn_traffic.experiments.crowds.stats import table4_comparisons
 
     base = np.array([0.01, 0.10, 0.05, 0.20, 0.02, 0.15])
     situations = pd.DataFrame({"strategy": 1, "situation": range(6), "population": base,
@@ -76,7 +76,7 @@ def test_table4_pairs_the_arms_by_situation():
 def test_learning_curve_averages_each_span_over_the_situations():
     import pandas as pd
 
-    from enn_traffic.experiments.crowds.arena import learning_curve
+    from enn_traffic.experiments.crowds.stats import learning_curve
 
     windows = pd.DataFrame({"strategy": [1, 1, 1, 1], "situation": [0, 0, 1, 1],
                             "window_start_s": [0.0, 100.0, 0.0, 100.0],

@@ -96,7 +96,7 @@ def test_the_learning_curves_verb_follows_its_paired_interval():
     situation "rises", one that falls in every situation "falls", and one that goes up in
     half and down in the other half moves neither way (its interval spans 0; docs/results.md
     chooses its verb from the interval's sign)."""
-    from enn_traffic.experiments.crowds.arena import learning_ends, trend
+    from enn_traffic.experiments.crowds.stats import learning_ends, trend
 
     def windows(slopes):
         rows = []

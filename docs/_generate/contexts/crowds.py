@@ -19,7 +19,8 @@ import pandas as pd
 from enn_traffic.config.shipped import shipped_scenario
 from enn_traffic.core import keys
 from enn_traffic.experiments import ablation, departures
-from enn_traffic.experiments.crowds.arena import ARMS, LEARNING, SECONDS
+from enn_traffic.experiments.crowds.arena import LEARNING, SECONDS
+from enn_traffic.experiments.crowds.stats import ARMS
 from enn_traffic.experiments.crowds.sumo import SITUATION_KEY as SUMO_SITUATION_KEY
 from enn_traffic.experiments.crowds.sumo import SUMO_LEARNING
 from enn_traffic.experiments.families import ARENA, CITY, SUMO, Family

@@ -43,10 +43,8 @@ with them, that situation's every span can be driven again.
 
 from __future__ import annotations
 
-import textwrap
 import time
 from collections.abc import Mapping
-from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
@@ -62,6 +60,21 @@ from enn_traffic.core.progress import slow_step, terminal
 from enn_traffic.experiments.choosing import evolved_candidates, final_population
 from enn_traffic.experiments.common import distinct, save_arrays, save_controller
 from enn_traffic.experiments.crowds.settings import CrowdSettings
+from enn_traffic.experiments.crowds.stats import (
+    ARMS,
+    REDUCTIONS,
+    Measured,
+    SituationResult,
+    curve_facts,
+    learning_curve,
+    learning_ends,
+    mean_reduction,
+    rates_table,
+    reduction_interval,
+    strategy_means,
+    table4_comparisons,
+    trend_facts,
+)
 from enn_traffic.experiments.families import ARENA, run_dir
 from enn_traffic.experiments.study import Study
 from enn_traffic.learning import ga
@@ -74,18 +87,22 @@ from enn_traffic.sim.strategies import NETWORK
 from enn_traffic.sumo.fresh import fresh_shares
 
 SECONDS = 100.0  # the paper's training time; each measured span and learning-curve window
+
+
 SITUATION_KEY = keys.ARENA_CROWD_TEST.start  # the situations whose rates are reported
+
+
 VALIDATION_KEY = keys.CROWD_CHOICE.start  # the situations that choose the winner
+
+
 VALIDATION_SITUATIONS = 20
+
+
 DRAWN_SECONDS = 20.0
+
+
 # Table 3's paper-way winner against ours: 90% for the four strategies together (Bonferroni)
 PAPER_WAY_LEVEL = 1 - 0.1 / 4
-# Table 4's arms over the span after learning, and the column each is compared with
-ARMS = {"population": "each vehicle's evolved controller",
-        "initial_after": "the initial drivers driving on",
-        "winner_after": "the winner driving on", "reranked": "the re-ranked controllers"}
-CONTRASTS = [("population", "initial_after"), ("population", "winner_after"),
-             ("population", "reranked")]
 
 
 # The arena's crowds: learning long enough that every learner breeds at least 3 generations,
@@ -153,19 +170,6 @@ def _evolved_population(ranked: np.ndarray, run_population: np.ndarray, size: in
     return distinct(np.concatenate([ranked, run_population]))[:size]
 
 
-@dataclass
-class SituationResult:
-    """One situation of Tables 3–4: the rates (the columns of ``simultaneous_situations.csv``),
-    every arm's rate in each span of the learning (``windows``), each learner's counts, each
-    vehicle's controller after learning (world layout) and the paths drawn."""
-
-    rates: dict[str, float]
-    windows: list[dict[str, float]]
-    learners: list[dict[str, int]]
-    controllers: np.ndarray
-    traces: tuple
-
-
 def learn_together(world: ArenaWorld, situation: int, winner: np.ndarray, evolved: np.ndarray,
                    learning: CrowdSettings, key: int = SITUATION_KEY
                    ) -> tuple[Crowd, OnlineLearning, list[CrowdRun]]:
@@ -218,15 +222,6 @@ def situation_rates(world: ArenaWorld, situation: int, winner: np.ndarray, evolv
     return SituationResult(rates, windows, online.learner_rows(),
                            world.spec.from_source_layout(own),
                            (initial[0].trace, broadcast[0].trace, after.trace, world.track.walls))
-
-
-@dataclass
-class Measured:
-    """Every strategy's situations of Tables 3–4, their learning windows and learners."""
-
-    situations: pd.DataFrame  # strategy, situation, one column per rate
-    windows: pd.DataFrame  # strategy, situation, window_start_s, one column per arm
-    learners: pd.DataFrame  # strategy, situation, learner, generations_bred, lives, ...
 
 
 def measure_strategy(world: ArenaWorld, strategy: int, winner: np.ndarray,
@@ -301,8 +296,12 @@ def measure(out: Path, inputs: dict[int, tuple[np.ndarray, np.ndarray]],
     write_csv(out / "table4_learners.csv", measured.learners)
     write_csv(out / "table4_learning.csv", curve)
     write_csv(out / "table4_learning_ends.csv", learning_ends(measured.windows))
-    _draw_crowds(paths, out / "simultaneous_paths.png")
-    draw_learning(curve, measured.situations, out / "table4_learning.png", learning.learning_s)
+    from enn_traffic.report.figures import crowd_learning_figure, crowd_paths_figure
+
+    crowd_paths_figure(paths, out / "simultaneous_paths.png", DRAWN_SECONDS)
+    crowd_learning_figure(curve, measured.situations, out / "table4_learning.png",
+                          learning.learning_s, "the arena's 8 vehicles, mean of the situations "
+                          f"in {SECONDS:g} s spans")
     return measured
 
 
@@ -338,154 +337,6 @@ def saved_inputs(out: Path) -> dict[int, tuple[np.ndarray, np.ndarray]]:
     return inputs
 
 
-def learning_curve(windows: pd.DataFrame) -> pd.DataFrame:
-    """Per strategy and span of the learning: every arm's collisions per vehicle-second,
-    averaged over the situations (``collisions_per_vehicle_s``: the learners')."""
-    curve = windows.groupby(["strategy", "window_start_s"], as_index=False)[
-        ["learning", "initial_drivers", "winner_driving_on"]].mean()
-    return curve.rename(columns={"learning": "collisions_per_vehicle_s"}).round(5)
-
-
-LEARNING_ARMS = ["learning", "initial_drivers", "winner_driving_on"]  # columns of the windows
-
-
-def learning_ends(windows: pd.DataFrame) -> pd.DataFrame:
-    """Per strategy and situation: each arm's mean rate over the first and over the last
-    tenth of the learning's spans (``ARM_first``, ``ARM_last``), so that whether the learning
-    curve rises can be read with an interval paired by situation
-    (``table4_learning_ends.csv``)."""
-    rows = []
-    for (strategy, situation), group in windows.groupby(["strategy", "situation"]):
-        spans = group.sort_values("window_start_s")
-        tenth = max(1, len(spans) // 10)
-        row = {"strategy": strategy, "situation": situation}
-        for arm in LEARNING_ARMS:
-            row |= {f"{arm}_first": spans[arm].head(tenth).mean(),
-                    f"{arm}_last": spans[arm].tail(tenth).mean()}
-        rows.append(row)
-    return pd.DataFrame(rows).round(6)
-
-
-def trend(ends: pd.DataFrame, arm: str = "learning", level: float = 0.9
-          ) -> tuple[float, float, float]:
-    """The mean change of ``arm``'s rate from the first to the last tenth of the learning
-    over every situation of ``ends`` (:func:`learning_ends`), with its ``level`` interval
-    (pairs drawn again)."""
-    change = (ends[f"{arm}_last"] - ends[f"{arm}_first"]).to_numpy()
-    low, high = paired_interval(change, np.zeros_like(change), np.random.default_rng(0),
-                                level=level)
-    return float(change.mean()), low, high
-
-
-def direction(low: float, high: float, up: str = "rises", down: str = "falls",
-              neither: str = "moves neither way (its interval spans 0)") -> str:
-    """The word an interval's sign allows: ``up`` above 0, ``down`` below, else
-    ``neither``."""
-    return up if low > 0 else down if high < 0 else neither
-
-
-def curve_ends(curve: pd.DataFrame, column: str) -> tuple[float, float]:
-    """``column``'s mean over the first and over the last tenth of the learning's spans (of
-    one strategy's curve, or of every strategy's together)."""
-    spans = curve.groupby("window_start_s")[column].mean().sort_index()
-    tenth = max(1, len(spans) // 10)
-    return float(spans.head(tenth).mean()), float(spans.tail(tenth).mean())
-
-
-def paired_interval(after: np.ndarray, before: np.ndarray, rng: np.random.Generator,
-                    draws: int = 2000, level: float = 0.9) -> tuple[float, float]:
-    """The central ``level`` interval of the mean difference ``after - before`` when the
-    situations (pairs) are drawn again with replacement (bootstrap)."""
-    differences = np.asarray(after, dtype=np.float64) - np.asarray(before, dtype=np.float64)
-    means = differences[rng.integers(0, len(differences), (draws, len(differences)))].mean(1)
-    low, high = np.quantile(means, [(1 - level) / 2, (1 + level) / 2])
-    return float(low), float(high)
-
-
-def table4_comparisons(situations: pd.DataFrame,
-                       arms: tuple[str, ...] = ("initial_after", "population", "winner_after",
-                                                "reranked"),
-                       contrasts: list[tuple[str, str]] = CONTRASTS, level: float = 0.9
-                       ) -> pd.DataFrame:
-    """Per strategy, Table 4's ``arms`` over the span after learning and the paired
-    differences of ``contrasts`` with their ``level`` bootstrap intervals over the
-    situations."""
-    rng = np.random.default_rng(0)
-    rows = []
-    for strategy, group in situations.groupby("strategy"):
-        row = {"strategy": strategy}  # the initial drivers first, then after learning
-        row |= {f"{arm}_collisions_per_s": round(group[arm].mean(), 4) for arm in arms}
-        for after, before in contrasts:
-            low, high = paired_interval(group[after].to_numpy(), group[before].to_numpy(), rng,
-                                        level=level)
-            name = f"{after}_minus_{before}"
-            row |= {name: round((group[after] - group[before]).mean(), 4),
-                    f"{name}_low": round(low, 4), f"{name}_high": round(high, 4)}
-        rows.append(row)
-    return pd.DataFrame(rows)
-
-
-def _draw_crowds(paths: dict, path: Path) -> None:
-    """Each strategy: the first seconds of its initial drivers, the broadcast winner and the
-    vehicles after simultaneous learning."""
-    import matplotlib.pyplot as plt  # here, not on import: the crowds' processes draw nothing
-
-    from enn_traffic.report.plots import draw_paths, save_figure
-
-    figure, axes = plt.subplots(3, 4, figsize=(16, 12))
-    steps = round(DRAWN_SECONDS * 10)
-    titles = ["initial drivers", "winning chromosome (Table 3)", "after learning (Table 4)"]
-    for column, (strategy, traces) in enumerate(sorted(paths.items())):
-        walls = traces[-1]
-        for row, trace in enumerate(traces[:3]):
-            ax = axes[row, column]
-            draw_paths(ax, walls, [trace[:steps, v] for v in range(trace.shape[1])],
-                       colors=[f"C{v}" for v in range(trace.shape[1])])
-            ax.set_xticks([])
-            ax.set_yticks([])
-            ax.set_title(f"strategy {strategy}: {titles[row]}", fontsize=9)
-    figure.suptitle(f"All 8 vehicles, first {DRAWN_SECONDS:g} s of simulated time "
-                    "(after learning: the first seconds after it)")
-    figure.tight_layout()
-    save_figure(figure, path)
-
-
-def draw_learning(curve: pd.DataFrame, situations: pd.DataFrame, path: Path,
-                  seconds: float, title: str = "the arena's 8 vehicles, mean of the "
-                  f"situations in {SECONDS:g} s spans",
-                  unit: str = "collisions per vehicle-second") -> None:
-    """Per strategy: collisions per vehicle-second in each span while the vehicles learn,
-    beside the initial drivers and the winner over the same spans, and each arm over the
-    span after learning (the markers at its end: Table 4)."""
-    import matplotlib.pyplot as plt
-
-    from enn_traffic.report.plots import save_figure
-
-    strategies = sorted(curve["strategy"].unique())
-    width = max(6, 4 * len(strategies))  # one panel (a user's crowd) holds its labels
-    figure, axes = plt.subplots(1, len(strategies), figsize=(width, 3.8), sharey=True,
-                                squeeze=False)
-    arms = [("collisions_per_vehicle_s", "learning together", "C3", "population"),
-            ("initial_drivers", "initial drivers", "C0", "initial_after"),
-            ("winner_driving_on", "winner driving on", "C2", "winner_after")]
-    for ax, strategy in zip(axes[0], strategies, strict=True):
-        rows = curve[curve["strategy"] == strategy]
-        after = situations[situations["strategy"] == strategy]
-        for column, label, color, arm in arms:
-            ax.plot(rows["window_start_s"] / 60, rows[column], color=color, label=label,
-                    linewidth=1)
-            ax.plot([seconds / 60], [after[arm].mean()], "o", color=color)
-        if len(strategies) > 1:
-            ax.set_title(f"strategy {strategy}", fontsize=10)
-        ax.set_xlabel("simulated minutes (dots: the span after learning)")
-    axes[0, 0].set_ylabel(unit)
-    axes[0, 0].legend(fontsize=8)
-    figure.suptitle("\n".join(textwrap.wrap(f"Learning while driving (paper §5.5.2): {title}",
-                                           round(width * 11))), fontsize=10)
-    figure.tight_layout()
-    save_figure(figure, path)
-
-
 def _measured(study: Study) -> Measured:
     return study.shared("simultaneous", lambda: measure(
         study.out, _inputs(study), study.settings(LEARNING), study.progress,
@@ -509,43 +360,6 @@ def _paper_winners(study: Study) -> dict[int, np.ndarray]:
                         shipped_scenario(ARENA.name(strategy)), best, float("nan"))
         winners[strategy] = best
     return winners
-
-
-def rates_table(measured: pd.DataFrame, after: str, before: str = "initial") -> pd.DataFrame:
-    """Table 3 or 4 from the strategies' mean rates (``measured``: one row per strategy):
-    collisions per second per vehicle of ``before`` and ``after``."""
-    return pd.DataFrame({"strategy": measured["strategy"],
-                         "initial_collisions_per_s": measured[before].round(4),
-                         "after_collisions_per_s": measured[after].round(4)})
-
-
-def strategy_means(situations: pd.DataFrame) -> pd.DataFrame:
-    """Every rate column's mean over each strategy's situations."""
-    return situations.drop(columns="situation").groupby("strategy", as_index=False).mean()
-
-
-def mean_reduction(rates: pd.DataFrame, after: str, before: str = "initial") -> float:
-    """The mean over the strategies of 1 − ``after`` / ``before`` (columns of
-    ``simultaneous.csv``): how much fewer collisions, strategy by strategy."""
-    return float((1 - rates[after] / rates[before]).mean())
-
-
-def reduction_interval(situations: pd.DataFrame, after: str, rng: np.random.Generator,
-                       before: str = "initial", draws: int = 2000, level: float = 0.9
-                       ) -> tuple[float, float]:
-    """How far the mean reduction over the strategies (1 − after / before, each strategy's
-    rates averaged over its situations) moves with the situations: its central ``level``
-    interval when each strategy's situations are drawn again with replacement (bootstrap,
-    the same draw for both columns: paired)."""
-    groups = [group for _, group in situations.groupby("strategy")]
-    reductions = np.zeros(draws)
-    for group in groups:
-        first, later = group[before].to_numpy(), group[after].to_numpy()
-        picks = rng.integers(0, len(group), (draws, len(group)))
-        reductions += 1 - later[picks].mean(axis=1) / first[picks].mean(axis=1)
-    reductions /= len(groups)
-    low, high = np.quantile(reductions, [(1 - level) / 2, (1 + level) / 2])
-    return float(low), float(high)
 
 
 def _reduction(means: pd.DataFrame, situations: pd.DataFrame, after: str, before: str) -> str:
@@ -622,32 +436,6 @@ def table4(study: Study) -> list[str]:
     measured = _measured(study)
     write_csv(study.out / "table4.csv", table4_comparisons(measured.situations))
     return summary_lines(measured.situations, measured.learners, "table4")
-
-
-# The arms' columns of table4_learning.csv, whose first and last tenth the documents state
-CURVE_COLUMNS = ["collisions_per_vehicle_s", "initial_drivers", "winner_driving_on"]
-# The mean reductions (after, before) the documents state with their intervals
-REDUCTIONS = [("winner", "initial"), ("population", "initial_after"), ("population", "initial"),
-              ("winner_after", "initial_after")]
-
-
-def curve_facts(curve: pd.DataFrame) -> dict:
-    """Each arm's first and last tenth of the learning (:func:`curve_ends`) in a learning
-    curve (``table4_learning.csv``), per strategy and over every strategy together."""
-    def ends(rows: pd.DataFrame) -> dict:
-        return {column: dict(zip(("first", "last"), curve_ends(rows, column), strict=True))
-                for column in CURVE_COLUMNS}
-
-    return {"strategies": [{"strategy": int(strategy)} | ends(rows)
-                           for strategy, rows in curve.groupby("strategy")],
-            "all": ends(curve)}
-
-
-def trend_facts(ends: pd.DataFrame) -> dict:
-    """The learners' :func:`trend` over ``table4_learning_ends.csv``: the mean change from the
-    first to the last tenth of the learning and its 90% interval over the situations."""
-    change, low, high = trend(ends)
-    return {"change": change, "low": low, "high": high}
 
 
 def facts(folder: Path) -> dict:

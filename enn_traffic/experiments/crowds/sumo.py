@@ -20,7 +20,7 @@ situations, three arms drive from the same SUMO state, in windows of ``window_s`
 
 The initial drivers and the winner drive as long, so Table 3 compares the first window and
 Table 4 the window after learning, every arm paired by situation, with bootstrap intervals of
-the differences (:func:`~enn_traffic.experiments.crowds.arena.table4_comparisons`). A live SUMO
+the differences (:func:`~enn_traffic.experiments.crowds.stats.table4_comparisons`). A live SUMO
 cannot be forked, so the arena's re-ranked alternative is not run here. The learning time, cap
 and population were chosen on crowd validation situations (``table4_validation_learners.csv``)
 so that every learner breeds 3 generations or more in SUMO time a 2-core machine affords
@@ -58,17 +58,16 @@ from enn_traffic.core.progress import slow_step, terminal
 from enn_traffic.core.provenance import rules_version, sources_of
 from enn_traffic.experiments.choosing import final_population, specialists
 from enn_traffic.experiments.common import save_arrays, save_controller
-from enn_traffic.experiments.crowds.arena import (
+from enn_traffic.experiments.crowds.settings import CrowdSettings
+from enn_traffic.experiments.crowds.stats import (
     Measured,
     SituationResult,
     curve_facts,
-    draw_learning,
     learning_curve,
     learning_ends,
     table4_comparisons,
     trend_facts,
 )
-from enn_traffic.experiments.crowds.settings import CrowdSettings
 from enn_traffic.experiments.families import CITY, SUMO, Family
 from enn_traffic.experiments.study import Study
 from enn_traffic.learning import ga
@@ -372,9 +371,12 @@ def measure_situations(folder: Path, inputs: dict[int, tuple[SumoWorld, np.ndarr
     write_csv(folder / "table4_learners.csv", measured.learners)
     write_csv(folder / "table4_learning.csv", curve)
     write_csv(folder / "table4_learning_ends.csv", learning_ends(measured.windows))
-    draw_learning(curve, measured.situations, folder / "table4_learning.png", learning.learning_s,
-                  f"{title}, mean of the situations in {learning.window_s:g} s windows",
-                  "collisions per learner-second")
+    from enn_traffic.report.figures import crowd_learning_figure
+
+    crowd_learning_figure(curve, measured.situations, folder / "table4_learning.png",
+                          learning.learning_s,
+                          f"{title}, mean of the situations in {learning.window_s:g} s windows",
+                          "collisions per learner-second")
     return measured
 
 
@@ -460,8 +462,8 @@ def lane_facts(family: Family) -> dict:
 def family_facts(folder: Path, family: Family) -> dict:
     """Facts (docs/_generate/README.md) of a SUMO family's Tables 3–4, from its subfolder of
     a reproduce folder: the learning curve's ends
-    (:func:`~enn_traffic.experiments.crowds.arena.curve_facts`, ``table4_learning.csv``), the
-    learners' trend (:func:`~enn_traffic.experiments.crowds.arena.trend_facts`,
+    (:func:`~enn_traffic.experiments.crowds.stats.curve_facts`, ``table4_learning.csv``), the
+    learners' trend (:func:`~enn_traffic.experiments.crowds.stats.trend_facts`,
     ``table4_learning_ends.csv``) and the lanes of its network (:func:`lane_facts`)."""
     tables = folder / family.folder
     return {"curve": curve_facts(pd.read_csv(tables / "table4_learning.csv")),

@@ -54,7 +54,7 @@ class RunResult:
 def ga_run(scenario: Scenario, budget: int, seed: int, test: bool = True,
            settings: dict | None = None) -> RunResult:
     """The scenario's GA, seeded by ``seed``, for at most ``budget`` learner-steps: a
-    generation that would end past the budget is not learned from (issue 65: no method learns
+    generation that would end past the budget is not learned from (no method learns
     from more steps than its budget; only a first generation larger than the budget counts).
     A generation's champion is a candidate while the steps so far have passed more
     checkpoints than there are candidates (one a generation at most: after a generation that
@@ -169,7 +169,7 @@ def rl_run(scenario: Scenario, method: str, settings: dict, budget: int, seed: i
             return True
 
     # Whole rollouts (PPO) or vector steps (SAC) within the budget, at least one: no method
-    # learns from more steps than its budget (issue 65).
+    # learns from more steps than its budget.
     rollout = settings["n_envs"] * (settings["n_steps"] if method == "PPO" else 1)
     model.learn(total_timesteps=max(rollout, budget // rollout * rollout),
                 callback=Snapshots())

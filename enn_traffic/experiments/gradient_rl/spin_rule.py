@@ -1,4 +1,4 @@
-"""The spin rule's second setting for the GA-against-RL comparison (issue 65).
+"""The spin rule's second setting for the GA-against-RL comparison.
 
 The authors' code rules a vehicle whose last ``spin_window`` positions vary by at most
 ``spin_variance`` m² on both axes to be spinning in place: fitness 0 (§5.3). On the narrow
@@ -128,8 +128,8 @@ CIRCLING = 25.0  # m: a long life whose tail stays this close circles (a 11.5 m 
 
 def travel(folder: Path, situations: int = 32) -> pd.DataFrame:
     """Do long lives under the second rule drive the track, or circle in a space the rule
-    lets through (a radius of 9–11.5 m, tests/test_spin_rule.py)? Every comparison run of
-    the pair's scenarios in ``folder``, its controller driven on the first ``situations``
+    lets through (a radius of 9–11.5 m, tests/experiments/test_spin_rule.py)? Every comparison
+    run of the pair's scenarios in ``folder``, its controller driven on the first ``situations``
     validation situations: how many lives pass :data:`LONG` steps, their median distance,
     and the smallest extent of their last :data:`TAIL` positions (a circle of 11.5 m stays
     within 23 m). The same controller scored under the pair's other rule too: what a rule

@@ -77,7 +77,7 @@ def differences(comparison: pd.DataFrame, level: float = 0.9) -> pd.DataFrame:
     return table
 
 
-# Scenarios that differ in their spin rule alone (issue 65): the paper's first, the second
+# Scenarios that differ in their spin rule alone: the paper's first, the second
 # rule (enn_traffic.experiments.gradient_rl.spin_rule) after it.
 RULE_PAIRS = (("navigation_narrow", "navigation_narrow_spin40"),)
 

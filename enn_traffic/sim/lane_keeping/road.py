@@ -60,7 +60,7 @@ class CameraLaneKeepingEnv(LaneKeepingEnv):
         what the camera makes unneeded: ``lane-keeping-v0``'s own observation (noisy state,
         derivative and reference state), reward and trajectory log (1.6-2x the steps per
         second, measured in one process). The vehicle moves exactly as under ``step()``
-        (tests/lanekeeping)."""
+        (tests/sim/test_lane_keeping.py)."""
         self.action_type.act(action)
         self._simulate()
 

@@ -13,7 +13,7 @@ from enn_traffic.envs.rangefinder import rangefinder_world
 from enn_traffic.experiments.gradient_rl import campaign, protocol, scoring, spin_rule
 from enn_traffic.sim.world import SituationResults
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 COMMITTED = ROOT / spin_rule.FOLDER / "spin_rule.csv"
 
 

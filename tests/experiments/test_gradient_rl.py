@@ -313,19 +313,19 @@ def test_a_committed_ga_run_of_the_comparison_comes_out_the_same(monkeypatch):
     monkeypatch.undo()
     from pathlib import Path
 
-    results = Path(__file__).resolve().parents[1] / "results"
+    results = Path(__file__).resolve().parents[2] / "results"
     folders = [folder for folder in (results / "baseline", results / "baseline_round2")
                if (folder / "protocol.json").is_file()
                and json.loads((folder / "protocol.json").read_text()) == protocol.protocol()]
     assert folders, "no committed comparison folder under today's protocol"
-    runs = pd.read_csv(folders[0] / "comparison.csv")
-    ga = runs[(runs["method"] == "GA") & (runs["budget_steps"] == 1_000_000)
-              & (runs["seed"] == 1)]
+    table = pd.read_csv(folders[0] / "comparison.csv")
+    ga = table[(table["method"] == "GA") & (table["budget_steps"] == 1_000_000)
+               & (table["seed"] == 1)]
     if ga.empty:
         pytest.skip(f"{folders[0].name}: no GA run at 1 M steps yet (the round is under way)")
     committed = ga.iloc[0]
     result = runs.ga_run(shipped_scenario(committed["scenario"]), 1_000_000, seed=1,
-                             settings=protocol.SEARCH["GA"][committed["setting"]])
+                         settings=protocol.SEARCH["GA"][committed["setting"]])
     best = result.curve.iloc[result.chosen]
     assert int(result.learner_steps) == committed["learner_steps"]
     assert int(best["learner_steps"]) == committed["chosen_at_steps"]

@@ -210,7 +210,7 @@ def test_a_slow_step_speaks_on_stderr_where_no_logging_is_configured():
 
 def test_design_md_lists_every_generations_column_as_its_function_says(root):
     """docs/design.md's table of generations.csv is rendered from the column functions'
-    docstrings (tests/test_docs.py keeps the file rendered): every column has one and is
+    docstrings (tests/docs/test_render.py keeps the file rendered): every column has one and is
     in the table."""
     from enn_traffic.runs.generations_csv import COLUMNS
 

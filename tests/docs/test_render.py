@@ -7,7 +7,7 @@ from pathlib import Path
 
 import pytest
 
-GENERATE = Path(__file__).resolve().parents[1] / "docs" / "_generate"
+GENERATE = Path(__file__).resolve().parents[2] / "docs" / "_generate"
 
 
 @pytest.fixture(scope="module")
