@@ -31,9 +31,10 @@ def add_parser(commands) -> None:
     command.add_argument("--plan", default="GA:1M:10,PPO:1M:10,SAC:1M:10,GA:5M:5,PPO:5M:5",
                          help="runs as METHOD:BUDGET:SEEDS,... (METHOD GA, PPO or SAC; "
                          "default: %(default)s)")
-    command.add_argument("--workers", type=int_in(1, 256), default=None,
+    command.add_argument("--workers", metavar="N", type=int_in(1, 256), default=None,
                          help="runs side by side, one core each (default: the cores, up to 8)")
-    command.add_argument("--out", type=nonempty_path, help="folder (default: results/baseline)")
+    command.add_argument("--out", metavar="DIR", type=nonempty_path,
+                         help="folder (default: results/baseline)")
     command.add_argument("--quiet", action="store_true", help="no progress bar or messages")
 
 

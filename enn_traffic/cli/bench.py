@@ -22,7 +22,8 @@ def add_parser(commands) -> None:
                          "same with or without --quick) unless --only names them")
     command.add_argument("--out", type=nonempty_path, metavar="FILE.csv",
                          help="also write the table")
-    command.add_argument("--only", help="comma-separated workloads (default: all): "
+    command.add_argument("--only", metavar="NAME,...",
+                         help="comma-separated workloads (default: all): "
                          + ", ".join(listed))
 
 

@@ -25,9 +25,9 @@ def add_parser(commands) -> None:
         "learning in your city').")
     command.add_argument("scenario", type=nonempty_path, metavar="SCENARIO.toml",
                          help="a SUMO scenario file, or a shipped one's name (sumo_strategy1)")
-    command.add_argument("--out", type=nonempty_path,
+    command.add_argument("--out", metavar="DIR", type=nonempty_path,
                          help="folder (default: results/<scenario name>_crowd)")
-    command.add_argument("--learners", type=int_in(1, 1000),
+    command.add_argument("--learners", metavar="N", type=int_in(1, 1000),
                          help="override traffic.learners (vehicles learning in one SUMO)")
     command.add_argument("--quick", action="store_true",
                          help="minutes: 2 generations of the GA, 20 s of learning in 10 s "
@@ -36,7 +36,8 @@ def add_parser(commands) -> None:
     command.add_argument("--executor", choices=["local", "process", "ray"], default="local",
                          help="where the GA's fitness is evaluated and, with ray, the "
                               "situations run side by side (default: local)")
-    command.add_argument("--address", help="Ray cluster address (with --executor ray)")
+    command.add_argument("--address", metavar="ADDR",
+                         help="Ray cluster address (with --executor ray)")
     run_folder_options(command, "continue the crowd run in the folder",
                        "start over, even in a folder of other files (those of the names it "
                        "writes are replaced)")

@@ -17,10 +17,11 @@ def add_parser(commands) -> None:
         "pair prints its lifetimes; several print the controller x scenario matrix of mean "
         "fitness. --out FILE.csv writes every situation (tidy) and, for several pairs, "
         "FILE_matrix.csv and FILE_matrix.png (heat map).")
-    command.add_argument("paths", type=nonempty_path, nargs="+", metavar="FILE",
+    command.add_argument("paths", type=nonempty_path, nargs="+",
+                         metavar="CONTROLLER.npz|SCENARIO.toml",
                          help="controllers (.npz) and scenarios (.toml): one or more of each, "
                               "in any order")
-    command.add_argument("--episodes", type=episodes, default=1,
+    command.add_argument("--episodes", metavar="N", type=episodes, default=1,
                          help="traffic situations per pair (default 1)")
     command.add_argument("--out", type=nonempty_path, metavar="FILE.csv",
                          help="write the lifetimes")
@@ -33,7 +34,8 @@ def add_parser(commands) -> None:
                          "(lane keeping has no traffic: it ignores this)")
     command.add_argument("--executor", choices=["local", "process", "ray"], default="local",
                          help="where the pairs run (default: local, one after another)")
-    command.add_argument("--address", help="Ray cluster address (with --executor ray)")
+    command.add_argument("--address", metavar="ADDR",
+                         help="Ray cluster address (with --executor ray)")
     command.add_argument("--quiet", action="store_true", help="no progress bar or messages")
     command.add_argument("--verbose", action="store_true",
                          help="show SUMO's console instead of logging it (to FILE_sumo/ "

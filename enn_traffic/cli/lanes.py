@@ -17,7 +17,8 @@ def add_parser(commands) -> None:
         "lanes cars may not use.")
     command.add_argument("source", type=nonempty_path, metavar="SCENARIO.toml|FILE.sumocfg",
                          help="a scenario, or a SUMO configuration (its network and routes)")
-    command.add_argument("--top", type=positive, default=20, help="lanes listed (default 20)")
+    command.add_argument("--top", metavar="N", type=positive, default=20,
+                         help="lanes listed (default 20)")
     command.add_argument("--out", type=nonempty_path, metavar="FILE.csv", help="write every lane")
     command.add_argument("--plot", type=nonempty_path, metavar="FILE.png",
                          help="draw the road surface for cars against every lane as road, with "

@@ -12,7 +12,7 @@ def add_parser(commands) -> None:
     command.add_argument("controller", type=nonempty_path, metavar="CONTROLLER.npz")
     command.add_argument("scenario", type=nonempty_path, metavar="SCENARIO.toml")
     command.add_argument("--out", type=nonempty_path, required=True, metavar="FILE.png|FILE.gif")
-    command.add_argument("--max-steps", type=steps, default=5000,
+    command.add_argument("--max-steps", metavar="N", type=steps, default=5000,
                          help="draw at most this many steps (default 5000)")
     command.add_argument("--quiet", action="store_true", help="no progress bar or messages")
     command.add_argument("--verbose", action="store_true",

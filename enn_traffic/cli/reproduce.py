@@ -16,15 +16,17 @@ def add_parser(commands) -> None:
     """The command's arguments."""
     command = commands.add_parser("reproduce", help="run the paper's experiments",
                                   epilog=EPILOG)
-    command.add_argument("--out", type=nonempty_path, default=Path("results/paper"))
+    command.add_argument("--out", metavar="DIR", type=nonempty_path, default=Path("results/paper"))
     command.add_argument("--quick", action="store_true",
                          help="small populations and few generations (minutes)")
-    command.add_argument("--only", help="comma-separated experiment names (default: all)")
+    command.add_argument("--only", metavar="NAME,...",
+                         help="comma-separated experiment names (default: all)")
     command.add_argument("--executor", choices=["local", "ray"], default="local",
                          help="where independent whole runs go: one after another here "
                               "(default) or side by side as Ray tasks")
-    command.add_argument("--address", help="Ray cluster address (with --executor ray; "
-                                           "default: start a local Ray)")
+    command.add_argument("--address", metavar="ADDR",
+                         help="Ray cluster address (with --executor ray; "
+                              "default: start a local Ray)")
     command.add_argument("--quiet", action="store_true", help="no progress bars or messages")
 
 

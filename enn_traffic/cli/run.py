@@ -27,14 +27,16 @@ def add_parser(commands) -> None:
                                   "a checkpoint.")
     command.add_argument("scenario", type=nonempty_path, metavar="SCENARIO.toml",
                          help="a scenario file, or a shipped scenario's name (navigation_narrow)")
-    command.add_argument("--out", type=nonempty_path,
+    command.add_argument("--out", metavar="DIR", type=nonempty_path,
                          help="run folder (default: results/<scenario name>)")
-    command.add_argument("--seed", type=seed, help="override the scenario's seed")
-    command.add_argument("--generations", type=count, help="override ga.generations")
-    command.add_argument("--population", type=count, help="override ga.population_size")
+    command.add_argument("--seed", metavar="N", type=seed, help="override the scenario's seed")
+    command.add_argument("--generations", metavar="N", type=count, help="override ga.generations")
+    command.add_argument("--population", metavar="N", type=count,
+                         help="override ga.population_size")
     command.add_argument("--executor", choices=["local", "process", "ray"], default="local",
                          help="where fitness is evaluated (default: local, in-process)")
-    command.add_argument("--address", help="Ray cluster address (with --executor ray)")
+    command.add_argument("--address", metavar="ADDR",
+                         help="Ray cluster address (with --executor ray)")
     run_folder_options(command, "continue the run in the folder from its checkpoint",
                        "start over even if the folder holds another run")
 

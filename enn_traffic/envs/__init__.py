@@ -1,9 +1,9 @@
 """The project's worlds as gymnasium and PettingZoo environments (docs/envs.md).
 
 ``import enn_traffic.envs`` registers, under the ``enn_traffic/`` namespace, one id per
-shipped arena, navigation and SUMO training scenario (``enn_traffic/NavigationNarrow-v0``,
-``enn_traffic/ArenaStrategy1-v0``, ``enn_traffic/SumoStrategy1-v0``,
-``enn_traffic/CityCologne3-v0``, ...) and ``enn_traffic/Scenario-v0``, which takes
+shipped scenario whose world an environment drives (:func:`register_envs`:
+``enn_traffic/NavigationNarrow-v0``, ``enn_traffic/ArenaStrategy1-v0``,
+``enn_traffic/CityCologne3-v0``, ...; :data:`REGISTERED` names them) and ``enn_traffic/Scenario-v0``, which takes
 ``scenario=PATH`` (a user's own SUMO scenario too, or a shipped scenario's name) and, for a
 scenario of several tracks, ``track=i``. Gymnasium 1.x has no plugin entry points: without
 the import, ``gymnasium.make("enn_traffic.envs:enn_traffic/NavigationNarrow-v0")`` imports
@@ -25,25 +25,17 @@ are for ``enn-traffic evaluate``, the second is highway-env's own environment.
 
 from __future__ import annotations
 
-import tomllib
 from pathlib import Path
 
 import gymnasium as gym
 from gymnasium.envs.registration import register, registry
 from gymnasium.vector import AutoresetMode
 
-from enn_traffic.config import EpisodeConfig, Scenario, load_scenario
+from enn_traffic.config import Scenario, load_scenario
 from enn_traffic.config.shipped import SCENARIOS, scenario_path
 from enn_traffic.core.registry import Registry
 
 NAMESPACE = "enn_traffic"
-# The shipped scenarios an id is registered for: the arena, navigation and SUMO training
-# scenarios of one track (an environment drives one track; navigation_mixed has five).
-REGISTERED = ("navigation_narrow", "navigation_wide", "arena_strategy1", "arena_strategy2",
-              "arena_strategy3", "arena_strategy4", "sumo_strategy1", "sumo_strategy2",
-              "sumo_strategy3", "sumo_strategy4", "city_cologne3")
-
-
 def env_id(name: str) -> str:
     """The registered id of a shipped scenario: ``navigation_narrow`` →
     ``enn_traffic/NavigationNarrow-v0``."""
@@ -71,6 +63,11 @@ PARALLEL_ENVS = Registry("world kind with a PettingZoo environment", {
     "arena": "enn_traffic.envs.crowd:ArenaCrowdEnv",
     "sumo": "enn_traffic.envs.sumo:SumoCrowdEnv",
 })
+
+
+# The shipped tracks held out from training, validation (``unseen_*``) and test (``test_*``):
+# no id, they are for ``enn-traffic evaluate``.
+HELD_OUT = ("test_", "unseen_")
 
 
 def _table_entry(table: Registry, scenario: Scenario):
@@ -148,23 +145,28 @@ def env(scenario: str | Path | Scenario, learners: int | None = None,
                                         observation_dtype))
 
 
-def _max_steps(path: Path) -> int:
-    """A shipped scenario's step cap, read from its file alone (registering loads nothing)."""
-    episode = tomllib.loads(path.read_text()).get("episode", {})
-    return int(episode.get("max_steps", EpisodeConfig.model_fields["max_steps"].default))
-
-
-def register_envs() -> None:
-    """Register the ids (once)."""
-    if f"{NAMESPACE}/Scenario-v0" in registry:
-        return
+def register_envs() -> tuple[str, ...]:
+    """Register ``enn_traffic/Scenario-v0`` and an id for each shipped scenario whose world
+    kind has an environment (:data:`ENVS`: not lane keeping, not several tracks), the held-out
+    tracks aside; the names of those scenarios, in order."""
     entry_points = {"entry_point": f"{__name__}:make_env",
                     "vector_entry_point": f"{__name__}:make_vector_env"}
-    register(f"{NAMESPACE}/Scenario-v0", **entry_points)
-    for name in REGISTERED:
-        path = SCENARIOS / f"{name}.toml"
-        register(env_id(name), **entry_points, max_episode_steps=_max_steps(path),
-                 kwargs={"scenario": str(path)})
+    if f"{NAMESPACE}/Scenario-v0" not in registry:
+        register(f"{NAMESPACE}/Scenario-v0", **entry_points)
+    names = []
+    for path in sorted(SCENARIOS.glob("*.toml")):
+        if path.stem.startswith(HELD_OUT):
+            continue
+        scenario = load_scenario(path)
+        if scenario.world_kind not in ENVS:
+            continue
+        names.append(path.stem)
+        if env_id(path.stem) not in registry:
+            register(env_id(path.stem), **entry_points,
+                     max_episode_steps=scenario.episode.max_steps,
+                     kwargs={"scenario": str(path)})
+    return tuple(names)
 
 
-register_envs()
+# The shipped scenarios with an id (``enn_traffic/NavigationNarrow-v0`` ...).
+REGISTERED = register_envs()

@@ -1,4 +1,4 @@
-"""README.md's city example, from the committed tables of the commands it shows
+"""README.md's command synopsis, from the command line's parser, and its city example, from the committed tables of the commands it shows
 (``results/readme_example/``): the run's ``generations.csv`` and its best controller's
 ``evaluate`` tables in replay, in closed loop and on the same roads without traffic
 (``city_cologne3_no_traffic.toml`` there). The README's timings come from the bench tables
@@ -6,6 +6,7 @@
 
 from __future__ import annotations
 
+import argparse
 from pathlib import Path
 
 import pandas as pd
@@ -25,12 +26,30 @@ def evaluation(table: pd.DataFrame) -> dict:
             "outcomes": [{"outcome": o, "count": int(counts[o])} for o in order]}
 
 
+def synopsis(width: int = 96) -> list[str]:
+    """Each command's usage line as ``enn-traffic COMMAND --help`` prints it (without
+    ``-h`` and the ``usage:`` prefix), in the order ``enn-traffic --help`` lists them."""
+    from enn_traffic.cli import build_parser
+
+    parser = build_parser()
+    commands = next(action for action in parser._actions
+                    if isinstance(action, argparse._SubParsersAction))
+    lines = []
+    for command in commands.choices.values():
+        formatter = argparse.HelpFormatter(command.prog, width=width)
+        formatter.add_usage(None, [action for action in command._actions
+                                   if not isinstance(action, argparse._HelpAction)],
+                            command._mutually_exclusive_groups, prefix="")
+        lines.append(formatter.format_help().rstrip("\n"))
+    return lines
+
+
 def context(root: Path) -> dict:
     folder = root / "results" / "readme_example"
     generations = pd.read_csv(folder / "generations.csv")
     best = generations["best_fitness"]
     start = generations["traffic_at_start"]
-    return {"readme": {"city": {
+    return {"readme": {"commands": synopsis(), "city": {
         "generations": len(generations),
         "first_best": best.iloc[0], "last_best": best.iloc[-1],
         "traffic_low": start.min(), "traffic_high": start.max(),
