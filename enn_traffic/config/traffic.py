@@ -92,9 +92,9 @@ class TrafficConfig(Section):
     SUMO traffic from ``routes`` / ``sumocfg`` (strategy ``"sumo"``, docs/sumo.md)."""
 
     strategy: Strategy | Annotated[list[Strategy], Field(min_length=1)] = Field(
-        "random_network", description="how the uncontrolled vehicles drive: `random_network`, "
-        "`straight`, `circling`, `wander` (below) or `sumo`; a list = fitness averaged over those "
-        "strategies")
+        "random_network", description="how the uncontrolled vehicles drive: "
+        + ", ".join(f"`{name}`" for name in STRATEGIES if name != "none")
+        + f" (below) or `{SUMO}`; a list = fitness averaged over those strategies")
     starts_xy: list[XY] = Field(
         [], max_length=1000, description="one uncontrolled vehicle per `[x, y]` start (at most "
         "1000, each at least the vehicle's length from every other and from the learner's "
