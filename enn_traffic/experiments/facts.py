@@ -20,7 +20,9 @@ from enn_traffic.core.io import write_text
 from enn_traffic.core.registry import Registry
 
 # Each facts file by "KIND/NAME": the function that computes it from a results folder of that
-# kind (``reproduce``'s, ``baseline``'s, ``crowd``'s), ``(folder: Path) -> dict`` of JSON values.
+# kind (``reproduce``'s, ``baseline``'s, ``crowd``'s; ``baseline_round2``: the comparison's
+# second round, a finished folder no command writes again), ``(folder: Path) -> dict`` of JSON
+# values.
 FACTS = Registry("facts", {
     "paper/table1": "enn_traffic.experiments.table1:facts",
     "paper/lane_keeping": "enn_traffic.experiments.lanekeeping:road_facts",
@@ -36,9 +38,14 @@ FACTS = Registry("facts", {
     "baseline/fitness": "enn_traffic.experiments.gradient_rl.facts:fitness",
     "baseline/ablations": "enn_traffic.experiments.gradient_rl.facts:ablations",
     "baseline/stopping": "enn_traffic.experiments.gradient_rl.facts:stopping",
+    "baseline_round2/starts": "enn_traffic.experiments.gradient_rl.facts:round2_starts",
+    "baseline_round2/settings": "enn_traffic.experiments.gradient_rl.facts:round2_settings",
+    "baseline_round2/networks": "enn_traffic.experiments.gradient_rl.facts:round2_networks",
+    "baseline_round2/levels": "enn_traffic.experiments.gradient_rl.facts:round2_levels",
 })
 # The committed results folder of each kind, under the repository's results/.
-FOLDERS = {"paper": "paper", "baseline": "baseline", "crowd": "crowd_brunswick"}
+FOLDERS = {"paper": "paper", "baseline": "baseline", "baseline_round2": "baseline_round2",
+           "crowd": "crowd_brunswick"}
 
 
 def path_of(folder: Path, name: str) -> Path:

@@ -1,4 +1,5 @@
-"""README.md's command synopsis, from the command line's parser, and its city example, from the committed tables of the commands it shows
+"""README.md's command synopsis, from the command line's parser, and its city example, from
+the committed tables of the commands it shows
 (``results/readme_example/``): the run's ``generations.csv`` and its best controller's
 ``evaluate`` tables in replay, in closed loop and on the same roads without traffic
 (``city_cologne3_no_traffic.toml`` there). The README's timings come from the bench tables

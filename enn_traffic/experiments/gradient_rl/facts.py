@@ -4,7 +4,10 @@ here from them, once, and written to ``facts/NAME.json`` beside them
 (:mod:`enn_traffic.experiments.facts`, kind ``baseline``): the protocol in force beyond
 ``protocol.json`` (its plan, the search's size, the scenarios' spin rules and step caps, the
 travel table's thresholds), the narrow track's length, width and starts, the spin rule chosen,
-each search's choice, the test fitness over seeds, and the ablations' Welch intervals.
+each search's choice, the test fitness over seeds, and the ablations' Welch intervals. And
+those of the comparison's second round (kind ``baseline_round2``, ``results/baseline_round2``,
+the ``round2_`` functions): its narrow track's starts, the settings beyond its
+``protocol.json``, its controllers' networks and its intervals' level.
 
 Each function takes the comparison's folder and returns a dict of JSON values (a missing
 value is ``None``, never NaN: a facts file is compared with what its tables give).
@@ -82,17 +85,15 @@ def plan(folder: Path) -> dict:
                    "circling": spin_rule.CIRCLING, "end_radius": spin_rule.END_RADIUS}}
 
 
-def starts(folder: Path) -> dict:
-    """The narrow track's starts under the folder's ``protocol.json``: how many of its test
-    starts are distinct and how many also start a validation situation, how many starts the
-    track has and how many validation and test take, the median distance from a test start to
-    the nearest validation start facing the same way, and the training start's distance to
-    the nearest test start (m)."""
+def _narrow_starts(protocol: dict) -> tuple[tuple, int, list[tuple], list[tuple]]:
+    """The narrow track's starts under a round's ``protocol`` (its ``protocol.json``): the
+    training start, how many starts the track has to score from, and the starts of the
+    validation and of the test situations, in order
+    (:func:`~enn_traffic.experiments.gradient_rl.scoring.held_out_keys`)."""
     from enn_traffic.config.shipped import shipped_scenario
     from enn_traffic.envs.rangefinder import rangefinder_world
     from enn_traffic.experiments.gradient_rl import scoring
 
-    protocol = json.loads((folder / "protocol.json").read_text())
     narrow = shipped_scenario("navigation_narrow")
     training = scoring.start_of(rangefinder_world(narrow).situations(0)[0])
     scored = scoring.scoring_scenario(narrow)
@@ -103,8 +104,20 @@ def starts(folder: Path) -> dict:
                 for situation in world.situations(key)][:count]
 
     validation_keys, test_keys = scoring.held_out_keys(scored, protocol)
-    validation = set(starts_of(validation_keys, protocol["validation_situations"]))
-    test = starts_of(test_keys, protocol["test_situations"])
+    return (training, len(world.starts),
+            starts_of(validation_keys, protocol["validation_situations"]),
+            starts_of(test_keys, protocol["test_situations"]))
+
+
+def starts(folder: Path) -> dict:
+    """The narrow track's starts under the folder's ``protocol.json``: how many of its test
+    starts are distinct and how many also start a validation situation, how many starts the
+    track has and how many validation and test take, the median distance from a test start to
+    the nearest validation start facing the same way, and the training start's distance to
+    the nearest test start (m)."""
+    protocol = json.loads((folder / "protocol.json").read_text())
+    training, track_starts, validation, test = _narrow_starts(protocol)
+    validation = set(validation)
 
     def nearest(start: tuple, among: set) -> float:  # facing the same way
         return min((np.hypot(start[0] - x, start[1] - y) for x, y, heading in among
@@ -112,7 +125,7 @@ def starts(folder: Path) -> dict:
 
     return {"distinct": len(set(test)),
             "shared": sum(start in validation for start in test),
-            "track": len(world.starts), "used": len(validation | set(test)),
+            "track": track_starts, "used": len(validation | set(test)),
             "validation_nearest": float(np.median([nearest(start, validation)
                                                    for start in test])),
             "training_nearest": float(min(np.hypot(x - training[0], y - training[1])
@@ -246,3 +259,126 @@ def stopping(folder: Path) -> dict:
                          "chosen": _value(float(group["chosen"].mean())),
                          "last": _value(float(group["last"].mean()))} | minus)
     return {"rows": rows}
+
+
+# The second round (docs/results.md, "The second round"; kind ``baseline_round2``): its folder
+# holds the tables, its protocol.json and its saved controllers, and no scenarios.json; its
+# scenarios are the shipped ones of the names its runs give.
+
+
+def round2_starts(folder: Path) -> dict:
+    """The narrow track's starts under the second round's own ``protocol.json`` (whose
+    validation and test situations drew their starts from the same poses): how far apart the
+    track's candidate starts lie along a lane (m, ``start_anywhere``), how many test starts
+    there are, how many are distinct, how many are also a validation start, and per method
+    and budget the mean test fitness (``situations.csv``, over seeds and situations) of the
+    test situations whose start is no validation start."""
+    from enn_traffic.roads.network import ANYWHERE_SPACING_M
+
+    protocol = json.loads((folder / "protocol.json").read_text())
+    _, _, validation, test = _narrow_starts(protocol)
+    shared = [start in set(validation) for start in test]
+    situations = pd.read_csv(folder / "situations.csv")
+    narrow = situations[situations["scenario"] == "navigation_narrow"]
+    others = narrow[~narrow["situation"].map(dict(enumerate(shared))).astype(bool)]
+    means = others.groupby(["method", "budget_steps"])["test_fitness"].mean()
+    return {"spacing": float(ANYWHERE_SPACING_M), "test": len(test),
+            "distinct": len(set(test)), "shared": sum(shared),
+            "without_shared": [{"method": method, "budget_steps": int(budget),
+                                "test_fitness": float(mean)}
+                               for (method, budget), mean in means.items()]}
+
+
+def round2_settings(folder: Path) -> dict:
+    """What the second round ran under beyond its ``protocol.json``: the test keys the
+    comparison's first round read (the key ledger, :mod:`enn_traffic.core.keys`; the folder's
+    own test keys must be the second round's allocation), and each scenario of its runs
+    (``comparison.csv``) as the package ships it: a step's length (s), the step cap, and how
+    many validation and test situations one key gives (of
+    :func:`~enn_traffic.experiments.gradient_rl.scoring.scoring_scenario`)."""
+    from enn_traffic.config.shipped import shipped_scenario
+    from enn_traffic.core import keys
+    from enn_traffic.envs.rangefinder import rangefinder_world
+    from enn_traffic.experiments.gradient_rl import scoring
+
+    protocol = json.loads((folder / "protocol.json").read_text())
+    if protocol["test_key"] not in keys.COMPARISON_SECOND_ROUND_TEST.keys:
+        raise ValueError(f"{folder}: test keys from {protocol['test_key']:,} are not the "
+                         "second round's")
+    scenarios = {}
+    for name in sorted(set(_runs(folder)["scenario"])):
+        scenario = shipped_scenario(name)
+        world = rangefinder_world(scoring.scoring_scenario(scenario))
+        scenarios[name] = {"dt": float(scenario.vehicle.dt),
+                           "max_steps": int(scenario.episode.max_steps),
+                           "situations_per_key": len(world.situations(protocol["test_key"]))}
+    return {"first_round_test_key": keys.COMPARISON_FIRST_ROUND_TEST.start,
+            "scenarios": scenarios}
+
+
+def round2_networks(folder: Path) -> dict:
+    """The networks of the second round's saved controllers (``controllers/``, one a run of
+    ``comparison.csv``), per scenario and method: the readings they take and their hidden
+    layers' sizes (the GA's controller file's layer sizes; PPO's and SAC's
+    :class:`~enn_traffic.experiments.gradient_rl.policy.NumpyPolicy`'s linear layers), the
+    same for every run of them."""
+    from enn_traffic.experiments.gradient_rl.campaign import controller_path
+    from enn_traffic.experiments.gradient_rl.policy import NumpyPolicy
+    from enn_traffic.runs.controller import Controller
+
+    found: dict[str, dict[str, dict]] = {}
+    for run in _runs(folder)[round_protocol.RUN_KEYS].itertuples(index=False):
+        path = controller_path(folder, *run)
+        if run.method == "GA":
+            sizes = list(Controller.load(path).layer_sizes)
+        else:
+            linear = [a for kind, a, _ in NumpyPolicy.load(path).layers if kind == "linear"]
+            sizes = [linear[0].shape[0], *(a.shape[1] for a in linear)]
+        network = {"inputs": int(sizes[0]), "hidden": [int(size) for size in sizes[1:-1]]}
+        if found.setdefault(run.scenario, {}).setdefault(run.method, network) != network:
+            raise ValueError(f"{path}: a network of {sizes}, unlike its method's other runs")
+    return found
+
+
+def round2_levels(folder: Path) -> dict:
+    """The level of the second round's intervals, which no file of it records, read back
+    from its tables: the seeds' Student's t intervals (``comparison_summary.csv``, over the
+    runs' test fitness in ``comparison.csv``) give theirs (the same, to 6 places, for every
+    row with a spread); the Welch intervals of ``comparison_differences.csv``
+    (:func:`~enn_traffic.report.stats.welch_contrast`) and each run's bootstrap interval over
+    its test situations (``situations.csv``; :func:`~enn_traffic.report.stats.
+    bootstrap_interval`, seeded by the run's seed, as the round drew it) have that level where
+    every row of theirs is what it gives at it, else ``None``."""
+    from scipy import stats as scipy_stats
+
+    from enn_traffic.report.stats import bootstrap_interval, welch_contrast
+
+    group = ["scenario", "method", "budget_steps"]
+    runs = _runs(folder)
+    fitness = {key: values["test_fitness"].to_numpy() for key, values in runs.groupby(group)}
+    found = set()
+    for row in pd.read_csv(folder / "comparison_summary.csv").itertuples():
+        values = fitness[row.scenario, row.method, row.budget_steps]
+        if len(values) < 2 or values.std() == 0:
+            continue
+        sem = values.std(ddof=1) / np.sqrt(len(values))
+        half = (row.seeds_high - row.seeds_low) / 2
+        found.add(round(float(2 * scipy_stats.t.cdf(half / sem, len(values) - 1) - 1), 6))
+    if len(found) != 1:
+        raise ValueError(f"{folder}: the seeds' intervals have levels {sorted(found)}")
+    level = found.pop()
+    welch = all(np.allclose(welch_contrast([fitness[row.scenario, row.method, row.budget_steps],
+                                            fitness[row.scenario, "GA", row.ga_budget_steps]],
+                                           [1, -1], level),
+                            (row.minus_ga, row.minus_ga_low, row.minus_ga_high))
+                for row in pd.read_csv(folder / "comparison_differences.csv").itertuples())
+    situations = pd.read_csv(folder / "situations.csv").sort_values("situation")
+    lives = {key: values["test_fitness"].to_numpy()
+             for key, values in situations.groupby(round_protocol.RUN_KEYS)}
+    bootstrap = all(np.allclose(bootstrap_interval(
+                        lives[row.scenario, row.method, row.budget_steps, row.seed],
+                        np.random.default_rng(row.seed), level=level),
+                                (row.test_fitness_low, row.test_fitness_high))
+                    for row in runs.itertuples())
+    return {"seeds": level, "differences": level if welch else None,
+            "situations": level if bootstrap else None}
