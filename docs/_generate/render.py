@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import argparse
 import difflib
+import re
 import sys
 from pathlib import Path
 
@@ -76,6 +77,32 @@ def differences(root: Path = ROOT, only: list[str] | None = None) -> dict[str, s
                 written.splitlines(keepends=True), text.splitlines(keepends=True),
                 f"{path} (as written)", f"{path} (as rendered)"))
     return found
+
+
+# What the typed-number check leaves aside: where a digit names something rather than states a
+# quantity (a code span or block, a link's target, a commit, a file, the paper's sections,
+# figures and tables, an issue, a strategy), and the mark an expression leaves (FILLED).
+FILLED = "\x00"
+NAMES = [re.compile(pattern, flags) for pattern, flags in (
+    (r"^```.*?^```", re.S | re.M), (r"`[^`\n]*`", 0), (r"\]\([^)]*\)", 0),
+    (r"\b[0-9a-f]{7}\b", 0), (r"[\w/.-]*\d[\w/-]*\.(?:csv|png|json|md|toml|npz|gif|xml)\b", 0),
+    (r"(?:§|Figs?\.|Tables?|[Ii]ssues?|strateg(?:y|ies)|[Ii]teration|#)\s*"
+     r"\d+(?:\.\d+)*(?:(?:[–-]|, | and | or )\d+(?:\.\d+)*)*", 0))]
+NUMBER = re.compile(r"(?<![\w.\x00])\d+(?:[.,]\d+)*(?![\w\x00])")
+
+
+def typed_numbers(root: Path, path: str) -> list[tuple[str, str]]:
+    """The numbers document ``path``'s template states in its own words, not from the facts
+    it is rendered over: each as written, with the line it stands in; every expression's
+    output is left out, and so are digits that name rather than count (:data:`NAMES`)."""
+    env = environment()
+    env.finalize = lambda value: FILLED
+    template, parts = DOCUMENTS[path]
+    text = env.get_template(template).render(**context(root, parts))
+    for pattern in NAMES:
+        text = pattern.sub(" ", text)
+    return [(match.group(), line.strip())
+            for line in text.splitlines() for match in NUMBER.finditer(line)]
 
 
 def main(argv: list[str] | None = None) -> int:
