@@ -45,12 +45,26 @@ def synopsis(width: int = 96) -> list[str]:
     return lines
 
 
+def experiments(root: Path) -> list[str]:
+    """The experiments whose results the committed reproduction holds (its ``summary.json``),
+    in the order ``reproduce`` runs them."""
+    import json
+
+    from enn_traffic.experiments import EXPERIMENTS
+
+    summary = json.loads((root / "results" / "paper" / "summary.json").read_text())
+    return [name for name in EXPERIMENTS if name in summary]
+
+
 def context(root: Path) -> dict:
     folder = root / "results" / "readme_example"
     generations = pd.read_csv(folder / "generations.csv")
     best = generations["best_fitness"]
     start = generations["traffic_at_start"]
-    return {"readme": {"commands": synopsis(), "city": {
+    from enn_traffic.experiments import EXPERIMENTS
+
+    return {"readme": {"commands": synopsis(), "experiments": experiments(root),
+                       "every_experiment": len(EXPERIMENTS), "city": {
         "generations": len(generations),
         "first_best": best.iloc[0], "last_best": best.iloc[-1],
         "traffic_low": start.min(), "traffic_high": start.max(),
