@@ -5,6 +5,8 @@ from __future__ import annotations
 
 import math
 
+from enn_traffic.experiments import EXPERIMENTS
+
 
 def g(value: float) -> str:
     """Python's general format (``{:g}``): 0.5, 10, 1e+06."""
@@ -62,4 +64,4 @@ def is_missing(value: object) -> bool:
 FILTERS = {"g": g, "fixed": fixed, "thousands": thousands, "signed": signed,
            "percent": percent}
 GLOBALS = {"interval": interval, "is_missing": is_missing, "difference": difference,
-           "side": side}
+           "side": side, "experiments": list(EXPERIMENTS)}
