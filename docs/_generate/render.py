@@ -41,8 +41,15 @@ def environment() -> jinja2.Environment:
 
 
 def context(root: Path, parts: tuple) -> dict:
-    """The merged context of a document's parts (a name two parts give is an error)."""
-    merged: dict = {}
+    """The merged context of a document's parts (a name two parts give is an error), and
+    ``table(PATH)``: the rows of ``results/PATH``, a CSV table, for a template that shows one
+    as it is."""
+    import pandas as pd
+
+    def table(path: str) -> list[dict]:
+        return pd.read_csv(root / "results" / path).to_dict("records")
+
+    merged: dict = {"table": table}
     for part in parts:
         values = part.context(root)
         shared = merged.keys() & values.keys()
