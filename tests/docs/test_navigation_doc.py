@@ -32,8 +32,8 @@ def copied(root, tmp_path) -> Path:
 
 def rendered(generate, root: Path, template: str, **values) -> str:
     render, navigation = generate
-    return render.environment().get_template(template).render(**navigation.context(root),
-                                                               **values)
+    return render.environment().get_template(template).render(
+        **render.context(root, (navigation,)), **values)
 
 
 def headline(generate, root: Path, experiment: str) -> str:
