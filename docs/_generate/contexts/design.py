@@ -1,11 +1,14 @@
 """docs/design.md: the layers (the package's folders, each described by its docstring), the
-traffic keys' ledger, and generations.csv's columns, as the package declares them."""
+traffic keys' ledger, and generations.csv's columns, as the package declares them; and what
+a change costs, as counted on scratch branches (``results/house/change_tasks.csv``)."""
 
 from __future__ import annotations
 
 import importlib
 import re
 from pathlib import Path
+
+import pandas as pd
 
 from enn_traffic import LAYERS
 from enn_traffic.core import keys
@@ -36,6 +39,8 @@ def context(root: Path) -> dict:
     allocations = [{"name": name, "first": key(a.keys.start),
                     "last": key(a.keys[-1]), "read_by": a.read_by}
                    for name, a in sorted(keys.ALLOCATIONS.items(), key=lambda i: i[1].start)]
-    return {"layers": layers, "key_ranges": ranges, "key_allocations": allocations,
+    tasks = pd.read_csv(root / "results" / "house" / "change_tasks.csv").to_dict("records")
+    return {"change_tasks": tasks, "layers": layers, "key_ranges": ranges,
+            "key_allocations": allocations,
             "generations_columns": [{"name": name, "meaning": " ".join(
                 function.__doc__.split())} for name, function in COLUMNS.items()]}

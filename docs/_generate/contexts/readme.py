@@ -8,6 +8,7 @@ the committed tables of the commands it shows
 from __future__ import annotations
 
 import argparse
+import json
 from pathlib import Path
 
 import pandas as pd
@@ -48,8 +49,6 @@ def synopsis(width: int = 96) -> list[str]:
 def experiments(root: Path) -> list[str]:
     """The experiments whose results the committed reproduction holds (its ``summary.json``),
     in the order ``reproduce`` runs them."""
-    import json
-
     from enn_traffic.experiments import EXPERIMENTS
 
     summary = json.loads((root / "results" / "paper" / "summary.json").read_text())
@@ -62,9 +61,11 @@ def context(root: Path) -> dict:
     best = generations["best_fitness"]
     start = generations["traffic_at_start"]
     from enn_traffic.experiments import EXPERIMENTS
+    from enn_traffic.runs.generations_csv import COLUMNS
 
-    return {"readme": {"commands": synopsis(), "experiments": experiments(root),
-                       "every_experiment": len(EXPERIMENTS), "city": {
+    return {"readme": {"commands": synopsis(), "generations_columns": list(COLUMNS),
+                       "experiments": experiments(root), "every_experiment": len(EXPERIMENTS),
+                       "city": {
         "generations": len(generations),
         "first_best": best.iloc[0], "last_best": best.iloc[-1],
         "traffic_low": start.min(), "traffic_high": start.max(),
