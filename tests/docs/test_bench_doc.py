@@ -1,24 +1,10 @@
 """docs/bench.md, and the README's timings and city example, say what the committed tables
 give (docs/_generate/README.md): a changed table changes the document as rendered over it."""
 
-import importlib
 import shutil
-import sys
 from pathlib import Path
 
 import pandas as pd
-import pytest
-
-GENERATE = Path(__file__).resolve().parents[2] / "docs" / "_generate"
-
-
-@pytest.fixture(scope="module")
-def render():
-    sys.path.insert(0, str(GENERATE))
-    try:
-        yield importlib.import_module("render")
-    finally:
-        sys.path.remove(str(GENERATE))
 
 
 def copied(root: Path, tmp_path: Path) -> Path:

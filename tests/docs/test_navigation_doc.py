@@ -4,22 +4,15 @@ table changes what they say."""
 
 import importlib
 import shutil
-import sys
 from pathlib import Path
 
 import pandas as pd
 import pytest
 
-GENERATE = Path(__file__).resolve().parents[2] / "docs" / "_generate"
-
 
 @pytest.fixture(scope="module")
-def generate():
-    sys.path.insert(0, str(GENERATE))
-    try:
-        yield importlib.import_module("render"), importlib.import_module("contexts.navigation")
-    finally:
-        sys.path.remove(str(GENERATE))
+def generate(render):
+    return render, importlib.import_module("contexts.navigation")
 
 
 @pytest.fixture

@@ -1,22 +1,8 @@
 """The documents are their templates rendered over the committed facts
 (docs/_generate/README.md), and every committed facts file is what its tables give."""
 
-import importlib
-import sys
-from pathlib import Path
 
 import pytest
-
-GENERATE = Path(__file__).resolve().parents[2] / "docs" / "_generate"
-
-
-@pytest.fixture(scope="module")
-def render():
-    sys.path.insert(0, str(GENERATE))
-    try:
-        yield importlib.import_module("render")
-    finally:
-        sys.path.remove(str(GENERATE))
 
 
 def test_every_document_is_its_template_rendered(render, root):

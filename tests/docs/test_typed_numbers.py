@@ -5,17 +5,14 @@ paper's numbers, a constant the package names — or one of the few below, each 
 source. A measured number typed into a template fails here; render it from its table."""
 
 import ast
-import importlib
 import json
 import math
 import re
-import sys
 import tomllib
 from pathlib import Path
 
 import pytest
 
-GENERATE = Path(__file__).resolve().parents[2] / "docs" / "_generate"
 DOCUMENTS = ("README.md", "docs/results.md", "docs/bench.md")
 # Typed numbers whose source is not a file of the project's facts, and why each may stand.
 CITED = {
@@ -27,14 +24,6 @@ CITED = {
 }
 STEP_S = 0.1  # a step's seconds (the paper's 0.1 s): a cap or window in steps is stated in s
 
-
-@pytest.fixture(scope="module")
-def render():
-    sys.path.insert(0, str(GENERATE))
-    try:
-        yield importlib.import_module("render")
-    finally:
-        sys.path.remove(str(GENERATE))
 
 
 def _numbers(value, out: set) -> None:
@@ -94,14 +83,14 @@ def test_a_measured_number_typed_into_a_template_is_caught(render, root, tmp_pat
     """The check's own test: 4,321.5 steps typed into the README's template is found."""
     import shutil
 
-    copy = tmp_path / "_generate"
-    shutil.copytree(GENERATE, copy)
+    generate, copy = render.HERE, tmp_path / "_generate"
+    shutil.copytree(generate, copy)
     template = copy / "templates" / "README.md.j2"
     template.write_text(template.read_text() + "\nThe best lived 4,321.5 steps.\n")
     try:
         render.HERE = copy
         typed = render.typed_numbers(root, "README.md")
     finally:
-        render.HERE = GENERATE
+        render.HERE = generate
     assert ("4,321.5", "The best lived 4,321.5 steps.") in typed
     assert not is_declared("4,321.5", declared(root))
