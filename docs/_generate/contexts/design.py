@@ -31,6 +31,23 @@ def key(number: int) -> str:
     return head if rest == 0 else f"{rest:,}" if whole == 0 else f"{head} + {rest:,}"
 
 
+def bench_ab(table: pd.DataFrame) -> dict:
+    """The A/B of the move: each row's median rate after over before, and whether the two
+    codes' ranges over the rounds overlap."""
+    before = table["code"].iloc[0]
+    rows = []
+    for (workload, implementation, threads), group in table.groupby(
+            ["workload", "implementation", "threads"], sort=False):
+        rates = group.groupby("code")["vehicle_steps_per_s"]
+        low, high, median = rates.min(), rates.max(), rates.median()
+        after = next(code for code in median.index if code != before)
+        rows.append({"workload": workload, "implementation": implementation,
+                     "threads": int(threads), "ratio": median[after] / median[before],
+                     "overlap": bool(low[after] <= high[before] and low[before] <= high[after])})
+    return {"before": before, "rounds": int(table["round"].nunique()), "rows": rows,
+            "overlapping": sum(row["overlap"] for row in rows)}
+
+
 def context(root: Path) -> dict:
     layers = [{"name": name, "summary": summary(importlib.import_module(
         f"enn_traffic.{name}").__doc__)} for name in LAYERS]
@@ -40,7 +57,8 @@ def context(root: Path) -> dict:
                     "last": key(a.keys[-1]), "read_by": a.read_by}
                    for name, a in sorted(keys.ALLOCATIONS.items(), key=lambda i: i[1].start)]
     tasks = pd.read_csv(root / "results" / "house" / "change_tasks.csv").to_dict("records")
-    return {"change_tasks": tasks, "layers": layers, "key_ranges": ranges,
+    return {"bench_ab": bench_ab(pd.read_csv(root / "results" / "house" / "bench_ab.csv")),
+            "change_tasks": tasks, "layers": layers, "key_ranges": ranges,
             "key_allocations": allocations,
             "generations_columns": [{"name": name, "meaning": " ".join(
                 function.__doc__.split())} for name, function in COLUMNS.items()]}
