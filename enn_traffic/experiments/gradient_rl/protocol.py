@@ -68,7 +68,7 @@ class Planned:
     seeds: int
 
 
-# Issue 65: ten independent seeds of every method at 1 M learner-steps, five of the GA and PPO
+# The plan: ten independent seeds of every method at 1 M learner-steps, five of the GA and PPO
 # at 5 M (their own seeds: :func:`run_seed`).
 PLAN = (Planned("GA", 1_000_000, 10), Planned("PPO", 1_000_000, 10),
         Planned("SAC", 1_000_000, 10), Planned("GA", 5_000_000, 5),
