@@ -38,6 +38,21 @@ def root() -> Path:
 
 
 @pytest.fixture(scope="module")
+def render():
+    """docs/_generate/render.py, the documents' renderer (a folder of scripts, not a package),
+    as a module, its contexts importable while the test runs."""
+    import importlib
+    import sys
+
+    generate = str(ROOT / "docs" / "_generate")
+    sys.path.insert(0, generate)
+    try:
+        yield importlib.import_module("render")
+    finally:
+        sys.path.remove(generate)
+
+
+@pytest.fixture(scope="module")
 def road_net(tmp_path_factory):
     """The straight two-way road of :mod:`sumo_road`, built once per test module."""
     from sumo_road import build_road_net
