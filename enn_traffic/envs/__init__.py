@@ -3,7 +3,7 @@
 ``import enn_traffic.envs`` registers, under the ``enn_traffic/`` namespace, one id per
 shipped scenario whose world an environment drives (:func:`register_envs`:
 ``enn_traffic/NavigationNarrow-v0``, ``enn_traffic/CityCologne3-v0``, ...;
-:data:`REGISTERED` names them) and ``enn_traffic/Scenario-v0``, which takes
+:data:`REGISTERED` names their scenarios) and ``enn_traffic/Scenario-v0``, which takes
 ``scenario=PATH`` (a user's own SUMO scenario too, or a shipped scenario's name) and, for a
 scenario of several tracks, ``track=i``. Gymnasium 1.x has no plugin entry points: without
 the import, ``gymnasium.make("enn_traffic.envs:enn_traffic/NavigationNarrow-v0")`` imports

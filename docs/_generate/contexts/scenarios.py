@@ -1,8 +1,10 @@
 """docs/scenarios.md: the scenario reference, a row per key of the schema, from the fields'
-own descriptions and defaults (a new section is documented without being listed here)."""
+own descriptions and defaults (a new section is documented without being listed here), and
+the shipped scenarios with the descriptions their files give."""
 
 from __future__ import annotations
 
+import tomllib
 from pathlib import Path
 from typing import get_args
 
@@ -63,4 +65,7 @@ def context(root: Path) -> dict:
                  for row in keys(model, name)]
     lane_keeping = [row for name, model in found.items() if name.startswith("lane_keeping")
                     for row in keys(model, name)]
-    return {"scenario_keys": scenario, "lane_keeping_keys": lane_keeping}
+    shipped = [{"name": path.stem,
+                "description": tomllib.loads(path.read_text()).get("description", "")}
+               for path in sorted((root / "scenarios").glob("*.toml"))]
+    return {"scenario_keys": scenario, "lane_keeping_keys": lane_keeping, "shipped": shipped}
