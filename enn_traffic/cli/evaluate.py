@@ -42,6 +42,11 @@ def add_parser(commands) -> None:
                               "beside --out)")
 
 
+def _is_scenario(path: Path) -> bool:
+    """A scenario file, or the bare name of a shipped scenario (no suffix, no such file)."""
+    return path.suffix == ".toml" or (not path.suffix and not path.exists())
+
+
 def run(args) -> int:
     from enn_traffic.config import load_scenario
     from enn_traffic.config.shipped import scenario_path
@@ -50,7 +55,7 @@ def run(args) -> int:
     from enn_traffic.runs.evaluate import evaluate_batch, matrix_files
 
     controller_paths = [p for p in args.paths if p.suffix == ".npz"]
-    scenario_paths = [p for p in args.paths if p.suffix == ".toml"]
+    scenario_paths = [p for p in args.paths if _is_scenario(p)]
     if args.out:  # every file it will write, before any work
         check_output_file(args.out, suffixes=(".csv",))
         if len(controller_paths) * len(scenario_paths) > 1:
@@ -58,8 +63,9 @@ def run(args) -> int:
                 check_output_file(written)
         check_output_folder(sumo_folder(args.out))
     for path in args.paths:
-        if path.suffix not in (".npz", ".toml"):
-            raise InputError("expected controllers (.npz) and scenarios (.toml)", path)
+        if path.suffix != ".npz" and not _is_scenario(path):
+            raise InputError("expected controllers (.npz) and scenarios (.toml, or a shipped "
+                             "scenario's name)", path)
     if not controller_paths or not scenario_paths:
         raise InputError("give at least one controller (.npz) and one scenario (.toml)",
                          key="evaluate")

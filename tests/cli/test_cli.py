@@ -90,6 +90,22 @@ def test_evaluate_and_render_a_saved_controller(small_run, tmp_path, root):
     assert animation.read_bytes()[:3] == b"GIF"
 
 
+def test_evaluate_takes_a_shipped_scenarios_name_as_the_other_commands_do(small_run, tmp_path,
+                                                                          root):
+    """``unseen_loop``, from a folder that holds no such file, is the shipped scenario: the
+    same table as its path gives. A name that is neither is refused, naming it."""
+    by_path, by_name = tmp_path / "path.csv", tmp_path / "name.csv"
+    result = cli("evaluate", small_run / "best.npz", root / "scenarios" / "unseen_loop.toml",
+                 "--episodes", 2, "--out", by_path)
+    assert result.returncode == 0, result.stderr
+    result = cli("evaluate", small_run / "best.npz", "unseen_loop", "--episodes", 2,
+                 "--out", by_name, cwd=tmp_path)
+    assert result.returncode == 0, result.stderr
+    pd.testing.assert_frame_equal(pd.read_csv(by_path), pd.read_csv(by_name))
+    result = cli("evaluate", small_run / "best.npz", "no_such_scenario", cwd=tmp_path)
+    assert result.returncode == 2 and "no_such_scenario" in result.stderr
+
+
 def test_evaluate_reproduces_the_recorded_best_fitness(small_run, root, tmp_path):
     # no traffic on the narrow track: every situation is the training's, so the controller's
     # lifetime is the best fitness its run recorded
