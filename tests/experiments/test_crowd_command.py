@@ -79,6 +79,34 @@ def test_a_resumed_crowd_measures_nothing_again_and_another_folder_is_refused(cr
     assert situation["settings"]["learning_s"] == 10.0
 
 
+@pytest.mark.parametrize("same_rules", [True, False])
+def test_a_crowd_kept_under_an_earlier_digest_of_the_same_rules_is_not_measured_again(
+        crowd_run, tmp_path, monkeypatch, capsys, same_rules):
+    """The rules' digest moves (code moved between files, say: here a digest of its own).
+    Where the digest the crowd was kept under is listed in provenance.SAME_RULES, it resumes
+    and measures nothing, its individual run included; where not, the run is refused as
+    made by other rules."""
+    from enn_traffic.core.provenance import rules_version
+    from enn_traffic.experiments.crowds import sumo
+    from enn_traffic.runs import run
+
+    scenario, out = crowd_run
+    copy = tmp_path / "out"
+    shutil.copytree(out, copy)
+    kept = {p: p.stat().st_mtime_ns for p in [*(copy / "crowds").iterdir(),
+                                               copy / "individual" / "checkpoint.npz"]}
+    made_by = rules_version()
+    for module in (sumo, run):
+        monkeypatch.setattr(module, "rules_version", lambda: "fedcba987654")
+        monkeypatch.setattr(module, "SAME_RULES", (made_by,) if same_rules else ())
+    status = main(["crowd", str(scenario), "--out", str(copy), "--resume", "--quiet"])
+    assert [p for p in kept if p.stat().st_mtime_ns != kept[p]] == []
+    if same_rules:
+        assert status == 0
+    else:
+        assert status == 2 and f"made by other rules ({made_by}" in capsys.readouterr().err
+
+
 def test_a_scenario_without_sumo_traffic_is_refused(root, tmp_path, capsys):
     path = root / "scenarios" / "arena_strategy1.toml"
     assert main(["crowd", str(path), "--out", str(tmp_path / "out"), "--quiet"]) == 2

@@ -45,6 +45,7 @@ from __future__ import annotations
 import hashlib
 import json
 import os
+from collections.abc import Callable
 from dataclasses import asdict
 from pathlib import Path
 
@@ -55,7 +56,7 @@ from tqdm import tqdm
 from enn_traffic.core import keys
 from enn_traffic.core.io import write_csv, write_text
 from enn_traffic.core.progress import slow_step, terminal
-from enn_traffic.core.provenance import rules_version, sources_of
+from enn_traffic.core.provenance import SAME_RULES, rules_version, sources_of
 from enn_traffic.experiments.choosing import final_population, specialists
 from enn_traffic.experiments.common import save_arrays, save_controller
 from enn_traffic.experiments.crowds.settings import CrowdSettings
@@ -183,13 +184,23 @@ def crowd_world(family: Family, strategy: int) -> SumoWorld:
         ga=dict(family.ga), traffic={"mode": "closed-loop"}))
 
 
-def _kept(path: Path, settings: dict) -> dict | None:
-    """What :func:`_keep` kept at ``path`` with the same ``settings``, or None."""
+def _kept(path: Path, settings: dict, earlier: list[dict] = ()) -> dict | None:
+    """What :func:`_keep` kept at ``path`` with the same ``settings`` (or one of ``earlier``,
+    the same settings as an earlier digest of these rules wrote them: :func:`_earlier`), or
+    None."""
     if path.is_file():
         kept = json.loads(path.read_text())
-        if kept.get("settings") == settings:
+        if kept.get("settings") == settings or kept.get("settings") in earlier:
             return kept
     return None
+
+
+def _earlier(settings: dict, identity: Callable[[str | None], dict] | None) -> list[dict]:
+    """``settings`` as the same rules wrote them under each earlier digest
+    (:data:`~enn_traffic.core.provenance.SAME_RULES`), ``identity(rules)`` among them: what
+    else a kept situation was measured with, under those rules."""
+    return [settings | {"rules": rules} | (identity(rules) if identity else {})
+            for rules in SAME_RULES]
 
 
 def _keep(path: Path, settings: dict, result: dict) -> dict:
@@ -261,17 +272,20 @@ def _settings(learning: CrowdSettings) -> dict:
 
 
 def validation(folder: Path, inputs: dict[int, tuple[SumoWorld, np.ndarray, np.ndarray]],
-               learning: CrowdSettings, identity: dict | None = None) -> pd.DataFrame:
+               learning: CrowdSettings, identity: Callable[[str | None], dict] | None = None
+               ) -> pd.DataFrame:
     """Every strategy's learners in its validation situations, written to
     ``table4_validation_learners.csv`` (kept under ``crowds/`` like the situations, with
-    ``identity`` among their settings)."""
+    ``identity(None)`` among their settings)."""
     rows = []
     for strategy, (world, winner, evolved) in inputs.items():
-        settings = _settings(learning) | (identity or {}) | {
-            "strategy": strategy, "inputs": _digest(winner, evolved)}
+        settings = _settings(learning) | {"strategy": strategy,
+                                          "inputs": _digest(winner, evolved)}
+        earlier = _earlier(settings, identity)
+        settings |= identity(None) if identity else {}
         path = folder / "crowds" / f"validation_strategy{strategy}.json"
-        kept = _kept(path, settings) or _keep(path, settings, {"learners": validation_learners(
-            world, winner, evolved, learning)})
+        kept = _kept(path, settings, earlier) or _keep(path, settings, {
+            "learners": validation_learners(world, winner, evolved, learning)})
         rows += [{"strategy": strategy} | row for row in kept["learners"]]
     table = pd.DataFrame(rows)
     write_csv(folder / "table4_validation_learners.csv", table)
@@ -304,20 +318,21 @@ def _situation_task(scenario, winner, evolved, situation, learning) -> Situation
 
 def measure_situations(folder: Path, inputs: dict[int, tuple[SumoWorld, np.ndarray, np.ndarray]],
                        learning: CrowdSettings, progress: bool, title: str,
-                       save_learner=None, ray=None, identity: dict | None = None) -> Measured:
+                       save_learner=None, ray=None,
+                       identity: Callable[[str | None], dict] | None = None) -> Measured:
     """Each input's validation (:func:`validation`) and situations, their learning windows and
     learners, written into ``folder`` (the module's list): each situation kept under
     ``crowds/`` as it ends, so that an interrupted measurement resumes where it stopped.
     ``save_learner(strategy, k, scenario, genes)`` keeps each learner's controller after
     learning in the first situation. With ``ray`` (:func:`~enn_traffic.learning.evaluators.
     connect_ray`'s module) the situations run side by side as Ray tasks; a situation's result
-    depends on its seed alone, so it is the same wherever it ran. ``identity``: what else a
-    kept situation must have been measured with (a user's scenario: its fingerprint)."""
+    depends on its seed alone, so it is the same wherever it ran. ``identity(rules)``: what
+    else a kept situation must have been measured with under ``rules`` (None: these; a user's
+    scenario: its fingerprint)."""
     with slow_step(f"{folder.name}: the crowd's validation situations ({learning.learning_s:g} s "
                    "of SUMO time learning in each)"):
         validation(folder, inputs, learning, identity)
-    settings = _settings(learning) | (identity or {})
-    settings["key"] = SITUATION_KEY
+    settings = _settings(learning) | {"key": SITUATION_KEY}
     jobs, kept = {}, {}
     for strategy, (_, winner, evolved) in inputs.items():
         for situation in range(learning.situations):
@@ -325,7 +340,9 @@ def measure_situations(folder: Path, inputs: dict[int, tuple[SumoWorld, np.ndarr
             path = folder / "crowds" / f"strategy{strategy}_situation{situation}.json"
             measured_as = settings | {"strategy": strategy, "situation": situation,
                                       "inputs": _digest(winner, evolved)}
-            kept[label] = _kept(path, measured_as)
+            earlier = _earlier(measured_as, identity)
+            measured_as |= identity(None) if identity else {}
+            kept[label] = _kept(path, measured_as, earlier)
             if kept[label] is None:
                 jobs[label] = (path, measured_as)
 

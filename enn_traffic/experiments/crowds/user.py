@@ -148,7 +148,7 @@ def run_crowd(scenario: Scenario, out: Path, executor: str = "local",
             out, {1: (world, source[0], source[1:])}, learning, progress,
             f"{scenario.name}: {scenario.traffic.learners} learners among SUMO traffic",
             save_learner, connect_ray(address) if executor == "ray" else None,
-            {"scenario": fingerprint(world.scenario)})  # its files' contents included
+            lambda rules: {"scenario": fingerprint(world.scenario, rules=rules)})  # its files too
         for kept in (out / "controllers").glob("learner*.npz"):  # of a run with more learners
             index = kept.stem.removeprefix("learner")
             if index.isdigit() and int(index) >= scenario.traffic.learners:
