@@ -277,11 +277,17 @@ class Scenario(Section):
         return tomli_w.dumps(data)
 
 
+# pydantic's name of a union's member in an error's location (``literal['a','b']``,
+# ``list[...]``): not a key of the file.
+UNION_MEMBER = re.compile(r"[\w-]+\[.*\]")
+
+
 def _key_of(error: dict) -> tuple[str, str]:
     """The key an error names, and its message. A check of several keys names its key as the
     message's prefix: ``"track.net: required ..."`` of the whole scenario, ``"learning_s:
     must be ..."`` of a section (the section's key then)."""
-    parts = [part for part in error["loc"] if part not in ("one", "several")]
+    parts = [part for part in error["loc"] if part not in ("one", "several")
+             and not (isinstance(part, str) and UNION_MEMBER.fullmatch(part))]
     key = "".join(f"[{part}]" if isinstance(part, int) else f'."{part}"' if "." in part
                   else f".{part}" for part in parts)  # a quoted TOML key with a dot: one name
     key = key.removeprefix(".")
@@ -317,7 +323,9 @@ def validated(data: dict, source: Path | None) -> Scenario:
                 message += QUOTED_DOT
         elif first["type"] == "missing":
             message = "required key is missing"
-        extra = f" (and {exc.error_count() - 1} more problems)" if exc.error_count() > 1 else ""
+        # a value that fits no member of a union is one problem, however many members
+        others = len({_key_of(error)[0] for error in exc.errors()} - {key})
+        extra = f" (and {others} more problems)" if others else ""
         raise InputError(message + extra, source, key) from None
     scenario = scenario.model_copy(update={"source": source})
     if isinstance(scenario.track, list):  # each track with its own traffic keys
