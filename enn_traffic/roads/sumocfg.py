@@ -193,10 +193,12 @@ def read_sumocfg(path: Path) -> SumoConfig:
                 check_input_file(file, "the file", path, option)
         files[option] = resolved
     if missing:
-        listed = "; ".join(f"{option}: {name} ({file})" for option, name, file in missing)
-        plural = "a file" if len(missing) == 1 else f"{len(missing)} files"
-        options = ", ".join(dict.fromkeys(option for option, _, _ in missing))
-        raise InputError(f"names {plural} that do not exist: {listed}", path, options)
+        options = list(dict.fromkeys(option for option, _, _ in missing))
+        listed = "; ".join(f"{option}: {name} ({file})" if len(options) > 1
+                           else f"{name} ({file})" for option, name, file in missing)
+        plural = ("a file that does not exist" if len(missing) == 1
+                  else f"{len(missing)} files that do not exist")
+        raise InputError(f"names {plural}: {listed}", path, ", ".join(options))
     for option in read:
         if option != "net-file":  # a network is read whole, and checked, where it is used
             check_included(files[option], path, option)

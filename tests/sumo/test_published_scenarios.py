@@ -141,6 +141,11 @@ def test_every_missing_file_is_named_at_once(tmp_path, road_net, capsys):
     assert "road.sumocfg: route-files, additional-files: names 3 files that do not exist" in error
     assert all(name in error for name in ("gone.rou.xml", "lights.add.xml", "stops.add.xml"))
     assert not (tmp_path / "run").exists()
+    (tmp_path / "road.sumocfg").write_text(
+        CONFIG.format(begin=0, end="").replace("buses.rou.xml", "buses.rou.xml,gone.rou.xml"))
+    assert main(["run", str(path), "--out", str(tmp_path / "run"), "--quiet"]) == 2
+    error = capsys.readouterr().err  # one file of one option: the option named once
+    assert "road.sumocfg: route-files: names a file that does not exist: gone.rou.xml (" in error
 
 
 @pytest.mark.parametrize("mode", ["replay", "closed-loop"])
