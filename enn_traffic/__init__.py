@@ -49,6 +49,7 @@ MOVED = {
     "enn_traffic.controller": "enn_traffic.runs.controller",
     "enn_traffic.runner": "enn_traffic.runs.run",
     "enn_traffic.deploy": "enn_traffic.runs.evaluate",
-    "enn_traffic.baseline": "enn_traffic.experiments.gradient_rl.campaign",
+    "enn_traffic.baseline": tuple(f"enn_traffic.experiments.gradient_rl.{part}" for part in (
+        "campaign", "protocol", "scoring", "runs", "policy", "stats")),
 }
 sys.meta_path.append(MovedModules(MOVED))

@@ -227,6 +227,26 @@ def test_old_module_names_still_import_with_a_warning(old):
     assert importlib.import_module("enn_traffic.envs").__file__.endswith("envs/__init__.py")
 
 
+def test_a_module_split_in_several_still_gives_each_of_its_names():
+    """``enn_traffic.baseline`` became the modules of ``experiments/gradient_rl``: a user's
+    ``from enn_traffic.baseline import policy_fitness, ZOO_PPO, ga_run`` finds each where it
+    went; a name none of them has is an AttributeError that names them."""
+    import importlib
+    import sys
+    import warnings
+
+    from enn_traffic.experiments.gradient_rl import protocol, runs, scoring
+
+    sys.modules.pop("enn_traffic.baseline", None)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", DeprecationWarning)
+        old = importlib.import_module("enn_traffic.baseline")
+    assert old.policy_fitness is scoring.policy_fitness
+    assert old.ZOO_PPO is protocol.ZOO_PPO and old.ga_run is runs.ga_run
+    with pytest.raises(AttributeError, match="gradient_rl.scoring"):
+        old.no_such_name  # noqa: B018
+
+
 def test_only_the_sumo_package_imports_libsumo():
     """SUMO lives in one package: no module outside ``enn_traffic/sumo/`` imports libsumo."""
     outside = []

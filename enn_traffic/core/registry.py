@@ -47,7 +47,7 @@ class MovedModules(importlib.abc.MetaPathFinder, importlib.abc.Loader):
     module whose attributes are the new module's, found on first use with a
     ``DeprecationWarning`` that names the new place."""
 
-    def __init__(self, moved: dict[str, str]):
+    def __init__(self, moved: dict[str, str | tuple[str, ...]]):
         self.moved = dict(moved)
 
     def find_spec(self, name: str, path: object = None, target: object = None
@@ -65,14 +65,21 @@ class MovedModules(importlib.abc.MetaPathFinder, importlib.abc.Loader):
 
 
 class _Moved(types.ModuleType):
-    """A module that moved: its attributes are those of the module at ``target``."""
+    """A module that moved: its attributes are those of the module at ``target``, or, where
+    it was split, of the first of the modules ``target`` names that has them."""
 
-    def __init__(self, name: str, target: str):
+    def __init__(self, name: str, target: str | tuple[str, ...]):
         super().__init__(name)
-        self.target = target
+        self.targets = (target,) if isinstance(target, str) else tuple(target)
+        self.target = " and ".join(self.targets)
 
     def __getattr__(self, name: str) -> object:
-        return getattr(importlib.import_module(self.target), name)
+        for target in self.targets:
+            module = importlib.import_module(target)
+            if hasattr(module, name):
+                return getattr(module, name)
+        raise AttributeError(f"{self.__name__} (now {self.target}) has no {name!r}")
 
     def __dir__(self) -> list[str]:
-        return dir(importlib.import_module(self.target))
+        return sorted({name for target in self.targets
+                       for name in dir(importlib.import_module(target))})
