@@ -186,7 +186,7 @@ def crowd_world(family: Family, strategy: int) -> SumoWorld:
 
 def _kept(path: Path, settings: dict, earlier: list[dict] = ()) -> dict | None:
     """What :func:`_keep` kept at ``path`` with the same ``settings`` (or one of ``earlier``,
-    the same settings as an earlier digest of these rules wrote them: :func:`_earlier`), or
+    the same settings as an earlier digest of these rules wrote them: :func:`_measured_as`), or
     None."""
     if path.is_file():
         kept = json.loads(path.read_text())
@@ -195,12 +195,16 @@ def _kept(path: Path, settings: dict, earlier: list[dict] = ()) -> dict | None:
     return None
 
 
-def _earlier(settings: dict, identity: Callable[[str | None], dict] | None) -> list[dict]:
-    """``settings`` as the same rules wrote them under each earlier digest
-    (:data:`~enn_traffic.core.provenance.SAME_RULES`), ``identity(rules)`` among them: what
-    else a kept situation was measured with, under those rules."""
-    return [settings | {"rules": rules} | (identity(rules) if identity else {})
-            for rules in SAME_RULES]
+def _measured_as(settings: dict, identity: Callable[[str | None], dict] | None
+                 ) -> tuple[dict, list[dict]]:
+    """``settings`` with ``identity(None)``, what else a kept situation is measured with
+    (a user's scenario: its fingerprint), and the same as an earlier digest of these rules
+    wrote them (:data:`~enn_traffic.core.provenance.SAME_RULES`, ``identity`` under it)."""
+    def under(rules: str | None) -> dict:
+        return settings | ({} if rules is None else {"rules": rules}) | (
+            identity(rules) if identity else {})
+
+    return under(None), [under(rules) for rules in SAME_RULES]
 
 
 def _keep(path: Path, settings: dict, result: dict) -> dict:
@@ -279,10 +283,8 @@ def validation(folder: Path, inputs: dict[int, tuple[SumoWorld, np.ndarray, np.n
     ``identity(None)`` among their settings)."""
     rows = []
     for strategy, (world, winner, evolved) in inputs.items():
-        settings = _settings(learning) | {"strategy": strategy,
-                                          "inputs": _digest(winner, evolved)}
-        earlier = _earlier(settings, identity)
-        settings |= identity(None) if identity else {}
+        settings, earlier = _measured_as(_settings(learning) | {
+            "strategy": strategy, "inputs": _digest(winner, evolved)}, identity)
         path = folder / "crowds" / f"validation_strategy{strategy}.json"
         kept = _kept(path, settings, earlier) or _keep(path, settings, {
             "learners": validation_learners(world, winner, evolved, learning)})
@@ -338,10 +340,9 @@ def measure_situations(folder: Path, inputs: dict[int, tuple[SumoWorld, np.ndarr
         for situation in range(learning.situations):
             label = (strategy, situation)
             path = folder / "crowds" / f"strategy{strategy}_situation{situation}.json"
-            measured_as = settings | {"strategy": strategy, "situation": situation,
-                                      "inputs": _digest(winner, evolved)}
-            earlier = _earlier(measured_as, identity)
-            measured_as |= identity(None) if identity else {}
+            measured_as, earlier = _measured_as(settings | {
+                "strategy": strategy, "situation": situation,
+                "inputs": _digest(winner, evolved)}, identity)
             kept[label] = _kept(path, measured_as, earlier)
             if kept[label] is None:
                 jobs[label] = (path, measured_as)
