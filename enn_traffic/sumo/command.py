@@ -126,7 +126,8 @@ def _file_names(value: str) -> str:
     return ",".join(Path(name).name for name in re.split(r"[,\s]+", value) if name)
 
 
-def _key(scenario: Scenario) -> str:
+def traffic_key(scenario: Scenario) -> str:
+    """The key that names a scenario's SUMO traffic, for an error about it."""
     return "traffic.sumocfg" if scenario.traffic.sumocfg is not None else "traffic.routes"
 
 
@@ -135,7 +136,7 @@ MISSING_FOLDER = ("(an output the scenario names in a sub-folder that does not e
                   "sub-folder, so it must exist, or the output be named without a folder)")
 
 
-def _sumo_errors(folder: Path) -> str:
+def sumo_errors(folder: Path) -> str:
     """What SUMO said went wrong in a start's ``folder``: its error log, else the errors it
     printed (an output it cannot open is printed, not logged), on one line, with the climb
     of :func:`output_prefix` shortened and the usual cause of a missing folder named."""

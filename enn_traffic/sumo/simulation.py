@@ -30,9 +30,9 @@ from enn_traffic.sumo.command import (
     RUN_LOG,
     SSM_FILE,
     STATE_FILE,
-    _key,
-    _sumo_errors,
     sumo_command,
+    sumo_errors,
+    traffic_key,
 )
 from enn_traffic.sumo.ssm import ssm_options
 
@@ -129,12 +129,12 @@ class Simulation:
     def _fail(self, what: str, exc: Exception | None = None, where: Path | None = None) -> None:
         """Close SUMO and raise what went wrong, with SUMO's own message, naming the
         scenario's traffic key, or ``where`` when a file of enn-traffic's own caused it."""
-        detail = _sumo_errors(self.folder)
+        detail = sumo_errors(self.folder)
         self.close()
         if where is not None:
             raise InputError(f"{what}: {detail or exc or ''}", where)
         raise InputError(f"{what}: {detail or exc or ''}", self.scenario.source,
-                         _key(self.scenario))
+                         traffic_key(self.scenario))
 
     def step(self, count: int = 1) -> None:
         try:

@@ -27,7 +27,7 @@ from enn_traffic.core.errors import InputError
 from enn_traffic.core.io import gzip_problem, max_input_bytes
 from enn_traffic.core.progress import bar, slow_step
 from enn_traffic.roads.sumocfg import departure_span
-from enn_traffic.sumo.command import _key
+from enn_traffic.sumo.command import traffic_key
 from enn_traffic.sumo.simulation import Simulation
 
 
@@ -159,7 +159,7 @@ def no_traffic_error(scenario: Scenario, steps: int, emptied: float | None = Non
             f"with none left to depart, before the learner's start")
     return InputError(f"{what}, so the learner would drive without traffic ({begin}; "
                       f"{departures}); set traffic.begin_s or warmup_s", scenario.source,
-                      _key(scenario))
+                      traffic_key(scenario))
 
 
 def first_traffic(scenario: Scenario, seed: int, state: Path | None, steps: int) -> int:
