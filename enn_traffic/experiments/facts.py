@@ -53,6 +53,15 @@ def path_of(folder: Path, name: str) -> Path:
     return folder / "facts" / f"{name.partition('/')[2]}.json"
 
 
+def read(folder: Path, name: str | None = None) -> dict:
+    """Facts file ``name`` of a results ``folder`` as written (its name within the folder:
+    ``table1``), or, without a name, every facts file of the folder by that name."""
+    if name is not None:
+        return json.loads((folder / "facts" / f"{name}.json").read_text())
+    return {path.stem: json.loads(path.read_text())
+            for path in sorted((folder / "facts").glob("*.json"))}
+
+
 def computed(folder: Path, name: str) -> dict:
     """Facts file ``name`` as its function computes it from the tables in ``folder`` (a
     JSON round trip: what the file would hold)."""

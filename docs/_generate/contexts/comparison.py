@@ -13,16 +13,13 @@ from pathlib import Path
 
 import pandas as pd
 
+from enn_traffic.experiments.facts import read as read_facts
+
 GROUP = ["scenario", "method", "budget_steps"]
 
 
 def _records(table: pd.DataFrame) -> list[dict]:
     return table.to_dict("records")
-
-
-def _facts(folder: Path) -> dict:
-    return {path.stem: json.loads(path.read_text())
-            for path in sorted((folder / "facts").glob("*.json"))}
 
 
 def _spin_rule(table: pd.DataFrame) -> dict:
@@ -100,7 +97,7 @@ def _search_past(tuning: pd.DataFrame, scenario: str, track: dict) -> dict:
 
 def context(root: Path) -> dict:
     folder = root / "results" / "baseline"
-    facts = _facts(folder)
+    facts = read_facts(folder)
     runs = pd.read_csv(folder / "comparison.csv")
     travel = pd.read_csv(folder / "travel.csv")
     tuning = pd.read_csv(folder / "tuning.csv")

@@ -23,6 +23,7 @@ from enn_traffic.experiments.crowds.arena import LEARNING, SECONDS
 from enn_traffic.experiments.crowds.stats import ARMS
 from enn_traffic.experiments.crowds.sumo import SITUATION_KEY as SUMO_SITUATION_KEY
 from enn_traffic.experiments.crowds.sumo import SUMO_LEARNING
+from enn_traffic.experiments.facts import read as read_facts
 from enn_traffic.experiments.families import ARENA, CITY, SUMO, Family
 from enn_traffic.report.paper import (
     PAPER_INITIAL,
@@ -43,10 +44,6 @@ def _native(value):
 
 def _records(table: pd.DataFrame) -> list[dict]:
     return [{k: _native(v) for k, v in row.items()} for row in table.to_dict("records")]
-
-
-def _facts(paper: Path, name: str) -> dict:
-    return json.loads((paper / "facts" / f"{name}.json").read_text())
 
 
 def _apart(table: pd.DataFrame, name: str) -> dict:
@@ -120,7 +117,7 @@ def _arena(paper: Path) -> dict:
     learners = pd.read_csv(paper / "table4_learners.csv")
     validation = pd.read_csv(paper / "table4_validation_learners.csv")
     curve = pd.read_csv(paper / "table4_learning.csv")
-    facts = _facts(paper, "tables34")
+    facts = read_facts(paper, "tables34")
     fall = means["initial"] - means["initial_after"]
     drop = means[fall == fall.max()].iloc[0]
     kept = facts["kept"]
@@ -168,7 +165,7 @@ def _ablation(paper: Path) -> dict:
     table = pd.read_csv(paper / "table4_ablation.csv")
     factors = pd.read_csv(paper / "table4_ablation_factors.csv")
     situations = pd.read_csv(paper / "table4_ablation_situations.csv")
-    facts = _facts(paper, "table4_ablation")
+    facts = read_facts(paper, "table4_ablation")
     authors = situations[situations["start_population"] == "authors"].drop_duplicates("situation")
     winners = table.drop_duplicates("strategy")
     arms = []
@@ -299,7 +296,7 @@ def _family(paper: Path, family: Family, summary: dict) -> dict:
     validation = pd.read_csv(folder / "table4_validation_learners.csv")
     curve = pd.read_csv(folder / "table4_learning.csv")
     situations = pd.read_csv(folder / "crowd_situations.csv")
-    facts = _facts(paper, f"{family.folder}_tables34")
+    facts = read_facts(paper, f"{family.folder}_tables34")
     fig11 = pd.read_csv(folder / "fig11.csv")
     medians = fig11.groupby("strategy")[["rise", "mean_rise", "held_out_rise", "first_held_out",
                                          "last5_mean_held_out"]].median()

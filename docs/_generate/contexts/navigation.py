@@ -15,6 +15,7 @@ import numpy as np
 import pandas as pd
 
 from enn_traffic.config.shipped import shipped_scenario
+from enn_traffic.experiments.facts import read as read_facts
 from enn_traffic.experiments.families import ARENA, SUMO
 from enn_traffic.experiments.navigation import REACHED_B
 from enn_traffic.report.paper import PAPER_TABLE1, PAPER_TABLE2
@@ -183,7 +184,7 @@ def dynamic(paper: Path) -> dict:
                    "seed5000": {**_pattern(unseen.to_numpy()),
                                 "situations": int(lives.groupby(["controller", "scenario"])
                                                   .size().min())},
-                   "spread": json.loads((paper / "facts" / "table1.json").read_text())},
+                   "spread": read_facts(paper, "table1")},
         "table2": {
             "first": float(table2["average"].iloc[0]), "last": float(table2["average"].iloc[-1]),
             "iterations": _records(table2),
@@ -208,7 +209,7 @@ def dynamic(paper: Path) -> dict:
 
 def lane_keeping(paper: Path) -> dict:
     table = pd.read_csv(paper / "lane_keeping.csv")
-    facts = json.loads((paper / "facts" / "lane_keeping.json").read_text())
+    facts = read_facts(paper, "lane_keeping")
     roads = list(dict.fromkeys(table["road"]))
     trainings = list(dict.fromkeys(table["trained_on"]))
     noises = sorted(table["noise_m"].unique())

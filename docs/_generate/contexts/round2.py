@@ -16,7 +16,8 @@ from pathlib import Path
 
 import pandas as pd
 
-from contexts.comparison import GROUP, _differences, _facts, _records
+from contexts.comparison import GROUP, _differences, _records
+from enn_traffic.experiments.facts import read as read_facts
 
 
 def _search(tuning: pd.DataFrame, runs: pd.DataFrame) -> dict:
@@ -70,7 +71,7 @@ def _zero_shares(situations: pd.DataFrame) -> dict:
 def context(root: Path) -> dict:
     folder = root / "results" / "baseline_round2"
     protocol = json.loads((folder / "protocol.json").read_text())
-    facts = _facts(folder)
+    facts = read_facts(folder)
     runs = pd.read_csv(folder / "comparison.csv")
     summary = pd.read_csv(folder / "comparison_summary.csv")
     steps = {scenario["dt"] for scenario in facts["settings"]["scenarios"].values()}
