@@ -18,7 +18,7 @@ from enn_traffic.experiments.facts import read as read_facts
 GROUP = ["scenario", "method", "budget_steps"]
 
 
-def _records(table: pd.DataFrame) -> list[dict]:
+def records(table: pd.DataFrame) -> list[dict]:
     return table.to_dict("records")
 
 
@@ -49,19 +49,19 @@ def _search(tuning: pd.DataFrame, chosen: dict) -> dict:
             "seed": tuning["seed"].iloc[0]}
 
 
-def _differences(differences: pd.DataFrame, runs: pd.DataFrame) -> dict:
+def differences_table(differences: pd.DataFrame, runs: pd.DataFrame) -> dict:
     """``comparison_differences.csv``: a row per scenario, method and budget with a cell per
     GA budget; and the comparisons at the same budget, each scenario's in the file's order,
     with the seeds' median test fitness of the method and of the GA."""
     median = runs.groupby(GROUP)["test_fitness"].median()
     rows = [{"scenario": name, "method": method, "budget_steps": budget,
-             "cells": {row["ga_budget_steps"]: row for row in _records(group)}}
+             "cells": {row["ga_budget_steps"]: row for row in records(group)}}
             for (name, method, budget), group in differences.groupby(GROUP)]
     same = differences[differences["budget_steps"] == differences["ga_budget_steps"]]
     verdicts = [{"scenario": name, "rows": [
                     row | {"median": median[name, row["method"], row["budget_steps"]],
                            "ga_median": median[name, "GA", row["ga_budget_steps"]]}
-                    for row in _records(group)]}
+                    for row in records(group)]}
                 for name, group in same.groupby("scenario", sort=False)]
     return {"ga_budgets": sorted(differences["ga_budget_steps"].unique()), "rows": rows,
             "verdicts": verdicts}
@@ -111,9 +111,9 @@ def context(root: Path) -> dict:
         "rule_scenarios": rules,
         "search": _search(tuning, facts["search"]["chosen"]),
         "search_past_length": _search_past(tuning, rules["second"], facts["track"]),
-        "differences": _differences(pd.read_csv(folder / "comparison_differences.csv"), runs),
-        "rules": _records(pd.read_csv(folder / "comparison_rules.csv")),
+        "differences": differences_table(pd.read_csv(folder / "comparison_differences.csv"), runs),
+        "rules": records(pd.read_csv(folder / "comparison_rules.csv")),
         "travel_situations": travel["situations"].iloc[0],
         "travel": _travel(travel),
-        "training_lives": _records(pd.read_csv(folder / "training_lives.csv").sort_values(
+        "training_lives": records(pd.read_csv(folder / "training_lives.csv").sort_values(
             ["scenario", "method"]))}}

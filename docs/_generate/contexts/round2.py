@@ -16,7 +16,7 @@ from pathlib import Path
 
 import pandas as pd
 
-from contexts.comparison import GROUP, _differences, _records
+from contexts.comparison import GROUP, differences_table, records
 from enn_traffic.experiments.facts import read as read_facts
 
 
@@ -28,7 +28,7 @@ def _search(tuning: pd.DataFrame, runs: pd.DataFrame) -> dict:
     chosen = set(zip(runs["scenario"], runs["method"], runs["setting"], strict=True))
     rows = [row | {"chosen": (row["scenario"], row["method"], row["setting"]) in chosen}
             for _, group in tuning.groupby(["scenario", "method"], sort=False)
-            for row in _records(group)]
+            for row in records(group)]
     seeds = tuning.groupby(["scenario", "method", "setting"])["seed"].nunique()
     return {"rows": rows, "counts": tuning.groupby("method")["setting"].nunique().to_dict(),
             "seeds_per_setting": int(seeds.max()), "seed": int(tuning["seed"].iloc[0]),
@@ -41,7 +41,7 @@ def _summary(summary: pd.DataFrame, runs: pd.DataFrame) -> list[dict]:
     spread = runs.groupby(GROUP)["test_fitness"].agg(["min", "max"])
     return [row | {"least": spread.loc[tuple(row[key] for key in GROUP), "min"],
                    "greatest": spread.loc[tuple(row[key] for key in GROUP), "max"]}
-            for row in _records(summary)]
+            for row in records(summary)]
 
 
 def _training_lives(lives: pd.DataFrame) -> dict:
@@ -52,7 +52,7 @@ def _training_lives(lives: pd.DataFrame) -> dict:
             if (match := re.fullmatch(r"lives_over_(\d+)", column))}
     thresholds = sorted(over)
     rows = [row | {"over": [row[over[threshold]] for threshold in thresholds]}
-            for row in _records(lives.sort_values(["scenario", "method"]))]
+            for row in records(lives.sort_values(["scenario", "method"]))]
     return {"rows": rows, "thresholds": thresholds, "seed": int(lives["seed"].iloc[0]),
             "runs": int(lives.groupby(["scenario", "method"]).size().max())}
 
@@ -93,6 +93,6 @@ def context(root: Path) -> dict:
         "step_s": steps.pop(),
         "search": _search(pd.read_csv(folder / "tuning.csv"), runs),
         "summary": _summary(summary, runs),
-        "differences": _differences(pd.read_csv(folder / "comparison_differences.csv"), runs),
+        "differences": differences_table(pd.read_csv(folder / "comparison_differences.csv"), runs),
         "training_lives": _training_lives(pd.read_csv(folder / "training_lives.csv")),
         "zero_shares": _zero_shares(pd.read_csv(folder / "situations.csv"))}}
