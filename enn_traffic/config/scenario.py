@@ -244,10 +244,11 @@ class Scenario(Section):
 
     @property
     def inputs(self) -> int:
-        """Network inputs: one per beam, or two marking offsets per look-ahead distance."""
+        """Network inputs: one per beam and channel, or two marking offsets per look-ahead
+        distance."""
         if self.lane_keeping is not None:
             return 2 * len(self.lane_keeping.lookahead_m)
-        return len(self.beams)
+        return self.sensor.readings
 
     def with_overrides(self, **sections: dict) -> Scenario:
         """A copy with some section fields replaced, validated again."""

@@ -3,10 +3,16 @@
 from __future__ import annotations
 
 import math
+from typing import Literal
 
-from pydantic import Field, model_serializer
+from pydantic import Field, field_validator, model_serializer
 
 from enn_traffic.config.base import PositiveFloat, Section
+
+# What a beam can read, each a channel of the network's inputs (enn_traffic.sim.sensors computes
+# them): the distance to what it meets (the paper's), the speed at which that closes in.
+CHANNELS = ("distance", "closing_speed")
+Channel = Literal[CHANNELS]
 
 
 class RingConfig(Section):
@@ -38,16 +44,39 @@ class SensorConfig(Section):
         "`span_deg`, `range`, `centre_deg`), say a short fan behind; the network reads the "
         "beams above, then each ring's, right to left")
 
+    channels: list[Channel] = Field(
+        ["distance"], min_length=1, max_length=len(CHANNELS), description="what each beam "
+        "reads: `distance` (m, the paper's) first, then any of `closing_speed` (m/s at which "
+        "what the beam meets draws nearer, negative when it draws away, 0 when it meets "
+        "nothing); the network reads every beam's distance, then every beam's next channel")
+
+    @field_validator("channels")
+    @classmethod
+    def _distance_first(cls, channels: list[str]) -> list[str]:
+        if channels[0] != "distance":
+            raise ValueError("the first channel is `distance` (the scripted strategies read "
+                             "it)")
+        if len(set(channels)) < len(channels):
+            raise ValueError("a channel is named twice")
+        return channels
+
     @model_serializer(mode="wrap")
-    def _without_empty_rings(self, handler):
-        """Leave ``rings`` out when there are none, so that a scenario of one fan of beams
-        reads the same whether or not it names ``rings = []`` (its ``scenario.toml``, which
-        ``--resume`` compares, and the name of its run folder in a study,
-        experiments/study.py)."""
+    def _without_defaults(self, handler):
+        """Leave ``rings`` out when there are none and ``channels`` when the beams read
+        distances only, so that a scenario of one fan of distances reads the same whether or
+        not it names them (its ``scenario.toml``, which ``--resume`` compares, the name of its
+        run folder in a study, experiments/study.py, and its digest)."""
         data = handler(self)
         if not self.rings:
             data.pop("rings", None)
+        if self.channels == ["distance"]:
+            data.pop("channels", None)
         return data
+
+    @property
+    def readings(self) -> int:
+        """Readings the sensor gives each step: one per beam and channel."""
+        return len(self.beam_list) * len(self.channels)
 
     @property
     def beam_list(self) -> list[tuple[float, float]]:

@@ -32,10 +32,11 @@ RULES = ("sim", "learning", "sumo", "roads", "core/geometry.py", "core/neural.py
 
 # Digests of earlier rules whose runs these rules continue: the code they digested computes
 # what this code computes (tests/sim/test_behaviour.py's saved lives and the committed
-# results' tests show it), only the digest moved. 72e67a1dafd1: the rules as the last version
-# that digested the files' bytes and paths named them; a run it made resumes, and its
-# checkpoint then takes this digest.
-SAME_RULES = ("72e67a1dafd1",)
+# results' tests show it), only the digest moved; a run one made resumes, and its checkpoint
+# then takes this digest. 72e67a1dafd1: the rules as the last version that digested the
+# files' bytes and paths named them. 13c0276f6863: the rules before the sensor read further
+# channels (a sensor of distances alone reads, and drives, as it did).
+SAME_RULES = ("72e67a1dafd1", "13c0276f6863")
 
 
 def source_digest(paths: Iterable[Path]) -> str:

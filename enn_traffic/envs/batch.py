@@ -84,7 +84,7 @@ class Worlds(NamedTuple):
     @classmethod
     def empty(cls, count: int, world: ArenaWorld, genes: int) -> Worlds:
         """Room for ``count`` worlds of ``world`` whose drivers have ``genes`` genes."""
-        vehicles, beams = world.vehicles, reading_count(world.geometry.beams)
+        vehicles, beams = world.vehicles, reading_count(world.geometry)
         width = max(int(world.layer_sizes.max()), 2)
         shape = (count, vehicles)
         return cls(
@@ -118,10 +118,10 @@ def world_work(worlds, i):
 @njit(cache=True, inline="always")
 def observe(vehicles, physics, geometry, out):
     """The learner (vehicle 0) senses walls and the other bodies into ``out``."""
-    beams = geometry.beams
     walls, cell_start, cell_walls, all_walls = wall_arrays(geometry)
-    sense(0, vehicles.pose, physics, beams, walls, cell_start, cell_walls, all_walls,
-          vehicles.pose.shape[0] > 1, vehicles.corners, vehicles.centres, 0, out)
+    sense(0, vehicles.pose, physics, geometry.beams, geometry.channels, walls, cell_start,
+          cell_walls, all_walls, vehicles.pose.shape[0] > 1, vehicles.corners, vehicles.centres,
+          vehicles.previous_centres, 0, out)
 
 
 @njit(cache=True)

@@ -47,11 +47,11 @@ from enn_traffic.sim.world import OUTCOMES, SPUN
 def observe(learners, vehicles, physics, geometry, out) -> None:
     """The first ``learners`` vehicles sense walls and the other bodies into ``out`` (L, B)."""
     pose = vehicles.pose
-    beams = geometry.beams
     walls, cell_start, cell_walls, all_walls = wall_arrays(geometry)
     for v in range(learners):
-        sense(v, pose, physics, beams, walls, cell_start, cell_walls, all_walls,
-              pose.shape[0] > 1, vehicles.corners, vehicles.centres, v, out[v])
+        sense(v, pose, physics, geometry.beams, geometry.channels, walls, cell_start,
+              cell_walls, all_walls, pose.shape[0] > 1, vehicles.corners, vehicles.centres,
+              vehicles.previous_centres, v, out[v])
 
 
 class ArenaCrowdEnv(ParallelEnv):
@@ -114,7 +114,7 @@ class ArenaCrowdEnv(ParallelEnv):
     def _observe(self) -> np.ndarray:
         """The live learners' readings (L, B): rows 0..L-1 of the crowd are the learners."""
         crowd = self.crowd
-        out = np.empty((len(self.agents), reading_count(crowd.geometry.beams)))
+        out = np.empty((len(self.agents), reading_count(crowd.geometry)))
         observe(len(self.agents), crowd.vehicles, crowd.physics, crowd.geometry, out)
         return observation_of(out, self._observation_space)
 

@@ -62,7 +62,7 @@ def spaces_of(world: ArenaWorld, observation_dtype: str = "float32"
     if observation_dtype not in OBSERVATION_DTYPES:
         raise ValueError(f"observation_dtype {observation_dtype!r}: expected one of "
                          f"{', '.join(OBSERVATION_DTYPES)}")
-    low, high = reading_bounds(world.geometry.beams)
+    low, high = reading_bounds(world.geometry)
     observation = spaces.Box(low.astype(observation_dtype), high.astype(observation_dtype),
                              low.shape, observation_dtype)
     return observation, spaces.Box(-1.0, 1.0, (2,), np.float32)

@@ -35,7 +35,7 @@ from enn_traffic.envs.rangefinder import (
     steering_of,
 )
 from enn_traffic.sim.crowd import ALIVE
-from enn_traffic.sim.sensors import reading_bounds, reading_count
+from enn_traffic.sim.sensors import reading_count, unseen_readings
 from enn_traffic.sim.sumo import world as recordings
 from enn_traffic.sim.sumo.crowd import SumoCrowd, observe
 from enn_traffic.sim.sumo.crowd import move_once as move_learners
@@ -68,7 +68,7 @@ class ReplayTraffic:
     def __init__(self, world: SumoWorld, seed: int, warmup: int | None, start: np.ndarray):
         self.world, self.seed, self.warmup = world, seed, warmup
         self._use(world.recording(seed, warmup, recordings.FIRST_RECORDING))
-        self.state = learner_state(start, self.physics, reading_count(world.geometry.beams),
+        self.state = learner_state(start, self.physics, reading_count(world.geometry),
                                    world.layer_sizes, self.ids.shape[1])
         clear_start(self.state.learner.centres, self.ids[0], self.centres[0], self.state.gone,
                     self.physics.clearance)
@@ -134,7 +134,7 @@ class SumoEnv(gym.Env):
             self.traffic = ReplayTraffic(world, sumo_seed, warmup, start)
         self.outcome = self._sensed()
         if self.outcome != RUNNING:  # a life that ends where it starts sensed nothing
-            self.traffic.state.work.readings[:] = reading_bounds(world.geometry.beams)[1]
+            self.traffic.state.work.readings[:] = unseen_readings(world.geometry)
         self.started = {"key": key, "situation": situation}
         readings = observation_of(self.traffic.state.work.readings, self.observation_space)
         return readings, dict(self.started)
@@ -272,7 +272,7 @@ class SumoCrowdEnv(ParallelEnv):
     def _readings(self) -> np.ndarray:
         """Every learner still on the network senses (K, B)."""
         crowd, lives = self.crowd, self.crowd.lives
-        out = np.zeros((len(self.possible_agents), reading_count(self.world.geometry.beams)))
+        out = np.zeros((len(self.possible_agents), reading_count(self.world.geometry)))
         args = (crowd.physics, self.world.geometry, crowd.slots, crowd.now, lives.vehicles,
                 lives.learners, out)
         if self._observe is None:

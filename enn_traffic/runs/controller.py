@@ -36,6 +36,8 @@ class Controller:
     spin_variance: float | None = None
     # The sensor's further rings, each its RingConfig's fields in order ([sensor] rings).
     rings: tuple[tuple[float, float, float, float], ...] = ()
+    # What each beam reads ([sensor] channels).
+    channels: tuple[str, ...] = ("distance",)
     # The file it was loaded from (not saved): where an error in its values is reported.
     source: Path | None = field(default=None, compare=False, repr=False)
 
@@ -56,6 +58,7 @@ class Controller:
             spin_window=scenario.episode.spin_window,
             spin_variance=scenario.episode.spin_variance,
             rings=tuple(tuple(ring.model_dump().values()) for ring in scenario.sensor.rings),
+            channels=tuple(scenario.sensor.channels),
         )
 
     def save(self, path: str | Path) -> None:
@@ -74,6 +77,7 @@ class Controller:
             **({} if self.spin_window is None else
                {"spin_window": self.spin_window, "spin_variance": self.spin_variance}),
             **({"rings": np.array(self.rings, dtype=np.float64)} if self.rings else {}),
+            **({"channels": np.array(self.channels)} if self.channels != ("distance",) else {}),
         )
         write_atomic(path, lambda handle: handle.write(buffer.getvalue()), binary=True)
 
@@ -113,6 +117,8 @@ class Controller:
                        if "spin_window" in data.files else {}),
                     rings=(tuple(tuple(float(x) for x in ring) for ring in data["rings"])
                            if "rings" in data.files else ()),
+                    **({"channels": tuple(str(name) for name in data["channels"])}
+                       if "channels" in data.files else {}),
                     source=path,
                 )
         except InputError:
@@ -164,12 +170,15 @@ class Controller:
                 raise InputError(
                     f"the controller's network takes {self.layer_sizes[0]} inputs, the "
                     f"scenario's camera gives {scenario.inputs}", path, "lane_keeping.lookahead_m")
-        elif self.layer_sizes[0] != scenario.sensor.beams + sum(r[0] for r in self.rings):
+        elif self.layer_sizes[0] != ((scenario.sensor.beams + sum(r[0] for r in self.rings))
+                                     * len(self.channels)):
             raise InputError(
                 f"the controller's network takes {self.layer_sizes[0]} beams, the scenario's "
                 f"sensor has {scenario.sensor.beams}"
                 + (f" (and the controller's own rings {sum(int(r[0]) for r in self.rings)})"
-                   if self.rings else ""), path, "sensor.beams")
+                   if self.rings else "")
+                + (f", each read as {len(self.channels)} channels"
+                   if len(self.channels) > 1 else ""), path, "sensor.beams")
         outputs = scenario.layer_sizes[-1]
         if self.layer_sizes[-1] != outputs:
             raise InputError(
@@ -186,7 +195,8 @@ class Controller:
                     "steering_gain_deg": self.steering_gain_deg,
                 },
                 sensor={"span_deg": self.span_deg, "range": self.range,
-                        "rings": [_ring_settings(ring) for ring in self.rings]},
+                        "rings": [_ring_settings(ring) for ring in self.rings],
+                        "channels": list(self.channels)},
                 **spin,
             )
         except InputError as exc:  # a value of the controller's, not of the scenario file
@@ -200,7 +210,8 @@ CONTROLLER_FIELDS = {"network.hidden": "layer_sizes", "network.layout": "layout"
                      "network.steering_gain_deg": "steering_gain_deg",
                      "sensor.span_deg": "span_deg", "sensor.range": "range",
                      "episode.spin_window": "spin_window",
-                     "episode.spin_variance": "spin_variance", "sensor.rings": "rings"}
+                     "episode.spin_variance": "spin_variance", "sensor.rings": "rings",
+                     "sensor.channels": "channels"}
 
 
 def _ring_settings(ring: tuple[float, ...]) -> dict:

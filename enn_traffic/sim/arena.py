@@ -149,7 +149,7 @@ def run_life(genes, layer_sizes, start, kinds, traffic_genes, physics, geometry,
     rng = np.empty(1, dtype=np.uint64)
     tally = np.empty(4, dtype=np.int64)
     activation, scratch = network_buffers(layer_sizes)
-    work = Work(np.empty(reading_count(geometry.beams)), activation, scratch, np.zeros(count))
+    work = Work(np.empty(reading_count(geometry)), activation, scratch, np.zeros(count))
     recent = np.empty((physics.spin_window, 2))
     start_world(start, kinds, vehicles, rng, seed, physics, tally)
     steps = 0
@@ -219,12 +219,13 @@ class LearnerWorld:
         self.layer_sizes = self.spec.layer_array
         episode = scenario.episode
         self.physics, self.geometry = build_constants(
-            self.grid, self.track.bounds, scenario.beams, self.exits,
+            self.grid, self.track.bounds, scenario.beams, scenario.sensor.channels, self.exits,
             strategy_settings(traffic),
             length=vehicle.length,
             width=vehicle.width,
             wheelbase=vehicle.wheelbase,
             distance=vehicle.speed * vehicle.dt,
+            dt=vehicle.dt,
             radius=0.5 * math.hypot(vehicle.length, vehicle.width),
             gain=math.radians(scenario.network.steering_gain_deg),
             spin_window=episode.spin_window,

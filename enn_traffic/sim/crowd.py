@@ -213,7 +213,7 @@ class Crowd:
         self.lives = Lives(np.zeros(count, dtype=np.bool_), np.zeros(count, dtype=np.int64),
                            np.zeros((count, p.spin_window, 2)), np.empty(count, dtype=np.int64))
         self.geometry = world.geometry
-        self.work = Work(np.empty(reading_count(self.geometry.beams)),
+        self.work = Work(np.empty(reading_count(self.geometry)),
                          *network_buffers(world.layer_sizes), np.zeros(count))
 
     @property

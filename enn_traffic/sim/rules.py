@@ -45,8 +45,11 @@ from enn_traffic.sim.sensors import (
     WallGrid,
     beam_table,
     beams_towards,
+    channel_codes,
+    fill_channels,
     nearby_walls,
     ray_segment_distance,
+    seen_for,
     sense_walls,
 )
 from enn_traffic.sim.strategies import (
@@ -68,6 +71,7 @@ PHYSICS_FIELDS = [
     ("width", float),
     ("wheelbase", float),
     ("distance", float),  # metres moved per step
+    ("dt", float),  # seconds a step lasts
     ("radius", float),  # half diagonal of the largest body: farther apart, bodies cannot touch
     ("max_range", float),  # the longest beam's range, m: farther walls and bodies are not sensed
     ("gain", float),  # steering angle per unit of (left − right) network output, rad
@@ -133,6 +137,7 @@ class Geometry(NamedTuple):
     themselves: a compiled call that takes a tuple of arrays is many times slower."""
 
     beams: np.ndarray  # the rangefinder's beams (enn_traffic.sim.sensors.beam_table)
+    channels: np.ndarray  # what each beam reads (enn_traffic.sim.sensors.channel_codes)
     walls: np.ndarray  # (S, 4)
     cell_start: np.ndarray  # the wall grid (WallGrid)
     cell_walls: np.ndarray
@@ -183,18 +188,20 @@ def wall_arrays(geometry):
 
 
 def build_constants(grid: WallGrid, bounds, beams: list[tuple[float, float]],
-                    exits: np.ndarray, strategy: dict, **numbers) -> tuple[Physics, Geometry]:
+                    channels: list[str], exits: np.ndarray, strategy: dict,
+                    **numbers) -> tuple[Physics, Geometry]:
     """The :class:`Physics` and :class:`Geometry` of a world, from its wall grid, the drivable
-    area's bounds, the beams (angle, range) of the scenario's rings, the exits, the
-    strategies' settings (:func:`~enn_traffic.sim.strategies.strategy_settings`) and the other
-    numbers."""
+    area's bounds, the beams (angle, range) of the scenario's rings and what each reads, the
+    exits, the strategies' settings (:func:`~enn_traffic.sim.strategies.strategy_settings`)
+    and the other numbers."""
     x_min, y_min, x_max, y_max = map(float, bounds)
     table = beam_table(beams)
     physics = Physics(max_range=float(table[:, RANGE].max()), cell_x0=grid.cell_x0,
                       cell_y0=grid.cell_y0, cell_size=grid.cell_size, cells_x=grid.cells_x,
                       cells_y=grid.cells_y, x_min=x_min, y_min=y_min, x_max=x_max, y_max=y_max,
                       **strategy, **numbers)
-    geometry = Geometry(table, grid.walls, grid.cell_start, grid.cell_walls, grid.all_walls,
+    geometry = Geometry(table, channel_codes(channels), grid.walls, grid.cell_start,
+                        grid.cell_walls, grid.all_walls,
                         np.ascontiguousarray(exits, dtype=np.float64).reshape(-1, 4))
     return physics, geometry
 
@@ -289,15 +296,19 @@ def _variance(points, axis) -> float:
 
 
 @njit(cache=True, inline="always")
-def sense(v, pose, physics, beams, walls, cell_start, cell_walls, all_walls, bodies, corners,
-          centres, me, readings) -> None:
+def sense(v, pose, physics, beams, channels, walls, cell_start, cell_walls, all_walls, bodies,
+          corners, centres, before, me, readings) -> None:
     """Rangefinder readings of vehicle ``v`` (paper §3): the nearest wall along each beam and,
-    when ``bodies``, the nearest edge of any other body (``corners``, ``centres``; ``me``, its
-    own there, skipped)."""
+    when ``bodies``, the nearest edge of any other body (``corners``, ``centres``, and the
+    centres a step ``before``; ``me``, its own there, skipped); then the further ``channels``
+    (:func:`~enn_traffic.sim.sensors.fill_channels`)."""
     x, y, cos_h, sin_h = sense_walls_of(v, pose, physics, beams, walls, cell_start, cell_walls,
                                         all_walls, readings)
+    seen = seen_for(beams, channels)
     if bodies:
-        sense_bodies(me, x, y, cos_h, sin_h, beams, corners, centres, physics.radius, readings)
+        sense_bodies(me, x, y, cos_h, sin_h, beams, corners, centres, before, physics.radius,
+                     physics.dt, readings, seen)
+    fill_channels(channels, beams, seen, cos_h, sin_h, physics.distance / physics.dt, readings)
 
 
 @njit(cache=True, inline="always")
@@ -312,17 +323,21 @@ def sense_walls_of(v, pose, physics, beams, walls, cell_start, cell_walls, all_w
 
 
 @njit(cache=True, inline="always")
-def sense_bodies(me, x, y, cos_h, sin_h, beams, corners, centres, radius, readings):
+def sense_bodies(me, x, y, cos_h, sin_h, beams, corners, centres, before, radius, dt, readings,
+                 seen):
     """Lower ``readings`` of a vehicle at (x, y) (heading cosine ``cos_h``, sine ``sin_h``)
     to the nearest edge of any body but ``me`` (``beams``: a
-    :func:`~enn_traffic.sim.sensors.beam_table`). A body is skipped when its bounding circle
-    lies beyond every reading, and its edges are tested only along the beams that pass
-    through that circle: those within the circle's angular half-width of its bearing
+    :func:`~enn_traffic.sim.sensors.beam_table`), and where ``seen``
+    (:func:`~enn_traffic.sim.sensors.seen_for`) has rows, note there the velocity of the body
+    each beam met, from its centre a step (``dt`` seconds) ``before``. A body is skipped when
+    its bounding circle lies beyond every reading, and its edges are tested only along the
+    beams that pass through that circle: those within the circle's angular half-width of its bearing
     (:func:`~enn_traffic.sim.sensors.beams_towards`), each checked as before. Of a body the
     vehicle is outside of, only the edges that face it are tested: a ray enters a convex body
     through one of those (:func:`facing_edges`)."""
     count = beams.shape[0]
-    far = largest(readings) + radius + 1e-9  # readings only fall: a looser cut, same result
+    noted = seen.shape[0] > 0
+    far = largest(readings, count) + radius + 1e-9  # readings only fall: a looser cut, same result
     for other in range(corners.shape[0]):
         if other == me:
             continue
@@ -354,6 +369,9 @@ def sense_bodies(me, x, y, cos_h, sin_h, beams, corners, centres, radius, readin
                 )  # fmt: skip
                 if d < readings[b]:
                     readings[b] = d
+                    if noted:
+                        seen[b, 0] = (centres[other, 0] - before[other, 0]) / dt
+                        seen[b, 1] = (centres[other, 1] - before[other, 1]) / dt
 
 
 EDGE_MARGIN = 1e-9  # m²: an edge nearly in line with the sensing point counts as facing it
@@ -374,10 +392,11 @@ def facing_edges(body, x, y) -> int:
 
 
 @njit(cache=True, inline="always")
-def largest(values) -> float:
-    """The largest of ``values`` (a loop: ``values.max()`` costs a reshape each call)."""
+def largest(values, count) -> float:
+    """The largest of the first ``count`` ``values`` (a loop: ``values.max()`` costs a reshape
+    each call)."""
     top = values[0]
-    for k in range(1, values.shape[0]):
+    for k in range(1, count):
         if values[k] > top:
             top = values[k]
     return top
@@ -407,7 +426,7 @@ def drive_all(kinds, genes, layer_sizes, physics, geometry, vehicles, rng, work)
                                       vehicles.memory)
     readings, activation, scratch, steering = (work.readings, work.activation, work.scratch,
                                                work.steering)
-    beams = geometry.beams
+    beams, channels, before = geometry.beams, geometry.channels, vehicles.previous_centres
     walls, cell_start, cell_walls, all_walls = wall_arrays(geometry)
     count = pose.shape[0]
     for v in range(count):
@@ -415,8 +434,9 @@ def drive_all(kinds, genes, layer_sizes, physics, geometry, vehicles, rng, work)
         if kind == ACTION:
             continue
         if kind != NONE:
-            sense(v, pose, physics, beams, walls, cell_start, cell_walls, all_walls,
-                  count > 1 and senses_vehicles(kind, physics), corners, centres, v, readings)
+            sense(v, pose, physics, beams, channels, walls, cell_start, cell_walls, all_walls,
+                  count > 1 and senses_vehicles(kind, physics), corners, centres, before, v,
+                  readings)
         steering[v] = decide(v, kind, genes, layer_sizes, readings, physics, beams, memory, rng,
                              activation, scratch)
     move_all(steering, physics, vehicles)
@@ -428,8 +448,11 @@ def drive_alone(genes, layer_sizes, physics, geometry, vehicles, work):
     that calls it in place of :func:`drive_all` compiles without the traffic's rules
     (:func:`enn_traffic.sim.arena.alone`)."""
     walls, cell_start, cell_walls, all_walls = wall_arrays(geometry)
-    sense_walls_of(0, vehicles.pose, physics, geometry.beams, walls, cell_start, cell_walls,
-                   all_walls, work.readings)
+    beams, channels = geometry.beams, geometry.channels
+    _, _, cos_h, sin_h = sense_walls_of(0, vehicles.pose, physics, beams, walls, cell_start,
+                                        cell_walls, all_walls, work.readings)
+    fill_channels(channels, beams, seen_for(beams, channels), cos_h, sin_h,
+                  physics.distance / physics.dt, work.readings)
     work.steering[0] = network_steering(genes[0], layer_sizes, work.readings, work.activation,
                                         work.scratch, physics.gain)
     move_all(work.steering, physics, vehicles)

@@ -17,6 +17,7 @@ from typing import NamedTuple
 import numpy as np
 from numba import njit
 
+from enn_traffic.config.sensor import CHANNELS
 from enn_traffic.core import cache
 from enn_traffic.core.errors import InputError
 from enn_traffic.core.progress import slow_step
@@ -211,18 +212,79 @@ def beam_table(beams: list[tuple[float, float]]) -> np.ndarray:
     return table
 
 
+# What a beam reads (``[sensor] channels``, named in enn_traffic.config.sensor.CHANNELS), as
+# the codes the compiled step takes: a channel is its name there, its branch in
+# :func:`fill_channels` and its bounds in :func:`reading_bounds`.
+CODES = {name: code for code, name in enumerate(CHANNELS)}
+DISTANCE, CLOSING_SPEED = CODES["distance"], CODES["closing_speed"]
+
+
+def channel_codes(names: list[str]) -> np.ndarray:
+    """The codes of the channels ``names`` (``[sensor] channels``), in their order."""
+    return np.array([CODES[name] for name in names], dtype=np.int64)
+
+
 @njit(cache=True)
-def reading_count(beams: np.ndarray) -> int:
-    """Readings a vehicle's sensor gives each step, the network's inputs: one per beam of its
-    :func:`beam_table` (every world, environment and buffer asks here, compiled kernels
-    too)."""
-    return beams.shape[0]
+def reading_count(geometry) -> int:
+    """Readings a vehicle's sensor gives each step, the network's inputs: one per beam of the
+    :func:`beam_table` and channel (every world, environment and buffer asks here, compiled
+    kernels too). Channel by channel: the distances of every beam, then the next channel's."""
+    return geometry.beams.shape[0] * geometry.channels.shape[0]
 
 
-def reading_bounds(beams: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Each reading's least and greatest value: 0 (a body at the sensor) and the beam's range
-    (nothing within it), what an environment's observation space holds."""
-    return np.zeros(reading_count(beams)), beams[:, RANGE].copy()
+def reading_bounds(geometry) -> tuple[np.ndarray, np.ndarray]:
+    """Each reading's least and greatest value, what an environment's observation space holds:
+    a distance from 0 (a body at the sensor) to the beam's range (nothing within it); a
+    closing speed is unbounded (SUMO's vehicles set their own speeds)."""
+    ranges = geometry.beams[:, RANGE]
+    low, high = [], []
+    for code in geometry.channels:
+        if code == DISTANCE:
+            low.append(np.zeros_like(ranges))
+            high.append(ranges.copy())
+        else:
+            low.append(np.full_like(ranges, -np.inf))
+            high.append(np.full_like(ranges, np.inf))
+    return np.concatenate(low), np.concatenate(high)
+
+
+def unseen_readings(geometry) -> np.ndarray:
+    """What the sensor reads when it meets nothing: each beam's range, every further channel
+    0."""
+    readings = np.zeros(reading_count(geometry))
+    readings[: geometry.beams.shape[0]] = geometry.beams[:, RANGE]
+    return readings
+
+
+@njit(cache=True, inline="always")
+def seen_for(beams, channels) -> np.ndarray:
+    """Room for what each beam meets, (B, 2), when ``channels`` go beyond the distance: the
+    velocity of the body it meets (m/s; a wall's is 0), noted as the bodies are sensed. No
+    rows when they do not: the distances need nothing noted."""
+    rows = beams.shape[0] if channels.shape[0] > 1 else 0
+    return np.zeros((rows, 2))
+
+
+@njit(cache=True, inline="always")
+def fill_channels(channels, beams, seen, cos_h, sin_h, speed, readings) -> None:
+    """The readings of every channel after the distances (``channels``: codes from
+    :func:`channel_codes`), for a vehicle whose heading has cosine ``cos_h`` and sine
+    ``sin_h``, moving at ``speed`` (m/s); ``seen``: :func:`seen_for`, filled. A beam that
+    reads its range met nothing.
+
+    Closing speed: how fast the distance along the beam shrinks, the vehicle's velocity less
+    what it met's, along the beam (m/s, negative when it draws away); 0 when it meets
+    nothing."""
+    count = beams.shape[0]
+    vx, vy = speed * cos_h, speed * sin_h
+    for c in range(1, channels.shape[0]):
+        for b in range(count):
+            value = 0.0
+            if channels[c] == CLOSING_SPEED and readings[b] < beams[b, RANGE]:
+                ux = cos_h * beams[b, COS] - sin_h * beams[b, SIN]
+                uy = sin_h * beams[b, COS] + cos_h * beams[b, SIN]
+                value = (vx - seen[b, 0]) * ux + (vy - seen[b, 1]) * uy
+            readings[c * count + b] = value
 
 
 @njit(cache=True, inline="always")

@@ -165,7 +165,8 @@ def test_a_second_ring_behind_reads_what_every_beam_against_every_wall_reads():
         sense_walls(0.0, 0.0, math.cos(heading), math.sin(heading), table, walls,
                     np.arange(len(walls)), readings)
         sense_bodies(-1, 0.0, 0.0, math.cos(heading), math.sin(heading), table, corners,
-                     corners.mean(axis=1), radius, readings)
+                     corners.mean(axis=1), corners.mean(axis=1), radius, 0.1, readings,
+                     np.zeros((0, 2)))
         edges = np.concatenate([walls] + [np.hstack([body, np.roll(body, -1, axis=0)])
                                           for body in corners])
         np.testing.assert_array_equal(
@@ -189,7 +190,8 @@ def test_bodies_seen_through_facing_edges_as_through_all_four():
         centres = corners.mean(axis=1)
         readings = np.full(19, 25.0)
         sense_bodies(-1, 0.0, 0.0, math.cos(heading), math.sin(heading),
-                     beam_table([(a, 25.0) for a in angles]), corners, centres, radius, readings)
+                     beam_table([(a, 25.0) for a in angles]), corners, centres, centres, radius,
+                     0.1, readings, np.zeros((0, 2)))
         edges = np.concatenate([np.hstack([body, np.roll(body, -1, axis=0)]) for body in corners])
         np.testing.assert_array_equal(
             readings, _every_beam_every_segment(0.0, 0.0, heading, angles, 25.0, edges))

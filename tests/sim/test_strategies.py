@@ -44,7 +44,7 @@ def test_beams_see_other_vehicles_bodies():
     angles = np.array([-math.pi / 2, 0.0, math.pi / 2])
     readings = np.full(3, 25.0)
     sense_bodies(0, 0.0, 0.0, 1.0, 0.0, beam_table([(a, 25.0) for a in angles]), corners,
-                 centres, 0.5 * math.hypot(4.3, 2.5), readings)
+                 centres, centres, 0.5 * math.hypot(4.3, 2.5), 0.1, readings, np.zeros((0, 2)))
     np.testing.assert_allclose(readings, [25.0, 10.0, 25.0])
 
 

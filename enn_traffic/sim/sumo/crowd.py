@@ -24,7 +24,6 @@ steps SUMO.
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 from typing import NamedTuple
 
@@ -45,13 +44,13 @@ from enn_traffic.sim.rules import (
     move_all,
     respawn_on_lanes,
     responsible,
-    sense,
     sense_bodies,
+    sense_walls_of,
     spun,
     vehicles_at,
     wall_arrays,
 )
-from enn_traffic.sim.sensors import reading_count
+from enn_traffic.sim.sensors import fill_channels, reading_count, seen_for
 from enn_traffic.sim.strategies import NETWORK
 from enn_traffic.sim.sumo.replay import mark_absent, struck_by_traffic, visible_centres
 from enn_traffic.sim.sumo.world import SumoWorld
@@ -73,13 +72,14 @@ class Near(NamedTuple):
     gone: np.ndarray  # (N,) int64 the learner's ``gone`` (slots)
     absent: np.ndarray  # (N,) bool not in the learner's world before the step
     visible: np.ndarray  # (N, 2) the centres the learner sees (slots)
+    before: np.ndarray  # (N, 2) the centres a step before, when the beams read motion
 
 
 def near_for(rows: int) -> Near:
     """Room for ``rows`` bodies."""
     return Near(np.zeros(rows, dtype=np.int64), np.zeros(rows, dtype=np.int64),
                 np.zeros((rows, 4, 2)), np.zeros((rows, 2)), np.zeros(rows, dtype=np.int64),
-                np.zeros(rows, dtype=np.bool_), np.zeros((rows, 2)))
+                np.zeros(rows, dtype=np.bool_), np.zeros((rows, 2)), np.zeros((rows, 2)))
 
 
 class Learners(NamedTuple):
@@ -226,18 +226,43 @@ def fill_now(physics, slots, now, vehicles, learners) -> None:
 @njit(cache=True, inline="always")
 def sense_learner(k, physics, geometry, slots, now, vehicles, learners, readings) -> None:
     """Learner ``k`` senses the walls, the SUMO vehicles in its world and the other
-    learners into ``readings`` (the buckets filled by :func:`fill_now`)."""
+    learners into ``readings`` (the buckets filled by :func:`fill_now`): the steps of
+    :func:`~enn_traffic.sim.rules.sense`, with two groups of bodies."""
     pose, near, others = vehicles.pose, learners.near_slots, learners.near_learners
     x, y = pose[k, 0], pose[k, 1]
-    beams = geometry.beams
+    beams, channels = geometry.beams, geometry.channels
     walls, cell_start, cell_walls, all_walls = wall_arrays(geometry)
     n = gather_slots(learners, k, x, y, slots, now)
     visible_centres(near.ids[:n], near.centres[:n], near.gone[:n], near.visible[:n])
-    sense(k, pose, physics, beams, walls, cell_start, cell_walls, all_walls, True,
-          near.corners[:n], near.visible[:n], -1, readings)
     m, me = gather_learners(learners, k, x, y, vehicles.corners, vehicles.centres)
-    sense_bodies(me, x, y, math.cos(pose[k, 2]), math.sin(pose[k, 2]), beams,
-                 others.corners[:m], others.centres[:m], physics.radius, readings)
+    if channels.shape[0] > 1:
+        gather_motion(slots, now, vehicles.previous_centres, near, n, others, m)
+    x, y, cos_h, sin_h = sense_walls_of(k, pose, physics, beams, walls, cell_start, cell_walls,
+                                        all_walls, readings)
+    seen = seen_for(beams, channels)
+    radius, dt = physics.radius, physics.dt
+    sense_bodies(-1, x, y, cos_h, sin_h, beams, near.corners[:n], near.visible[:n],
+                 near.before[:n], radius, dt, readings, seen)
+    sense_bodies(me, x, y, cos_h, sin_h, beams, others.corners[:m], others.centres[:m],
+                 others.before[:m], radius, dt, readings, seen)
+    fill_channels(channels, beams, seen, cos_h, sin_h, physics.distance / physics.dt, readings)
+
+
+@njit(cache=True, inline="always")
+def gather_motion(slots, now, previous_centres, near, n, others, m) -> None:
+    """The centres a step before of the gathered bodies, what the beams' further channels
+    read motion from: a SUMO vehicle's in the slot arrays' other row (its centre now when it
+    was not in the slot then), a learner's previous centre."""
+    ids, _, centres = slots
+    before = 1 - now  # the slot arrays hold two rows: the step before and now
+    for i in range(n):
+        s = near.index[i]
+        row = before if ids[before, s] == ids[now, s] else now
+        near.before[i, 0], near.before[i, 1] = centres[row, s, 0], centres[row, s, 1]
+    for i in range(m):
+        other = others.index[i]
+        others.before[i, 0] = previous_centres[other, 0]
+        others.before[i, 1] = previous_centres[other, 1]
 
 
 @njit(cache=True, inline="always")
@@ -330,7 +355,7 @@ class SumoCrowd:
         self.physics = world._learner_physics(simulation.largest_radius())
         self.slots = recording.slot_arrays(2, 64)
         self.before, self.now = 0, 1  # rows of the slot arrays; they swap every step
-        self.lives = lives = _Lives(self.count, self.physics, reading_count(world.geometry.beams),
+        self.lives = lives = _Lives(self.count, self.physics, reading_count(world.geometry),
                                     world.layer_sizes, self.slots[0].shape[1], self.seed)
         self._read()
         for k in range(self.count):

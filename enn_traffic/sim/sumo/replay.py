@@ -95,6 +95,15 @@ def visible_centres(ids_now, centres_now, gone, visible) -> None:
             visible[s, 0], visible[s, 1] = FAR, FAR
 
 
+@njit(cache=True, inline="always")
+def moved_from(ids_before, ids_now, centres_before, centres_now, out) -> None:
+    """Where each slot's vehicle was a step before, what a beam's further channels read its
+    motion from: its centre then, or now (no motion) when it was not in the slot then."""
+    for s in range(ids_now.shape[0]):
+        source = centres_before if ids_before[s] == ids_now[s] else centres_now
+        out[s, 0], out[s, 1] = source[s, 0], source[s, 1]
+
+
 @njit(cache=True)
 def clear_start(centre, ids, centres, gone, clearance) -> None:
     """Take vehicles within ``clearance`` of the learner's body centre out of the world."""
@@ -116,6 +125,7 @@ class LearnerState(NamedTuple):
     met: np.ndarray  # (2,) vehicle-steps within sensor range, most at once
     gone: np.ndarray  # (S,) the id a slot held when it left the learner's world, or -1
     visible: np.ndarray  # (S, 2) the centres the learner sees (far off: not seen)
+    moved: np.ndarray  # (S, 2) the centres a step before, when the beams read motion
     absent: np.ndarray  # (S,) not in the learner's world before the step
     hit: np.ndarray  # (1,) what the learner ran into: NO_HIT, HIT_WALL or the vehicle's id
 
@@ -131,7 +141,7 @@ def learner_state(start, physics, beams, layer_sizes, slots) -> LearnerState:
     return LearnerState(learner, Work(np.empty(beams), activation, scratch, np.zeros(1)),
                         np.empty((physics.spin_window, 2)), np.zeros(1, np.int64),
                         np.zeros(2, np.int64), np.full(slots, -1, np.int64),
-                        np.empty((slots, 2)), np.empty(slots, np.bool_),
+                        np.empty((slots, 2)), np.empty((slots, 2)), np.empty(slots, np.bool_),
                         np.full(1, NO_HIT, np.int64))
 
 
@@ -139,7 +149,7 @@ def with_slots(state: LearnerState, slots: int) -> LearnerState:
     """``state`` with room for ``slots`` traffic slots (the new ones never gone)."""
     gone = np.full(slots, -1, dtype=np.int64)
     gone[: len(state.gone)] = state.gone
-    return state._replace(gone=gone, visible=np.empty((slots, 2)),
+    return state._replace(gone=gone, visible=np.empty((slots, 2)), moved=np.empty((slots, 2)),
                           absent=np.empty(slots, np.bool_))
 
 
@@ -179,8 +189,11 @@ def learner_sense(t, physics, geometry, ids, corners, centres, before, now, max_
     within = within_range(pose[0, 0], pose[0, 1], visible, 0, physics.max_range + physics.radius)
     met[0] += within
     met[1] = max(met[1], within)
-    sense(0, pose, physics, beams, walls, cell_start, cell_walls, all_walls, True, corners_now,
-          visible, -1, state.work.readings)
+    channels, moved = geometry.channels, state.moved
+    if channels.shape[0] > 1:
+        moved_from(ids_before, ids_now, centres_before, centres_now, moved)
+    sense(0, pose, physics, beams, channels, walls, cell_start, cell_walls, all_walls, True,
+          corners_now, visible, moved, -1, state.work.readings)
     return RUNNING
 
 
@@ -229,7 +242,7 @@ def run_replay_life(genes, layer_sizes, physics, geometry, start, ids, corners, 
     within sensor range, most at once, what it hit: ``NO_HIT``, ``HIT_WALL`` or the vehicle's
     id); ``trace`` (n, 3) receives the learner's poses of steps 0..n-1 when n > 0, ``end``
     (3,) its pose as the life ended (where it collided, left or was capped)."""
-    state = learner_state(start, physics, reading_count(geometry.beams), layer_sizes,
+    state = learner_state(start, physics, reading_count(geometry), layer_sizes,
                           ids.shape[1])
     pose, suffered, met = state.learner.pose, state.suffered, state.met
     clear_start(state.learner.centres, ids[0], centres[0], state.gone, physics.clearance)

@@ -485,7 +485,7 @@ class LiveTraffic:
             self.physics = world._learner_physics(simulation.largest_radius())
             self.ids, self.corners, self.centres = recording.slot_arrays(2, 64)
             self.before, self.now = 0, 1
-            self.state = learner_state(start, self.physics, reading_count(world.geometry.beams),
+            self.state = learner_state(start, self.physics, reading_count(world.geometry),
                                        world.layer_sizes, self.ids.shape[1])
             self._read()
             self.at_start = int((self.ids[self.now] >= 0).sum())
