@@ -39,7 +39,7 @@ from enn_traffic.envs.rangefinder import (
 )
 from enn_traffic.sim.crowd import ALIVE, Crowd, crowd_events, step_once
 from enn_traffic.sim.rules import sense, wall_arrays
-from enn_traffic.sim.sensors import reading_count
+from enn_traffic.sim.sensors import reading_count, seen_for
 from enn_traffic.sim.world import OUTCOMES, SPUN
 
 
@@ -48,10 +48,11 @@ def observe(learners, vehicles, physics, geometry, out) -> None:
     """The first ``learners`` vehicles sense walls and the other bodies into ``out`` (L, B)."""
     pose = vehicles.pose
     walls, cell_start, cell_walls, all_walls = wall_arrays(geometry)
+    seen = seen_for(geometry.beams, geometry.channels)
     for v in range(learners):
         sense(v, pose, physics, geometry.beams, geometry.channels, walls, cell_start,
               cell_walls, all_walls, pose.shape[0] > 1, vehicles.corners, vehicles.centres,
-              vehicles.previous_centres, v, out[v])
+              vehicles.previous_centres, v, out[v], seen)
 
 
 class ArenaCrowdEnv(ParallelEnv):

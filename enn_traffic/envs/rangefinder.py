@@ -1,7 +1,7 @@
 """The arena and the navigation tracks as gymnasium environments (docs/envs.md).
 
 Observation: the learner's beam readings, right to left (m, ``float32``, each from 0 to its
-beam's range: the numbers its network would read); action: a symmetric ``float32``
+beam's range: the numbers its network would read; then each further ``[sensor] channels``'s); action: a symmetric ``float32``
 ``Box(-1, 1, (2,))``, the paper's two network outputs in [0, 1] rescaled (§3): forces
 ``(action + 1) / 2``, steering = gain · (force 1 − force 0) (:func:`forces`); reward: 1 per
 step lived, and a spin in place takes the life's steps back, so that an episode's return is

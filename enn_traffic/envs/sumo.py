@@ -68,7 +68,7 @@ class ReplayTraffic:
     def __init__(self, world: SumoWorld, seed: int, warmup: int | None, start: np.ndarray):
         self.world, self.seed, self.warmup = world, seed, warmup
         self._use(world.recording(seed, warmup, recordings.FIRST_RECORDING))
-        self.state = learner_state(start, self.physics, reading_count(world.geometry),
+        self.state = learner_state(start, self.physics, world.geometry,
                                    world.layer_sizes, self.ids.shape[1])
         clear_start(self.state.learner.centres, self.ids[0], self.centres[0], self.state.gone,
                     self.physics.clearance)

@@ -28,12 +28,11 @@ from enn_traffic.config import Scenario
 from enn_traffic.config.traffic import NETWORK, STRATEGIES
 from enn_traffic.core import keys
 from enn_traffic.core.errors import InputError
-from enn_traffic.core.neural import NetworkSpec, network_buffers
+from enn_traffic.core.neural import NetworkSpec
 from enn_traffic.roads import Track, load_track
 from enn_traffic.roads.network import anywhere_poses, lane_start_poses
 from enn_traffic.sim.rules import (
     NO_HIT,
-    Work,
     build_constants,
     copy_row,
     copy_rows,
@@ -48,8 +47,9 @@ from enn_traffic.sim.rules import (
     vehicles_at,
     wall_arrays,
     within_range,
+    work_for,
 )
-from enn_traffic.sim.sensors import WallGrid, reading_count
+from enn_traffic.sim.sensors import WallGrid
 from enn_traffic.sim.strategies import reset_memory, strategy_settings
 from enn_traffic.sim.world import CAPPED, COLLIDED, RUNNING, SPUN, SituationResults
 
@@ -148,8 +148,7 @@ def run_life(genes, layer_sizes, start, kinds, traffic_genes, physics, geometry,
     copy_row(genes, drivers[0])
     rng = np.empty(1, dtype=np.uint64)
     tally = np.empty(4, dtype=np.int64)
-    activation, scratch = network_buffers(layer_sizes)
-    work = Work(np.empty(reading_count(geometry)), activation, scratch, np.zeros(count))
+    work = work_for(geometry, layer_sizes, count)
     recent = np.empty((physics.spin_window, 2))
     start_world(start, kinds, vehicles, rng, seed, physics, tally)
     steps = 0

@@ -31,11 +31,9 @@ import numpy as np
 from numba import njit
 
 from enn_traffic.config.traffic import NETWORK
-from enn_traffic.core.neural import network_buffers
 from enn_traffic.sim.arena import ArenaWorld
 from enn_traffic.sim.rules import (
     NO_HIT,
-    Work,
     copy_rows,
     drive_all,
     enter,
@@ -46,8 +44,8 @@ from enn_traffic.sim.rules import (
     spun,
     vehicles_at,
     wall_arrays,
+    work_for,
 )
-from enn_traffic.sim.sensors import reading_count
 from enn_traffic.sim.strategies import reset_memory
 from enn_traffic.sim.world import COLLIDED, SPUN
 
@@ -213,8 +211,7 @@ class Crowd:
         self.lives = Lives(np.zeros(count, dtype=np.bool_), np.zeros(count, dtype=np.int64),
                            np.zeros((count, p.spin_window, 2)), np.empty(count, dtype=np.int64))
         self.geometry = world.geometry
-        self.work = Work(np.empty(reading_count(self.geometry)),
-                         *network_buffers(world.layer_sizes), np.zeros(count))
+        self.work = work_for(self.geometry, world.layer_sizes, count)
 
     @property
     def pose(self) -> np.ndarray:

@@ -35,6 +35,7 @@ from enn_traffic.core.geometry import (
     box_hits_walls,
     boxes_overlap,
 )
+from enn_traffic.core.neural import network_buffers
 from enn_traffic.core.neural import steering as network_steering
 from enn_traffic.sim.bicycle import bicycle_step
 from enn_traffic.sim.sensors import (
@@ -46,9 +47,11 @@ from enn_traffic.sim.sensors import (
     beam_table,
     beams_towards,
     channel_codes,
+    clear_seen,
     fill_channels,
     nearby_walls,
     ray_segment_distance,
+    reading_count,
     seen_for,
     sense_walls,
 )
@@ -122,10 +125,12 @@ def vehicles_at(count: int) -> Vehicles:
 
 
 class Work(NamedTuple):
-    """A step's work arrays: one vehicle's readings, the networks' layer buffers
+    """A step's work arrays: one vehicle's readings and what its beams met
+    (:func:`~enn_traffic.sim.sensors.seen_for`), the networks' layer buffers
     (:func:`~enn_traffic.core.neural.network_buffers`) and every vehicle's steering (V,)."""
 
     readings: np.ndarray
+    seen: np.ndarray
     activation: np.ndarray
     scratch: np.ndarray
     steering: np.ndarray
@@ -143,6 +148,15 @@ class Geometry(NamedTuple):
     cell_walls: np.ndarray
     all_walls: np.ndarray
     exits: np.ndarray  # (X, 4) segments that end a life as "left network"
+
+
+@njit(cache=True)
+def work_for(geometry, layer_sizes, count) -> Work:
+    """A step's :class:`Work` arrays for ``count`` vehicles with the sensor of ``geometry``
+    and networks of ``layer_sizes``."""
+    activation, scratch = network_buffers(layer_sizes)
+    return Work(np.empty(reading_count(geometry)), seen_for(geometry.beams, geometry.channels),
+                activation, scratch, np.zeros(count))
 
 
 @njit(cache=True, inline="always")
@@ -297,14 +311,15 @@ def _variance(points, axis) -> float:
 
 @njit(cache=True, inline="always")
 def sense(v, pose, physics, beams, channels, walls, cell_start, cell_walls, all_walls, bodies,
-          corners, centres, before, me, readings) -> None:
+          corners, centres, before, me, readings, seen) -> None:
     """Rangefinder readings of vehicle ``v`` (paper §3): the nearest wall along each beam and,
     when ``bodies``, the nearest edge of any other body (``corners``, ``centres``, and the
     centres a step ``before``; ``me``, its own there, skipped); then the further ``channels``
-    (:func:`~enn_traffic.sim.sensors.fill_channels`)."""
+    (:func:`~enn_traffic.sim.sensors.fill_channels`; ``seen``: a
+    :func:`~enn_traffic.sim.sensors.seen_for` work array)."""
     x, y, cos_h, sin_h = sense_walls_of(v, pose, physics, beams, walls, cell_start, cell_walls,
                                         all_walls, readings)
-    seen = seen_for(beams, channels)
+    clear_seen(seen)
     if bodies:
         sense_bodies(me, x, y, cos_h, sin_h, beams, corners, centres, before, physics.radius,
                      physics.dt, readings, seen)
@@ -436,7 +451,7 @@ def drive_all(kinds, genes, layer_sizes, physics, geometry, vehicles, rng, work)
         if kind != NONE:
             sense(v, pose, physics, beams, channels, walls, cell_start, cell_walls, all_walls,
                   count > 1 and senses_vehicles(kind, physics), corners, centres, before, v,
-                  readings)
+                  readings, work.seen)
         steering[v] = decide(v, kind, genes, layer_sizes, readings, physics, beams, memory, rng,
                              activation, scratch)
     move_all(steering, physics, vehicles)
@@ -451,8 +466,9 @@ def drive_alone(genes, layer_sizes, physics, geometry, vehicles, work):
     beams, channels = geometry.beams, geometry.channels
     _, _, cos_h, sin_h = sense_walls_of(0, vehicles.pose, physics, beams, walls, cell_start,
                                         cell_walls, all_walls, work.readings)
-    fill_channels(channels, beams, seen_for(beams, channels), cos_h, sin_h,
-                  physics.distance / physics.dt, work.readings)
+    clear_seen(work.seen)
+    fill_channels(channels, beams, work.seen, cos_h, sin_h, physics.distance / physics.dt,
+                  work.readings)
     work.steering[0] = network_steering(genes[0], layer_sizes, work.readings, work.activation,
                                         work.scratch, physics.gain)
     move_all(work.steering, physics, vehicles)

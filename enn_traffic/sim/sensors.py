@@ -256,13 +256,23 @@ def unseen_readings(geometry) -> np.ndarray:
     return readings
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)
 def seen_for(beams, channels) -> np.ndarray:
     """Room for what each beam meets, (B, 2), when ``channels`` go beyond the distance: the
     velocity of the body it meets (m/s; a wall's is 0), noted as the bodies are sensed. No
-    rows when they do not: the distances need nothing noted."""
+    rows when they do not: the distances need nothing noted. A work array, made once: an
+    array made at every sensing costs the parallel loops their speed (numba counts every
+    allocation in counters the threads share)."""
     rows = beams.shape[0] if channels.shape[0] > 1 else 0
     return np.zeros((rows, 2))
+
+
+@njit(cache=True, inline="always")
+def clear_seen(seen) -> None:
+    """Every beam of ``seen`` (:func:`seen_for`) meets a wall or nothing, until a body is
+    sensed."""
+    for b in range(seen.shape[0]):
+        seen[b, 0], seen[b, 1] = 0.0, 0.0
 
 
 @njit(cache=True, inline="always")

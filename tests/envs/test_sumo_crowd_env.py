@@ -119,3 +119,40 @@ def test_two_sumo_crowds_in_one_process_pass_pettingzoos_seed_test():
     observations, _ = second.reset(seed=5)  # the child's crowd, reset again
     assert sorted(observations) == ["vehicle_0", "vehicle_1"]
     second.close()
+
+
+def test_learners_read_the_closing_speed_of_sumos_vehicles_and_of_each_other():
+    """With ``[sensor] channels`` = distance and closing speed, six learners among SUMO's
+    traffic read the plain scenario's distances bit for bit, then closing speeds: 0 where a
+    beam meets nothing, the learner's own speed along the beam where it meets a wall, and
+    other values where it meets a moving SUMO vehicle or learner (the motion of both groups
+    of bodies reaches the channel), within what a car's speed allows. (One crowd at a time:
+    libsumo runs one SUMO per process.)"""
+    plain = shipped_scenario("sumo_strategy1")
+    both = plain.with_overrides(sensor={"channels": ["distance", "closing_speed"]})
+    beams, reach = plain.sensor.beams, plain.sensor.range
+    along = plain.vehicle.speed * np.cos(np.array(plain.beam_angles))
+    runs = []
+    for scenario in (plain, both):
+        crowd = SumoCrowdEnv(scenario, learners=6, observation_dtype="float64")
+        try:
+            observations, _ = crowd.reset(options={"key": 0, "situation": 0})
+            run = [observations]
+            for _ in range(40):
+                observations, *_ = crowd.step({agent: np.zeros(2, np.float32)
+                                               for agent in crowd.agents})
+                run.append(observations)
+            runs.append(run)
+        finally:
+            crowd.close()
+    moving = 0
+    for first, second in zip(*runs, strict=True):
+        assert first.keys() == second.keys()
+        for agent, distances in first.items():
+            np.testing.assert_array_equal(second[agent][:beams], distances)
+            closing = second[agent][beams:]
+            assert np.all(closing[distances >= reach] == 0.0)
+            other = np.abs(closing - along)[distances < reach]
+            assert np.all(other < 60.0)
+            moving += int((other > 0.5).sum())
+    assert moving > 10, moving

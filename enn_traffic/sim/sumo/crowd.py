@@ -31,13 +31,11 @@ import numpy as np
 from numba import njit
 
 from enn_traffic.core.errors import InputError
-from enn_traffic.core.neural import network_buffers
 from enn_traffic.core.neural import steering as network_steering
 from enn_traffic.sim.buckets import Buckets, buckets_for, fill, nearby
 from enn_traffic.sim.crowd import ALIVE, CrowdRun, Learning
 from enn_traffic.sim.rules import (
     NO_HIT,
-    Work,
     enter,
     hits_earlier_body,
     left_network,
@@ -49,8 +47,9 @@ from enn_traffic.sim.rules import (
     spun,
     vehicles_at,
     wall_arrays,
+    work_for,
 )
-from enn_traffic.sim.sensors import fill_channels, reading_count, seen_for
+from enn_traffic.sim.sensors import clear_seen, fill_channels, seen_for
 from enn_traffic.sim.strategies import NETWORK
 from enn_traffic.sim.sumo.replay import mark_absent, struck_by_traffic, visible_centres
 from enn_traffic.sim.sumo.world import SumoWorld
@@ -224,7 +223,8 @@ def fill_now(physics, slots, now, vehicles, learners) -> None:
 
 
 @njit(cache=True, inline="always")
-def sense_learner(k, physics, geometry, slots, now, vehicles, learners, readings) -> None:
+def sense_learner(k, physics, geometry, slots, now, vehicles, learners, readings,
+                  seen) -> None:
     """Learner ``k`` senses the walls, the SUMO vehicles in its world and the other
     learners into ``readings`` (the buckets filled by :func:`fill_now`): the steps of
     :func:`~enn_traffic.sim.rules.sense`, with two groups of bodies."""
@@ -239,7 +239,7 @@ def sense_learner(k, physics, geometry, slots, now, vehicles, learners, readings
         gather_motion(slots, now, vehicles.previous_centres, near, n, others, m)
     x, y, cos_h, sin_h = sense_walls_of(k, pose, physics, beams, walls, cell_start, cell_walls,
                                         all_walls, readings)
-    seen = seen_for(beams, channels)
+    clear_seen(seen)
     radius, dt = physics.radius, physics.dt
     sense_bodies(-1, x, y, cos_h, sin_h, beams, near.corners[:n], near.visible[:n],
                  near.before[:n], radius, dt, readings, seen)
@@ -278,7 +278,8 @@ def drive(genes, layer_sizes, physics, geometry, slots, now, vehicles, learners,
     all move at once."""
     fill_now(physics, slots, now, vehicles, learners)
     for k in range(vehicles.pose.shape[0]):
-        sense_learner(k, physics, geometry, slots, now, vehicles, learners, work.readings)
+        sense_learner(k, physics, geometry, slots, now, vehicles, learners, work.readings,
+                      work.seen)
         work.steering[k] = network_steering(genes[k], layer_sizes, work.readings,
                                             work.activation, work.scratch, physics.gain)
     move(work.steering, physics, vehicles, learners)
@@ -289,9 +290,10 @@ def observe(physics, geometry, slots, now, vehicles, learners, out) -> None:
     """Every ``active`` learner ``k`` senses into ``out[k]`` (for a caller that steers them
     from outside: the PettingZoo SUMO crowd, :mod:`enn_traffic.envs.sumo`)."""
     fill_now(physics, slots, now, vehicles, learners)
+    seen = seen_for(geometry.beams, geometry.channels)
     for k in range(vehicles.pose.shape[0]):
         if learners.active[k]:
-            sense_learner(k, physics, geometry, slots, now, vehicles, learners, out[k])
+            sense_learner(k, physics, geometry, slots, now, vehicles, learners, out[k], seen)
 
 
 move_once = njit(cache=True)(move.py_func)
@@ -355,7 +357,7 @@ class SumoCrowd:
         self.physics = world._learner_physics(simulation.largest_radius())
         self.slots = recording.slot_arrays(2, 64)
         self.before, self.now = 0, 1  # rows of the slot arrays; they swap every step
-        self.lives = lives = _Lives(self.count, self.physics, reading_count(world.geometry),
+        self.lives = lives = _Lives(self.count, self.physics, world.geometry,
                                     world.layer_sizes, self.slots[0].shape[1], self.seed)
         self._read()
         for k in range(self.count):
@@ -487,7 +489,7 @@ class _Lives:
     world of K vehicles), their lives and worlds (:class:`Learners`), their work arrays and
     the generator of their re-entries."""
 
-    def __init__(self, count: int, physics, beams: int, layer_sizes: np.ndarray, slots: int,
+    def __init__(self, count: int, physics, geometry, layer_sizes: np.ndarray, slots: int,
                  seed: int):
         self.vehicles = vehicles = vehicles_at(count)
         vehicles.pose[:], vehicles.centres[:] = FAR, FAR  # not on the network yet
@@ -495,7 +497,7 @@ class _Lives:
         vehicles.previous_centres[:] = FAR
         vehicles.fresh[:] = True
         self.learners = learners_for(count, physics.spin_window, slots)
-        self.work = Work(np.empty(beams), *network_buffers(layer_sizes), np.zeros(count))
+        self.work = work_for(geometry, layer_sizes, count)
         self.rng = np.full(1, np.uint64(seed), dtype=np.uint64)
 
     @property

@@ -26,7 +26,6 @@ import numpy as np
 from numba import njit, prange
 
 from enn_traffic.core.geometry import boxes_overlap
-from enn_traffic.core.neural import network_buffers
 from enn_traffic.core.neural import steering as network_steering
 from enn_traffic.sim.rules import (
     HIT_WALL,
@@ -46,8 +45,8 @@ from enn_traffic.sim.rules import (
     vehicles_at,
     wall_arrays,
     within_range,
+    work_for,
 )
-from enn_traffic.sim.sensors import reading_count
 from enn_traffic.sim.world import CAPPED, COLLIDED, LEFT_NETWORK, RUNNING, SPUN
 from enn_traffic.sumo.simulation import FAR
 
@@ -131,14 +130,13 @@ class LearnerState(NamedTuple):
 
 
 @njit(cache=True)
-def learner_state(start, physics, beams, layer_sizes, slots) -> LearnerState:
+def learner_state(start, physics, geometry, layer_sizes, slots) -> LearnerState:
     """A fresh :class:`LearnerState` at pose ``start`` among ``slots`` traffic slots."""
     learner = vehicles_at(1)
     place(0, start[0], start[1], start[2], physics, learner.pose, learner.corners,
           learner.centres)
     remember_bodies(learner)
-    activation, scratch = network_buffers(layer_sizes)
-    return LearnerState(learner, Work(np.empty(beams), activation, scratch, np.zeros(1)),
+    return LearnerState(learner, work_for(geometry, layer_sizes, 1),
                         np.empty((physics.spin_window, 2)), np.zeros(1, np.int64),
                         np.zeros(2, np.int64), np.full(slots, -1, np.int64),
                         np.empty((slots, 2)), np.empty((slots, 2)), np.empty(slots, np.bool_),
@@ -193,7 +191,7 @@ def learner_sense(t, physics, geometry, ids, corners, centres, before, now, max_
     if channels.shape[0] > 1:
         moved_from(ids_before, ids_now, centres_before, centres_now, moved)
     sense(0, pose, physics, beams, channels, walls, cell_start, cell_walls, all_walls, True,
-          corners_now, visible, moved, -1, state.work.readings)
+          corners_now, visible, moved, -1, state.work.readings, state.work.seen)
     return RUNNING
 
 
@@ -242,7 +240,7 @@ def run_replay_life(genes, layer_sizes, physics, geometry, start, ids, corners, 
     within sensor range, most at once, what it hit: ``NO_HIT``, ``HIT_WALL`` or the vehicle's
     id); ``trace`` (n, 3) receives the learner's poses of steps 0..n-1 when n > 0, ``end``
     (3,) its pose as the life ended (where it collided, left or was capped)."""
-    state = learner_state(start, physics, reading_count(geometry), layer_sizes,
+    state = learner_state(start, physics, geometry, layer_sizes,
                           ids.shape[1])
     pose, suffered, met = state.learner.pose, state.suffered, state.met
     clear_start(state.learner.centres, ids[0], centres[0], state.gone, physics.clearance)

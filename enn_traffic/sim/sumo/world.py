@@ -32,7 +32,6 @@ from enn_traffic.core.progress import slow_step
 from enn_traffic.roads.network import lane_spots
 from enn_traffic.sim.arena import LearnerWorld
 from enn_traffic.sim.rules import Physics
-from enn_traffic.sim.sensors import reading_count
 from enn_traffic.sim.sumo.replay import (
     RUNNING,
     clear_start,
@@ -485,7 +484,7 @@ class LiveTraffic:
             self.physics = world._learner_physics(simulation.largest_radius())
             self.ids, self.corners, self.centres = recording.slot_arrays(2, 64)
             self.before, self.now = 0, 1
-            self.state = learner_state(start, self.physics, reading_count(world.geometry),
+            self.state = learner_state(start, self.physics, world.geometry,
                                        world.layer_sizes, self.ids.shape[1])
             self._read()
             self.at_start = int((self.ids[self.now] >= 0).sum())
