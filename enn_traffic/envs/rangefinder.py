@@ -1,15 +1,15 @@
 """The arena and the navigation tracks as gymnasium environments (docs/envs.md).
 
 Observation: the learner's beam readings, right to left (m, ``float32``, each from 0 to its
-beam's range: the numbers its network would read; then each further ``[sensor] channels``'s); action: a symmetric ``float32``
-``Box(-1, 1, (2,))``, the paper's two network outputs in [0, 1] rescaled (§3): forces
-``(action + 1) / 2``, steering = gain · (force 1 − force 0) (:func:`forces`); reward: 1 per
-step lived, and a spin in place takes the life's steps back, so that an episode's return is
-the paper's fitness (§5, §5.3). ``terminated``: a collision or a spin; ``truncated``: the
-step cap. ``reset``'s info holds the situation's ``key`` and ``situation``; a life's last
-step's info adds its ``steps``, ``outcome`` (a name of
-:data:`~enn_traffic.sim.world.OUTCOMES`), ``fitness``, the collisions it ``suffered`` and
-what it ``hit`` (:data:`END_KEYS`), the same keys single and vectorised.
+beam's range: the numbers its network would read; then each further ``[sensor] channels``'s);
+action: a symmetric ``float32`` ``Box(-1, 1, (2,))``, the paper's two network outputs in [0, 1]
+rescaled (§3): forces ``(action + 1) / 2``, steering = gain · (force 1 − force 0)
+(:func:`forces`); reward: 1 per step lived, and a spin in place takes the life's steps back, so
+that an episode's return is the paper's fitness (§5, §5.3). ``terminated``: a collision or a
+spin; ``truncated``: the step cap. ``reset``'s info holds the situation's ``key`` and
+``situation``; a life's last step's info adds its ``steps``, ``outcome`` (a name of
+:data:`~enn_traffic.sim.world.OUTCOMES`), ``fitness``, the collisions it ``suffered`` and what
+it ``hit`` (:data:`END_KEYS`), the same keys single and vectorised.
 
 A situation is the GA's (:meth:`ArenaWorld.situations`): ``reset(options={"key": k,
 "situation": e})`` starts situation ``e`` of traffic key ``k``; without them, a training key

@@ -32,9 +32,13 @@ def key(number: int) -> str:
 
 
 def bench_ab(table: pd.DataFrame) -> dict:
-    """The A/B of the move: each row's median rate after over before, and whether the two
-    codes' ranges over the rounds overlap."""
+    """An A/B of two codes: each row's median rate (vehicle-steps, or learner-steps where the
+    workload counts those) after over before, and whether the two codes' ranges over the
+    rounds overlap."""
     before = table["code"].iloc[0]
+    if "learner_steps_per_s" in table:
+        table = table.assign(vehicle_steps_per_s=table["vehicle_steps_per_s"].fillna(
+            table["learner_steps_per_s"]))
     rows = []
     for (workload, implementation, threads), group in table.groupby(
             ["workload", "implementation", "threads"], sort=False):
@@ -57,7 +61,9 @@ def context(root: Path) -> dict:
                     "last": key(a.keys[-1]), "read_by": a.read_by}
                    for name, a in sorted(keys.ALLOCATIONS.items(), key=lambda i: i[1].start)]
     tasks = pd.read_csv(root / "results" / "house" / "change_tasks.csv").to_dict("records")
-    return {"bench_ab": bench_ab(pd.read_csv(root / "results" / "house" / "bench_ab.csv")),
+    house = root / "results" / "house"
+    return {"bench_ab": bench_ab(pd.read_csv(house / "bench_ab.csv")),
+            "bench_channels": bench_ab(pd.read_csv(house / "bench_channels_ab.csv")),
             "change_tasks": tasks, "layers": layers, "key_ranges": ranges,
             "key_allocations": allocations,
             "generations_columns": [{"name": name, "meaning": " ".join(
