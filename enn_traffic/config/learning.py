@@ -16,8 +16,8 @@ class NetworkConfig(Section):
 
     hidden: list[Annotated[int, Field(ge=1, le=1024)]] = Field(
         [3], max_length=16, description="hidden layer sizes (up to 16 layers of up to 1024; [] = "
-        "inputs straight to outputs); inputs = beams, outputs = 2 (right, left force), sigmoid "
-        "everywhere")
+        "inputs straight to outputs); inputs = beams × sensor channels, outputs = 2 (right, left "
+        "force), sigmoid everywhere")
     steering_gain_deg: float = Field(
         90.0, gt=0, le=180, description="steering = gain × (left − right)")
     layout: Literal["source", "target"] = Field(

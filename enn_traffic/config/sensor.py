@@ -45,10 +45,14 @@ class SensorConfig(Section):
         "beams above, then each ring's, right to left")
 
     channels: list[Channel] = Field(
-        ["distance"], min_length=1, max_length=len(CHANNELS), description="what each beam "
-        "reads: `distance` (m, the paper's) first, then any of `closing_speed` (m/s at which "
-        "what the beam meets draws nearer, negative when it draws away, 0 when it meets "
-        "nothing); the network reads every beam's distance, then every beam's next channel")
+        ["distance"], min_length=1, description="what each beam (the rings' too) reads: "
+        "`distance` (m, the paper's) first, then any of `closing_speed` (m/s at which what "
+        "the beam meets draws nearer along it: the vehicle's velocity along its heading less "
+        "that body's over the last step, a wall's 0; negative when it draws away, 0 when it "
+        "meets nothing; unbounded in an environment's observation space, so scale it there, "
+        "`VecNormalize` for one); the network reads every beam's distance, then every beam's "
+        "next channel, so its inputs are beams × channels. A controller keeps the channels "
+        "it was evolved with, as it keeps its rings")
 
     @field_validator("channels")
     @classmethod

@@ -25,6 +25,7 @@ are for ``enn-traffic evaluate``, the second is highway-env's own environment.
 
 from __future__ import annotations
 
+import warnings
 from pathlib import Path
 
 import gymnasium as gym
@@ -33,6 +34,7 @@ from gymnasium.vector import AutoresetMode
 
 from enn_traffic.config import Scenario, load_scenario
 from enn_traffic.config.shipped import SCENARIOS, scenario_path
+from enn_traffic.core.errors import InputError
 from enn_traffic.core.registry import Registry
 
 NAMESPACE = "enn_traffic"
@@ -157,7 +159,11 @@ def register_envs() -> tuple[str, ...]:
     for path in sorted(SCENARIOS.glob("*.toml")):
         if path.stem.startswith(HELD_OUT):
             continue
-        scenario = load_scenario(path)
+        try:
+            scenario = load_scenario(path)
+        except InputError as exc:  # a file a user broke there: the others keep their ids
+            warnings.warn(f"no gymnasium id for {exc}", stacklevel=2)
+            continue
         if scenario.world_kind not in ENVS:
             continue
         names.append(path.stem)

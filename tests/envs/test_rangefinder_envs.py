@@ -174,3 +174,19 @@ def test_the_vector_env_compiled_before_anything_else_steps_as_the_single_env(tm
         env=os.environ | {"NUMBA_CACHE_DIR": str(tmp_path)}, capture_output=True, text=True,
         timeout=900)
     assert done.returncode == 0, done.stdout[-3000:]
+
+
+def test_a_broken_file_in_the_scenarios_folder_leaves_the_other_ids(root, tmp_path, monkeypatch):
+    """A scenario a user broke in the shipped folder costs its own id, with a warning naming
+    its file and key, not the import of every environment."""
+    import enn_traffic.envs as envs
+
+    text = (root / "scenarios" / "navigation_narrow.toml").read_text().replace(
+        '"../sumo_nets/', f'"{root}/sumo_nets/')
+    (tmp_path / "probe_good.toml").write_text(text)
+    (tmp_path / "probe_bad.toml").write_text(
+        text.replace("[sensor]\n", '[sensor]\nchannels = ["closing_speed"]\n'))
+    monkeypatch.setattr(envs, "SCENARIOS", tmp_path)
+    with pytest.warns(UserWarning, match="probe_bad.toml: sensor.channels"):
+        assert envs.register_envs() == ("probe_good",)
+    gym.envs.registration.registry.pop(env_id("probe_good"))
