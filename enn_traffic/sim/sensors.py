@@ -3,7 +3,9 @@
 Beam i points at heading + its angle from the pose at the front bumper (the scenario's rings
 of beams, :attr:`enn_traffic.config.Scenario.beams`); its reading is the distance to the
 nearest wall or vehicle-body edge it crosses, or its range when it crosses none. Readings are
-raw metres, as the authors feed them to the network.
+raw metres, as the authors feed them to the network. Further channels (``[sensor] channels``:
+the closing speed of what a beam meets) follow the distances, every beam's each
+(:func:`fill_channels`).
 
 Walls are culled with a uniform grid: each cell lists the walls within reach of any point in
 the cell, so a sensing step only tests the walls that can matter (docs/design.md, "Speed").
