@@ -25,8 +25,8 @@ from numba import njit, prange
 from enn_traffic.config.traffic import ACTION
 from enn_traffic.core.progress import slow_step
 from enn_traffic.sim.arena import ArenaWorld, settle, start_world
-from enn_traffic.sim.rules import Vehicles, Work, copy_row, copy_rows, drive_all, sense, wall_arrays
-from enn_traffic.sim.sensors import reading_count, seen_for
+from enn_traffic.sim.rules import Vehicles, Work, copy_row, copy_rows, drive_all, wall_arrays
+from enn_traffic.sim.sensors import reading_count, seen_for, sense
 from enn_traffic.sim.world import RUNNING, SPUN
 
 

@@ -415,3 +415,111 @@ def beams_towards(ahead, left, distance, radius, beams):
     if bearing - half < -math.pi or bearing + half > math.pi:
         return 0, beams.shape[0] - 1
     return first_rank_from(beams, bearing - half), last_rank_to(beams, bearing + half)
+
+
+@njit(cache=True, inline="always")
+def sense(v, pose, physics, beams, channels, walls, cell_start, cell_walls, all_walls, bodies,
+          corners, centres, before, me, readings, seen) -> None:
+    """Rangefinder readings of vehicle ``v`` (paper §3): the nearest wall along each beam and,
+    when ``bodies``, the nearest edge of any other body (``corners``, ``centres``, and the
+    centres a step ``before``; ``me``, its own there, skipped); then the further ``channels``
+    (:func:`~enn_traffic.sim.sensors.fill_channels`; ``seen``: a
+    :func:`~enn_traffic.sim.sensors.seen_for` work array)."""
+    x, y, cos_h, sin_h = sense_walls_of(v, pose, physics, beams, walls, cell_start, cell_walls,
+                                        all_walls, readings)
+    clear_seen(seen)
+    if bodies:
+        sense_bodies(me, x, y, cos_h, sin_h, beams, corners, centres, before, physics.radius,
+                     physics.dt, readings, seen)
+    fill_channels(channels, beams, seen, cos_h, sin_h, physics.distance / physics.dt, readings)
+
+
+@njit(cache=True, inline="always")
+def sense_walls_of(v, pose, physics, beams, walls, cell_start, cell_walls, all_walls, readings):
+    """The walls' half of :func:`sense`: vehicle ``v``'s readings of the nearest walls. Returns
+    its position and its heading's cosine and sine."""
+    x, y, heading = pose[v, 0], pose[v, 1], pose[v, 2]
+    cos_h, sin_h = math.cos(heading), math.sin(heading)
+    candidates = nearby_walls(x, y, physics, cell_start, cell_walls, all_walls)
+    sense_walls(x, y, cos_h, sin_h, beams, walls, candidates, readings)
+    return x, y, cos_h, sin_h
+
+
+@njit(cache=True, inline="always")
+def sense_bodies(me, x, y, cos_h, sin_h, beams, corners, centres, before, radius, dt, readings,
+                 seen):
+    """Lower ``readings`` of a vehicle at (x, y) (heading cosine ``cos_h``, sine ``sin_h``)
+    to the nearest edge of any body but ``me`` (``beams``: a
+    :func:`~enn_traffic.sim.sensors.beam_table`), and where ``seen``
+    (:func:`~enn_traffic.sim.sensors.seen_for`) has rows, note there the velocity of the body
+    each beam met, from its centre a step (``dt`` seconds) ``before``. A body is skipped when
+    its bounding circle lies beyond every reading, and its edges are tested only along the
+    beams that pass through that circle: those within the circle's angular half-width of its bearing
+    (:func:`~enn_traffic.sim.sensors.beams_towards`), each checked as before. Of a body the
+    vehicle is outside of, only the edges that face it are tested: a ray enters a convex body
+    through one of those (:func:`facing_edges`)."""
+    count = beams.shape[0]
+    noted = seen.shape[0] > 0
+    far = largest(readings, count) + radius + 1e-9  # readings only fall: a looser cut, same result
+    for other in range(corners.shape[0]):
+        if other == me:
+            continue
+        dx, dy = centres[other, 0] - x, centres[other, 1] - y
+        squared = dx * dx + dy * dy
+        if squared > far * far:
+            continue
+        lo, hi = 0, count - 1
+        if squared > 4.0 * radius * radius and count > 1:
+            lo, hi = beams_towards(dx * cos_h + dy * sin_h, dy * cos_h - dx * sin_h,
+                                   math.sqrt(squared), radius, beams)
+        if lo > hi:
+            continue
+        facing = facing_edges(corners[other], x, y)
+        for rank in range(lo, hi + 1):
+            b = int(beams[rank, FAN_BEAM])
+            ux = cos_h * beams[b, COS] - sin_h * beams[b, SIN]
+            uy = sin_h * beams[b, COS] + cos_h * beams[b, SIN]
+            along = dx * ux + dy * uy
+            if along < -radius or along - radius > readings[b] or abs(dx * uy - dy * ux) > radius:
+                continue  # the beam passes clear of the body's bounding circle
+            for i in range(4):
+                if not facing & (1 << i):
+                    continue
+                j = (i + 1) % 4
+                d = ray_segment_distance(
+                    x, y, ux, uy, readings[b], corners[other, i, 0], corners[other, i, 1],
+                    corners[other, j, 0], corners[other, j, 1],
+                )  # fmt: skip
+                if d < readings[b]:
+                    readings[b] = d
+                    if noted:
+                        seen[b, 0] = (centres[other, 0] - before[other, 0]) / dt
+                        seen[b, 1] = (centres[other, 1] - before[other, 1]) / dt
+
+
+EDGE_MARGIN = 1e-9  # m²: an edge nearly in line with the sensing point counts as facing it
+
+
+@njit(cache=True, inline="always")
+def facing_edges(body, x, y) -> int:
+    """Bit i set when edge i (corner i to i + 1; corners counter-clockwise, as
+    :func:`~enn_traffic.core.geometry.body_corners` lists them) faces (x, y), that is (x, y) lies
+    on or beyond its outer side; every edge when (x, y) is inside the body."""
+    mask = 0
+    for i in range(4):
+        j = (i + 1) % 4
+        ex, ey = body[j, 0] - body[i, 0], body[j, 1] - body[i, 1]
+        if ex * (y - body[i, 1]) - ey * (x - body[i, 0]) < EDGE_MARGIN:
+            mask |= 1 << i
+    return mask if mask else 15
+
+
+@njit(cache=True, inline="always")
+def largest(values, count) -> float:
+    """The largest of the first ``count`` ``values`` (a loop: ``values.max()`` costs a reshape
+    each call)."""
+    top = values[0]
+    for k in range(1, count):
+        if values[k] > top:
+            top = values[k]
+    return top

@@ -5,7 +5,6 @@ import pytest
 
 from enn_traffic.core.geometry import body_polygon, box_hits_segment, boxes_overlap
 from enn_traffic.sim.bicycle import bicycle_step
-from enn_traffic.sim.rules import sense_bodies
 from enn_traffic.sim.sensors import (
     ANGLE_MARGIN,
     WallGrid,
@@ -13,6 +12,7 @@ from enn_traffic.sim.sensors import (
     nearby_walls,
     ray_segment_distance,
     rough_atan2,
+    sense_bodies,
     sense_walls,
 )
 

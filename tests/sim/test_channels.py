@@ -15,8 +15,13 @@ from enn_traffic.envs.rangefinder import RangefinderEnv, action_of
 from enn_traffic.envs.sumo import SumoEnv
 from enn_traffic.runs.controller import Controller
 from enn_traffic.sim.arena import ArenaWorld
-from enn_traffic.sim.rules import sense_bodies
-from enn_traffic.sim.sensors import beam_table, channel_codes, fill_channels, sense_walls
+from enn_traffic.sim.sensors import (
+    beam_table,
+    channel_codes,
+    fill_channels,
+    sense_bodies,
+    sense_walls,
+)
 
 BOTH = {"channels": ["distance", "closing_speed"]}
 RADIUS = 0.5 * math.hypot(4.3, 2.5)

@@ -10,8 +10,7 @@ from enn_traffic.config import load_scenario
 from enn_traffic.core.errors import InputError
 from enn_traffic.core.geometry import body_polygon
 from enn_traffic.sim.arena import ArenaWorld
-from enn_traffic.sim.rules import sense_bodies
-from enn_traffic.sim.sensors import beam_table
+from enn_traffic.sim.sensors import beam_table, sense_bodies
 from enn_traffic.sim.world import COLLIDED
 
 

@@ -42,14 +42,18 @@ from enn_traffic.sim.rules import (
     move_all,
     respawn_on_lanes,
     responsible,
-    sense_bodies,
-    sense_walls_of,
     spun,
     vehicles_at,
     wall_arrays,
     work_for,
 )
-from enn_traffic.sim.sensors import clear_seen, fill_channels, seen_for
+from enn_traffic.sim.sensors import (
+    clear_seen,
+    fill_channels,
+    seen_for,
+    sense_bodies,
+    sense_walls_of,
+)
 from enn_traffic.sim.strategies import NETWORK
 from enn_traffic.sim.sumo.replay import mark_absent, struck_by_traffic, visible_centres
 from enn_traffic.sim.sumo.world import SumoWorld
@@ -227,7 +231,7 @@ def sense_learner(k, physics, geometry, slots, now, vehicles, learners, readings
                   seen) -> None:
     """Learner ``k`` senses the walls, the SUMO vehicles in its world and the other
     learners into ``readings`` (the buckets filled by :func:`fill_now`): the steps of
-    :func:`~enn_traffic.sim.rules.sense`, with two groups of bodies."""
+    :func:`~enn_traffic.sim.sensors.sense`, with two groups of bodies."""
     pose, near, others = vehicles.pose, learners.near_slots, learners.near_learners
     x, y = pose[k, 0], pose[k, 1]
     beams, channels = geometry.beams, geometry.channels

@@ -40,13 +40,13 @@ from enn_traffic.sim.rules import (
     place,
     remember_bodies,
     responsible,
-    sense,
     spun,
     vehicles_at,
     wall_arrays,
     within_range,
     work_for,
 )
+from enn_traffic.sim.sensors import sense
 from enn_traffic.sim.world import CAPPED, COLLIDED, LEFT_NETWORK, RUNNING, SPUN
 from enn_traffic.sumo.simulation import FAR
 
