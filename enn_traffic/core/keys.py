@@ -108,6 +108,8 @@ ABLATION_ARENA = Allocation(_within(ABLATION_CROWD_TEST, 2_000_000, 1_000_000),
                             "Table 4's ablation, the arena")
 DEPARTURES = Allocation(_within(ABLATION_CROWD_TEST, 3_000_000, 1_000_000),
                         "the departures from the authors' rules")
+AUTHORS_RULES = Allocation(_within(ABLATION_CROWD_TEST, 4_000_000, 1_000_000),
+                           "the authors' set-up's three rules, one at a time")
 
 ALLOCATIONS = {name: value for name, value in globals().items()
                if isinstance(value, Allocation) and name.isupper()}

@@ -26,6 +26,7 @@ EXPERIMENTS = Registry("experiment", {
     "table4_ablation": "enn_traffic.experiments.ablation:table4_ablation",
     "regime": "enn_traffic.experiments.regime:regime",
     "departures": "enn_traffic.experiments.departures:departures",
+    "authors_rules": "enn_traffic.experiments.authors_rules:authors_rules",
     "sumo": "enn_traffic.experiments.sumo_family:sumo",
     "city": "enn_traffic.experiments.sumo_family:city",
     "sumo_ablation": "enn_traffic.experiments.ablation:table4_ablation_sumo",
