@@ -50,7 +50,7 @@ VARIANTS = {
 }
 MEASURES = {"first_span": "the learning's first span",
             "after": "the span after learning",
-            "after_minus_first_span": "after learning − the first span"}
+            "after_minus_first_span": "the change from the first span to after learning"}
 
 
 @dataclass(frozen=True)

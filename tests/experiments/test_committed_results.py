@@ -268,6 +268,18 @@ def test_committed_departures_drive_their_first_situation(root):
                                   driven, check_dtype=False)
 
 
+@pytest.mark.full
+def test_committed_authors_rules_drive_their_first_situation(root):
+    """The authors' set-up's three rules, situation 0 driven again under every variant: its
+    rows of ``authors_rules_situations.csv``."""
+    from enn_traffic.experiments.authors_rules import situation_rows
+
+    committed = pd.read_csv(root / "results" / "paper" / "authors_rules_situations.csv")
+    driven = pd.DataFrame(situation_rows(0)).round(5)
+    pd.testing.assert_frame_equal(committed[committed["situation"] == 0].reset_index(drop=True),
+                                  driven, check_dtype=False)
+
+
 @pytest.mark.parametrize("family, strategy", [pytest.param(SUMO, 3, id="sumo"),
                                               full(CITY, 1, id="city")])
 def test_committed_sumo_crowd_files_drive_their_first_situation(family, strategy, root):

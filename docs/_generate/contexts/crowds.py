@@ -18,7 +18,7 @@ import pandas as pd
 
 from enn_traffic.config.shipped import shipped_scenario
 from enn_traffic.core import keys
-from enn_traffic.experiments import ablation, departures
+from enn_traffic.experiments import ablation, authors_rules, departures
 from enn_traffic.experiments.crowds.arena import LEARNING, SECONDS
 from enn_traffic.experiments.crowds.stats import ARMS
 from enn_traffic.experiments.crowds.sumo import SITUATION_KEY as SUMO_SITUATION_KEY
@@ -249,6 +249,43 @@ def _departures(paper: Path) -> dict:
     }
 
 
+def _authors_rules(paper: Path) -> dict:
+    table = pd.read_csv(paper / "authors_rules.csv")
+    situations = pd.read_csv(paper / "authors_rules_situations.csv")
+    none = authors_rules.NONE
+    same = situations.pivot(index="situation", columns="variant", values="first_span")
+    moved = []
+    for row in _records(table[table["variant"] != none]):
+        alike = bool((same[row["variant"]] == same[none]).all())  # the same by construction
+        moved.append({"variant": row["variant"], "measures": [
+            {"measure": m, "up": row[f"{m}_vs_none_low"] > 0} for m in authors_rules.MEASURES
+            if (row[f"{m}_vs_none_low"] > 0 or row[f"{m}_vs_none_high"] < 0)
+            and not (alike and m == "first_span")], "alike": alike})
+    finishing = situations[[authors_rules.VARIANTS[v].until_finished
+                            for v in situations["variant"]]]
+    ablation_table = pd.read_csv(paper / "table4_ablation.csv")
+    random = ablation_table[ablation_table["start_population"] == "random"]
+    authors = float(ablation_table.query("start_population == 'authors'")
+                    ["reduction_vs_first_span"].mean())
+    return {
+        "rows": _records(table), "measures": authors_rules.MEASURES, "moved": moved,
+        "reaching": [row["variant"] for row in _records(table)
+                     if row["fall_low"] <= authors <= row["fall_high"]],
+        "alone": list(authors_rules.VARIANTS)[1:-1],  # each rule alone
+        "situations": int(table["situations"].iloc[0]), "level": ablation.LEVEL,
+        "intervals": int(table.filter(like="_low").notna().to_numpy().sum()),
+        "key_billions": keys.ABLATION_CROWD_TEST.start // BILLION,
+        "key_offset": authors_rules.RULES_KEY - keys.ABLATION_CROWD_TEST.start,
+        "seconds": authors_rules.STEPS.seconds,
+        "authors_seconds": authors_rules.STEPS.authors_seconds,
+        "learning": {"low": float(finishing["learning_s"].min()),
+                     "high": float(finishing["learning_s"].max())},
+        "random_arms": {"low": float(random["reduction_vs_first_span"].min()),
+                        "high": float(random["reduction_vs_first_span"].max())},
+        "ablation_authors": authors,
+    }
+
+
 def _closed_loop(folder: Path, family: Family) -> dict:
     """``closed_loop.csv``: each strategy's mean lifetimes replayed and in closed loop, the
     situations that give the same lifetime both ways, the widest gap."""
@@ -366,5 +403,6 @@ def context(root: Path) -> dict:
     summary = json.loads((paper / "summary.json").read_text())
     return {"crowds": {"paper": _paper(), "arena": _arena(paper), "ablation": _ablation(paper),
                        "departures": _departures(paper),
+                       "authors_rules": _authors_rules(paper),
                        "sumo": _family(paper, SUMO, summary),
                        "city": _family(paper, CITY, summary)}}
