@@ -87,11 +87,12 @@ class CrowdConfig(Section):
     """Every vehicle driving by its own network at once (paper §5.5, Tables 3–4): how its
     collisions are counted."""
 
-    counting: Literal["responsible", "authors"] = Field(
+    counting: Literal["responsible", "lives_lost"] = Field(
         "responsible", description="the rates of Tables 3–4: `responsible` (responsible "
-        "collisions per vehicle-second) or `authors` (lives lost, responsible collisions and "
-        "spins, of all vehicles together per second: the authors' display's count, the "
-        "paper's unit, [results.md](results.md#all-vehicles-at-once-paper-55-tables-34)). "
+        "collisions per vehicle-second) or `lives_lost` (responsible collisions and spins, "
+        "of all vehicles together per second: the paper's unit, all cars together; the "
+        "authors' code ends a life at either, and their tables may count collisions alone, "
+        "[results.md](results.md#all-vehicles-at-once-paper-55-tables-34)). "
         "Read by `reproduce`'s crowds (`table3`, `table4`, `sumo`, `city`) from the shipped "
         "arena and SUMO scenarios, and by `enn-traffic crowd`; `run` says it ignores it")
     learning_s: float = Field(

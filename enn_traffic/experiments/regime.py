@@ -64,14 +64,14 @@ def time_bases(lives_lost_per_s: np.ndarray, dt: float) -> dict[str, np.ndarray]
 
 
 def _row(strategy: object, configuration: str, runs: list, vehicles: int) -> dict:
-    """The runs' rates: lives lost by the authors' counting (``[crowd] counting =
-    "authors"``), apart as collisions and spins, and ours per vehicle-second."""
+    """The runs' rates: lives lost of all vehicles together (``[crowd] counting =
+    "lives_lost"``), apart as collisions and spins, and ours per vehicle-second."""
     collisions = np.mean([run.collision_rate for run in runs]) * vehicles
     spins = np.mean([run.spin_rate for run in runs]) * vehicles
     return {"strategy": strategy, "configuration": configuration,
             "collisions_per_s": round(float(collisions), 3),
             "spins_per_s": round(float(spins), 3),
-            "lives_lost_per_s": round(float(np.mean([run.rate("authors") for run in runs])), 3),
+            "lives_lost_per_s": round(float(np.mean([run.rate("lives_lost") for run in runs])), 3),
             "collisions_per_vehicle_s": round(float(np.mean([run.rate("responsible")
                                                              for run in runs])), 4)}
 

@@ -177,9 +177,9 @@ class CrowdRun:
 
     def rate(self, counting: str = "responsible") -> float:
         """The rate of Tables 3–4 by the scenario's ``[crowd] counting``: ``responsible``,
-        :attr:`collision_rate`; ``authors``, lives lost (collisions and spins) of all
-        vehicles together per second, the authors' display's count."""
-        if counting == "authors":
+        :attr:`collision_rate`; ``lives_lost``, lives lost (collisions and spins) of all
+        vehicles together per second, the paper's unit."""
+        if counting == "lives_lost":
             return float(self.collisions.sum() + self.spins.sum()) / self.seconds
         return self.collision_rate
 

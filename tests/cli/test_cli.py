@@ -287,7 +287,7 @@ def test_run_says_it_ignores_the_crowd_section(tmp_path, root):
     text = (root / "scenarios" / "navigation_narrow.toml").read_text().replace(
         '"../sumo_nets/', f'"{root}/sumo_nets/')
     scenario = tmp_path / "narrow_counted.toml"
-    scenario.write_text(text + '\n[crowd]\ncounting = "authors"\n')
+    scenario.write_text(text + '\n[crowd]\ncounting = "lives_lost"\n')
     result = cli("run", scenario, "--generations", 1, "--population", 10, "--out",
                  tmp_path / "out", "--quiet")
     assert result.returncode == 0, result.stderr

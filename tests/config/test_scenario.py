@@ -63,7 +63,7 @@ def test_network_path_resolves_relative_to_the_scenario_file(tmp_path, net):
         ("[vehicle]\nspeed = -1\n", "vehicle.speed", "greater than or equal to 0.1"),
         ("[ga]\nelite_count = 500\n", "ga.elite_count", "smaller than population_size"),
         ("colour = 'red'\n", "track.colour", "unknown key"),
-        ("[crowd]\ncounting = 'both'\n", "crowd.counting", "'responsible' or 'authors'"),
+        ("[crowd]\ncounting = 'both'\n", "crowd.counting", "'responsible' or 'lives_lost'"),
         # a value no member of a union takes: the key as written, one problem, the choices
         ("[traffic]\nstrategy = 'sumoo'\n", "traffic.strategy", "'wander' or 'sumo'"),
     ],

@@ -146,11 +146,11 @@ def test_the_authors_blame_after_a_respawn_tests_every_current_body(world, blame
     assert run.collisions.tolist() == expected
 
 
-def test_the_authors_counting_is_every_life_lost_of_all_vehicles_per_second():
+def test_lives_lost_count_every_collision_and_spin_of_all_vehicles_per_second():
     """Two vehicles over 10 s: 1 + 2 responsible collisions and 1 spin. Ours: 3 collisions
-    per 20 vehicle-seconds; the authors' display: 4 lives lost per 10 s."""
+    per 20 vehicle-seconds; lives lost: 4 per 10 s."""
     from enn_traffic.sim.crowd import CrowdRun
 
     run = CrowdRun(np.array([1, 2]), np.array([0, 1]), 10.0, np.zeros((101, 2, 3)))
     assert run.rate() == run.rate("responsible") == pytest.approx(0.15)
-    assert run.rate("authors") == pytest.approx(0.4)
+    assert run.rate("lives_lost") == pytest.approx(0.4)

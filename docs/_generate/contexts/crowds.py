@@ -99,14 +99,17 @@ def _regime(regime: pd.DataFrame) -> dict:
     low, high = float(regime["paper_low"].iloc[0]), float(regime["paper_high"].iloc[0])
     authors = regime.iloc[-1]
     inside = regime[(regime["lives_lost_per_s"] >= low) & (regime["lives_lost_per_s"] <= high)]
-    bases = [{"name": name, "rate": float(authors[column])}
+    bases = [{"name": name, "rate": float(authors[column]),
+              "collisions": float(authors["collisions_per_s"] * authors[column]
+                                  / authors["lives_lost_per_s"])}
              for name, column in (("second", "lives_lost_per_s"),
                                   ("step (0.1 s)", "lives_lost_per_step"),
                                   ("100 steps", "lives_lost_per_100_steps"))]
     return {"rows": _records(regime), "low": low, "high": high,
             "authors": float(authors["lives_lost_per_s"]),
             "inside": list(inside["configuration"]),
-            "bases": bases, "bases_inside": [b["name"] for b in bases if low <= b["rate"] <= high]}
+            "bases": bases, "bases_inside": [b["name"] for b in bases if low <= b["rate"] <= high],
+            "collisions_inside": [b["name"] for b in bases if low <= b["collisions"] <= high]}
 
 
 def _arena(paper: Path) -> dict:

@@ -28,8 +28,8 @@ from the start poses in spans of ``SECONDS`` (100 s, the paper's):
   its own lives) drives from the same state after learning.
 
 The metric is the scenario's ``[crowd] counting`` (:meth:`enn_traffic.sim.crowd.CrowdRun.rate`):
-by default responsible collisions per vehicle-second; the authors' count, lives lost of all
-vehicles together per second, is the paper's unit (:mod:`enn_traffic.experiments.regime`).
+by default responsible collisions per vehicle-second; lives lost (collisions and spins) of all
+vehicles together per second is the paper's unit (:mod:`enn_traffic.experiments.regime`).
 Evolved drivers are held to §5.3's spin rule throughout: rotating in place ends a life (the
 vehicle respawns); their spins per second are recorded beside the collisions.
 
