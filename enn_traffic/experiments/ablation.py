@@ -53,6 +53,12 @@ from enn_traffic.experiments.crowds.arena import (
     situation_crowd,
 )
 from enn_traffic.experiments.crowds.settings import CrowdSettings
+from enn_traffic.experiments.crowds.stats import (
+    curve_ends,
+    mean_reduction,
+    paired_by_strategy,
+    reduction_interval,
+)
 from enn_traffic.experiments.crowds.sumo import (
     SUMO_LEARNING,
     saved_crowd_inputs,
@@ -80,6 +86,7 @@ ARMS = [(start, stopping) for start in STARTS for stopping in STOPPINGS] + [
     ("evolved", "frozen"), ("authors", "authors")]
 SHARED = {("random", "cap"), ("random", "finish"), ("authors", "authors")}  # any strategy
 EARLY_SPANS = slice(1, 11)  # spans 2–11 of the learning
+OWN = ("first_span", "early_spans")  # the contrasts against an arm's own spans
 # the span after learning against: (a), (a') the arm's own spans, (b)-(d) the other arms
 CONTRASTS = {"first_span": "its own first span",
              "early_spans": "its own spans 2–11",
@@ -279,11 +286,15 @@ def t_interval_counts(situations: pd.DataFrame, contrast: str, level: float = LE
                       ) -> tuple[int, int]:
     """How many (strategy, arm) rows have the mean of ``after`` − ``contrast`` below and
     above 0 by Student-t intervals at the table's simultaneous level instead of the
-    bootstrap's: a check on percentile intervals from 20 situations at a Bonferroni level."""
+    bootstrap's: a check on percentile intervals from 20 situations at a Bonferroni level. A
+    shared arm (:data:`SHARED`) against its own spans is one measurement, counted once."""
     groups = situations.groupby(["strategy", "start_population", "stopping"], sort=False)
     family_level = 1 - (1 - level) / (groups.ngroups * len(CONTRASTS))
+    first = situations["strategy"].min()
     below = above = 0
-    for _, group in groups:
+    for (strategy, start, stopping), group in groups:
+        if (start, stopping) in SHARED and contrast in OWN and strategy != first:
+            continue
         low, high = t_interval((group["after"] - group[contrast]).to_numpy(), family_level)
         below += high < 0
         above += low > 0
@@ -416,6 +427,11 @@ def summary_lines(table: pd.DataFrame, factors: pd.DataFrame) -> list[str]:
             + "; " + carrier(factors)]
 
 
+def _arm(situations: pd.DataFrame, start: str, stopping: str) -> pd.DataFrame:
+    return situations[(situations["start_population"] == start)
+                      & (situations["stopping"] == stopping)]
+
+
 def idle_arms(table: pd.DataFrame) -> list[tuple[str, str]]:
     """The learning arms (start population, stopping) of ``table4_ablation.csv`` whose
     learners bred no generation (median 0 in every strategy): their change from the first span
@@ -522,7 +538,25 @@ def facts(folder: Path) -> dict:
     whose learners bred no generation (:func:`idle_arms`, over ``table4_ablation.csv``)."""
     situations = pd.read_csv(folder / "table4_ablation_situations.csv")
     counts = {contrast: t_interval_counts(situations, contrast) for contrast in CONTRASTS}
+    curve = pd.read_csv(folder / "table4_ablation_learning.csv")
+    arms = situations.groupby(["start_population", "stopping"], sort=False)
     return {"t_intervals": [{"contrast": contrast, "below": below, "above": above}
                             for contrast, (below, above) in counts.items()],
+            "against_initial": [
+                {"start_population": start, "stopping": stopping,
+                 "reduction": mean_reduction(arm.groupby("strategy").mean(numeric_only=True),
+                                             "after", "initial_first"),
+                 **dict(zip(("low", "high"), reduction_interval(
+                     arm, "after", np.random.default_rng(0), "initial_first"), strict=True))}
+                for (start, stopping), arm in arms],
+            "learners_vs_frozen": paired_by_strategy(
+                _arm(situations, "evolved", "cap").set_index(["strategy", "situation"])
+                .assign(frozen=_arm(situations, "evolved", "frozen")
+                        .set_index(["strategy", "situation"])["after"]).reset_index(),
+                "after", "frozen"),
+            "curve_ends": [{"start_population": start, "stopping": stopping, "strategy": int(s),
+                            "last_tenth": curve_ends(rows, "collisions_per_vehicle_s")[1]}
+                           for (start, stopping, s), rows in curve.groupby(
+                               ["start_population", "stopping", "strategy"], sort=False)],
             "idle_arms": [{"start_population": start, "stopping": stopping} for start, stopping
                           in idle_arms(pd.read_csv(folder / "table4_ablation.csv"))]}

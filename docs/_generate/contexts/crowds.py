@@ -144,6 +144,12 @@ def _arena(paper: Path) -> dict:
         "drop": {"strategy": float(drop["strategy"]), "initial": float(drop["initial"]),
                  "initial_after": float(drop["initial_after"])},
         "reductions": facts["reductions"],
+        "baseline": float(means["initial"].mean()),
+        "baseline_after": float(means["initial_after"].mean()),
+        "below_paper_table3": [r["strategy"] for r in facts["table4_vs_paper_table3"]
+                               if r["high"] < 0],
+        "above_paper_table3": [r["strategy"] for r in facts["table4_vs_paper_table3"]
+                               if r["low"] > 0],
         "paper_way": {"rows": _records(table3), "strategies": len(table3),
                       **_apart(table3, "paper_winner_minus_winner"),
                       "cut": float((1 - table3["paper_winner_collisions_per_s"]
@@ -164,6 +170,14 @@ def _arena(paper: Path) -> dict:
     }
 
 
+def _curve_ends(ends: list[dict]) -> list[dict]:
+    """Each arm's learning curve over its last tenth, the range over the strategies."""
+    table = pd.DataFrame(ends).groupby(["start_population", "stopping"], sort=False)
+    return [{"start_population": start, "stopping": stopping, "authors": start == "authors",
+             "low": float(rows["last_tenth"].min()), "high": float(rows["last_tenth"].max())}
+            for (start, stopping), rows in table]
+
+
 def _ablation(paper: Path) -> dict:
     table = pd.read_csv(paper / "table4_ablation.csv")
     factors = pd.read_csv(paper / "table4_ablation_factors.csv")
@@ -172,12 +186,19 @@ def _ablation(paper: Path) -> dict:
     authors = situations[situations["start_population"] == "authors"].drop_duplicates("situation")
     winners = table.drop_duplicates("strategy")
     arms = []
+    against = {(a["start_population"], a["stopping"]): a for a in facts["against_initial"]}
     for (start, stopping), arm in table.groupby(["start_population", "stopping"], sort=False):
+        shared = (start, stopping) in ablation.SHARED
+        once = arm.head(1)  # a shared arm against its own spans: one measurement
         arms.append({"start_population": start, "stopping": stopping,
-                     "authors": start == "authors",
+                     "authors": start == "authors", "shared": shared,
                      "reduction": float(arm["reduction_vs_first_span"].mean()),
+                     "against_initial": against[start, stopping],
                      "finished": float(arm["finished_share"].mean()),
-                     "apart": {c: _apart(arm, f"after_minus_{c}") for c in ablation.CONTRASTS}})
+                     "apart": {c: _apart(once if shared and c in ablation.OWN else arm,
+                                         f"after_minus_{c}") for c in ablation.CONTRASTS},
+                     "counted": {c: 1 if shared and c in ablation.OWN else len(arm)
+                                 for c in ablation.CONTRASTS}})
     finished = {(arm["start_population"], arm["stopping"]): arm["finished"] for arm in arms}
     idle = [arm | {"finished": finished[arm["start_population"], arm["stopping"]]}
             for arm in facts["idle_arms"]]
@@ -188,6 +209,8 @@ def _ablation(paper: Path) -> dict:
     count = int(table["situations"].iloc[0])
     sumo = pd.read_csv(paper / SUMO.folder / "table4_ablation.csv")
     first = pd.read_csv(paper / "table4_ablation_first_reading.csv")
+    first_factors = pd.read_csv(paper / "table4_ablation_first_reading_factors.csv")
+    frozen = facts["learners_vs_frozen"]
     first_reductions = first.groupby(["start_population", "stopping"], sort=False)[
         "reduction_vs_first_span"].mean()
     return {
@@ -211,7 +234,18 @@ def _ablation(paper: Path) -> dict:
                                   & (factors["outcome"] == outcome)])[0],
         "stop": _records(factors[(factors["factor"] == "stopping")
                                  & (factors["outcome"] == outcome)])[0],
-        "t_intervals": facts["t_intervals"], "rows_count": len(table),
+        "t_intervals": facts["t_intervals"],
+        "counted": {c: sum(arm["counted"][c] for arm in arms) for c in ablation.CONTRASTS},
+        "learners_vs_frozen": frozen,
+        "learners_above_frozen": [r["strategy"] for r in frozen if r["low"] > 0],
+        "learners_below_frozen": [r["strategy"] for r in frozen if r["high"] < 0],
+        "curve_ends": _curve_ends(facts["curve_ends"]),
+        "first_stopping": _records(first_factors[(first_factors["factor"] == "stopping") & (
+            first_factors["contrast"] == "after_minus_initial_after")])[0],
+        "stop_after": _records(factors[(factors["factor"] == "stopping")
+                                       & (factors["outcome"] == "after")])[0],
+        "start_after": _records(factors[(factors["factor"] == "start_population")
+                                        & (factors["outcome"] == "after")])[0],
         "idle": idle, "idle_finish": any(arm["stopping"] != "cap" for arm in idle),
         "sumo": {"strategy": ablation.SUMO_STRATEGY, "rows": _records(sumo),
                  "situations": int(sumo["situations"].iloc[0]),

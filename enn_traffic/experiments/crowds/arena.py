@@ -69,6 +69,7 @@ from enn_traffic.experiments.crowds.stats import (
     learning_curve,
     learning_ends,
     mean_reduction,
+    paired_by_strategy,
     rates_table,
     reduction_interval,
     strategy_means,
@@ -465,6 +466,8 @@ def facts(folder: Path) -> dict:
                      "distinct": len({chromosome.tobytes() for chromosome in controllers}),
                      "vehicles": len(controllers)})
     return {"reductions": reductions,
+            "table4_vs_paper_table3": paired_by_strategy(situations, "population",
+                                                         "paper_winner"),
             "curve": curve_facts(pd.read_csv(folder / "table4_learning.csv")),
             "trend": trend_facts(pd.read_csv(folder / "table4_learning_ends.csv")),
             "kept": kept}

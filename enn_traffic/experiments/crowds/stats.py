@@ -171,6 +171,22 @@ CURVE_COLUMNS = ["collisions_per_vehicle_s", "initial_drivers", "winner_driving_
 
 
 # The mean reductions (after, before) the documents state with their intervals
+def paired_by_strategy(situations: pd.DataFrame, after: str, before: str,
+                       level: float = 0.9) -> list[dict]:
+    """Per strategy, the mean of ``after`` − ``before`` over its situations (paired) and its
+    bootstrap interval, simultaneous over the strategies (Bonferroni, ``level`` for all)."""
+    groups = situations.groupby("strategy")
+    family = 1 - (1 - level) / groups.ngroups
+    rng = np.random.default_rng(0)
+    rows = []
+    for strategy, group in groups:
+        low, high = paired_interval(group[after], group[before], rng, 20000, family)
+        rows.append({"strategy": int(strategy),
+                     "difference": float((group[after] - group[before]).mean()),
+                     "low": low, "high": high})
+    return rows
+
+
 REDUCTIONS = [("winner", "initial"), ("population", "initial_after"), ("population", "initial"),
               ("winner_after", "initial_after")]
 
