@@ -10,7 +10,15 @@ dynamic-traffic experiments share their protocol (:mod:`~enn_traffic.experiments
 the statistics of choosing controllers (:mod:`~enn_traffic.experiments.choosing`).
 """
 
+from __future__ import annotations
+
+import importlib
+from typing import TYPE_CHECKING
+
 from enn_traffic.core.registry import Registry
+
+if TYPE_CHECKING:
+    from enn_traffic.experiments.study import Study
 
 # Imported when first run: an arena experiment does not load SUMO.
 EXPERIMENTS = Registry("experiment", {
@@ -32,3 +40,11 @@ EXPERIMENTS = Registry("experiment", {
     "sumo_ablation": "enn_traffic.experiments.ablation:table4_ablation_sumo",
     "lane_keeping": "enn_traffic.experiments.lanekeeping:lane_keeping",
 })
+
+
+def summary_lines(name: str, study: Study) -> list[str]:
+    """Experiment ``name``'s lines of ``summary.md``, from the tables it wrote into the
+    study's folder: the function named as the experiment's with ``_lines`` (``fig7`` →
+    ``fig7_lines``), so a changed table changes its line."""
+    module, attribute = EXPERIMENTS.target(name).split(":")
+    return getattr(importlib.import_module(module), f"{attribute}_lines")(study)

@@ -409,21 +409,29 @@ def measure(out: Path, ablation: Ablation, progress: bool = False) -> pd.DataFra
     return table
 
 
-def summary_lines(table: pd.DataFrame, factors: pd.DataFrame) -> list[str]:
-    """The summary's line: per arm, its mean reduction against its first span and the
-    strategies whose interval is below or above 0 for each contrast; each choice's effect on
-    the rate after learning."""
+def table4_ablation_lines(study: Study) -> list[str]:
+    """The summary's line, from the tables the study wrote: per arm, its mean reduction
+    against the paper's baseline (the initial drivers' first span) and against its own first
+    span, and the measurements whose interval is below or above 0 for each contrast (a shared
+    arm against its own spans is one); each choice's effect on the rate after learning."""
+    table = pd.read_csv(study.out / "table4_ablation.csv")
+    factors = pd.read_csv(study.out / "table4_ablation_factors.csv")
+    situations = pd.read_csv(study.out / "table4_ablation_situations.csv")
     parts = []
     for (start, stopping), arm in table.groupby(["start_population", "stopping"], sort=False):
+        means = _arm(situations, start, stopping).groupby("strategy").mean(numeric_only=True)
         counts = ", ".join(
             f"vs {contrast.replace('_', ' ')} "
-            f"{int((arm[f'after_minus_{contrast}_high'] < 0).sum())} below / "
-            f"{int((arm[f'after_minus_{contrast}_low'] > 0).sum())} above"
-            for contrast in CONTRASTS)
-        parts.append(f"{start}, {stopping}: mean reduction vs its first span "
-                     f"{arm['reduction_vs_first_span'].mean():.0%}; {counts}")
-    return [f"table4_ablation (strategies of {len(table['strategy'].unique())} with the "
-            f"simultaneous {LEVEL:.0%} interval below / above 0): " + "; ".join(parts)
+            f"{int((rows[f'after_minus_{contrast}_high'] < 0).sum())} below / "
+            f"{int((rows[f'after_minus_{contrast}_low'] > 0).sum())} above of {len(rows)}"
+            for contrast in CONTRASTS
+            for rows in [arm.head(1) if (start, stopping) in SHARED and contrast in OWN
+                         else arm])
+        parts.append(f"{start}, {stopping}: mean reduction vs the initial drivers' first span "
+                     f"{mean_reduction(means, 'after', 'initial_first'):.0%}, vs its own "
+                     f"first span {arm['reduction_vs_first_span'].mean():.0%}; {counts}")
+    return ["table4_ablation (measurements with the simultaneous "
+            f"{LEVEL:.0%} interval below / above 0): " + "; ".join(parts)
             + "; " + carrier(factors)]
 
 
@@ -506,9 +514,14 @@ def table4_ablation_sumo(study: Study) -> list[str]:
                          "controllers the SUMO family saved (run sumo first)",
                          key="--only") from error
     folder = study.out / family.folder
-    table = ablation_table(situations)
     write_csv(folder / "table4_ablation_situations.csv", situations.round(5))
-    write_csv(folder / "table4_ablation.csv", table)
+    write_csv(folder / "table4_ablation.csv", ablation_table(situations))
+    return table4_ablation_sumo_lines(study)
+
+
+def table4_ablation_sumo_lines(study: Study) -> list[str]:
+    """The SUMO ablation's summary line, from the table the study wrote."""
+    table = pd.read_csv(study.out / study.settings(SUMO).folder / "table4_ablation.csv")
     words = []
     for row in table.to_dict("records"):
         words.append(f"start {row['start_population']}, {row['stopping']}: "
@@ -527,8 +540,8 @@ def _interval_words(row: dict, name: str) -> str:
 
 def table4_ablation(study: Study) -> list[str]:
     """Table 4's ablation from the controllers Tables 3–4 saved in the study's folder."""
-    table = measure(study.out, study.settings(ABLATION), study.progress)
-    return summary_lines(table, pd.read_csv(study.out / "table4_ablation_factors.csv"))
+    measure(study.out, study.settings(ABLATION), study.progress)
+    return table4_ablation_lines(study)
 
 
 def facts(folder: Path) -> dict:

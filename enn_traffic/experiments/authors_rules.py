@@ -137,6 +137,13 @@ def authors_rules(study: Study) -> list[str]:
     table = rules_table(situations)
     write_csv(study.out / "authors_rules_situations.csv", situations.round(5))
     write_csv(study.out / "authors_rules.csv", table)
+    return authors_rules_lines(study)
+
+
+def authors_rules_lines(study: Study) -> list[str]:
+    """The summary's line, from the ``authors_rules.csv`` the study wrote."""
+    table = pd.read_csv(study.out / "authors_rules.csv")
+    count = int(table["situations"].iloc[0])
     return [f"the authors' rules ({count} situations, the fall from the learning's first span "
             "to after it): " + "; ".join(f"{row.variant} {row.fall:.0%} ({row.fall_low:.0%} "
                                          f"to {row.fall_high:.0%})"

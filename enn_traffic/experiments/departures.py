@@ -159,9 +159,27 @@ def departures(study: Study) -> list[str]:
     table = departures_table(situations)
     write_csv(study.out / "departures_situations.csv", situations.round(5))
     write_csv(study.out / "departures.csv", table)
+    return departures_lines(study)
+
+
+def departures_lines(study: Study) -> list[str]:
+    """The summary's line, from the ``departures.csv`` the study wrote: the differences apart
+    from 0, how wide the intervals are beside the rate after learning, and the differences
+    that are 0 in every situation (no interval to read)."""
+    table = pd.read_csv(study.out / "departures.csv")
+    count = int(table["situations"].iloc[0])
     apart = table[(table["difference_low"] > 0) | (table["difference_high"] < 0)]
-    return [f"departures ({count} situations, the authors' rule − ours, collisions per "
-            f"vehicle-second): {len(apart)} of {len(table)} differences apart from 0"
+    after = table[table["measure"] == "after"]
+    widest = after.loc[after["difference_high"].idxmax()]
+    zero = table[(table["difference_low"] == 0) & (table["difference_high"] == 0)]
+    return [f"departures ({count} situations, in the authors' set-up only, the authors' rule − "
+            f"ours, collisions per vehicle-second): {len(apart)} of {len(table)} differences "
+            "apart from 0"
             + "".join(f"; {row.departure}, {row.measure}: {row.difference:+.4f} "
                       f"({row.difference_low:+.4f} to {row.difference_high:+.4f})"
-                      for row in apart.itertuples())]
+                      for row in apart.itertuples())
+            + f"; no evidence of no effect: the intervals are wide beside the rates (after "
+            f"learning, ours {widest['ours']:.4f}; {widest['departure']} up to "
+            f"{widest['difference_high']:+.4f})"
+            + "".join(f"; {row.departure}, {row.measure}: 0 in every situation"
+                      for row in zero.itertuples())]

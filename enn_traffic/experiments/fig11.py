@@ -30,8 +30,14 @@ def fig11(study: Study, family: Family = ARENA) -> list[str]:
                  f"{len(family.seeds)} runs per strategy\nsolid: each generation's best "
                  f"fitness; dashed: the same chromosome on {family.test_situations} test "
                  "situations", out / "fig11.png")
-    table = pd.DataFrame(rows)
-    write_csv(out / "fig11.csv", table)
+    write_csv(out / "fig11.csv", pd.DataFrame(rows))
+    return fig11_lines(study, family)
+
+
+def fig11_lines(study: Study, family: Family = ARENA) -> list[str]:
+    """The summary's Fig. 11 line, from the ``fig11.csv`` the study wrote."""
+    family = study.settings(family)
+    table = pd.read_csv(study.out / family.folder / "fig11.csv")
     return [summary_line(table, f"{family.folder}/fig11" if family.folder else "fig11")]
 
 

@@ -139,13 +139,20 @@ def lane_keeping(study: Study) -> list[str]:
     table = pd.DataFrame(rows)
     write_csv(out / "lane_keeping.csv", table)
     _draw_roads(paths, out / "lane_keeping_paths.png", TRAININGS[-1], NOISES[-1])
+    return lane_keeping_lines(study)
+
+
+def lane_keeping_lines(study: Study) -> list[str]:
+    """The summary's lines, from the ``lane_keeping.csv`` the study wrote."""
+    table = pd.read_csv(study.out / "lane_keeping.csv")
+    seeds = table["seed"].nunique()
     lines = []
     for (name, noise), group in table.groupby(["trained_on", "noise_m"], sort=False):
         kept = group.groupby("road", sort=False)["kept_whole_episode"].sum()
         lines.append(
             f"lane_keeping: trained on {name}, camera noise {noise:g} m: runs keeping the lane "
             "for the whole capped episode: "
-            + ", ".join(f"{road}: {kept[road]}/{len(seeds)}" for road in ROADS))
+            + ", ".join(f"{road}: {kept[road]}/{seeds}" for road in kept.index))
     return lines
 
 

@@ -65,13 +65,24 @@ def fig7(study: Study) -> list[str]:
     write_csv(out / "fig7.csv", summary)
     learning_curves({f"seed {s}": t for s, t in runs.items()}, out / "fig7.png",
                     title="Fig. 7: narrow track (12 m)", hline=REACHED_B)
+    return fig7_lines(study)
+
+
+def fig7_lines(study: Study) -> list[str]:
+    """The summary's Fig. 7 line, from the ``fig7.csv`` the study wrote."""
+    summary = pd.read_csv(study.out / "fig7.csv")
     reached = int(summary["reached_B_generation"].notna().sum())
     return [
         f"fig7: best vehicle reached location B (≥{REACHED_B} steps) in {reached} of "
-        f"{len(runs)} seeds; generations to reach it: "
-        f"{summary['reached_B_generation'].tolist()}; max best fitness "
+        f"{len(summary)} seeds; generations to reach it: "
+        f"{_generations(summary['reached_B_generation'])}; max best fitness "
         f"{summary['max_best_fitness'].max():.0f} steps (paper: <50 generations, stalls at B)",
     ]
+
+
+def _generations(column: pd.Series) -> str:
+    """Each seed's generation, in seed order: ``18, 17, never``."""
+    return ", ".join("never" if pd.isna(g) else f"{g:.0f}" for g in column)
 
 
 def fig8(study: Study) -> list[str]:
@@ -90,10 +101,17 @@ def fig8(study: Study) -> list[str]:
     write_csv(out / "fig8.csv", summary)
     learning_curves({f"seed {s}": t for s, t in runs.items()}, out / "fig8.png",
                     title="Fig. 8: wide track (30 m)", hline=cap, log=True)
+    return fig8_lines(study)
+
+
+def fig8_lines(study: Study) -> list[str]:
+    """The summary's Fig. 8 line, from the ``fig8.csv`` the study wrote."""
+    summary = pd.read_csv(study.out / "fig8.csv")
+    cap = shipped_scenario("navigation_wide").episode.max_steps
     capped = int(summary["capped_generation"].notna().sum())
     return [
-        f"fig8: best vehicle drove to the {cap}-step cap in {capped} of {len(runs)} seeds, at "
-        f"generations {summary['capped_generation'].tolist()} (paper: 'very high fitness')",
+        f"fig8: best vehicle drove to the {cap}-step cap in {capped} of {len(summary)} seeds, at "
+        f"generations {_generations(summary['capped_generation'])} (paper: 'very high fitness')",
     ]
 
 
@@ -140,6 +158,12 @@ def fig9(study: Study) -> list[str]:
     write_csv(out / "fig9.csv", summary)
     learning_curves(curves, out / "fig9.png", hline=REACHED_B, log=True,
                     title="Fig. 9: sensor resolution (median best over seeds)")
+    return fig9_lines(study)
+
+
+def fig9_lines(study: Study) -> list[str]:
+    """The summary's Fig. 9 line, from the ``fig9.csv`` the study wrote."""
+    summary = pd.read_csv(study.out / "fig9.csv")
     over_180 = summary[summary["span_deg"] == 180.0]
     accepted = over_180.dropna(subset=["median_generations_to_accepted"])
     fastest = (int(accepted.loc[accepted["median_generations_to_accepted"].idxmin(), "beams"])
@@ -199,6 +223,12 @@ def generalization(study: Study) -> list[str]:
              title=f"Unseen tracks: controllers at the {STEP_CAP}-step cap, % of {len(seeds)} "
              "seeds (blank: trained on it); validation tracks, then test tracks")
     _path_figure(traces, out / "generalization_paths.png", seeds[0])
+    return generalization_lines(study)
+
+
+def generalization_lines(study: Study) -> list[str]:
+    """The summary's generalisation lines, from the ``generalization.csv`` the study wrote."""
+    table = pd.read_csv(study.out / "generalization.csv")
     unseen_rows = table[~table["seen"] & (table["tracks"] != "training")]
     shares = unseen_rows.groupby(["tracks", "trained_on"], sort=False)["capped"].agg(
         ["sum", "size"])

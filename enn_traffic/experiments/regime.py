@@ -122,7 +122,12 @@ def regime(study: Study) -> list[str]:
         table[column] = rates
     table["paper_low"], table["paper_high"] = min(PAPER_INITIAL), max(PAPER_INITIAL)
     write_csv(study.out / "regime.csv", table)
-    return [summary_line(table)]
+    return regime_lines(study)
+
+
+def regime_lines(study: Study) -> list[str]:
+    """The summary's line, from the ``regime.csv`` the study wrote."""
+    return [summary_line(pd.read_csv(study.out / "regime.csv"))]
 
 
 def summary_line(table: pd.DataFrame) -> str:

@@ -1,8 +1,10 @@
 """``enn-traffic reproduce``: every experiment of the paper into one folder, with summary.md.
 
-Each experiment's headline lines, wall time, date and the code that ran it (commit and source
-digest, :mod:`enn_traffic.core.provenance`) are kept in ``summary.json``, so a call with ``--only``
-updates its own experiments and summary.md still lists every one done so far.
+Each experiment's wall time, date and the code that ran it (commit and source digest,
+:mod:`enn_traffic.core.provenance`) are kept in ``summary.json``, so a call with ``--only``
+updates its own experiments and summary.md still lists every one done so far; each line of
+summary.md is read from the tables the experiment wrote (:func:`enn_traffic.experiments.
+summary_lines`), so it says what they say now.
 """
 
 from __future__ import annotations
@@ -19,7 +21,7 @@ from enn_traffic.core.errors import InputError
 from enn_traffic.core.io import write_csv, write_text
 from enn_traffic.core.progress import terminal
 from enn_traffic.core.provenance import code_version, commit
-from enn_traffic.experiments import EXPERIMENTS, facts
+from enn_traffic.experiments import EXPERIMENTS, facts, summary_lines
 from enn_traffic.experiments.common import executor as runs_on
 from enn_traffic.experiments.study import Study
 from enn_traffic.report.paper_tables import paper_tables
@@ -53,7 +55,7 @@ def reproduce(out: Path, quick: bool = False, only: list[str] | None = None,
         tree, code = commit(), code_version()
         started = time.perf_counter()
         lines = EXPERIMENTS[name](study)
-        records[name] = {"lines": lines, "seconds": round(time.perf_counter() - started, 1),
+        records[name] = {"seconds": round(time.perf_counter() - started, 1),
                          "settings": "quick" if quick else "full", "commit": tree,
                          "code": code,
                          "date": datetime.now(UTC).strftime("%Y-%m-%d %H:%M UTC")}
@@ -76,7 +78,8 @@ def summary_text(out: Path, records: dict) -> str:
     """What :func:`write_summary` writes."""
     done = [n for n in EXPERIMENTS if n in records]
     summary = ["# enn-traffic: reproduction of Eraqi et al. (2016)", ""]
-    summary += [f"- {line}" for n in done for line in records[n]["lines"]]
+    summary += [f"- {line}" for n in done for line in summary_lines(
+        n, Study(out, quick=records[n]["settings"] == "quick", progress=False))]
     summary += ["", "| experiment | settings | commit | code | date | wall time of its last call "
                 "[s] |", "|---|---|---|---|---|---|"]
     summary += [f"| {n} | {records[n]['settings']} | {records[n].get('commit') or '-'} | "
@@ -98,9 +101,9 @@ def summary_text(out: Path, records: dict) -> str:
 def measure_closed_loop_again(paper: Path, family: Family, why: str) -> pd.DataFrame:
     """``closed_loop.csv`` of a reproduce folder ``paper`` measured again from its committed
     Table 1 controllers, when the simulation changed but the controllers did not; the
-    family's record in ``summary.json`` gets the new summary line and says when, at which
-    commit and ``why`` (:func:`write_summary` lists it)."""
-    from enn_traffic.experiments.sumo_family import closed_loop_line, closed_loop_table
+    family's record in ``summary.json`` says when, at which commit and ``why``
+    (:func:`write_summary` lists it, and its line follows the new table)."""
+    from enn_traffic.experiments.sumo_family import closed_loop_table
     from enn_traffic.runs.controller import Controller
 
     tree, code, started = commit(), code_version(), time.perf_counter()
@@ -109,8 +112,7 @@ def measure_closed_loop_again(paper: Path, family: Family, why: str) -> pd.DataF
                    for s in family.strategies}
     table = closed_loop_table(family, controllers)
     write_csv(paper / family.folder / "closed_loop.csv", table)
-    _record_again(paper, family, "closed_loop.csv", [closed_loop_line(table, family)],
-                  (tree, code, started), why)
+    _record_again(paper, family, "closed_loop.csv", (tree, code, started), why)
     return table
 
 
@@ -131,20 +133,18 @@ def measure_crowds_again(paper: Path, family: Family, why: str, progress: bool =
     measured = measure(Study(paper, progress=progress), family, SUMO_LEARNING,
                        saved_crowd_inputs(paper, family))
     lines = write_tables(paper / family.folder, measured.situations, measured.learners)
-    _record_again(paper, family, "table3.csv, table4.csv", lines, (tree, code, started), why)
+    _record_again(paper, family, "table3.csv, table4.csv", (tree, code, started), why)
     return lines
 
 
-def _record_again(paper: Path, family: Family, tables: str, lines: list[str],
+def _record_again(paper: Path, family: Family, tables: str,
                   made: tuple[str | None, str, float], why: str) -> None:
-    """The family's record in ``summary.json``: ``lines`` replace those of the same table
-    (``family/table:``), and ``tables`` measured again at ``made`` (commit, code, start
-    time) because ``why``; summary.md written again."""
+    """The family's record in ``summary.json``: ``tables`` measured again at ``made``
+    (commit, code, start time) because ``why``; summary.md written again, its lines from
+    the tables as they are now."""
     tree, code, started = made
     records = json.loads((paper / "summary.json").read_text())
     record = records[family.folder]
-    new = {line.split(":", 1)[0]: line for line in lines}
-    record["lines"] = [new.get(line.split(":", 1)[0], line) for line in record["lines"]]
     record.setdefault("measured_again", {})[tables] = {
         "commit": tree, "code": code, "seconds": round(time.perf_counter() - started, 1),
         "date": datetime.now(UTC).strftime("%Y-%m-%d %H:%M UTC"), "why": why}

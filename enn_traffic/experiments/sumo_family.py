@@ -10,12 +10,12 @@ import pandas as pd
 
 from enn_traffic.core.io import write_csv
 from enn_traffic.experiments.choosing import specialists
-from enn_traffic.experiments.crowds.sumo import sumo_tables
+from enn_traffic.experiments.crowds.sumo import crowd_lines, sumo_tables
 from enn_traffic.experiments.families import CITY, SUMO, Family
-from enn_traffic.experiments.fig11 import fig11
+from enn_traffic.experiments.fig11 import fig11, fig11_lines
 from enn_traffic.experiments.study import Study
-from enn_traffic.experiments.table1 import table1
-from enn_traffic.experiments.table2 import table2
+from enn_traffic.experiments.table1 import table1, table1_lines
+from enn_traffic.experiments.table2 import table2, table2_lines
 from enn_traffic.runs.evaluate import EVALUATION_KEY
 from enn_traffic.sim.world import make_world
 
@@ -27,6 +27,25 @@ def replay_against_closed_loop(study: Study, family: Family = SUMO) -> list[str]
     table = closed_loop_table(family, specialists(study, family))
     write_csv(study.out / family.folder / "closed_loop.csv", table)
     return [closed_loop_line(table, family)]
+
+
+def family_lines(study: Study, family: Family) -> list[str]:
+    """A SUMO family's summary lines, from the tables the study wrote into its folder."""
+    family = study.settings(family)
+    table = pd.read_csv(study.out / family.folder / "closed_loop.csv")
+    return [*fig11_lines(study, family), *table1_lines(study, family),
+            *table2_lines(study, family), closed_loop_line(table, family),
+            *crowd_lines(study.out / family.folder)]
+
+
+def sumo_lines(study: Study) -> list[str]:
+    """The SUMO family's summary lines (:func:`family_lines`)."""
+    return family_lines(study, SUMO)
+
+
+def city_lines(study: Study) -> list[str]:
+    """The city family's summary lines (:func:`family_lines`)."""
+    return family_lines(study, CITY)
 
 
 def closed_loop_table(family: Family, controllers: dict[int, np.ndarray]) -> pd.DataFrame:
@@ -58,8 +77,12 @@ def closed_loop_line(table: pd.DataFrame, family: Family) -> str:
 def family_experiments(study: Study, family: Family) -> list[str]:
     """Fig. 11 and Tables 1–4 over a SUMO family's strategies, and the replayed against the
     closed-loop lifetimes, into ``<study folder>/<family folder>/``."""
-    return [*fig11(study, family), *table1(study, family), *table2(study, family),
-            *replay_against_closed_loop(study, family), *sumo_tables(study, family)]
+    fig11(study, family)
+    table1(study, family)
+    table2(study, family)
+    replay_against_closed_loop(study, family)
+    sumo_tables(study, family)
+    return family_lines(study, family)
 
 
 def sumo(study: Study) -> list[str]:

@@ -47,6 +47,14 @@ def table1(study: Study, family: Family = ARENA) -> list[str]:
     fig12_figure(matrix, family.strategies, out / "fig12.png")
     _draw_specialists(study, family, controllers,
                       out / ("arena_paths.png" if family.names == ARENA.names else "paths.png"))
+    return table1_lines(study, family)
+
+
+def table1_lines(study: Study, family: Family = ARENA) -> list[str]:
+    """The summary's Table 1 line, from the ``table1.csv`` the study wrote."""
+    family = study.settings(family)
+    matrix = pd.read_csv(study.out / family.folder / "table1.csv").drop(
+        columns="training_strategy").to_numpy()
     return [summary_line(matrix, f"{family.folder}/table1" if family.folder else "table1")]
 
 

@@ -40,7 +40,6 @@ def table2(study: Study, family: Family = ARENA) -> list[str]:
     worst strategy does best on validation traffic, as Table 1 chooses among its seeds' runs."""
     family = study.settings(family).incremental()
     root, out = study.out, study.out / family.folder
-    threshold = family.threshold
     evolutions = {seed: incremental_evolution(study, family,
                                               out / "runs" / "incremental" / f"seed{seed}", seed)
                   for seed in family.incremental_seeds}
@@ -55,6 +54,18 @@ def table2(study: Study, family: Family = ARENA) -> list[str]:
     write_csv(out / "table2_runs.csv", every.round(1))
     table = every[every["seed"] == seed].drop(columns="seed").reset_index(drop=True)
     write_csv(out / "table2.csv", table.round(1))
+    return table2_lines(study, family)
+
+
+def table2_lines(study: Study, family: Family = ARENA) -> list[str]:
+    """The summary's Table 2 line, from the ``table2.csv`` (the chosen seed's evolution) and
+    ``table2_runs.csv`` (every seed's) the study wrote."""
+    family = study.settings(family).incremental()
+    threshold = family.threshold
+    every = pd.read_csv(study.out / family.folder / "table2_runs.csv")
+    table = pd.read_csv(study.out / family.folder / "table2.csv")
+    seed = next(s for s, rows in every.groupby("seed")  # the seed whose evolution it is
+                if rows.drop(columns="seed").reset_index(drop=True).equals(table))
     last = table.iloc[-1]
     kept = all(last[f"strategy_{s}"] > threshold for s in family.strategies)
     ends = every.groupby("seed").last()[[f"strategy_{s}" for s in family.strategies]].min(axis=1)
@@ -63,5 +74,6 @@ def table2(study: Study, family: Family = ARENA) -> list[str]:
             f"{last['average']:.0f} after iteration {int(last['iteration'])} "
             f"({last['average'] / table['average'].iloc[0]:.0%} of the first; paper 96%); "
             f"every strategy above the {threshold:.0f}-step threshold at the end: {kept} "
-            f"(seed {seed} of {len(chains)}, chosen on validation traffic; each seed's worst "
+            f"(seed {seed} of {every['seed'].nunique()}, chosen on validation traffic; each "
+            "seed's worst "
             "strategy at the end: " + ", ".join(f"{v:.0f}" for v in ends) + ")"]

@@ -91,12 +91,14 @@ def test_everything_the_rules_import_is_in_the_rules():
     assert outside <= DECIDES_NOTHING, sorted(outside - DECIDES_NOTHING)
 
 
-def test_a_table_measured_again_replaces_its_lines_and_says_when_and_at_which_commit(
+def test_a_table_measured_again_says_when_and_at_which_commit_and_its_line_follows(
         tmp_path, root):
-    """``reproduce._record_again``: the family's lines of the re-measured tables are replaced
-    in place, the others kept; summary.md lists the re-measurement with its commit."""
-    import json
+    """``reproduce._record_again``: summary.md lists the re-measurement with its commit, and
+    its lines are those of the tables as they are now: a changed ``table3.csv`` changes the
+    family's Table 3 line and no other."""
     import shutil
+
+    import pandas as pd
 
     from enn_traffic.experiments.families import SUMO
     from enn_traffic.experiments.reproduce import _record_again
@@ -104,20 +106,18 @@ def test_a_table_measured_again_replaces_its_lines_and_says_when_and_at_which_co
     paper = tmp_path / "paper"
     shutil.copytree(root / "results" / "paper", paper,
                     ignore=shutil.ignore_patterns("controllers", "*.png", "runs", "crowds"))
-    before = json.loads((paper / "summary.json").read_text())["sumo"]["lines"]
-    _record_again(paper, SUMO, "table3.csv, table4.csv",
-                  ["sumo/table3: new three", "sumo/table4: new four"],
-                  ("abcdef1234", "0123456789ab", 0.0), "a test")
-    record = json.loads((paper / "summary.json").read_text())["sumo"]
-    tables34 = [line for line in record["lines"]
-                if line.startswith(("sumo/table3", "sumo/table4"))]
-    assert tables34 == ["sumo/table3: new three", "sumo/table4: new four"]
-    assert len(record["lines"]) == len(before)
-    assert [a for a, b in zip(record["lines"], before, strict=True) if a != b] == [
-        "sumo/table3: new three", "sumo/table4: new four"]
-    summary = (paper / "summary.md").read_text()
-    assert "| sumo/table3.csv, table4.csv (measured again: a test) | full | abcdef1234 |" \
-        in summary
+    before = (paper / "summary.md").read_text().splitlines()
+    table3 = pd.read_csv(paper / "sumo" / "table3.csv")
+    table3.loc[0, "winner_collisions_per_s"] = 0.25
+    table3.to_csv(paper / "sumo" / "table3.csv", index=False)
+    _record_again(paper, SUMO, "table3.csv, table4.csv", ("abcdef1234", "0123456789ab", 0.0),
+                  "a test")
+    after = (paper / "summary.md").read_text().splitlines()
+    changed = [line for line in after if line not in before and line.startswith("- ")]
+    assert len(changed) == 1 and changed[0].startswith("- sumo/table3: ")
+    assert "strategy 1: 0.374 -> 0.250" in changed[0]
+    assert any(line.startswith("| sumo/table3.csv, table4.csv (measured again: a test) | full "
+                               "| abcdef1234 | 0123456789ab |") for line in after)
 
 
 def test_old_kernel_folders_are_pruned_but_the_recent_ones(tmp_path):

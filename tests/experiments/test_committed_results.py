@@ -341,19 +341,39 @@ def test_a_committed_generalization_controller_drives_its_table_row(trained, tra
 
 
 def test_summary_md_is_what_its_records_and_csvs_give(root):
-    """The committed summary.md is regenerated, byte for byte, from summary.json and the
-    tables beside it; the closed-loop and regime lines it carries are those their committed
-    CSVs give now (summary.md once said 1442 where closed_loop.csv gave 1386)."""
+    """The committed summary.md is regenerated, byte for byte, from summary.json (when and by
+    which commit each experiment ran) and the tables beside it: every line of it is its
+    experiment's ``*_lines`` reading the committed CSVs now (summary.md once said 1442 where
+    closed_loop.csv gave 1386), and no record stores a line of its own."""
     import json
 
-    from enn_traffic.experiments import regime
+    from enn_traffic.experiments import summary_lines
     from enn_traffic.experiments.reproduce import summary_text
-    from enn_traffic.experiments.sumo_family import closed_loop_line
+    from enn_traffic.experiments.study import Study
 
     paper = root / "results" / "paper"
+    records = json.loads((paper / "summary.json").read_text())
     summary = (paper / "summary.md").read_text()
-    assert summary == summary_text(paper, json.loads((paper / "summary.json").read_text()))
-    for family in (SUMO, CITY):
-        table = pd.read_csv(paper / family.folder / "closed_loop.csv")
-        assert f"- {closed_loop_line(table, family)}\n" in summary
-    assert f"- {regime.summary_line(pd.read_csv(paper / 'regime.csv'))}\n" in summary
+    assert summary == summary_text(paper, records)
+    assert not any("lines" in record for record in records.values())
+    derived = [f"- {line}" for name in records
+               for line in summary_lines(name, Study(paper, progress=False))]
+    assert len(derived) == sum(line.startswith("- ") for line in summary.splitlines()) > 30
+    assert all(line in summary.splitlines() for line in derived)
+
+
+def test_a_changed_csv_changes_its_summary_line(root, tmp_path):
+    """The departures' line follows departures.csv: one difference apart from 0 is named."""
+    import shutil
+
+    from enn_traffic.experiments.departures import departures_lines
+    from enn_traffic.experiments.study import Study
+
+    shutil.copy(root / "results" / "paper" / "departures.csv", tmp_path / "departures.csv")
+    table = pd.read_csv(tmp_path / "departures.csv")
+    before = departures_lines(Study(tmp_path, progress=False))[0]
+    table.loc[2, ["difference_low", "difference_high"]] = [0.001, 0.02]
+    table.to_csv(tmp_path / "departures.csv", index=False)
+    after = departures_lines(Study(tmp_path, progress=False))[0]
+    assert "0 of 19 differences apart from 0" in before
+    assert "1 of 19 differences apart from 0; blame after a respawn, after:" in after

@@ -433,8 +433,17 @@ def write_tables(folder: Path, situations: pd.DataFrame, learners: pd.DataFrame)
     table3 = table(situations, ["initial", "winner"]).merge(
         table4_comparisons(situations, (), [("winner", "initial")]), on="strategy")
     write_csv(folder / "table3.csv", table3)
-    table4_rows = table4(situations)
-    write_csv(folder / "table4.csv", table4_rows)
+    write_csv(folder / "table4.csv", table4(situations))
+    return crowd_lines(folder, learners)
+
+
+def crowd_lines(folder: Path, learners: pd.DataFrame | None = None) -> list[str]:
+    """The summary's Table 3 and Table 4 lines of a SUMO family, from the ``table3.csv``,
+    ``table4.csv`` and ``table4_learners.csv`` in its ``folder``."""
+    table3 = pd.read_csv(folder / "table3.csv")
+    table4_rows = pd.read_csv(folder / "table4.csv")
+    if learners is None:
+        learners = pd.read_csv(folder / "table4_learners.csv")
     bred = learners.groupby("strategy")["generations_bred"].median()
 
     def entries(frame: pd.DataFrame, before: str, after: str) -> str:
