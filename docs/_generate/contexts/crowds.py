@@ -279,6 +279,7 @@ def _departures(paper: Path) -> dict:
         "key_offset": departures.DEPARTURE_KEY - keys.ABLATION_CROWD_TEST.start,
         "level": ablation.LEVEL, "rows": _records(table), "measures": departures.MEASURES,
         "groups": groups,
+        "zero": _records(table[(table["difference_low"] == 0) & (table["difference_high"] == 0)]),
         "widest": _records(after.loc[[after["difference_high"].idxmax()]])[0],
         "falls": [{"name": name, "fall": float(1 - row["after"] / row["first_span"])}
                   for name, row in means.iterrows()],
