@@ -69,15 +69,15 @@ def paper_tables(out: Path) -> list[str]:
         if (base / "table3.csv").exists():
             sections += _sumo_rates(base / "table3.csv", f"Table 3, {label}", PAPER_TABLE3,
                                     "initial", "winner")
-        if (base / "table4.csv").exists():
-            sections += _sumo_table4(base / "table4.csv", f"Table 4 (the window after "
-                                     f"learning; initial: the initial drivers driving on), "
-                                     f"{label}")
+        if (base / "table4.csv").exists() and (base / "table3.csv").exists():
+            sections += _sumo_table4(base, f"Table 4 (initial: the initial drivers' first "
+                                     f"window, the paper's baseline, as in Table 3; after: the "
+                                     f"window after learning), {label}")
     if (out / "table3.csv").exists():
         sections += _rates(out / "table3.csv", "Table 3", PAPER_TABLE3)
-    if (out / "table4.csv").exists():
-        sections += _rates(out / "table4.csv", "Table 4 (the span after learning; initial: the "
-                           "initial drivers driving on)", PAPER_TABLE4)
+    if (out / "table4.csv").exists() and (out / "table3.csv").exists():
+        sections += _table4(out, "Table 4 (initial: the initial drivers' first span, the "
+                            "paper's baseline, as in Table 3; after: the span after learning)")
     return ["## The paper's tables beside these", "", *sections] if sections else []
 
 
@@ -99,19 +99,38 @@ def _sumo_rates(path: Path, title: str, paper, before: str, after: str) -> list[
     return [*lines, ""]
 
 
-def _sumo_table4(path: Path, title: str) -> list[str]:
-    """A SUMO family's Table 4: both arms over the window after learning and their paired
-    difference with its 90% interval."""
-    table = pd.read_csv(path)
+def _table4(folder: Path, title: str) -> list[str]:
+    """The arena's Table 4: the paper's initial column beside the initial drivers' first
+    span (``table3.csv``), its after column beside the learners after learning, and the
+    initial drivers over that same later span (``table4.csv``)."""
+    initial = pd.read_csv(folder / "table3.csv")["initial_collisions_per_s"]
+    table = pd.read_csv(folder / "table4.csv")
+    lines = [f"### {title}: collisions per second, paper (its count) / here (per vehicle)", "",
+             "| strategy | initial | after | here: the initial drivers driving on |",
+             "|---|---|---|---|"]
+    for i, row in table.iterrows():
+        lines.append(f"| {int(row['strategy'])} | {_pair(PAPER_TABLE4[i][0], initial[i])} | "
+                     f"{_pair(PAPER_TABLE4[i][1], row['population_collisions_per_s'])} | "
+                     f"{row['initial_after_collisions_per_s']:g} |")
+    return [*lines, ""]
+
+
+def _sumo_table4(folder: Path, title: str) -> list[str]:
+    """A SUMO family's Table 4: the initial drivers' first window (``table3.csv``) and the
+    learners over the window after learning, and the learners' paired difference from the
+    initial drivers driving on over that window, with its 90% interval."""
+    initial = pd.read_csv(folder / "table3.csv")["initial_collisions_per_s"]
+    table = pd.read_csv(folder / "table4.csv")
     name = "population_minus_initial_after"
     lines = [f"### {title}: collisions per second, paper (its count) / here (per learner); "
-             "the paired difference with its 90% interval over situations; SSM conflicts per "
-             "learner-hour (each arm's SUMO in a fresh process)", "",
-             "| strategy | initial | after | after − initial | conflicts, initial -> after |",
-             "|---|---|---|---|---|"]
+             "the paired difference from the initial drivers driving on, with its 90% "
+             "interval over situations; SSM conflicts per learner-hour (each arm's SUMO in a "
+             "fresh process)", "",
+             "| strategy | initial | after | after − the initial drivers driving on | "
+             "conflicts, driving on -> after |", "|---|---|---|---|---|"]
     for i, row in table.iterrows():
         lines.append(f"| {int(row['strategy'])} | "
-                     f"{_pair(PAPER_TABLE4[i][0], row['initial_after_collisions_per_s'])} | "
+                     f"{_pair(PAPER_TABLE4[i][0], initial[i])} | "
                      f"{_pair(PAPER_TABLE4[i][1], row['population_collisions_per_s'])} | "
                      f"{row[name]:+g} ({row[f'{name}_low']:+g} to {row[f'{name}_high']:+g}) | "
                      f"{row['initial_after_conflicts_per_h']:g} -> "

@@ -150,6 +150,8 @@ def _arena(paper: Path) -> dict:
                                if r["high"] < 0],
         "above_paper_table3": [r["strategy"] for r in facts["table4_vs_paper_table3"]
                                if r["low"] > 0],
+        "below_table3": [r["strategy"] for r in facts["table4_vs_table3"] if r["high"] < 0],
+        "above_table3": [r["strategy"] for r in facts["table4_vs_table3"] if r["low"] > 0],
         "paper_way": {"rows": _records(table3), "strategies": len(table3),
                       **_apart(table3, "paper_winner_minus_winner"),
                       "cut": float((1 - table3["paper_winner_collisions_per_s"]

@@ -486,6 +486,7 @@ def facts(folder: Path) -> dict:
     return {"reductions": reductions,
             "table4_vs_paper_table3": paired_by_strategy(situations, "population",
                                                          "paper_winner"),
+            "table4_vs_table3": paired_by_strategy(situations, "population", "winner"),
             "curve": curve_facts(pd.read_csv(folder / "table4_learning.csv")),
             "trend": trend_facts(pd.read_csv(folder / "table4_learning_ends.csv")),
             "kept": kept}
