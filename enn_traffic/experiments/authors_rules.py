@@ -23,18 +23,15 @@ table (Bonferroni, 90% for the family). Written to ``authors_rules.csv`` and
 
 from __future__ import annotations
 
-import os
-from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass, field, replace
 
 import numpy as np
 import pandas as pd
-from tqdm import tqdm
 
 from enn_traffic.core import keys
 from enn_traffic.core.io import write_csv
-from enn_traffic.core.progress import terminal
 from enn_traffic.experiments.ablation import ABLATION, DRAWS, LEVEL, AuthorsRules, authors_arm
+from enn_traffic.experiments.common import over_situations
 from enn_traffic.experiments.departures import strategy_world
 from enn_traffic.experiments.study import Study
 from enn_traffic.report.stats import bootstrap_interval
@@ -125,15 +122,8 @@ def rules_table(situations: pd.DataFrame, seed: int = 0) -> pd.DataFrame:
 def authors_rules(study: Study) -> list[str]:
     """``authors_rules.csv``: the authors' set-up's three rules, each alone and together."""
     settings = study.settings(STEPS)
-    count = settings.situations
-    workers = min(count, os.cpu_count() or 1)
-    with ProcessPoolExecutor(workers) if workers > 1 else _InProcess() as pool:
-        done = pool.map(situation_rows, range(count), [settings] * count)
-        rows = [row for situation in tqdm(done, total=count, desc="authors' rules",
-                                          unit="situation", disable=not study.progress,
-                                          file=terminal())
-                for row in situation]
-    situations = pd.DataFrame(rows)
+    situations = over_situations(situation_rows, settings.situations, settings,
+                                 "authors' rules", study.progress)
     table = rules_table(situations)
     write_csv(study.out / "authors_rules_situations.csv", situations.round(5))
     write_csv(study.out / "authors_rules.csv", table)
@@ -149,14 +139,3 @@ def authors_rules_lines(study: Study) -> list[str]:
                                          f"to {row.fall_high:.0%})"
                                          for row in table.itertuples())]
 
-
-class _InProcess:
-    """:class:`ProcessPoolExecutor`'s ``map`` in this process (one situation or one core)."""
-
-    def __enter__(self) -> _InProcess:
-        return self
-
-    def __exit__(self, *exc) -> None:
-        return None
-
-    map = staticmethod(map)

@@ -3,8 +3,10 @@ here or on Ray."""
 
 from __future__ import annotations
 
+import os
 import tempfile
-from collections.abc import Hashable
+from collections.abc import Callable, Hashable
+from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 
 import numpy as np
@@ -130,3 +132,29 @@ def first_generation(table: pd.DataFrame, threshold: float) -> float:
     """The first generation whose best fitness reaches ``threshold`` (NaN if none)."""
     hits = table.loc[table["best_fitness"] >= threshold, "generation"]
     return float(hits.iloc[0]) if len(hits) else float("nan")
+
+
+def over_situations(rows_of: Callable[..., list[dict]], count: int, settings: object,
+                    desc: str, progress: bool) -> pd.DataFrame:
+    """``rows_of(situation, settings)`` for situations 0..count-1, every core at once (each
+    situation is independent and draws from its own keys, so the rows are the same on any
+    number of workers), in situation order, as one table."""
+    workers = min(count, os.cpu_count() or 1)
+    with ProcessPoolExecutor(workers) if workers > 1 else _InProcess() as pool:
+        done = pool.map(rows_of, range(count), [settings] * count)
+        return pd.DataFrame([row for rows in tqdm(done, total=count, desc=desc,
+                                                  unit="situation", disable=not progress,
+                                                  file=terminal())
+                             for row in rows])
+
+
+class _InProcess:
+    """:class:`ProcessPoolExecutor`'s ``map`` in this process (one situation or one core)."""
+
+    def __enter__(self) -> _InProcess:
+        return self
+
+    def __exit__(self, *exc) -> None:
+        return None
+
+    map = staticmethod(map)

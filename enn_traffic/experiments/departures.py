@@ -27,13 +27,11 @@ from functools import cache
 
 import numpy as np
 import pandas as pd
-from tqdm import tqdm
 
 from enn_traffic.config.shipped import shipped_scenario
 from enn_traffic.config.traffic import STRATEGIES
 from enn_traffic.core import keys
 from enn_traffic.core.io import write_csv
-from enn_traffic.core.progress import terminal
 from enn_traffic.experiments.ablation import (
     ABLATION,
     DRAWS,
@@ -43,6 +41,7 @@ from enn_traffic.experiments.ablation import (
     authors_arm,
     start_poses,
 )
+from enn_traffic.experiments.common import over_situations
 from enn_traffic.experiments.crowds.arena import SECONDS
 from enn_traffic.experiments.families import ARENA
 from enn_traffic.experiments.study import Study
@@ -150,12 +149,8 @@ def departures_table(situations: pd.DataFrame, seed: int = 0) -> pd.DataFrame:
 def departures(study: Study) -> list[str]:
     """``departures.csv``: each of the three departures' effect in the authors' set-up."""
     settings = study.settings(DEPARTURES)
-    count = settings.situations
-    rows = []
-    for situation in tqdm(range(count), desc="departures", unit="situation",
-                          disable=not study.progress, file=terminal()):
-        rows.extend(situation_rows(situation, settings))
-    situations = pd.DataFrame(rows)
+    situations = over_situations(situation_rows, settings.situations, settings, "departures",
+                                 study.progress)
     table = departures_table(situations)
     write_csv(study.out / "departures_situations.csv", situations.round(5))
     write_csv(study.out / "departures.csv", table)
