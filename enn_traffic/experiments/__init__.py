@@ -12,7 +12,6 @@ the statistics of choosing controllers (:mod:`~enn_traffic.experiments.choosing`
 
 from __future__ import annotations
 
-import importlib
 from typing import TYPE_CHECKING
 
 from enn_traffic.core.registry import Registry
@@ -42,9 +41,13 @@ EXPERIMENTS = Registry("experiment", {
 })
 
 
+# Each experiment's summary.md lines, from the tables it wrote: the function named as the
+# experiment's with ``_lines`` (``fig7`` -> ``fig7_lines``), so a changed table changes its line.
+SUMMARY_LINES = Registry("summary lines", {name: f"{EXPERIMENTS.target(name)}_lines"
+                                           for name in EXPERIMENTS})
+
+
 def summary_lines(name: str, study: Study) -> list[str]:
     """Experiment ``name``'s lines of ``summary.md``, from the tables it wrote into the
-    study's folder: the function named as the experiment's with ``_lines`` (``fig7`` →
-    ``fig7_lines``), so a changed table changes its line."""
-    module, attribute = EXPERIMENTS.target(name).split(":")
-    return getattr(importlib.import_module(module), f"{attribute}_lines")(study)
+    study's folder (:data:`SUMMARY_LINES`)."""
+    return SUMMARY_LINES[name](study)
