@@ -61,9 +61,8 @@ def context(root: Path) -> dict:
     best = generations["best_fitness"]
     start = generations["traffic_at_start"]
     from enn_traffic.experiments import EXPERIMENTS
-    from enn_traffic.runs.generations_csv import COLUMNS
 
-    return {"readme": {"commands": synopsis(), "generations_columns": list(COLUMNS),
+    return {"readme": {"commands": synopsis(),
                        "experiments": experiments(root), "every_experiment": len(EXPERIMENTS),
                        "city": {
         "generations": len(generations),
