@@ -126,15 +126,18 @@ def _ends(results: SituationResults, scenario: Scenario) -> list[dict]:
 
 
 def _safety(safety, column: int, lifetime_s: float) -> dict[str, float]:
-    """The SSM columns of a closed-loop row (none in replay): lowest TTC, conflicts by
-    measure, and all three per hour of the learner's life."""
+    """The safety columns of a closed-loop row (none in replay): SSM's lowest TTC, its
+    conflicts by measure and all three per hour of the learner's life; the two-dimensional
+    time to collision over the footprints (:mod:`enn_traffic.sim.safety`), its least and the
+    steps below SSM's TTC threshold (docs/sumo.md, "Safety figures")."""
     if safety is None:
         return {}
-    min_ttc, ttc, drac, pet = safety[0, column]
+    min_ttc, ttc, drac, pet, min_ttc_2d, ttc_2d_steps = safety[0, column]
     hours = max(lifetime_s, 1e-9) / 3600.0
     return {"min_ttc_s": min_ttc, "ttc_conflicts": int(ttc), "drac_conflicts": int(drac),
             "pet_conflicts": int(pet), "ttc_conflicts_per_h": ttc / hours,
-            "drac_conflicts_per_h": drac / hours, "pet_conflicts_per_h": pet / hours}
+            "drac_conflicts_per_h": drac / hours, "pet_conflicts_per_h": pet / hours,
+            "min_ttc_2d_s": min_ttc_2d, "ttc_2d_steps": int(ttc_2d_steps)}
 
 
 def _evaluate_pair(label: str, controller: Controller, scenario: Scenario, episodes: int

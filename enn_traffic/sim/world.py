@@ -82,8 +82,9 @@ class SituationResults:
     suffered: np.ndarray
     vehicles: int = 1
     traffic: np.ndarray | None = None
-    # (P, E, 4), closed loop with SUMO only: the lowest time-to-collision its SSM device saw
-    # (s; inf: none), then conflicts by TTC, DRAC and PET
+    # (P, E, 6), closed loop with SUMO only: the lowest time-to-collision its SSM device saw
+    # (s; inf: none), then conflicts by TTC, DRAC and PET; the least two-dimensional time to
+    # collision over the footprints (enn_traffic.sim.safety) and the steps it was below 1.5 s
     safety: np.ndarray | None = None
     hit: np.ndarray | None = None
     hit_vehicle: np.ndarray | None = None  # (P, E) objects: (id, type), or None

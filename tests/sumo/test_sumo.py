@@ -271,15 +271,19 @@ def test_closed_loop_records_the_learners_conflicts_with_ssm(tmp_path, root):
     behind the learner, which starts 15 m along the lane and enters SUMO after its first step
     (10 m/s, front at x = 31 m, rear at 26.7 m): time-to-collision 11.7 m / 10 m/s = 1.17 s,
     below 1.5 s; the deceleration that avoids a crash, 10² / (2 · 11.7) = 4.3 m/s², above 3.
-    One conflict, by TTC and by DRAC. A replay has no learner in SUMO: no figures."""
+    One conflict, by TTC and by DRAC. The two-dimensional time to collision over the
+    footprints sees the same encounter within a step's closing (0.1 s): it reads the car's
+    speed from its travel since the step before. A replay has no learner in SUMO: no
+    figures."""
     length = SumoWorld(sumo_scenario(tmp_path, root, FOLLOWER)).spec.chromosome_length
     straight = np.zeros((1, length))
     settings = dict(lane="g0_0to1_0_0", offset=15.0, steps=90, warmup=0.0, episodes=1)
     closed = make_world(sumo_scenario(tmp_path, root, FOLLOWER, mode="closed-loop", **settings))
     safety = closed.evaluate(straight).safety[0, 0]
-    min_ttc, ttc, drac, pet = safety
+    min_ttc, ttc, drac, pet, min_ttc_2d, _ = safety
     assert min_ttc == pytest.approx(1.17, abs=0.01)
     assert (ttc, drac, pet) == (1, 1, 0)
+    assert min_ttc_2d == pytest.approx(min_ttc, abs=0.1)
     replay = make_world(sumo_scenario(tmp_path, root, FOLLOWER, **settings))
     assert replay.evaluate(straight).safety is None
 
@@ -289,16 +293,19 @@ def test_ssm_sees_the_learner_closing_on_a_vehicle_ahead(tmp_path, root):
     car's rear at its start, it closes at 8 m/s and runs into it after about 3.2 s. On the way
     the time-to-collision, gap / 8 m/s, falls through 1.5 s towards 0: SUMO's SSM device on
     the learner records the conflict with a finite, small TTC (the device once saw nothing
-    of a learner that SUMO itself drove: issue 60)."""
+    of a learner that SUMO itself drove: issue 60). The two-dimensional time to collision
+    reaches 0 as the bodies touch, and is below 1.5 s from 12 m (8 m/s · 1.5 s) on: 12 m at
+    0.8 m a step is 15 steps, and the step of the contact."""
     length = SumoWorld(sumo_scenario(tmp_path, root, LEADER)).spec.chromosome_length
     straight = np.zeros((1, length))
     scenario = sumo_scenario(tmp_path, root, LEADER, mode="closed-loop", lane="g0_0to1_0_0",
                              offset=15.0, steps=60, warmup=0.0, episodes=1)
     results = make_world(scenario).evaluate(straight)
-    min_ttc, ttc, drac, _ = results.safety[0, 0]
+    min_ttc, ttc, drac, _, min_ttc_2d, below = results.safety[0, 0]
     assert results.outcome[0, 0] == COLLIDED and results.hit[0, 0] >= 0  # the car, not a wall
     assert min_ttc < 0.5
     assert ttc == 1 and drac == 1
+    assert (min_ttc_2d, below) == (0.0, 16)
 
 
 def test_the_learners_speed_factor_lets_them_go_their_speed_on_the_slowest_lane(root):

@@ -32,6 +32,7 @@ from enn_traffic.core.progress import slow_step
 from enn_traffic.roads.network import lane_spots
 from enn_traffic.sim.arena import LearnerWorld
 from enn_traffic.sim.rules import Physics
+from enn_traffic.sim.safety import least_time_to_contact
 from enn_traffic.sim.sumo.replay import (
     RUNNING,
     clear_start,
@@ -53,8 +54,10 @@ class ClosedLoopLife(NamedTuple):
     """One life in a live SUMO: steps moved, outcome, collisions suffered, vehicle-steps
     within sensor range, most within range at once, what it ran into (``NO_HIT``, ``HIT_WALL``
     or the vehicle's number), vehicles on the network at the start, the conflicts its SSM
-    device recorded, the SUMO id and type of the vehicle it ran into (or None), and its pose
-    (x, y, heading) as the life ended."""
+    device recorded, the SUMO id and type of the vehicle it ran into (or None), its pose
+    (x, y, heading) as the life ended, and the two-dimensional time to collision over the
+    bodies' footprints (:mod:`~enn_traffic.sim.safety`): its least over the life (s) and the
+    steps it was below SSM's TTC threshold."""
 
     steps: int
     outcome: int
@@ -66,6 +69,8 @@ class ClosedLoopLife(NamedTuple):
     conflicts: ssm.Conflicts
     hit_vehicle: tuple[str, str] | None = None
     end: tuple[float, float, float] = (math.nan, math.nan, math.nan)
+    min_ttc_2d: float = math.inf
+    ttc_2d_steps: int = 0
 
 
 class TracedLife(NamedTuple):
@@ -300,8 +305,9 @@ class SumoWorld(LearnerWorld):
                              for i in range(6)])
                 at_start.append(np.array([life.at_start for life in lives]))
                 safety.append(np.array([[life.conflicts.min_ttc, life.conflicts.ttc,
-                                         life.conflicts.drac, life.conflicts.pet]
-                                        for life in lives], dtype=np.float64).reshape(-1, 4))
+                                         life.conflicts.drac, life.conflicts.pet,
+                                         life.min_ttc_2d, life.ttc_2d_steps]
+                                        for life in lives], dtype=np.float64).reshape(-1, 6))
                 hit_vehicle.append(objects([life.hit_vehicle for life in lives]))
                 ends.append(np.array([life.end for life in lives], dtype=np.float64))
                 continue
@@ -370,10 +376,18 @@ class SumoWorld(LearnerWorld):
                                                   live.centres, live.before, live.now, limit,
                                                   live.state)
             step = self._steps[kind]
+            least, below = math.inf, 0
+            speed, dt = self.scenario.vehicle.speed, self.scenario.vehicle.dt
             while True:
                 if frames is not None:
                     frames.append((live.state.learner.pose[0].copy(), live.ids[live.now].copy(),
                                    live.corners[live.now].copy()))
+                heading = live.state.learner.pose[0, 2]
+                ttc = least_time_to_contact(
+                    live.state.learner.corners[0], speed * math.cos(heading),
+                    speed * math.sin(heading), live.ids, live.corners, live.centres,
+                    live.before, live.now, dt, live.followed)
+                least, below = min(least, ttc), below + (ttc < ssm.SSM_THRESHOLDS["TTC"])
                 outcome = step(live.t, genes, self.layer_sizes, live.physics, self.geometry,
                                live.ids, live.corners, live.centres, live.before, live.now,
                                limit, live.state)
@@ -385,7 +399,8 @@ class SumoWorld(LearnerWorld):
         state, hit = live.state, int(live.state.hit[0])
         return ClosedLoopLife(live.t, int(outcome), int(state.suffered[0]), int(state.met[0]),
                               int(state.met[1]), hit, live.at_start, conflicts,
-                              live.vehicle(hit), tuple(state.learner.pose[0].tolist()))
+                              live.vehicle(hit), tuple(state.learner.pose[0].tolist()),
+                              least, below)
 
     def trace(self, chromosome: np.ndarray, key: int = 0, situation: int = 0,
               max_steps: int | None = None) -> tuple[np.ndarray, int]:
@@ -496,7 +511,7 @@ class LiveTraffic:
             # vehicles' travel.
             travel = (simulation.largest_speed() + vehicle.speed) * vehicle.dt
             self.reach = world.scenario.max_range + 2.0 * travel
-            simulation.follow_learner(self.reach + 4.0 * self.physics.radius)
+            simulation.follow_learner(self.followed)
         except BaseException:
             simulation.close()
             raise
@@ -512,7 +527,12 @@ class LiveTraffic:
         if radius > self.physics.radius:
             self.physics = self.physics._replace(radius=radius)
             if self.reach is not None:
-                self.simulation.follow_learner(self.reach + 4.0 * radius)
+                self.simulation.follow_learner(self.followed)
+
+    @property
+    def followed(self) -> float:
+        """How far from the learner SUMO's vehicles are read each step (m)."""
+        return self.reach + 4.0 * self.physics.radius
 
     def advance(self) -> None:
         """The learner where it moved, SUMO one step on, its vehicles read."""
