@@ -33,6 +33,7 @@ def test_a_changed_table_changes_the_document(render, root, tmp_path):
     folder = tmp_path / "results" / "crowd_brunswick"
     shutil.copytree(root / "results" / "crowd_brunswick", folder,
                     ignore=shutil.ignore_patterns("*.npz", "*.gif", "*.png"))
+    shutil.copytree(root / "results" / "safety", tmp_path / "results" / "safety")
     table = pd.read_csv(folder / "table3.csv")
     table["winner_collisions_per_s"] = 9.8765
     table.to_csv(folder / "table3.csv", index=False)
