@@ -5,7 +5,7 @@ from __future__ import annotations
 import contextlib
 from pathlib import Path
 
-from enn_traffic.cli.args import EPILOG, episodes, nonempty_path, seed, sumo_folder
+from enn_traffic.cli.args import EPILOG, episodes, nonempty_path, note, seed, sumo_folder
 from enn_traffic.core.errors import InputError
 
 
@@ -112,13 +112,19 @@ def _show_and_write(table, controllers: dict, scenarios: list, out: Path | None)
     """``evaluate``'s table on the terminal, and into ``out`` (with its matrix files when
     several pairs ran)."""
     from enn_traffic.core.io import write_csv
-    from enn_traffic.runs.evaluate import fitness_matrix, write_batch
+    from enn_traffic.runs.evaluate import distinct_starts, fitness_matrix, write_batch
 
     single = len(controllers) == 1 and len(scenarios) == 1
     if single:
         print(table.drop(columns="controller").to_string(index=False))
     else:
         print(fitness_matrix(table).round(1).to_string())
+    distinct, situations = distinct_starts(table)
+    if distinct < situations:
+        note(f"only {distinct} of {situations} situations start from distinct states: "
+             "situations sharing a warm-up and the learner's start (same_start_as) differ "
+             "only by what SUMO draws after it; the matrix counts each starting state once. "
+             "Raise traffic.warmup_states for more distinct ones.")
     if out:
         written = [out] if single else write_batch(table, out)
         if single:

@@ -70,6 +70,8 @@ def evaluate_controller(controller: Controller, scenario: Scenario, episodes: in
     fitness = SituationResults.lifetime_fitness(steps, outcome)
     traffic = results.traffic[0]
     ends = _ends(results, scenario)
+    alike = (world.first_alike(EVALUATION_KEY) if hasattr(world, "first_alike")
+             else list(range(episodes)))  # SUMO's shared warm-ups can start two alike
     rows = []
     for column, strategy in enumerate(world.situation_labels()):
         rows.append({
@@ -77,6 +79,7 @@ def evaluate_controller(controller: Controller, scenario: Scenario, episodes: in
             "track": world.track.name,
             "strategy": strategy,
             "situation": column % episodes,
+            "same_start_as": alike[column % episodes],
             "steps": int(steps[column]),
             "lifetime_s": steps[column] * vehicle.dt,
             "distance_m": steps[column] * vehicle.speed * vehicle.dt,
@@ -196,11 +199,24 @@ def evaluate_batch(controllers: dict[str, Controller], scenarios: Sequence[Scena
 
 
 def fitness_matrix(table: pd.DataFrame) -> pd.DataFrame:
-    """Mean fitness of each controller (rows, in table order) on each scenario (columns)."""
-    matrix = table.pivot_table(index="controller", columns="scenario", values="fitness",
-                               aggfunc="mean", sort=False)
+    """Mean fitness of each controller (rows, in table order) on each scenario (columns), over
+    its distinct starting states: situations that start alike (``same_start_as``) count once,
+    by their mean."""
+    starts = table.groupby(["controller", "scenario", "strategy", "same_start_as"],
+                           sort=False)["fitness"].mean().reset_index()
+    matrix = starts.pivot_table(index="controller", columns="scenario", values="fitness",
+                                aggfunc="mean", sort=False)
     matrix.columns.name = None
     return matrix
+
+
+def distinct_starts(table: pd.DataFrame) -> tuple[int, int]:
+    """(distinct starting states, situations) of each (controller, scenario) pair: the fewest
+    distinct over the pairs, and the situations of that pair."""
+    pairs = table.groupby(["controller", "scenario"], sort=False)
+    counts = pairs.apply(lambda rows: (rows[["strategy", "same_start_as"]].drop_duplicates()
+                                       .shape[0], len(rows)), include_groups=False)
+    return min(counts, key=lambda c: c[0] / c[1])
 
 
 def matrix_files(out: Path) -> tuple[Path, Path]:
@@ -218,9 +234,10 @@ def write_batch(table: pd.DataFrame, out: Path) -> list[Path]:
     table_file, picture = matrix_files(out)
     write_csv(out, table)
     write_csv(table_file, matrix.reset_index())
-    situations = int(table.groupby(["controller", "scenario"]).size().max())
-    heat_map(matrix, picture, f"mean fitness over {situations} situation(s)",
-             "mean fitness [steps]")
+    distinct, situations = distinct_starts(table)
+    over = (f"{situations} situation(s)" if distinct == situations
+            else f"{distinct} distinct starting states of {situations} situations")
+    heat_map(matrix, picture, f"mean fitness over {over}", "mean fitness [steps]")
     return [out, table_file, picture]
 
 

@@ -414,3 +414,27 @@ def test_a_scenario_in_a_folder_named_with_a_comma_and_a_space_runs(tmp_path, ro
                          "tournament_size = 2\ngenerations = 1")
     assert main(["run", str(path), "--out", str(tmp_path / "out"), "--quiet"]) == 0
     assert (tmp_path / "out" / "best.npz").is_file()
+
+
+def test_situations_that_start_alike_are_named_and_counted_once(tmp_path, road_net, monkeypatch):
+    """One shared warm-up and one start for three held-out situations: all three start from
+    the same state (``same_start_as`` 0), ``evaluate`` says so and its matrix counts the
+    starting state once; with a warm-up each (none shared), three distinct."""
+    from enn_traffic.runs.controller import Controller
+    from enn_traffic.runs.evaluate import distinct_starts, evaluate_controller, fitness_matrix
+
+    monkeypatch.setenv(states.STATE_FOLDER_VARIABLE, str(tmp_path / "states"))
+    shared = load_scenario(road_scenario(tmp_path, road_net, warmup=30.0,
+                                         extra="warmup_states = 1"))
+    world = make_world(shared)
+    controller = Controller.from_scenario(shared, straight(world)[0], 0.0, 0)
+    table = evaluate_controller(controller, shared, episodes=3).assign(controller="c")
+    assert table["same_start_as"].tolist() == [0, 0, 0]
+    assert distinct_starts(table) == (1, 3)
+    twice = pd.concat([table, table.assign(same_start_as=[0, 1, 2], fitness=[9.0, 9.0, 9.0],
+                                           scenario="other")])
+    matrix = fitness_matrix(twice)
+    assert matrix.loc["c", shared.name] == pytest.approx(table["fitness"].mean())
+    (tmp_path / "own").mkdir()
+    own = load_scenario(road_scenario(tmp_path / "own", road_net, warmup=30.0))
+    assert evaluate_controller(controller, own, episodes=3)["same_start_as"].tolist() == [0, 1, 2]

@@ -162,6 +162,21 @@ class SumoWorld(LearnerWorld):
         return [np.asarray(self.start_of(key, 0, e), dtype=np.float64)
                 for e in range(self.scenario.traffic.episodes)]
 
+    def first_alike(self, key: int) -> list[int]:
+        """For each traffic situation of a traffic key, the first one that starts from the
+        same state: the same shared warm-up (loaded without SUMO's random generators, so only
+        the randomness SUMO draws after it can tell them apart) and the same learner start;
+        itself where it is the first, or starts from a warm-up of its own."""
+        first: dict[tuple, int] = {}
+        alike = []
+        for index, (start, warmup) in enumerate(zip(self.situation_starts(key),
+                                                    self.warmups(key), strict=True)):
+            if warmup is None:
+                alike.append(index)
+            else:
+                alike.append(first.setdefault((warmup, *np.round(start, 6).tolist()), index))
+        return alike
+
     def warm_state(self, seed: int, index: int | None = None) -> Path | None:
         """The SUMO state a situation of ``seed`` starts from: shared warm-up ``index`` (by
         default drawn by the seed, as a held-out situation's), or None for the situation's own
