@@ -66,6 +66,13 @@ def test_crowd_writes_tables_3_and_4_the_curve_the_controllers_and_the_gif(crowd
         table4.columns)
     curve = pd.read_csv(out / "table4_learning.csv")
     assert len(curve) == 2  # the 10 s of learning in windows of 5 s
+    cost = pd.read_csv(out / "crowd_cost.csv")  # what each arm of each situation cost
+    assert len(cost) == 2 * 3 and set(cost["arm"]) == {"initial drivers", "the winner",
+                                                       "learning together"}
+    learner_s = 4 * 10 * 10  # 4 learners, 10 s of SUMO time (two windows of 5 s), 0.1 s steps
+    assert (cost[cost["arm"] == "learning together"]["learner_steps"] == learner_s + 200).all()
+    assert ((cost["sumo_s"] > 0) & (cost["sumo_s"] < cost["wall_s"])
+            & (cost["wall_s"] < cost["situation_wall_s"])).all()
 
 
 def test_a_resumed_crowd_measures_nothing_again_and_another_folder_is_refused(crowd_run, capsys):

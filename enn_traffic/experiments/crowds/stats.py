@@ -31,6 +31,7 @@ class SituationResult:
     learners: list[dict[str, int]]
     controllers: np.ndarray
     traces: tuple
+    cost: dict | None = None  # a SUMO crowd's: its wall time, and each arm's (crowd_cost.csv)
 
 
 @dataclass

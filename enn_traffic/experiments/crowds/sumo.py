@@ -45,6 +45,7 @@ from __future__ import annotations
 import hashlib
 import json
 import os
+import time
 from collections.abc import Callable
 from dataclasses import asdict
 from pathlib import Path
@@ -120,7 +121,9 @@ def learn_together(world: SumoWorld, winner: np.ndarray, evolved: np.ndarray, si
     of the window after it (each learner its evolved controller) and the learning.
     ``winner`` (G,) and ``evolved`` (N, G) in the source layout. SUMO runs in a fresh process
     (:mod:`enn_traffic.sumo.fresh`)."""
-    return fresh(_learning_arm, world.scenario, winner, evolved, situation, learning, key)
+    learnt, after, online, _ = fresh(_learning_arm, world.scenario, winner, evolved, situation,
+                                     learning, key)
+    return learnt, after, online
 
 
 def _learning_arm(scenario, winner, evolved, situation, learning, key):
@@ -132,14 +135,15 @@ def _learning_arm(scenario, winner, evolved, situation, learning, key):
         learnt = [crowd.run(learning.window_s, np.tile(winner, (count, 1)), online)
                   for _ in range(learning.windows)]
         after = crowd.run(learning.window_s, online.evolved_controllers())
-    return learnt, after, online
+    return learnt, after, online, crowd.cost
 
 
 def _driving_arm(scenario, seed: int, genes: np.ndarray, window_s: float, windows: int):
-    """An arm whose drivers keep their controllers: a run per window, SUMO in this process."""
+    """An arm whose drivers keep their controllers: a run per window, SUMO in this process;
+    and what it cost (:attr:`SumoCrowd.cost`)."""
     world = make_world(scenario)
     with SumoCrowd(world, seed) as crowd:
-        return [crowd.run(window_s, genes) for _ in range(windows)]
+        return [crowd.run(window_s, genes) for _ in range(windows)], crowd.cost
 
 
 def situation_result(world: SumoWorld, winner: np.ndarray, evolved: np.ndarray, situation: int,
@@ -153,14 +157,18 @@ def situation_result(world: SumoWorld, winner: np.ndarray, evolved: np.ndarray, 
     rng = np.random.default_rng([scenario.traffic.seed, key, situation])
     drivers = world.spec.in_source_layout(
         rng.uniform(-1, 1, (count, world.spec.chromosome_length)))
-    initial, winning, learning_arm = fresh_calls([
+    started = time.perf_counter()
+    (initial, initial_cost), (winning, winner_cost), learning_arm = fresh_calls([
         (_driving_arm, scenario, seed, drivers, learning.window_s, windows + 1),
         (_driving_arm, scenario, seed, np.tile(winner, (count, 1)), learning.window_s,
          windows + 1),
         (_learning_arm, scenario, winner, evolved, situation, learning, key)],
         workers=min(3, os.cpu_count() or 1))
     arms = {"initial": initial, "winner": winning}
-    learnt, after, online = learning_arm
+    learnt, after, online, learning_cost = learning_arm
+    cost = {"situation_wall_s": time.perf_counter() - started,
+            "arms": {"initial drivers": initial_cost, "the winner": winner_cost,
+                     "learning together": learning_cost}}
     measured = {"initial": arms["initial"][0], "winner": arms["winner"][0],
                 "initial_after": arms["initial"][-1], "winner_after": arms["winner"][-1],
                 "population": after}
@@ -174,7 +182,7 @@ def situation_result(world: SumoWorld, winner: np.ndarray, evolved: np.ndarray, 
                     "winner_driving_on": arms["winner"][w].rate(counting)}
                    for w in range(windows)]
     return SituationResult(rates, window_rows, online.learner_rows(),
-                           online.evolved_controllers(), ())
+                           online.evolved_controllers(), (), cost)
 
 
 def crowd_world(family: Family, strategy: int) -> SumoWorld:
@@ -352,7 +360,8 @@ def measure_situations(folder: Path, inputs: dict[int, tuple[SumoWorld, np.ndarr
         path, measured_as = jobs[label]
         kept[label] = _keep(path, measured_as, {"rates": result.rates,
                                                 "windows": result.windows,
-                                                "learners": result.learners})
+                                                "learners": result.learners,
+                                                "cost": result.cost})
         world = inputs[strategy][0]
         if situation == 0 and save_learner is not None:  # committed with the tables
             for k, genes in enumerate(world.spec.from_source_layout(result.controllers)):
@@ -384,6 +393,7 @@ def measure_situations(folder: Path, inputs: dict[int, tuple[SumoWorld, np.ndarr
         windows += [label | window for window in result["windows"]]
         learners += [label | learner for learner in result["learners"]]
     measured = Measured(pd.DataFrame(rows), pd.DataFrame(windows), pd.DataFrame(learners))
+    write_csv(folder / "crowd_cost.csv", cost_table(kept))
     curve = learning_curve(measured.windows)
     write_csv(folder / "crowd_situations.csv", measured.situations)
     write_csv(folder / "table4_learners.csv", measured.learners)
@@ -396,6 +406,28 @@ def measure_situations(folder: Path, inputs: dict[int, tuple[SumoWorld, np.ndarr
                           f"{title}, mean of the situations in {learning.window_s:g} s windows",
                           "collisions per learner-second")
     return measured
+
+
+COST_COLUMNS = ["strategy", "situation", "arm", "situation_wall_s", "learner_steps", "wall_s",
+                "sumo_s", "learner_steps_per_s", "sumo_share"]
+
+
+def cost_table(kept: dict) -> pd.DataFrame:
+    """``crowd_cost.csv``: per situation and arm, the learner-steps it drove, its wall time,
+    the share of it inside SUMO's step, and the situation's wall time (its three arms side by
+    side). A situation kept from before costs were recorded has no rows."""
+    rows = []
+    for (strategy, situation), result in kept.items():
+        cost = result.get("cost")
+        for arm, spent in (cost or {}).get("arms", {}).items():
+            wall = max(spent["wall_s"], 1e-9)
+            rows.append({"strategy": strategy, "situation": situation, "arm": arm,
+                         "situation_wall_s": round(cost["situation_wall_s"], 2),
+                         "learner_steps": spent["learner_steps"],
+                         "wall_s": round(spent["wall_s"], 2), "sumo_s": round(spent["sumo_s"], 2),
+                         "learner_steps_per_s": round(spent["learner_steps"] / wall, 1),
+                         "sumo_share": round(spent["sumo_s"] / wall, 3)})
+    return pd.DataFrame(rows, columns=COST_COLUMNS)
 
 
 def table(situations: pd.DataFrame, columns: list[str]) -> pd.DataFrame:

@@ -188,7 +188,21 @@ def summary(out: Path) -> list[str]:
         lines.append("note: no learner bred a generation, so 'after learning together' is the "
                      "copied start population; give crowd.learning_s more time than "
                      "crowd.population_size lives of crowd.life_cap_steps steps")
-    return lines
+    return lines + cost_lines(pd.read_csv(out / "crowd_cost.csv"))
+
+
+def cost_lines(cost) -> list[str]:
+    """What the crowd cost (``crowd_cost.csv``): each arm's learner-steps per second and SUMO's
+    share of its wall time, and the wall time per situation (its arms side by side)."""
+    if cost.empty:
+        return ["cost: not recorded (every situation was measured before costs were kept)"]
+    arms = cost.groupby("arm", sort=False)[["learner_steps", "wall_s", "sumo_s"]].sum()
+    per_arm = "; ".join(f"{arm} {row.learner_steps / max(row.wall_s, 1e-9):,.0f} "
+                        f"learner-steps/s, SUMO {row.sumo_s / max(row.wall_s, 1e-9):.0%} of it"
+                        for arm, row in arms.iterrows())
+    situations = cost.drop_duplicates(["strategy", "situation"])["situation_wall_s"]
+    return [f"cost (crowd_cost.csv): {per_arm}; {situations.mean():.1f} s per situation "
+            f"({len(situations)} measured here)"]
 
 
 def record_crowd(scenario: Scenario, genes: np.ndarray, seed: int, seconds: float

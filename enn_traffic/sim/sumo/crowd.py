@@ -24,6 +24,7 @@ steps SUMO.
 
 from __future__ import annotations
 
+import time
 from dataclasses import dataclass
 from typing import NamedTuple
 
@@ -338,6 +339,7 @@ class SumoCrowd:
         self._starts = starts
         self._simulation: Simulation | None = None
         self._runs: list[SumoCrowdRun] = []
+        self.cost = {"learner_steps": 0, "wall_s": 0.0, "sumo_s": 0.0}  # of every run so far
 
     def __enter__(self) -> SumoCrowd:
         return self
@@ -424,7 +426,9 @@ class SumoCrowd:
     def advance(self) -> None:
         """The learners where they moved, SUMO one step on, its vehicles read."""
         self._move_learners()
+        started = time.perf_counter()
         self._simulation.step()
+        self.cost["sumo_s"] += time.perf_counter() - started
         self.before, self.now = self.now, self.before
         self._read()
         self.t += 1
@@ -444,6 +448,7 @@ class SumoCrowd:
         and tells it of every life it ends and every life that reaches its cap."""
         if self._simulation is None:
             self.start()
+        started = time.perf_counter()
         world, count, lives = self.world, self.count, self.lives
         learners = lives.learners  # its K-row arrays stay when SUMO's slots grow
         genes = np.array(genes, dtype=np.float64)
@@ -485,6 +490,8 @@ class SumoCrowd:
                            trace, exits=outcomes[LEFT_NETWORK],
                            suffered=learners.suffered - suffered, begin=begin)
         self._runs.append(run)
+        self.cost["learner_steps"] += count * steps
+        self.cost["wall_s"] += time.perf_counter() - started
         return run
 
 
