@@ -302,6 +302,16 @@ def _key_of(error: dict) -> tuple[str, str]:
 QUOTED_DOT = " (a quoted key with a dot is one name; without the quotes each dot opens a table)"
 
 
+def _deepest(errors: list[dict]) -> list[dict]:
+    """The errors without those a deeper one explains: a list given where a value or a list
+    may go fails both members of the union, and the one about its item says what is wrong
+    (``traffic.strategy[0]``), not the one that wanted a single value."""
+    keys = [_key_of(error)[0] for error in errors]
+    return [error for error, key in zip(errors, keys, strict=True)
+            if not any(other.startswith(key + "[") or other.startswith(key + ".")
+                       for other in keys if other != key)] or errors
+
+
 def validated(data: dict, source: Path | None) -> Scenario:
     quoted = [key for key in data if "." in key] if isinstance(data, dict) else []
     if quoted:  # said before the missing [track] it hides
@@ -316,7 +326,8 @@ def validated(data: dict, source: Path | None) -> Scenario:
     try:
         scenario = Scenario.model_validate(data)
     except ValidationError as exc:
-        first = exc.errors()[0]
+        errors = _deepest(exc.errors())
+        first = errors[0]
         key, message = _key_of(first)
         if first["type"] == "extra_forbidden":
             message = "unknown key"
@@ -325,7 +336,7 @@ def validated(data: dict, source: Path | None) -> Scenario:
         elif first["type"] == "missing":
             message = "required key is missing"
         # a value that fits no member of a union is one problem, however many members
-        others = len({_key_of(error)[0] for error in exc.errors()} - {key})
+        others = len({_key_of(error)[0] for error in errors} - {key})
         extra = f" (and {others} more problems)" if others else ""
         raise InputError(message + extra, source, key) from None
     scenario = scenario.model_copy(update={"source": source})

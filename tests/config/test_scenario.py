@@ -66,6 +66,8 @@ def test_network_path_resolves_relative_to_the_scenario_file(tmp_path, net):
         ("[crowd]\ncounting = 'both'\n", "crowd.counting", "'responsible' or 'lives_lost'"),
         # a value no member of a union takes: the key as written, one problem, the choices
         ("[traffic]\nstrategy = 'sumoo'\n", "traffic.strategy", "'wander' or 'sumo'"),
+        # a list with an unknown item: that item, not the single value the union also takes
+        ("[traffic]\nstrategy = ['SUMO', 'wander']\n", "traffic.strategy[0]", "or 'sumo'"),
     ],
 )
 def test_bad_values_name_file_and_key(tmp_path, net, extra, key, message):
