@@ -56,18 +56,19 @@ def _projection(body: np.ndarray, nx: float, ny: float) -> tuple[float, float]:
 
 @njit(cache=True)
 def least_time_to_contact(corners: np.ndarray, vx: float, vy: float, ids: np.ndarray,
-                          slot_corners: np.ndarray, slot_centres: np.ndarray, before: int,
-                          now: int, dt: float, reach: float) -> float:
+                          gone: np.ndarray, slot_corners: np.ndarray, slot_centres: np.ndarray,
+                          before: int, now: int, dt: float, reach: float) -> float:
     """The least :func:`time_to_contact` between a vehicle (``corners`` (4, 2), moving at
     (``vx``, ``vy``)) and the bodies in the slot arrays' row ``now`` within ``reach`` metres
     of it, each moving as it did since row ``before`` (``dt`` seconds earlier; at rest when
-    its slot held another vehicle then). inf when none is within reach or none comes
-    closer."""
+    its slot held another vehicle then); a vehicle that has left the learner's world (its id
+    in ``gone``: cleared from its start, or after running into it) is not there for it, as
+    for the blame rule. inf when none is within reach or none comes closer."""
     x = 0.25 * (corners[0, 0] + corners[1, 0] + corners[2, 0] + corners[3, 0])
     y = 0.25 * (corners[0, 1] + corners[1, 1] + corners[2, 1] + corners[3, 1])
     least = math.inf
     for s in range(ids.shape[1]):
-        if ids[now, s] < 0:
+        if ids[now, s] < 0 or ids[now, s] == gone[s]:
             continue
         cx, cy = slot_centres[now, s, 0], slot_centres[now, s, 1]
         if (cx - x) ** 2 + (cy - y) ** 2 > reach * reach:

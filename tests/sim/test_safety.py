@@ -53,17 +53,22 @@ def test_a_rotated_body_is_met_by_its_corner():
 
 def test_the_least_over_the_slots_uses_each_vehicles_motion_since_the_step_before():
     """Three slots: one ahead closing (from its move since the step before: 2 s), one far
-    beyond reach, one new in its slot (taken at rest: 10 m at the car's 10 m/s, 1 s)."""
+    beyond reach, one new in its slot (taken at rest: 10 m at the car's 10 m/s, 1 s). A
+    vehicle gone from the learner's world (cleared from its start) is not met."""
     ids = np.array([[0, 1, 7], [0, 1, 2]])
     corners = np.stack([np.stack([box(20.5, -0.9, 24.8, 0.9), box(500, 0, 504, 2),
                                   box(10.0, -0.9, 14.3, 0.9)]),
                         np.stack([box(20.0, -0.9, 24.3, 0.9), box(500, 0, 504, 2),
                                   box(10.0, -0.9, 14.3, 0.9)])])
     centres = corners.mean(axis=2)
-    ttc = least_time_to_contact(CAR, 10.0, 0.0, ids, corners, centres, 0, 1, 0.1, 60.0)
+    gone = np.full(3, -1)
+    ttc = least_time_to_contact(CAR, 10.0, 0.0, ids, gone, corners, centres, 0, 1, 0.1, 60.0)
     assert ttc == pytest.approx(1.0)  # the new one, at rest, 10 m ahead at 10 m/s
-    ids[1, 2] = -1  # gone: the one ahead, 20 m away, closing at 10 + 5 = 15 m/s
-    ttc = least_time_to_contact(CAR, 10.0, 0.0, ids, corners, centres, 0, 1, 0.1, 60.0)
+    gone[2] = 2  # left the learner's world: the one ahead, 20 m away, closing at 15 m/s
+    ttc = least_time_to_contact(CAR, 10.0, 0.0, ids, gone, corners, centres, 0, 1, 0.1, 60.0)
+    assert ttc == pytest.approx(20.0 / 15.0)
+    ids[1, 2] = -1  # and an empty slot the same
+    ttc = least_time_to_contact(CAR, 10.0, 0.0, ids, gone, corners, centres, 0, 1, 0.1, 60.0)
     assert ttc == pytest.approx(20.0 / 15.0)
 
 

@@ -400,8 +400,8 @@ class SumoWorld(LearnerWorld):
                 heading = live.state.learner.pose[0, 2]
                 ttc = least_time_to_contact(
                     live.state.learner.corners[0], speed * math.cos(heading),
-                    speed * math.sin(heading), live.ids, live.corners, live.centres,
-                    live.before, live.now, dt, live.followed)
+                    speed * math.sin(heading), live.ids, live.state.gone, live.corners,
+                    live.centres, live.before, live.now, dt, live.followed)
                 least, below = min(least, ttc), below + (ttc < ssm.SSM_THRESHOLDS["TTC"])
                 outcome = step(live.t, genes, self.layer_sizes, live.physics, self.geometry,
                                live.ids, live.corners, live.centres, live.before, live.now,
