@@ -121,10 +121,11 @@ def _show_and_write(table, controllers: dict, scenarios: list, out: Path | None)
         print(fitness_matrix(table).round(1).to_string())
     distinct, situations = distinct_starts(table)
     if distinct < situations:
+        counted = ("" if single else "; the matrix counts each starting state once")
         note(f"only {distinct} of {situations} situations start from distinct states: "
              "situations sharing a warm-up and the learner's start (same_start_as) differ "
-             "only by what SUMO draws after it; the matrix counts each starting state once. "
-             "Raise traffic.warmup_states for more distinct ones.")
+             f"only by what SUMO draws after it{counted}. Raise traffic.warmup_states for "
+             "more distinct ones.")
     if out:
         written = [out] if single else write_batch(table, out)
         if single:
