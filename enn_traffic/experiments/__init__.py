@@ -36,7 +36,7 @@ EXPERIMENTS = Registry("experiment", {
     "authors_rules": "enn_traffic.experiments.authors_rules:authors_rules",
     "sumo": "enn_traffic.experiments.sumo_family:sumo",
     "city": "enn_traffic.experiments.sumo_family:city",
-    "sumo_ablation": "enn_traffic.experiments.ablation:table4_ablation_sumo",
+    "sumo_ablation": "enn_traffic.experiments.ablation_sumo:table4_ablation_sumo",
     "lane_keeping": "enn_traffic.experiments.lanekeeping:lane_keeping",
 })
 

@@ -57,7 +57,7 @@ def test_no_training_run_reaches_a_held_out_key():
 
 def test_the_experiments_read_the_ledgers_keys():
     """The experiments' keys are the ledger's allocations (a sample of the uses)."""
-    from enn_traffic.experiments import ablation, choosing, departures, lanekeeping
+    from enn_traffic.experiments import ablation, ablation_sumo, choosing, departures, lanekeeping
     from enn_traffic.experiments.crowds import arena, sumo
     from enn_traffic.experiments.gradient_rl import protocol
     from enn_traffic.runs import evaluate
@@ -65,7 +65,7 @@ def test_the_experiments_read_the_ledgers_keys():
     starts = {allocation.start for allocation in keys.ALLOCATIONS.values()}
     used = [evaluate.EVALUATION_KEY, lanekeeping.TEST_KEY, choosing.VALIDATION_KEY,
             choosing.ACCEPTANCE_KEY, arena.VALIDATION_KEY, arena.SITUATION_KEY,
-            sumo.SITUATION_KEY, sumo.VALIDATION_KEY, ablation.ABLATION_KEY, ablation.SUMO_KEY,
+            sumo.SITUATION_KEY, sumo.VALIDATION_KEY, ablation.ABLATION_KEY, ablation_sumo.SUMO_KEY,
             departures.DEPARTURE_KEY, protocol.TEST_KEY, protocol.VALIDATION_KEY]
     assert set(used) <= starts
     assert max(ablation.ABLATION.situations, departures.DEPARTURES.situations) <= len(

@@ -18,7 +18,7 @@ import pandas as pd
 
 from enn_traffic.config.shipped import shipped_scenario
 from enn_traffic.core import keys
-from enn_traffic.experiments import ablation, authors_rules, departures
+from enn_traffic.experiments import ablation, ablation_sumo, authors_rules, departures
 from enn_traffic.experiments.crowds.arena import LEARNING, SECONDS
 from enn_traffic.experiments.crowds.stats import ARMS
 from enn_traffic.experiments.crowds.sumo import SITUATION_KEY as SUMO_SITUATION_KEY
@@ -249,9 +249,9 @@ def _ablation(paper: Path) -> dict:
         "start_after": _records(factors[(factors["factor"] == "start_population")
                                         & (factors["outcome"] == "after")])[0],
         "idle": idle, "idle_finish": any(arm["stopping"] != "cap" for arm in idle),
-        "sumo": {"strategy": ablation.SUMO_STRATEGY, "rows": _records(sumo),
+        "sumo": {"strategy": ablation_sumo.SUMO_STRATEGY, "rows": _records(sumo),
                  "situations": int(sumo["situations"].iloc[0]),
-                 "key_offset": ablation.SUMO_KEY - keys.ABLATION_CROWD_TEST.start,
+                 "key_offset": ablation_sumo.SUMO_KEY - keys.ABLATION_CROWD_TEST.start,
                  "folder": SUMO.folder} | _learning(SUMO_LEARNING),
         "first_reading": {"rows": len(first), "situations": int(first["situations"].iloc[0]),
                           "above_winner": int((first["after_minus_winner_after_low"] > 0).sum()),
