@@ -307,9 +307,9 @@ def _deepest(errors: list[dict]) -> list[dict]:
     may go fails both members of the union, and the one about its item says what is wrong
     (``traffic.strategy[0]``), not the one that wanted a single value."""
     keys = [_key_of(error)[0] for error in errors]
-    return [error for error, key in zip(errors, keys, strict=True)
-            if not any(other.startswith(key + "[") or other.startswith(key + ".")
-                       for other in keys if other != key)] or errors
+    above = {key[:cut] for key in keys  # every key that holds another (once per key: a
+             for cut, char in enumerate(key) if char in ".["}  # file may hold very many)
+    return [error for error, key in zip(errors, keys, strict=True) if key not in above] or errors
 
 
 def validated(data: dict, source: Path | None) -> Scenario:
