@@ -44,3 +44,14 @@ def warmups_used(scenario: Scenario, key: int) -> str:
         if part.traffic.is_sumo and part.traffic.warmup_states:
             used.append(" ".join(str(i) for i in indices))
     return "; ".join(used)
+
+
+def first_alike(starts: list[np.ndarray], warmups: list[int | None]) -> list[int]:
+    """For each situation (its learner start and shared warm-up), the first one that starts
+    from the same state: the same shared warm-up (loaded without SUMO's random generators, so
+    only the randomness SUMO draws after it can tell them apart) and the same start; itself
+    where it is the first, or starts from a warm-up of its own (None)."""
+    first: dict[tuple, int] = {}
+    return [index if warmup is None
+            else first.setdefault((warmup, *np.round(start, 6).tolist()), index)
+            for index, (start, warmup) in enumerate(zip(starts, warmups, strict=True))]

@@ -42,7 +42,12 @@ from enn_traffic.sim.sumo.replay import (
     run_replay_population,
     with_slots,
 )
-from enn_traffic.sim.sumo.situations import WARMUP_STREAM, shared_warmup, situation_seed
+from enn_traffic.sim.sumo.situations import (
+    WARMUP_STREAM,
+    first_alike,
+    shared_warmup,
+    situation_seed,
+)
 from enn_traffic.sim.world import CAPPED, SituationResults
 from enn_traffic.sumo import command, recording, ssm, states
 from enn_traffic.sumo.fresh import WORKERS, fresh, fresh_calls, fresh_shares
@@ -163,19 +168,9 @@ class SumoWorld(LearnerWorld):
                 for e in range(self.scenario.traffic.episodes)]
 
     def first_alike(self, key: int) -> list[int]:
-        """For each traffic situation of a traffic key, the first one that starts from the
-        same state: the same shared warm-up (loaded without SUMO's random generators, so only
-        the randomness SUMO draws after it can tell them apart) and the same learner start;
-        itself where it is the first, or starts from a warm-up of its own."""
-        first: dict[tuple, int] = {}
-        alike = []
-        for index, (start, warmup) in enumerate(zip(self.situation_starts(key),
-                                                    self.warmups(key), strict=True)):
-            if warmup is None:
-                alike.append(index)
-            else:
-                alike.append(first.setdefault((warmup, *np.round(start, 6).tolist()), index))
-        return alike
+        """For each traffic situation of a traffic key, the first that starts alike
+        (:func:`~enn_traffic.sim.sumo.situations.first_alike`)."""
+        return first_alike(self.situation_starts(key), self.warmups(key))
 
     def warm_state(self, seed: int, index: int | None = None) -> Path | None:
         """The SUMO state a situation of ``seed`` starts from: shared warm-up ``index`` (by
