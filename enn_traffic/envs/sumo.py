@@ -37,8 +37,9 @@ from enn_traffic.envs.rangefinder import (
 from enn_traffic.sim.crowd import ALIVE
 from enn_traffic.sim.sensors import reading_count, unseen_readings
 from enn_traffic.sim.sumo import world as recordings
-from enn_traffic.sim.sumo.crowd import SumoCrowd, observe
-from enn_traffic.sim.sumo.crowd import move_once as move_learners
+from enn_traffic.sim.sumo.crowd import SumoCrowd
+from enn_traffic.sim.sumo.crowd_rules import move_once as move_learners
+from enn_traffic.sim.sumo.crowd_rules import observe
 from enn_traffic.sim.sumo.replay import (
     clear_start,
     learner_state,

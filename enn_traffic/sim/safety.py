@@ -79,3 +79,35 @@ def least_time_to_contact(corners: np.ndarray, vx: float, vy: float, ids: np.nda
             uy = (cy - slot_centres[before, s, 1]) / dt
         least = min(least, time_to_contact(corners, slot_corners[now, s], ux - vx, uy - vy))
     return least
+
+
+@njit(cache=True, inline="always")
+def may_meet(px: float, py: float, ux: float, uy: float, gap: float, horizon: float) -> bool:
+    """Do two points ``(px, py)`` apart, moving at (``ux``, ``uy``) m/s relative to each other,
+    come within ``gap`` of each other in the next ``horizon`` seconds? Two bodies whose bounding
+    circles (diameter ``gap`` together) never meet in that time cannot touch in it."""
+    speed2 = ux * ux + uy * uy
+    t = 0.0 if speed2 == 0.0 else min(max(-(px * ux + py * uy) / speed2, 0.0), horizon)
+    dx, dy = px + ux * t, py + uy * t
+    return dx * dx + dy * dy <= gap * gap
+
+
+@njit(cache=True, inline="always")
+def least_time_among(corners: np.ndarray, vx: float, vy: float, bodies: np.ndarray,
+                     centres: np.ndarray, velocities: np.ndarray, skip: np.ndarray, gap: float,
+                     horizon: float) -> float:
+    """The least :func:`time_to_contact` below ``horizon`` seconds between a vehicle
+    (``corners`` (4, 2), moving at (``vx``, ``vy``) m/s) and ``bodies`` (n, 4, 2) centred at
+    ``centres`` and moving at ``velocities`` (n, 2), leaving out those ``skip`` marks; bodies
+    whose bounding circles (``gap`` the sum of two radii) do not meet within ``horizon`` are
+    not tried. inf when none comes that close."""
+    x = 0.25 * (corners[0, 0] + corners[1, 0] + corners[2, 0] + corners[3, 0])
+    y = 0.25 * (corners[0, 1] + corners[1, 1] + corners[2, 1] + corners[3, 1])
+    least = math.inf
+    for i in range(bodies.shape[0]):
+        if skip[i]:
+            continue
+        ux, uy = velocities[i, 0] - vx, velocities[i, 1] - vy
+        if may_meet(centres[i, 0] - x, centres[i, 1] - y, ux, uy, gap, horizon):
+            least = min(least, time_to_contact(corners, bodies[i], ux, uy))
+    return least if least < horizon else math.inf

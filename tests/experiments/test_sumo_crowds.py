@@ -17,15 +17,18 @@ def test_interval_of_equal_values_is_that_value_and_brackets_the_mean_otherwise(
 
 
 def test_table_gives_each_strategys_means_over_its_situations():
-    """Strategy 1: collision rates 0.1 and 0.3 (mean 0.2), conflicts 10 and 20 per hour;
-    strategy 2: a single situation."""
+    """Strategy 1: collision rates 0.1 and 0.3 (mean 0.2), SSM conflicts 10 and 20 per hour,
+    2-D conflicts 40 and 60; strategy 2: a single situation."""
     situations = pd.DataFrame({
         "strategy": [1, 1, 2], "situation": [0, 1, 0],
         "initial": [0.1, 0.3, 0.5], "initial_conflicts": [10.0, 20.0, 30.0],
-        "winner": [0.0, 0.1, 0.2], "winner_conflicts": [0.0, 4.0, 2.0]})
+        "initial_conflicts_2d": [40.0, 60.0, 0.0],
+        "winner": [0.0, 0.1, 0.2], "winner_conflicts": [0.0, 4.0, 2.0],
+        "winner_conflicts_2d": [1.0, 2.0, 3.0]})
     result = table(situations, ["initial", "winner"]).set_index("strategy")
     assert result.loc[1, "initial_collisions_per_s"] == pytest.approx(0.2)
     assert result.loc[1, "initial_conflicts_per_h"] == pytest.approx(15.0)
+    assert result.loc[1, "initial_conflicts_2d_per_h"] == pytest.approx(50.0)
     assert result.loc[1, "winner_collisions_per_s"] == pytest.approx(0.05)
     assert result.loc[2, "initial_low"] == result.loc[2, "initial_high"] == pytest.approx(0.5)
     assert result.loc[1, "initial_low"] <= 0.2 <= result.loc[1, "initial_high"]

@@ -73,6 +73,8 @@ def test_sumo_tables_carry_paired_intervals_into_the_summary(tmp_path):
             "population": [0.0, 0.1, 0.2, 0.2], "learning": [0.1, 0.1, 0.1, 0.1]}
     situations = pd.DataFrame({"strategy": [1, 1, 2, 2], "situation": [0, 1, 0, 1], **arms,
                                **{f"{arm}_conflicts": [3.0, 5.0, 0.0, 0.0]
+                                  for arm in CONFLICTS},
+                               **{f"{arm}_conflicts_2d": [6.0, 8.0, 1.0, 1.0]
                                   for arm in CONFLICTS}})
     learners = pd.DataFrame({"strategy": [1, 2], "situation": [0, 0], "learner": [0, 0],
                              "generations_bred": [3, 4]})
@@ -85,6 +87,7 @@ def test_sumo_tables_carry_paired_intervals_into_the_summary(tmp_path):
     assert -0.25 <= table4.loc[1, "population_minus_initial_after_high"] <= -0.2
     assert table4.loc[2, "population_minus_winner_after"] == pytest.approx(0.1)
     assert table4.loc[1, "population_conflicts_per_h"] == pytest.approx(4.0)
+    assert table4.loc[1, "population_conflicts_2d_per_h"] == pytest.approx(7.0)
     assert "median generations bred per learner 3, 4" in lines[1]
     text = "\n".join(paper_tables(tmp_path))
     assert "| 1 | 16.33 / 0.6 | 2.11 / 0.05 | -0.25 (" in text  # initial: the first window

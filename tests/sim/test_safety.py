@@ -6,7 +6,7 @@ import math
 import numpy as np
 import pytest
 
-from enn_traffic.sim.safety import least_time_to_contact, time_to_contact
+from enn_traffic.sim.safety import least_time_among, least_time_to_contact, time_to_contact
 
 
 def box(x0: float, y0: float, x1: float, y1: float) -> np.ndarray:
@@ -70,6 +70,26 @@ def test_the_least_over_the_slots_uses_each_vehicles_motion_since_the_step_befor
     ids[1, 2] = -1  # and an empty slot the same
     ttc = least_time_to_contact(CAR, 10.0, 0.0, ids, gone, corners, centres, 0, 1, 0.1, 60.0)
     assert ttc == pytest.approx(20.0 / 15.0)
+
+
+def test_among_bodies_only_those_that_touch_within_the_horizon_count():
+    """The car at 10 m/s; a stopped car 10 m ahead (1 s), one beside it at the car's own
+    velocity (never), one 30 m ahead stopped (3 s, beyond a 1.5 s horizon). Horizon 1.5 s:
+    1 s; the first left out: inf (the third lies beyond the horizon); horizon 5 s: 3 s."""
+    bodies = np.stack([box(10.0, -0.9, 14.3, 0.9), box(-4.3, 2.0, 0.0, 3.8),
+                       box(30.0, -0.9, 34.3, 0.9)])
+    centres = bodies.mean(axis=1)
+    velocities = np.array([[0.0, 0.0], [10.0, 0.0], [0.0, 0.0]])
+    skip = np.zeros(3, dtype=np.bool_)
+    gap = 2 * np.hypot(2.15, 0.9)  # two bodies' half diagonals
+
+    def least(horizon: float) -> float:
+        return least_time_among(CAR, 10.0, 0.0, bodies, centres, velocities, skip, gap, horizon)
+
+    assert least(1.5) == pytest.approx(1.0)
+    skip[0] = True
+    assert math.isinf(least(1.5))
+    assert least(5.0) == pytest.approx(3.0)
 
 
 def test_every_collision_with_a_vehicle_in_the_committed_city_evaluation_left_a_trace(root):

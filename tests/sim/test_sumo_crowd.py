@@ -56,6 +56,22 @@ def test_head_on_learners_are_both_responsible_at_the_hand_computed_step(world):
     assert run.collision_rate == pytest.approx(2 / (2 * 0.1))
 
 
+def test_learners_closing_head_on_count_one_2d_conflict_each_and_side_by_side_none(world):
+    """Nose to nose less than 20 m apart, closing at 20 m/s: their 2-D time to collision is
+    below 1.5 s from the first step, one conflict each that lasts until they collide (none
+    more at the collision's step). Side by side, 5 m apart at the same speed and heading:
+    never closing, no conflict."""
+    starts = np.array([[60.0, 5.0, 0.0], [80.0, 5.0, np.pi]])
+    with SumoCrowd(world, seed=1, starts=starts) as crowd:
+        assert crowd.run(1.0, straight(world)).conflicts_2d == 2
+        assert crowd.run(0.1, straight(world)).conflicts_2d == 0
+        assert crowd.lives.learners.conflicts.tolist() == [1, 1]
+    side_by_side = np.array([[60.0, 5.0, 0.0], [60.0, 0.0, 0.0]])
+    with SumoCrowd(world, seed=1, starts=side_by_side) as crowd:
+        run = crowd.run(1.0, straight(world))
+    assert run.conflicts_2d == 0 and run.collisions.tolist() == [0, 0]
+
+
 def test_a_learner_that_hits_a_wall_re_enters_at_a_free_spot(world):
     """Heading south from y = 5.5, the front reaches the outer wall (y = -15) at step 21
     (5.5 - 21 = -15.5); the learner then drives on from a free spot on the road, at least the
@@ -104,8 +120,8 @@ def test_one_situation_of_the_sumo_tables_is_the_same_run_again(world):
                              population_size=4, elite_count=1, situations=1)
     first = situation_result(world, winner, evolved, 0, learning)
     assert set(first.rates) == {"initial", "winner", "initial_after", "winner_after",
-                                "population", "learning"} | {f"{arm}_conflicts"
-                                                             for arm in CONFLICTS}
+                                "population", "learning"} | {
+        f"{arm}_{measure}" for arm in CONFLICTS for measure in ("conflicts", "conflicts_2d")}
     again = situation_result(world, winner, evolved, 0, learning)
     assert (first.rates, first.windows, first.learners) == (again.rates, again.windows,
                                                            again.learners)
@@ -133,7 +149,7 @@ def test_a_sumo_vehicle_that_drives_into_a_learner_leaves_that_learners_world_on
     not learner 1's."""
     from enn_traffic.core.geometry import body_corners
     from enn_traffic.sim.rules import Vehicles
-    from enn_traffic.sim.sumo.crowd import ALIVE, learner_events, learners_for
+    from enn_traffic.sim.sumo.crowd_rules import ALIVE, learner_events, learners_for
     from enn_traffic.sumo import recording
 
     length, width = world.scenario.vehicle.length, world.scenario.vehicle.width

@@ -176,6 +176,7 @@ def situation_result(world: SumoWorld, winner: np.ndarray, evolved: np.ndarray, 
     rates = {arm: run.rate(counting) for arm, run in measured.items()}
     rates["learning"] = float(np.mean([run.rate(counting) for run in learnt]))
     rates |= {f"{arm}_conflicts": measured[arm].conflict_rate for arm in CONFLICTS}
+    rates |= {f"{arm}_conflicts_2d": measured[arm].conflict_rate_2d for arm in CONFLICTS}
     window_rows = [{"window_start_s": w * learning.window_s,
                     "learning": learnt[w].rate(counting),
                     "initial_drivers": arms["initial"][w].rate(counting),
@@ -431,8 +432,8 @@ def cost_table(kept: dict) -> pd.DataFrame:
 
 
 def table(situations: pd.DataFrame, columns: list[str]) -> pd.DataFrame:
-    """Per strategy: the mean of each span's collision and conflict rates, with the 90%
-    interval of the collision rate over the situations."""
+    """Per strategy: the mean of each span's collision and conflict rates (SSM's and the 2-D
+    ones), with the 90% interval of the collision rate over the situations."""
     rng = np.random.default_rng(0)
     rows = []
     for strategy, group in situations.groupby("strategy"):
@@ -441,20 +442,23 @@ def table(situations: pd.DataFrame, columns: list[str]) -> pd.DataFrame:
             low, high = bootstrap_interval(group[span].to_numpy(), rng)
             row |= {f"{span}_collisions_per_s": round(group[span].mean(), 4),
                     f"{span}_low": round(low, 4), f"{span}_high": round(high, 4),
-                    f"{span}_conflicts_per_h": round(group[f"{span}_conflicts"].mean(), 1)}
+                    f"{span}_conflicts_per_h": round(group[f"{span}_conflicts"].mean(), 1),
+                    f"{span}_conflicts_2d_per_h": round(group[f"{span}_conflicts_2d"].mean(),
+                                                        1)}
         rows.append(row)
     return pd.DataFrame(rows)
 
 
 def table4(situations: pd.DataFrame) -> pd.DataFrame:
     """Table 4 among SUMO traffic: each arm over the window after learning, the paired
-    differences (``CONTRASTS``) with their 90% intervals, and each arm's SSM conflicts."""
+    differences (``CONTRASTS``) with their 90% intervals, and each arm's conflicts (SSM's and
+    the 2-D ones) per learner-hour."""
     arms = ["initial_after", "population", "winner_after"]
     comparisons = table4_comparisons(situations, arms, CONTRASTS)
-    conflicts = situations.groupby("strategy", as_index=False)[
-        [f"{arm}_conflicts" for arm in arms]].mean().round(1)
+    columns = [f"{arm}_{measure}" for arm in arms for measure in ("conflicts", "conflicts_2d")]
+    conflicts = situations.groupby("strategy", as_index=False)[columns].mean().round(1)
     return comparisons.merge(conflicts.rename(
-        columns={f"{arm}_conflicts": f"{arm}_conflicts_per_h" for arm in arms}), on="strategy")
+        columns={column: f"{column}_per_h" for column in columns}), on="strategy")
 
 
 def write_tables(folder: Path, situations: pd.DataFrame, learners: pd.DataFrame) -> list[str]:
