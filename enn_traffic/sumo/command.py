@@ -9,6 +9,7 @@ clockwise); ours is the same point with the heading in radians, 0 = east, counte
 
 from __future__ import annotations
 
+import gzip
 import hashlib
 import math
 import re
@@ -17,6 +18,7 @@ from pathlib import Path
 from numba import njit
 
 from enn_traffic.config import Scenario, begin_time, route_files, sumo_config
+from enn_traffic.core.errors import InputError
 
 LEARNER = "enn_learner"
 LEARNER_TYPE = LEARNER + "_type"  # the learners' vehicle type (:func:`add_learner`)
@@ -54,8 +56,8 @@ def sumo_command(scenario: Scenario, seed: int, folder: Path, state: Path | None
     source = ["-c", listed(traffic.sumocfg, folder)] if traffic.sumocfg is not None else []
     if traffic.routes:  # added to the .sumocfg's own route files, which -r would replace
         source += ["-r", ",".join(listed(r, folder) for r in route_files(scenario))]
-    if state is not None:
-        source += ["--load-state", listed(state, folder)]
+    if state is not None:  # begun at the state's time, where SUMO would warn it differs
+        source += ["--load-state", listed(state, folder), "--begin", state_time(state)]
     elif traffic.begin_s is not None or traffic.sumocfg is None:
         source += ["--begin", f"{begin_time(scenario):g}"]
     if save_rng:
@@ -90,6 +92,20 @@ def sumo_command(scenario: Scenario, seed: int, folder: Path, state: Path | None
         "--collision.action", "none",  # collisions with the learner are ours (docs/sumo.md)
         "--output-prefix", output_prefix(folder), "--error-log", ERROR_LOG,
     ]  # fmt: skip
+
+
+SNAPSHOT_TIME = re.compile(rb'<snapshot\b[^>]*?\btime="([^"]+)"')
+
+
+def state_time(path: Path) -> str:
+    """The SUMO time a saved state was written at, as it wrote it (its ``<snapshot>``, after
+    the configuration SUMO writes first)."""
+    with gzip.open(path, "rb") if path.name.endswith(".gz") else open(path, "rb") as file:
+        found = SNAPSHOT_TIME.search(file.read(1 << 20))
+    if found is None:
+        raise InputError("not a SUMO state: no <snapshot time=...> in its first megabyte "
+                         "(a warm-up enn-traffic saved; delete it to simulate it again)", path)
+    return found.group(1).decode()
 
 
 def listed(path: Path, folder: Path) -> str:

@@ -53,7 +53,7 @@ class Simulation:
 
     def __init__(self, scenario: Scenario, seed: int, state: Path | None = None,
                  save_rng: bool = False, extra: tuple[str, ...] = (),
-                 learners: tuple[str, ...] = (LEARNER,)):
+                 learners: tuple[str, ...] = (LEARNER,), keeps_outputs: bool = True):
         if Simulation.running is not None:
             raise RuntimeError(
                 f"{scenario.name}: a SUMO is already running in this process (libsumo runs one "
@@ -61,6 +61,7 @@ class Simulation:
                 "its own process (gymnasium.make_vec(..., vectorization_mode='async'))")
         self.scenario = scenario
         self.seed = seed
+        self.keeps_outputs = keeps_outputs  # False: a warm-up's, which holds no situation
         sweep_process_folders()  # those of killed processes (Ctrl-C, SIGKILL)
         self.folder = process_folder()  # all this start writes
         self._open = True
@@ -289,7 +290,8 @@ class Simulation:
         if "ssm" in traffic.outputs and ssm.is_file():  # every vehicle's conflicts, kept
             shutil.copyfile(ssm, self.folder / "ssm.xml")
         outputs = [file for file in self.folder.iterdir() if file.name not in OWN_FILES]
-        if outputs and (traffic.sumo_outputs == "keep" or traffic.outputs):
+        if outputs and self.keeps_outputs and (traffic.sumo_outputs == "keep"
+                                               or traffic.outputs):
             if (target / "outputs").is_symlink():
                 raise InputError("is a link: SUMO's outputs are kept only inside the output "
                                  "folder", target / "outputs")

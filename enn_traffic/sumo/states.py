@@ -6,10 +6,12 @@ traffic")."""
 from __future__ import annotations
 
 import contextlib
+import fcntl
 import functools
 import hashlib
 import math
 import os
+from collections.abc import Iterator
 from pathlib import Path
 
 import libsumo
@@ -108,17 +110,40 @@ def warm_state(scenario: Scenario, seed: int, keep_rng: bool) -> Path:
     if kept_state(path):
         return path
     path.parent.mkdir(parents=True, exist_ok=True)
-    partial = path.with_name(f"{path.name.split('.')[0]}.{os.getpid()}.partial.xml.gz")
-    simulation = Simulation(scenario, seed, save_rng=keep_rng)
-    try:
-        warm_up(simulation)
-        with slow_step("saving the warm-up"):
-            simulation.save_state(partial)
-        os.replace(partial, path)  # whole or not at all, whichever process wrote it first
-    finally:
-        simulation.close()
-        partial.unlink(missing_ok=True)  # a failed or interrupted save leaves nothing
+    with _simulating(path):
+        if kept_state(path):  # another process simulated it while this one waited
+            return path
+        partial = path.with_name(f"{path.name.split('.')[0]}.{os.getpid()}.partial.xml.gz")
+        simulation = Simulation(scenario, seed, save_rng=keep_rng, keeps_outputs=False)
+        try:
+            warm_up(simulation)
+            with slow_step("saving the warm-up"):
+                simulation.save_state(partial)
+            os.replace(partial, path)  # whole or not at all
+        finally:
+            simulation.close()
+            partial.unlink(missing_ok=True)  # a failed or interrupted save leaves nothing
     return path
+
+
+@contextlib.contextmanager
+def _simulating(path: Path) -> Iterator[None]:
+    """Hold the lock of the warm-up ``path`` (a file beside it, ``.NAME.lock``) while the
+    block runs: of processes that need the same warm-up at once, one simulates it and the
+    others wait for it, then load it. Where no lock can be taken (a read-only folder, which
+    the save would fail in anyway), the block runs unlocked."""
+    try:
+        descriptor = os.open(path.with_name(f".{path.name}.lock"),
+                             os.O_RDWR | os.O_CREAT | os.O_NOFOLLOW, 0o644)
+    except OSError:
+        yield
+        return
+    try:
+        with slow_step("waiting for another process's warm-up of the same traffic"):
+            fcntl.flock(descriptor, fcntl.LOCK_EX)
+        yield
+    finally:
+        os.close(descriptor)  # releases the lock
 
 
 def kept_state(path: Path) -> bool:

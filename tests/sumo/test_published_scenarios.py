@@ -13,6 +13,7 @@ from enn_traffic.cli import main
 from enn_traffic.config import load_scenario
 from enn_traffic.roads import load_track
 from enn_traffic.runs.controller import Controller
+from enn_traffic.sumo.states import warm_state
 
 # The road's .sumocfg as publishers ship theirs: a <sumoConfiguration> root, outputs, a log,
 # SUMO's verbose console, a detector writing its own file, and a GUI settings file that is not
@@ -128,6 +129,50 @@ def test_kept_outputs_go_to_the_run_folder(tmp_path, road_net):
         names = {p.name for p in start.iterdir()}
         assert {"tripinfos.xml", "summary.xml", "loop.xml", "sumo_log.txt"} <= names
         assert "<tripinfos" in (start / "tripinfos.xml").read_text()
+
+
+def test_a_shared_warm_up_keeps_no_outputs_and_is_simulated_once(tmp_path, road_net,
+                                                                  monkeypatch):
+    """With a shared warm-up (``warmup_states = 1``), the two situations' outputs are kept,
+    not the warm-up's (it holds no situation: its files would be empty); two processes that
+    need the warm-up at once simulate it once (SUMO's log holds one start that ended at the
+    warm-up's end, 10 s after the begin), the other waiting for it."""
+    from concurrent.futures import ProcessPoolExecutor
+    from multiprocessing import get_context
+
+    monkeypatch.setenv("ENN_TRAFFIC_SUMO_STATES", str(tmp_path / "states"))
+    path = published(tmp_path / "scenario", road_net,
+                     extra='sumo_outputs = "keep"\nwarmup_states = 1')
+    run = tmp_path / "run"
+    assert main(["run", str(path), "--out", str(run), "--generations", "1",
+                 "--population", "10", "--quiet"]) == 0
+    assert len(list((run / "sumo" / "outputs").iterdir())) == 2  # the situations' alone
+    monkeypatch.setenv("ENN_TRAFFIC_SUMO_STATES", str(tmp_path / "states_again"))
+    scenario = load_scenario(path).with_sumo_output(tmp_path / "both")
+    with ProcessPoolExecutor(2, mp_context=get_context("spawn")) as pool:
+        states = list(pool.map(warm_state, [scenario] * 2, [7] * 2, [False] * 2))
+    assert states[0] == states[1] and states[0].is_file()
+    log = (tmp_path / "both" / "sumo.log").read_text()
+    assert log.count("== SUMO, seed 7, ended at 1010 s") == 1
+
+
+def test_loading_a_warm_up_begins_at_its_time_without_a_warning(tmp_path, road_net, capfd,
+                                                                 monkeypatch):
+    """SUMO warns when a state's time is not the begin ("State was written at a different
+    time"), on every load with its console shown (``--verbose``): the command begins at the
+    state's time, 10 s after the .sumocfg's begin, and SUMO says nothing."""
+    from enn_traffic.sumo.command import state_time
+    from enn_traffic.sumo.simulation import Simulation
+
+    monkeypatch.setenv("ENN_TRAFFIC_SUMO_STATES", str(tmp_path / "states"))
+    scenario = load_scenario(road_scenario(tmp_path, road_net))
+    state = warm_state(scenario, 7, keep_rng=False)
+    assert state_time(state) == "1010.00"
+    capfd.readouterr()
+    simulation = Simulation(scenario.with_sumo_output(None, console=True), 7, state)
+    assert simulation.time() == pytest.approx(1010.0)
+    simulation.close()
+    assert "different time" not in "".join(capfd.readouterr())
 
 
 def test_every_missing_file_is_named_at_once(tmp_path, road_net, capsys):
