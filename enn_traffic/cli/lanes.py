@@ -13,12 +13,13 @@ def add_parser(commands) -> None:
         "lanes", help="the lanes a learner may start on, ranked by the traffic demand",
         epilog=EPILOG, description="List the lanes of a scenario's network that allow passenger "
         "cars (where a learner may start: [track] start_lane), ranked by the vehicles its route "
-        "files send over them, with their lengths and allowed vehicle classes; and count the "
+        "files send over them (a lane's share of its edge's: the vehicles whose route goes on "
+        "from that lane), with their lengths and allowed vehicle classes; and count the "
         "lanes cars may not use.")
     command.add_argument("source", type=nonempty_path, metavar="SCENARIO.toml|FILE.sumocfg",
                          help="a scenario, or a SUMO configuration (its network and routes)")
     command.add_argument("--top", metavar="N", type=positive, default=20,
-                         help="lanes listed (default 20)")
+                         help="lanes listed, and numbered in --plot (default 20)")
     command.add_argument("--out", type=nonempty_path, metavar="FILE.csv", help="write every lane")
     command.add_argument("--plot", type=nonempty_path, metavar="FILE.png",
                          help="draw the road surface for cars against every lane as road, with "
@@ -58,8 +59,10 @@ def run(args) -> int:
                                                in kinds.head(6).items()))
     demand = "routes: " + ", ".join(p.name for p in routes) if routes else "no route files"
     print(f"the learner's lanes by the vehicles the demand sends over them, trips routed as "
-          f"SUMO routes them ({demand}):")
-    columns = ["lane", "edge", "vehicles", "length_m", "speed_limit_kmh", "allowed"]
+          f"SUMO routes them ({demand}); vehicles: the lane's share of its edge's "
+          f"edge_vehicles, those whose route goes on from that lane (docs/sumo.md):")
+    columns = ["lane", "edge", "vehicles", "edge_vehicles", "length_m", "speed_limit_kmh",
+               "allowed"]
     ranked = learner[columns].assign(rank=range(1, len(learner) + 1))
     print(ranked.head(args.top)[["rank", *columns]].to_string(index=False))
     starts = _scenario_starts(source, table)
@@ -77,7 +80,7 @@ def run(args) -> int:
         write_csv(args.out, table)
         print(f"written {args.out}")
     if args.plot:
-        _plot_lanes(net, learner.head(min(args.top, 9)), args.plot)
+        _plot_lanes(net, learner.head(args.top), args.plot)
         print(f"written {args.plot}")
     return 0
 

@@ -81,11 +81,20 @@ def paper_tables(out: Path) -> list[str]:
     return ["## The paper's tables beside these", "", *sections] if sections else []
 
 
+def _conflicts(row: pd.Series, before: str, after: str) -> str:
+    """An arm pair's conflicts per learner-hour, SSM's and the 2-D ones (docs/sumo.md,
+    "Safety figures")."""
+    return " · ".join(f"{name} {row[f'{before}_{column}_per_h']:g} -> "
+                      f"{row[f'{after}_{column}_per_h']:g}"
+                      for name, column in (("SSM", "conflicts"), ("2-D", "conflicts_2d")))
+
+
 def _sumo_rates(path: Path, title: str, paper, before: str, after: str) -> list[str]:
     table = pd.read_csv(path)
     lines = [f"### {title}: collisions per second, paper (its count) / here (per "
-             "learner, 90% interval over situations); SSM conflicts per learner-hour (each "
-             "arm's SUMO in a fresh process)", "",
+             "learner, 90% interval over situations); conflicts per learner-hour, SUMO's SSM "
+             "and the 2-D time to collision below 1.5 s (each arm's SUMO in a fresh process)",
+             "",
              "| strategy | initial | after | conflicts, initial -> after |", "|---|---|---|---|"]
 
     def cell(row, span: str, value: float) -> str:
@@ -94,8 +103,7 @@ def _sumo_rates(path: Path, title: str, paper, before: str, after: str) -> list[
 
     for i, row in table.iterrows():
         lines.append(f"| {int(row['strategy'])} | {cell(row, before, paper[i][0])} | "
-                     f"{cell(row, after, paper[i][1])} | {row[f'{before}_conflicts_per_h']:g} -> "
-                     f"{row[f'{after}_conflicts_per_h']:g} |")
+                     f"{cell(row, after, paper[i][1])} | {_conflicts(row, before, after)} |")
     return [*lines, ""]
 
 
@@ -124,8 +132,8 @@ def _sumo_table4(folder: Path, title: str) -> list[str]:
     name = "population_minus_initial_after"
     lines = [f"### {title}: collisions per second, paper (its count) / here (per learner); "
              "the paired difference from the initial drivers driving on, with its 90% "
-             "interval over situations; SSM conflicts per learner-hour (each arm's SUMO in a "
-             "fresh process)", "",
+             "interval over situations; conflicts per learner-hour, SUMO's SSM and the 2-D "
+             "time to collision below 1.5 s (each arm's SUMO in a fresh process)", "",
              "| strategy | initial | after | after − the initial drivers driving on | "
              "conflicts, driving on -> after |", "|---|---|---|---|---|"]
     for i, row in table.iterrows():
@@ -133,6 +141,5 @@ def _sumo_table4(folder: Path, title: str) -> list[str]:
                      f"{_pair(PAPER_TABLE4[i][0], initial[i])} | "
                      f"{_pair(PAPER_TABLE4[i][1], row['population_collisions_per_s'])} | "
                      f"{row[name]:+g} ({row[f'{name}_low']:+g} to {row[f'{name}_high']:+g}) | "
-                     f"{row['initial_after_conflicts_per_h']:g} -> "
-                     f"{row['population_conflicts_per_h']:g} |")
+                     f"{_conflicts(row, 'initial_after', 'population')} |")
     return [*lines, ""]

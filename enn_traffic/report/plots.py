@@ -160,14 +160,47 @@ def segments_within(segments: np.ndarray, low: np.ndarray, high: np.ndarray) -> 
     return segments[keep].reshape(-1, 2, 2)
 
 
+COLLISION_VIEW_M = 24.0  # the side of the inset that shows a collision up close
+
+
+def _collision_inset(axes, learner: np.ndarray, hit_body: np.ndarray,
+                     learner_body: np.ndarray | None) -> None:
+    """An inset in ``axes``' upper left: the collision up close (:data:`COLLISION_VIEW_M`
+    across, round the vehicle ``hit_body`` ran into), the learner's last metres of path (its
+    front's) and its body at the end (``learner_body``), the vehicle's body, which on a
+    city's scale lies under the end marker."""
+    from matplotlib.patches import Polygon as Patch
+
+    centre = hit_body.mean(axis=0)
+    inset = axes.inset_axes((0.02, 0.62, 0.36, 0.36))
+    inset.add_patch(Patch(hit_body, closed=True, facecolor="C1", edgecolor="black",
+                          alpha=0.85, zorder=2))
+    if learner_body is not None:
+        inset.add_patch(Patch(learner_body, closed=True, facecolor="none", edgecolor="C3",
+                              lw=1.5, zorder=3))
+    near = np.abs(learner - centre).max(axis=1) <= COLLISION_VIEW_M
+    inset.plot(*break_at_jumps(learner[near]).T, color="C3", lw=2.2, zorder=3)
+    inset.plot(*learner[-1], "x", color="C3", ms=9, mew=2.0, zorder=4)
+    half = COLLISION_VIEW_M / 2
+    inset.set_xlim(centre[0] - half, centre[0] + half)
+    inset.set_ylim(centre[1] - half, centre[1] + half)
+    inset.set_aspect("equal")
+    inset.set_xticks([])
+    inset.set_yticks([])
+    inset.set_title(f"the collision, {COLLISION_VIEW_M:g} m across", fontsize=7)
+    axes.indicate_inset_zoom(inset, edgecolor="0.3")
+
+
 def learner_among_traffic(walls: np.ndarray, exits: np.ndarray, poses: np.ndarray,
                           path: str | Path, title: str, end_label: str,
-                          hit_body: np.ndarray | None = None, margin: float = 50.0) -> None:
+                          hit_body: np.ndarray | None = None, margin: float = 50.0,
+                          learner_body: np.ndarray | None = None) -> None:
     """One life among SUMO's traffic, drawn so that the learner stands out on a busy map: the
     view cropped to the learner's path and ``margin`` metres around it; the walls and exits
     there; every vehicle's path in light grey under the learner's, and where it was last seen;
     the learner's path on top, its start and its end (``end_label``), and the body of the
-    vehicle it ran into (corners ``hit_body``)."""
+    vehicle it ran into (corners ``hit_body``), with the learner's at the end
+    (``learner_body``) up close in an inset."""
     from matplotlib.collections import LineCollection
     from matplotlib.patches import Polygon as Patch
 
@@ -200,6 +233,8 @@ def learner_among_traffic(walls: np.ndarray, exits: np.ndarray, poses: np.ndarra
     axes.plot(*break_at_jumps(learner).T, color="C3", lw=2.2, zorder=5, label="learner's path")
     axes.plot(*learner[0], "o", color="C2", ms=8, zorder=6, label="learner's start")
     axes.plot(*learner[-1], "X", color="C3", mec="black", ms=11, zorder=6, label=end_label)
+    if hit_body is not None:
+        _collision_inset(axes, learner, hit_body, learner_body)
     axes.set_xlim(low[0], high[0])
     axes.set_ylim(low[1], high[1])
     axes.set_aspect("equal")
@@ -209,6 +244,46 @@ def learner_among_traffic(walls: np.ndarray, exits: np.ndarray, poses: np.ndarra
     axes.legend(fontsize=8, loc="best", framealpha=0.9)
     figure.tight_layout()
     save_figure(figure, path)
+
+
+LABEL_OFFSETS_PT = [(0.0, 0.0)] + [
+    (radius * np.cos(angle), radius * np.sin(angle))
+    for radius in range(14, 420, 14) for angle in np.linspace(0, 2 * np.pi, 16, endpoint=False)]
+
+
+def _rank_labels(figure, axes, anchors: list[np.ndarray]) -> None:
+    """Number the ``anchors`` (data coordinates) 1, 2, ... in ``axes``, each label where it
+    overlaps no earlier one: at its anchor, or at the first of :data:`LABEL_OFFSETS_PT`
+    (rings around it) where it is free, with a line back to its anchor. Label 1 is boxed in
+    the lanes' colour."""
+    from matplotlib.transforms import Bbox
+
+    renderer = figure.canvas.get_renderer()
+    points = figure.dpi / 72.0
+    placed: list[Bbox] = []
+    for rank, anchor in enumerate(anchors, start=1):
+        first = rank == 1
+        style = {"color": "white" if first else "C3", "fontsize": 9, "fontweight": "bold",
+                 "zorder": 5, "ha": "center", "va": "center",
+                 "bbox": {"boxstyle": "round,pad=0.15", "fc": "C3" if first else "white",
+                          "ec": "C3", "lw": 0.6, "alpha": 1.0 if first else 0.85}}
+        probe = axes.text(*anchor, f"{rank}", **style)
+        size = probe.get_window_extent(renderer)
+        probe.remove()
+        pad = 2 * (0.15 * 9 + 1) * points  # the box's pad round the text, and a point more
+        width, height = size.width + pad, size.height + pad
+        x, y = axes.transData.transform(anchor)
+        for dx, dy in LABEL_OFFSETS_PT:
+            box = Bbox.from_bounds(x + dx * points - width / 2, y + dy * points - height / 2,
+                                   width, height)
+            if not any(box.overlaps(other) for other in placed):
+                break
+        placed.append(box)
+        arrow = {} if (dx, dy) == (0.0, 0.0) else {
+            "arrowprops": {"arrowstyle": "-", "color": "C3", "lw": 0.6, "shrinkA": 0,
+                           "shrinkB": 0}}
+        axes.annotate(f"{rank}", xy=anchor, xytext=(dx, dy), textcoords="offset points",
+                      **style, **arrow)
 
 
 def road_surfaces(surfaces: dict[str, tuple[object, np.ndarray]],
@@ -247,21 +322,21 @@ def road_surfaces(surfaces: dict[str, tuple[object, np.ndarray]],
         axes.set_xlabel("x [m]")
     axes_row[0, 0].set_ylabel("y [m]")
     last = axes_row[0, -1]
-    for rank, (_, shape) in enumerate(lanes, start=1):
+    anchors = []
+    for _, shape in lanes:
         last.plot(*shape.T, color="C3", lw=max(2 * line, 1.2), zorder=3)
         last.annotate("", xy=shape[-1], xytext=shape[-2], zorder=3,
                       arrowprops={"arrowstyle": "->", "color": "C3", "lw": 1.2})
         steps = np.hypot(*np.diff(shape, axis=0).T)
         halfway = int(np.searchsorted(np.cumsum(steps), steps.sum() / 2))
-        middle = shape[halfway] + (shape[halfway + 1] - shape[halfway]) * 0.5
-        last.text(*middle, f"{rank}", color="C3", fontsize=9, fontweight="bold", zorder=4,
-                  va="bottom", bbox={"boxstyle": "round,pad=0.1", "fc": "white", "ec": "none",
-                                     "alpha": 0.7})
+        anchors.append(shape[halfway] + (shape[halfway + 1] - shape[halfway]) * 0.5)
     if lanes:
-        listed = "start lanes, by the demand over them: " + ", ".join(
-            f"{rank} {lane}" for rank, (lane, _) in enumerate(lanes, 1))
+        listed = ("start lanes, by the demand over them (1, boxed: the start_lane = \"auto\" "
+                  "choice): " + ", ".join(f"{rank} {lane}"
+                                          for rank, (lane, _) in enumerate(lanes, 1)))
         figure.text(0.5, 0.01, "\n".join(textwrap.wrap(listed, 60 * len(surfaces))),
                     ha="center", va="bottom", fontsize=8, color="C3")
     figure.suptitle(title, fontsize=11)
     figure.tight_layout(rect=(0, 0.05 if lanes else 0, 1, 1))
+    _rank_labels(figure, last, anchors)
     save_figure(figure, path)

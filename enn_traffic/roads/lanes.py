@@ -7,10 +7,14 @@ each edge of it; a trip or a flow between edges (``from``, ``via``, ``to``) is r
 own ``duarouter`` on the network, as SUMO routes it when it departs, and counts on every edge
 of that route (where ``duarouter`` finds none, on its given edges only). A flow counts its
 vehicles: ``number``, or its span over ``period``, ``vehsPerHour`` or ``probability`` (a flow
-without an ``end`` counts one hour). A lane carries the demand of its edge by the vehicle
-classes it allows (a vehicle's class is its type's ``vClass``, from the route and additional
-files; passenger when not given, as SUMO's). The counts are kept in the cache folder, named
-by the files' bytes (:mod:`enn_traffic.core.cache`).
+without an ``end`` counts one hour). The counts are kept in the cache folder, named by the
+files' bytes (:mod:`enn_traffic.core.cache`).
+
+A lane's share of its edge's demand follows SUMO's strategic lane choice: a vehicle drives on
+the lanes of an edge that allow its class (its type's ``vClass``, from the route and additional
+files; passenger when not given, as SUMO's) and connect to the next edge of its route, one
+share each (all of the edge's lanes it may use on its route's last edge, or where none
+connects). SUMO spreads vehicles over equally good lanes as it drives, so such lanes tie.
 
 A lane whose edge ends at the network's fringe (an exit: the learner would leave the network
 within the lane's length) is never a learner's lane for ``auto``.
@@ -19,6 +23,7 @@ within the lane's length) is never a learner's lane for ``auto``.
 from __future__ import annotations
 
 import gzip
+import shutil
 import subprocess
 import tempfile
 import xml.etree.ElementTree as ElementTree
@@ -91,12 +96,26 @@ def demand_per_edge(route_files: list[Path] | tuple[Path, ...],
                     classes: dict[str, str] | None = None,
                     net_file: Path | None = None) -> Counter[tuple[str, str]]:
     """Vehicles the route files send over each edge, by vehicle class: (edge, class) ->
-    vehicles (see the module's docstring); ``classes``: each vehicle type's class, besides
-    those the route files define. With ``net_file``, trips and flows between edges are routed
-    on it by ``duarouter`` (:func:`_route_trips`); without, they count on their given edges."""
+    vehicles (:func:`demand_per_move` summed over the next edges)."""
+    demand: Counter[tuple[str, str]] = Counter()
+    for (edge, _, kind), vehicles in demand_per_move(route_files, classes, net_file).items():
+        demand[edge, kind] += vehicles
+    return demand
+
+
+def demand_per_move(route_files: list[Path] | tuple[Path, ...],
+                    classes: dict[str, str] | None = None,
+                    net_file: Path | None = None) -> Counter[tuple[str, str, str]]:
+    """Vehicles the route files send over each edge, by the edge they drive on to ("" at the
+    route's end, or for a trip counted on its given edges) and vehicle class: (edge, next
+    edge, class) -> vehicles (see the module's docstring), once per vehicle and edge (a route
+    that passes an edge twice counts its first move on). ``classes``: each vehicle type's
+    class, besides those the route files define. With ``net_file``, trips and flows between
+    edges are routed on it by ``duarouter`` (:func:`_route_trips`); without, they count on
+    their given edges."""
     classes = {**(classes or {}), **vehicle_classes(route_files)}
     routes: dict[str, list[tuple[list[str], float]]] = {}  # a route or distribution's routes
-    demand: Counter[tuple[str, str]] = Counter()
+    demand: Counter[tuple[str, str, str]] = Counter()
     types: list[bytes] = []  # every vType and vTypeDistribution, for duarouter
     unrouted: list[bytes] = []  # trips and flows between edges
 
@@ -111,12 +130,17 @@ def demand_per_edge(route_files: list[Path] | tuple[Path, ...],
             if net_file is not None and element.get("from") and element.get("to"):
                 unrouted.append(ElementTree.tostring(element))
                 return
-            paths = [([element.get(k) for k in ("from", "to") if element.get(k)]
-                      + element.get("via", "").split(), 1.0)]
+            given = [element.get(k) for k in ("from", "to") if element.get(k)]
+            for edge in dict.fromkeys(given + element.get("via", "").split()):
+                demand[edge, "", kind] += vehicles  # no path: no next edge
+            return
         total = sum(weight for _, weight in paths) or 1.0
         for edges, weight in paths:
-            for edge in dict.fromkeys(edges):  # once per vehicle, however often it passes
-                demand[edge, kind] += vehicles * weight / total
+            moves: dict[str, str] = {}
+            for edge, after in zip(edges, [*edges[1:], ""], strict=True):
+                moves.setdefault(edge, after)  # once per vehicle, however often it passes
+            for edge, after in moves.items():
+                demand[edge, after, kind] += vehicles * weight / total
 
     for path in route_files:
         try:
@@ -147,8 +171,10 @@ def demand_per_edge(route_files: list[Path] | tuple[Path, ...],
             raise InputError(f"not a readable SUMO route file: {exc}", path) from None
     if unrouted:
         routed = _route_trips(net_file, types, unrouted)
-        demand.update(demand_per_edge([routed], classes))
-        routed.unlink()
+        try:
+            demand.update(demand_per_move([routed], classes))
+        finally:
+            shutil.rmtree(routed.parent, ignore_errors=True)
     return demand
 
 
@@ -158,7 +184,8 @@ DUAROUTER_MAX_S = 600.0
 def _route_trips(net_file: Path, types: list[bytes], trips: list[bytes]) -> Path:
     """The ``trips`` (trip and flow elements between edges) routed on the network by SUMO's
     ``duarouter``, as SUMO routes them (fastest path at free flow), into a temporary route
-    file; one it cannot route is left out with a warning, and counts nowhere."""
+    file, in a temporary folder of its own that the caller removes; one it cannot route is
+    left out with a warning, and counts nowhere."""
     import sumo as sumo_wheel  # duarouter of the eclipse-sumo wheel
 
     folder = Path(tempfile.mkdtemp(prefix="enn-routes-"))
@@ -173,33 +200,36 @@ def _route_trips(net_file: Path, types: list[bytes], trips: list[bytes]) -> Path
             capture_output=True, text=True, timeout=DUAROUTER_MAX_S, check=False)
     given.unlink()
     if done.returncode != 0 or not routed.is_file():
+        shutil.rmtree(folder, ignore_errors=True)
         raise InputError(f"SUMO's duarouter could not route the demand's trips: "
                          f"{' '.join((done.stderr or done.stdout).split())[:400]}", net_file)
     return routed
 
 
-DEMAND_VERSION = 1  # raised when the counting changes
+DEMAND_VERSION = 2  # raised when the counting changes
 
 
 def cached_demand(net_file: Path, route_files: list[Path] | tuple[Path, ...],
                   additional_files: list[Path] | tuple[Path, ...] = ()
-                  ) -> Counter[tuple[str, str]]:
-    """:func:`demand_per_edge` with the trips routed on ``net_file``, counted once and kept in
+                  ) -> Counter[tuple[str, str, str]]:
+    """:func:`demand_per_move` with the trips routed on ``net_file``, counted once and kept in
     the cache folder (named by every file's bytes)."""
     key = key_of(DEMAND_VERSION, content_digest(net_file),
                  *(content_digest(f) for f in (*route_files, *additional_files)))
 
     def build() -> dict[str, np.ndarray]:
-        demand = demand_per_edge(route_files, vehicle_classes(additional_files), net_file)
+        demand = demand_per_move(route_files, vehicle_classes(additional_files), net_file)
         pairs = list(demand.items())
-        return {"edges": np.array([edge for (edge, _), _ in pairs], dtype=str),
-                "classes": np.array([kind for (_, kind), _ in pairs], dtype=str),
+        return {"edges": np.array([edge for (edge, _, _), _ in pairs], dtype=str),
+                "next": np.array([after for (_, after, _), _ in pairs], dtype=str),
+                "classes": np.array([kind for (*_, kind), _ in pairs], dtype=str),
                 "vehicles": np.array([v for _, v in pairs], dtype=np.float64)}
 
     with slow_step(f"counting the demand over {Path(net_file).name}'s lanes"):
         arrays = cached_arrays("demand", key, build)
-    return Counter({(str(e), str(k)): float(v) for e, k, v
-                    in zip(arrays["edges"], arrays["classes"], arrays["vehicles"], strict=True)})
+    return Counter({(str(e), str(n), str(k)): float(v) for e, n, k, v
+                    in zip(arrays["edges"], arrays["next"], arrays["classes"],
+                           arrays["vehicles"], strict=True)})
 
 
 def _allowed(lane) -> str:
@@ -221,40 +251,61 @@ def lane_table(net_file: Path, route_files: list[Path] | tuple[Path, ...],
     allowed classes (of :data:`SHOWN_CLASSES`), whether its edge ends at an exit (the
     network's fringe, with ``exits``), whether the learner may start on it (it allows
     passenger cars, is ``min_length`` long or longer,
-    :func:`~enn_traffic.roads.network.least_start_length`, and does not end at an exit) and
-    the demand's vehicles over it that it allows (whole vehicles); the learner's lanes first,
-    ranked by that demand, then by length. ``additional_files``: where vehicle types may be
-    defined too."""
+    :func:`~enn_traffic.roads.network.least_start_length`, and does not end at an exit), the
+    demand's vehicles over its edge that it allows (``edge_vehicles``, whole vehicles) and its
+    share of them (``vehicles``: the module's docstring); the learner's lanes first, ranked
+    by their share, then by length. ``additional_files``: where vehicle types may be defined
+    too."""
     with slow_step(f"reading {Path(net_file).name}"):
         net = read_net(net_file)
-    demand: dict[str, list[tuple[str, float]]] = {}
-    for (edge, kind), vehicles in cached_demand(net_file, route_files,
-                                                additional_files).items():
-        demand.setdefault(edge, []).append((kind, vehicles))
+    demand: dict[str, list[tuple[str, str, float]]] = {}
+    for (edge, after, kind), vehicles in cached_demand(net_file, route_files,
+                                                       additional_files).items():
+        demand.setdefault(edge, []).append((after, kind, vehicles))
     fringe = fringe_nodes(net) if exits else set()
-
-    def carried(edge, lane) -> int:
-        allowed = lane.getPermissions()
-        return round(sum(v for kind, v in demand.get(edge.getID(), []) if kind in allowed))
 
     rows = []
     for edge in net.getEdges(withInternal=False):
         at_exit = edge.getToNode().getID() in fringe
+        shares = lane_shares(edge, demand.get(edge.getID(), []))
+        edge_vehicles = {lane.getID(): round(sum(
+            v for _, kind, v in demand.get(edge.getID(), []) if lane.allows(kind)))
+            for lane in edge.getLanes()}
         for lane in edge.getLanes():
             cars = lane.allows(LEARNER_CLASS)
             rows.append({
-                "lane": lane.getID(), "edge": edge.getID(), "vehicles": carried(edge, lane),
+                "lane": lane.getID(), "edge": edge.getID(),
+                "vehicles": round(shares.get(lane.getID(), 0.0), 1),
+                "edge_vehicles": edge_vehicles[lane.getID()],
                 "length_m": round(lane.getLength(), 1),
                 "speed_limit_kmh": round(3.6 * lane.getSpeed()), "allowed": _allowed(lane),
                 "ends_at_fringe": at_exit, "allows_cars": cars,
                 "learner_may_start": cars and lane.getLength() >= min_length and not at_exit})
-    table = pd.DataFrame(rows, columns=["lane", "edge", "vehicles", "length_m",
-                                        "speed_limit_kmh", "allowed", "ends_at_fringe",
-                                        "allows_cars", "learner_may_start"])
-    table["vehicles"] = table["vehicles"].astype(np.int64)
+    table = pd.DataFrame(rows, columns=["lane", "edge", "vehicles", "edge_vehicles",
+                                        "length_m", "speed_limit_kmh", "allowed",
+                                        "ends_at_fringe", "allows_cars", "learner_may_start"])
+    table["vehicles"] = table["vehicles"].astype(np.float64)
+    table["edge_vehicles"] = table["edge_vehicles"].astype(np.int64)
     table = table.sort_values(["learner_may_start", "vehicles", "length_m", "lane"],
                               ascending=[False, False, False, True], kind="stable")
     return table.reset_index(drop=True)
+
+
+def lane_shares(edge, moves: list[tuple[str, str, float]]) -> dict[str, float]:
+    """Each lane's share of the ``moves`` (next edge, vehicle class, vehicles) over ``edge``
+    (a sumolib edge): a move's vehicles split evenly over the lanes that allow their class and
+    connect to the next edge, or, where none does, over all that allow it (the module's
+    docstring)."""
+    onward: dict[str, set[str]] = {}  # next edge -> the lanes that connect to it
+    for after, connections in edge.getOutgoing().items():
+        onward[after.getID()] = {c.getFromLane().getID() for c in connections}
+    shares: dict[str, float] = {}
+    for after, kind, vehicles in moves:
+        allowed = [lane.getID() for lane in edge.getLanes() if lane.allows(kind)]
+        lanes = [lane for lane in allowed if lane in onward.get(after, ())] or allowed
+        for lane in lanes:
+            shares[lane] = shares.get(lane, 0.0) + vehicles / len(lanes)
+    return shares
 
 
 def auto_lane(net_file: Path, route_files: list[Path] | tuple[Path, ...],

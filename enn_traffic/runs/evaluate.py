@@ -19,6 +19,7 @@ from tqdm import tqdm
 from enn_traffic.config import Scenario, learner_start_time
 from enn_traffic.core import keys
 from enn_traffic.core.errors import InputError
+from enn_traffic.core.geometry import body_corners
 from enn_traffic.core.io import write_csv
 from enn_traffic.core.progress import slow_step, terminal
 from enn_traffic.learning.evaluators import connect_ray
@@ -301,7 +302,10 @@ def _render_among_traffic(controller: Controller, scenario: Scenario, out: Path,
         end = f"end: collision with a wall at step {steps}"
     elif life.hit_vehicle is not None:
         end = f"end: collision with {life.hit_vehicle[0]} ({life.hit_vehicle[1]}) at step {steps}"
+    vehicle, body = world.scenario.vehicle, np.empty((4, 2))
+    body_corners(*life.poses[-1, 0], vehicle.length, vehicle.width, body)
     learner_among_traffic(world.track.walls, world.exits, life.poses, out,
-                          f"{scenario.name}: {steps} steps, {outcome}", end, life.hit_body)
+                          f"{scenario.name}: {steps} steps, {outcome}", end, life.hit_body,
+                          learner_body=body)
     return {"steps": steps, "outcome": outcome, "file": str(out)}
 

@@ -3,6 +3,7 @@ may start on, ranked by the vehicles the demand sends over them."""
 
 import gzip
 
+import numpy as np
 import pytest
 from sumo_road import road_scenario
 
@@ -79,7 +80,7 @@ def test_the_busiest_lane_that_does_not_lead_out_is_auto(tmp_path, road_net, cap
     assert list(table["lane"][:1]) == ["we_0"]
     assert dict(zip(table["lane"], table["vehicles"], strict=True)) == {
         "we_0": 0, "ew_0": 60, "em_0": 60, "me_0": 0}
-    assert table["vehicles"].dtype.kind == "i"
+    assert table["edge_vehicles"].dtype.kind == "i"
     assert dict(zip(table["lane"], table["ends_at_fringe"], strict=True)) == {
         "we_0": False, "ew_0": True, "em_0": False, "me_0": True}
     assert list(table["learner_may_start"]) == [True, False, False, False]
@@ -90,6 +91,47 @@ def test_the_busiest_lane_that_does_not_lead_out_is_auto(tmp_path, road_net, cap
     assert "1 bus" in printed
     assert 'start_lane = "we_0"' in printed
     assert (tmp_path / "lanes.csv").read_text().count("\n") == 5
+
+
+# A junction: "in" (two lanes, west to the middle) turns right (lane 0), runs on (lane 0) or
+# turns left (lane 1), as netconvert connects it.
+JUNCTION_NODES = """<nodes>
+    <node id="w" x="0" y="0"/><node id="m" x="100" y="0"/><node id="e" x="200" y="0"/>
+    <node id="n" x="100" y="100"/><node id="s" x="100" y="-100"/>
+</nodes>"""
+JUNCTION_EDGES = """<edges>
+    <edge id="in" from="w" to="m" numLanes="2"/><edge id="on" from="m" to="e"/>
+    <edge id="left" from="m" to="n"/><edge id="right" from="m" to="s"/>
+</edges>"""
+JUNCTION_ROUTES = """<routes>
+    <flow id="r" begin="0" end="100" number="10"><route edges="in right"/></flow>
+    <flow id="l" begin="0" end="100" number="20"><route edges="in left"/></flow>
+    <flow id="o" begin="0" end="100" number="30"><route edges="in on"/></flow>
+    <flow id="stop" begin="0" end="100" number="4"><route edges="in"/></flow>
+</routes>"""
+
+
+def test_a_lane_carries_the_vehicles_whose_route_goes_on_from_it(tmp_path):
+    """Of the 64 vehicles over "in", those turning right or running on (10 + 30) may use only
+    lane 0, those turning left (20) only lane 1, those that end there (4) either, one share
+    each: 42 and 22, where the edge's count (64) ties them. The ranking follows."""
+    import subprocess
+
+    import sumo as sumo_wheel
+
+    (tmp_path / "j.nod.xml").write_text(JUNCTION_NODES)
+    (tmp_path / "j.edg.xml").write_text(JUNCTION_EDGES)
+    subprocess.run([f"{sumo_wheel.SUMO_HOME}/bin/netconvert", "-n", "j.nod.xml", "-e",
+                    "j.edg.xml", "-o", "j.net.xml", "--no-turnarounds", "true"],
+                   cwd=tmp_path, check=True, capture_output=True)
+    (tmp_path / "j.rou.xml").write_text(JUNCTION_ROUTES)
+    table = lane_table(tmp_path / "j.net.xml", [tmp_path / "j.rou.xml"], exits=False)
+    lanes = table.set_index("lane")
+    assert lanes.loc["in_0", "vehicles"] == pytest.approx(42.0)
+    assert lanes.loc["in_1", "vehicles"] == pytest.approx(22.0)
+    assert lanes.loc["in_0", "edge_vehicles"] == lanes.loc["in_1", "edge_vehicles"] == 64
+    assert lanes.loc["on_0", "vehicles"] == pytest.approx(30.0)
+    assert list(table["lane"][:3]) == ["in_0", "on_0", "in_1"]
 
 
 def test_lanes_lists_the_lanes_auto_may_choose(tmp_path, road_net, capsys):
@@ -122,3 +164,28 @@ def test_auto_needs_a_lane_long_enough(tmp_path, road_net):
     with pytest.raises(InputError, match="no lane that allows passenger cars is") as error:
         load_scenario(path)
     assert error.value.key == "track.start_lane"
+
+
+def test_the_plots_rank_labels_never_overlap_and_rank_1_is_boxed():
+    """Twelve lanes 3 m apart on a 2 km map (one street's lanes, in a city's extent): twelve
+    labels, no two overlapping on the page, the first boxed in the lanes' colour."""
+    import itertools
+
+    import matplotlib.pyplot as plt
+
+    from enn_traffic.report.plots import _rank_labels
+
+    figure, axes = plt.subplots(figsize=(7, 7))
+    axes.set_xlim(0, 2000)
+    axes.set_ylim(0, 2000)
+    anchors = [np.array([1000.0, 1000.0 + 3.0 * k]) for k in range(12)]
+    _rank_labels(figure, axes, anchors)
+    figure.canvas.draw()
+    renderer = figure.canvas.get_renderer()
+    labels = {text.get_text(): text for text in axes.texts}
+    assert sorted(labels, key=int) == [str(rank) for rank in range(1, 13)]
+    boxes = [text.get_bbox_patch().get_window_extent(renderer) for text in labels.values()]
+    assert not any(a.overlaps(b) for a, b in itertools.combinations(boxes, 2))
+    assert labels["1"].get_bbox_patch().get_facecolor() != labels["2"].get_bbox_patch(
+        ).get_facecolor()
+    plt.close(figure)

@@ -308,6 +308,30 @@ def test_ssm_sees_the_learner_closing_on_a_vehicle_ahead(tmp_path, root):
     assert (min_ttc_2d, below) == (0.0, 16)
 
 
+@pytest.mark.parametrize("mode", ["replay", "closed-loop"])
+def test_a_traced_collision_ends_with_the_learners_body_on_what_it_hit(tmp_path, root, mode):
+    """The learner drives into the slow car ahead: the trace's last pose is where its last
+    move took it, and its body there touches the body the car had before that move (what
+    the blame rule tested, what ``render`` draws up close); a step earlier it did not."""
+    from enn_traffic.core.geometry import body_corners
+    from enn_traffic.sim.rules import boxes_overlap
+
+    length = SumoWorld(sumo_scenario(tmp_path, root, LEADER)).spec.chromosome_length
+    scenario = sumo_scenario(tmp_path, root, LEADER, mode=mode, lane="g0_0to1_0_0",
+                             offset=15.0, steps=60, warmup=0.0, episodes=1)
+    life = make_world(scenario).trace_life(np.zeros(length))
+    assert life.outcome == COLLIDED and life.hit_vehicle[0] == "leader"
+
+    def body(row: int) -> np.ndarray:
+        corners = np.empty((4, 2))
+        body_corners(*life.poses[row, 0], scenario.vehicle.length, scenario.vehicle.width,
+                     corners)
+        return corners
+
+    assert boxes_overlap(body(-1), life.hit_body)
+    assert not boxes_overlap(body(-2), life.hit_body)
+
+
 def test_the_learners_speed_factor_lets_them_go_their_speed_on_the_slowest_lane(root):
     """The ring's slowest car lanes are its right turns inside the junctions (4.88 m/s in its
     .net.xml): a 10 m/s learner's type gets the factor 10 / 4.88, enters at 10 m/s, and a 3 m/s
@@ -379,3 +403,22 @@ def test_sumo_outputs_of_every_vehicle_without_a_sumocfg(tmp_path, root):
     conflicts = ElementTree.parse(start / "ssm.xml").getroot().findall("conflict")
     assert {c.get("ego") for c in conflicts} <= {command.LEARNER, "leader"}
     assert len([c for c in conflicts if c.get("ego") == command.LEARNER]) == own[0, 0, 1] == 1
+
+
+def test_a_collision_on_a_city_scale_is_drawn_up_close(tmp_path):
+    """A 600 m path ending on a 4.5 m car: on the map the car is a few pixels under the end
+    marker; the inset draws it 24 m across, hundreds of pixels of its colour."""
+    from PIL import Image
+
+    from enn_traffic.report.plots import learner_among_traffic
+
+    x = np.linspace(0.0, 600.0, 601)
+    poses = np.stack([x, np.zeros_like(x), np.zeros_like(x)], axis=1)[:, None, :]
+    car = np.array([[602.0, -0.9], [602.0, 0.9], [597.5, 0.9], [597.5, -0.9]])
+    body = np.array([[600.0, -0.85], [600.0, 0.85], [595.7, 0.85], [595.7, -0.85]])
+    out = tmp_path / "hit.png"
+    learner_among_traffic(np.zeros((0, 4)), np.zeros((0, 4)), poses, out, "a city", "end",
+                          hit_body=car, learner_body=body)
+    pixels = np.asarray(Image.open(out).convert("RGB")).astype(int)
+    orange = (np.abs(pixels - [255, 145, 50]) < 40).all(axis=2).sum()  # C1, nearly opaque
+    assert orange > 400

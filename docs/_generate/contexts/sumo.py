@@ -38,4 +38,5 @@ def context(root: Path) -> dict:
         "best_generation": int(generations["generation"][best]),
         "table3": pd.read_csv(folder / "table3.csv").iloc[0],
         "table4": pd.read_csv(folder / "table4.csv").iloc[0],
+        "has_2d": "population_conflicts_2d_per_h" in pd.read_csv(folder / "table4.csv"),
         "bred": {"median": bred.median(), "min": bred.min(), "max": bred.max()}}}
