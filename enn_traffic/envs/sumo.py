@@ -6,7 +6,7 @@ The world is :class:`~enn_traffic.sim.sumo.world.SumoWorld`'s and the step its o
 (:func:`~enn_traffic.sim.sumo.replay.learner_sense`, after the blame rule, exits, spin test and
 step cap), the action steers, the learner moves (:func:`~enn_traffic.sim.sumo.replay.learner_move`).
 In replay mode the traffic is the situation's recorded SUMO run; in closed-loop mode a live
-SUMO per episode, the learner in it (:class:`~enn_traffic.sim.sumo.world.LiveTraffic`), so
+SUMO per episode, the learner in it (:class:`~enn_traffic.sim.sumo.live.LiveTraffic`), so
 SUMO's drivers react to it. Observation, action and reward are those of
 :mod:`enn_traffic.envs.rangefinder`; reaching an exit of the network ends the episode too
 (``terminated``, outcome ``left network``: its steps count, as in the GA's fitness).
@@ -40,6 +40,7 @@ from enn_traffic.sim.sumo import world as recordings
 from enn_traffic.sim.sumo.crowd import SumoCrowd
 from enn_traffic.sim.sumo.crowd_rules import move_once as move_learners
 from enn_traffic.sim.sumo.crowd_rules import observe
+from enn_traffic.sim.sumo.live import LiveTraffic
 from enn_traffic.sim.sumo.replay import (
     clear_start,
     learner_state,
@@ -47,7 +48,7 @@ from enn_traffic.sim.sumo.replay import (
     sense_once,
     with_slots,
 )
-from enn_traffic.sim.sumo.world import LiveTraffic, SumoWorld
+from enn_traffic.sim.sumo.world import SumoWorld
 from enn_traffic.sim.world import CAPPED, OUTCOMES, RUNNING, SPUN
 from enn_traffic.sumo.simulation import Simulation
 

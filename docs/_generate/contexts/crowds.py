@@ -365,6 +365,17 @@ def _matrix(table: pd.DataFrame) -> dict:
                    for j in range(size)}}
 
 
+def _conflicts(situations: pd.DataFrame) -> dict:
+    """How often the 2-D conflicts per learner-hour exceed SSM's, strategy by arm (the cells
+    of the results' conflict table: means over the situations)."""
+    arms = ["initial", "winner", "initial_after", "winner_after", "population"]
+    means = situations.groupby("strategy")[
+        [f"{arm}_{m}" for arm in arms for m in ("conflicts", "conflicts_2d")]].mean()
+    above = sum(int((means[f"{arm}_conflicts_2d"] > means[f"{arm}_conflicts"]).sum())
+                for arm in arms)
+    return {"above": above, "cells": len(means) * len(arms)}
+
+
 def _family(paper: Path, family: Family, summary: dict) -> dict:
     folder = paper / family.folder
     table3 = pd.read_csv(folder / "table3.csv")
@@ -393,6 +404,7 @@ def _family(paper: Path, family: Family, summary: dict) -> dict:
         "rows": [{"first": first, "after": after} for first, after in zip(
             _records(table3), _records(table4), strict=True)],
         "winner_below": _apart(table3, "winner_minus_initial")["below"],
+        "conflicts": _conflicts(situations),
         "strategies": len(table4),
         "apart": {name: _apart(table4, f"population_minus_{name}")
                   for name in ("initial_after", "winner_after")},

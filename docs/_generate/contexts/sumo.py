@@ -19,7 +19,9 @@ def safety(table: pd.DataFrame) -> dict:
             "scenarios": sorted(table["scenario"].unique()),
             "situations": int(table["situation"].nunique()), "hits": len(hits),
             "finite_2d": int(np.isfinite(hits["min_ttc_2d_s"]).sum()),
-            "ssm_inf": int(np.isinf(hits["min_ttc_s"]).sum())}
+            "ssm_inf": int(np.isinf(hits["min_ttc_s"]).sum()),
+            "walls_touching": int(((table["outcome"] == "collision") & (table["hit"] == "wall")
+                                   & (table["min_ttc_2d_s"] == 0)).sum())}
 
 
 def context(root: Path) -> dict:
