@@ -63,8 +63,13 @@ def run(args) -> int:
           f"edge_vehicles, those whose route goes on from that lane (docs/sumo.md):")
     columns = ["lane", "edge", "vehicles", "edge_vehicles", "length_m", "speed_limit_kmh",
                "allowed"]
+    learner, skipped = _clear_head(learner, source, net, args.top)
     ranked = learner[columns].assign(rank=range(1, len(learner) + 1))
     print(ranked.head(args.top)[["rank", *columns]].to_string(index=False))
+    if skipped:
+        print(f"({skipped:,} busier {'lane' if skipped == 1 else 'lanes'} left out: the body "
+              "at start_offset would reach over the road's edge there, a bend or a narrow "
+              "lane; auto skips them too)")
     starts = _scenario_starts(source, table)
     if starts is not None:
         key, chosen = starts
@@ -83,6 +88,36 @@ def run(args) -> int:
         _plot_lanes(net, learner.head(args.top), args.plot)
         print(f"written {args.plot}")
     return 0
+
+
+def _clear_head(learner, source: Path, net: Path, top: int):
+    """The learner's lanes with those whose start would put the body over the road's edge
+    left out, as ``start_lane = "auto"`` leaves them, tested in rank order until ``top`` pass
+    (the rest are not tested); and how many were left out."""
+    from enn_traffic.config import load_scenario
+    from enn_traffic.config.track import TrackConfig
+    from enn_traffic.config.vehicle import VehicleConfig
+    from enn_traffic.roads.network import clear_starts
+
+    if source.suffix == ".sumocfg":
+        defaults = VehicleConfig()
+        clear = clear_starts(net, TrackConfig.model_fields["start_offset"].default,
+                             defaults.length, defaults.width)
+    else:
+        scenario = load_scenario(source)
+        track, vehicle = scenario.track, scenario.vehicle
+        clear = clear_starts(net, track.start_offset, vehicle.length, vehicle.width,
+                             track.surface, scenario.fringe_exits)
+    keep, left_out, passed = [], 0, 0
+    for lane in learner["lane"]:
+        if passed >= top:
+            keep.append(True)
+            continue
+        fits = clear(str(lane))
+        keep.append(fits)
+        passed += fits
+        left_out += not fits
+    return learner[keep], left_out
 
 
 def _scenario_starts(source, table):

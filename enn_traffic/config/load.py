@@ -17,7 +17,7 @@ from enn_traffic.config.vehicle import VehicleConfig
 from enn_traffic.core.errors import InputError
 from enn_traffic.core.io import check_input_file
 from enn_traffic.roads.lanes import auto_lane
-from enn_traffic.roads.network import least_start_length, read_net
+from enn_traffic.roads.network import clear_starts, least_start_length, read_net
 from enn_traffic.roads.sumocfg import check_included, read_sumocfg
 
 PACKAGE_PREFIX = "pkg:"
@@ -179,8 +179,11 @@ def _with_auto_lane(scenario: Scenario, path: Path) -> Scenario:
     additional = config.additional_files if config is not None else ()
     with network_named(scenario):
         read_net(track.net)  # read once per process: auto_lane reads it from memory
+    vehicle = scenario.vehicle
+    clear = clear_starts(track.net, track.start_offset, vehicle.length, vehicle.width,
+                         track.surface, scenario.fringe_exits)
     try:
-        lane = auto_lane(track.net, route_files(scenario), length, additional)
+        lane = auto_lane(track.net, route_files(scenario), length, additional, clear=clear)
     except InputError as exc:
         raise InputError(f"auto: {exc.message}", path, "track.start_lane") from None
     return scenario.model_copy(update={"track": track.model_copy(update={"start_lane": lane})})

@@ -28,6 +28,7 @@ import subprocess
 import tempfile
 import xml.etree.ElementTree as ElementTree
 from collections import Counter
+from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
@@ -310,14 +311,17 @@ def lane_shares(edge, moves: list[tuple[str, str, float]]) -> dict[str, float]:
 
 def auto_lane(net_file: Path, route_files: list[Path] | tuple[Path, ...],
               min_length: float, additional_files: list[Path] | tuple[Path, ...] = (),
-              exits: bool = True) -> str:
+              exits: bool = True, clear: Callable[[str], bool] | None = None) -> str:
     """``start_lane = "auto"``: the learner's lane that the demand uses most, among those at
-    least ``min_length`` long whose edge does not end at an exit (an InputError if there is
-    none)."""
+    least ``min_length`` long whose edge does not end at an exit and, with ``clear``
+    (:func:`~enn_traffic.roads.network.clear_starts`), whose start leaves the body on the
+    road (an InputError if there is none)."""
     table = lane_table(net_file, route_files, additional_files, min_length, exits)
     fit = table[table["learner_may_start"]]
-    if fit.empty:
-        raise InputError(f"no lane that allows passenger cars is {min_length:g} m long or "
-                         "longer" + (" and does not end at the network's fringe" if exits
-                                     else ""), net_file)
-    return str(fit.iloc[0]["lane"])
+    for lane in fit["lane"]:
+        if clear is None or clear(str(lane)):
+            return str(lane)
+    raise InputError(f"no lane that allows passenger cars is {min_length:g} m long or longer"
+                     + (" and does not end at the network's fringe" if exits else "")
+                     + (" and leaves the body on the road at its start" if len(fit) else ""),
+                     net_file)

@@ -18,6 +18,7 @@ from __future__ import annotations
 import functools
 import math
 import xml.etree.ElementTree as ElementTree
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Literal
@@ -96,6 +97,29 @@ class Track:
     def lane_pose(self, net_file: Path, lane_id: str, offset: float) -> tuple[float, float, float]:
         """(x, y, heading) at ``offset`` metres along the centre line of ``lane_id``."""
         return lane_start_poses(net_file, [("lane", lane_id)], offset)[0]
+
+
+def body_on_road(area: Polygon | MultiPolygon, pose: tuple[float, float, float],
+                 length: float, width: float) -> bool:
+    """Does a ``length`` x ``width`` body whose front bumper's middle is at ``pose`` (x, y,
+    heading) lie inside the road surface ``area``, touching none of its walls?"""
+    corners = np.empty((4, 2))
+    body_corners(*pose, length, width, corners)
+    return bool(area.contains_properly(Polygon(corners)))
+
+
+def clear_starts(net_file: Path, offset: float, length: float, width: float,
+                 surface: Surface = "passenger", exits: bool = True) -> Callable[[str], bool]:
+    """A test of a lane as a start: does a ``length`` x ``width`` body ``offset`` metres along
+    it lie on the road ``surface`` (:func:`body_on_road`)? A lane passes every other check and
+    still fails this one where it bends or narrows there."""
+    area = load_track(net_file, exits=exits, surface=surface).area
+
+    def clear(lane: str) -> bool:
+        pose = lane_start_poses(net_file, [("lane", lane)], offset)[0]
+        return body_on_road(area, pose, length, width)
+
+    return clear
 
 
 def lane_start_poses(net_file: Path, names: list[tuple[str, str]], offset: float

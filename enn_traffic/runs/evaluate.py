@@ -116,13 +116,17 @@ def _ends(results: SituationResults, scenario: Scenario) -> list[dict]:
     """Where and when each life of the first world ended, among SUMO's traffic (else no
     columns): the learner's position in the network's coordinates (``end_x_m``,
     ``end_y_m``), the lane and edge of the learner's surface nearest it (blank off the road),
-    and the SUMO time (``end_sumo_time_s``: the learner's start plus its steps), to find a
-    collision in SUMO's own outputs (``traffic.outputs``) or in sumo-gui."""
+    and the SUMO time (``end_sumo_time_s``) as SUMO's outputs label that step, to find a
+    collision in SUMO's own outputs (``traffic.outputs``) or in sumo-gui: SUMO labels a step by
+    the time it begins at, where its clock (``simulation.getTime``) reads the time it ends at,
+    so the learner's last pose, which its last step put into SUMO, is labelled its start plus
+    one step fewer than it moved (its start, when it ended before moving)."""
     if results.end_pose is None or not scenario.traffic.is_sumo:
         return [{}] * results.steps.shape[1]
     xy = results.end_pose[0, :, :2]
     lanes = lanes_at(scenario.track.net, xy, scenario.track.surface)
-    times = learner_start_time(scenario) + results.steps[0] * scenario.vehicle.dt
+    times = (learner_start_time(scenario)
+             + np.maximum(results.steps[0] - 1, 0) * scenario.vehicle.dt)
     return [{"end_x_m": round(float(x), 2), "end_y_m": round(float(y), 2),
              "end_edge": lane.rpartition("_")[0], "end_lane": lane,
              "end_sumo_time_s": round(float(time), 3)}

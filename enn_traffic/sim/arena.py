@@ -30,7 +30,7 @@ from enn_traffic.core import keys
 from enn_traffic.core.errors import InputError
 from enn_traffic.core.neural import NetworkSpec
 from enn_traffic.roads import Track, load_track
-from enn_traffic.roads.network import anywhere_poses, lane_start_poses
+from enn_traffic.roads.network import anywhere_poses, body_on_road, lane_start_poses
 from enn_traffic.sim.rules import (
     NO_HIT,
     build_constants,
@@ -363,9 +363,17 @@ def start_poses(scenario: Scenario, track: Track,
                              scenario.source, "track.start_anywhere")
         return poses
     poses = listed if listed is not None else listed_starts(scenario)
+    vehicle = scenario.vehicle
     for index, pose in enumerate(poses):
         if not track.contains(pose[0], pose[1]):
             raise InputError(f"start pose ({pose[0]:.1f}, {pose[1]:.1f}) is off the drivable "
                              f"area of {track.name}", scenario.source,
+                             _start_key(scenario, index))
+        if not body_on_road(track.area, pose, vehicle.length, vehicle.width):
+            raise InputError(f"the learner's body at start pose ({pose[0]:.1f}, "
+                             f"{pose[1]:.1f}), heading {math.degrees(pose[2]):.0f}°, reaches "
+                             f"over the edge of {track.name}'s road surface: every life would "
+                             "end at a wall at step 0 (a bend or a narrow lane there; try "
+                             "another lane or start_offset)", scenario.source,
                              _start_key(scenario, index))
     return poses

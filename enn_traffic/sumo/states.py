@@ -189,8 +189,9 @@ def no_traffic_error(scenario: Scenario, steps: int, emptied: float | None = Non
 
 def first_traffic(scenario: Scenario, seed: int, state: Path | None, steps: int) -> int:
     """Steps after the learner's start until a SUMO vehicle is on the network (at most
-    ``steps``; an InputError if none ever is)."""
-    simulation = Simulation(scenario, seed, state)
+    ``steps``; an InputError if none ever is). A check, not a situation: its outputs are
+    not kept."""
+    simulation = Simulation(scenario, seed, state, keeps_outputs=False)
     try:
         if state is None:
             warm_up(simulation)

@@ -189,3 +189,56 @@ def test_the_plots_rank_labels_never_overlap_and_rank_1_is_boxed():
     assert labels["1"].get_bbox_patch().get_facecolor() != labels["2"].get_bbox_patch(
         ).get_facecolor()
     plt.close(figure)
+
+
+NARROW_NODES = """<nodes>
+    <node id="w" x="0" y="0"/><node id="m" x="100" y="0"/><node id="e" x="200" y="0"/>
+    <node id="f" x="300" y="0"/>
+</nodes>"""
+# "a" is 1.5 m wide, narrower than the 1.8 m car; "b" and "c" are 3.5 m wide.
+NARROW_EDGES = """<edges>
+    <edge id="a" from="w" to="m" width="1.5"/><edge id="b" from="m" to="e" width="3.5"/>
+    <edge id="c" from="e" to="f" width="3.5"/>
+</edges>"""
+NARROW_ROUTES = """<routes>
+    <flow id="busy" begin="0" end="100" number="80"><route edges="a"/></flow>
+    <flow id="quiet" begin="0" end="100" number="20"><route edges="b c"/></flow>
+</routes>"""
+NARROW_CONFIG = """<configuration><input><net-file value="n.net.xml"/>
+    <route-files value="n.rou.xml"/></input></configuration>"""
+
+
+def test_a_start_that_puts_the_body_over_the_roads_edge_is_refused_and_auto_skips_it(
+        tmp_path, capsys):
+    """Lane a_0 carries the most vehicles (80) and passes every other check, but it is 1.5 m
+    wide: a 1.8 m car there reaches over the road's edge, and every life would end at a wall at
+    step 0. Named as the start, it is refused, naming the key; ``auto`` takes b_0 (20), and
+    ``lanes`` leaves a_0 out and says so."""
+    import subprocess
+
+    import sumo as sumo_wheel
+
+    (tmp_path / "n.nod.xml").write_text(NARROW_NODES)
+    (tmp_path / "n.edg.xml").write_text(NARROW_EDGES)
+    subprocess.run([f"{sumo_wheel.SUMO_HOME}/bin/netconvert", "-n", "n.nod.xml", "-e",
+                    "n.edg.xml", "-o", "n.net.xml", "--no-turnarounds", "true"],
+                   cwd=tmp_path, check=True, capture_output=True)
+    (tmp_path / "n.rou.xml").write_text(NARROW_ROUTES)
+    (tmp_path / "n.sumocfg").write_text(NARROW_CONFIG)
+    path = tmp_path / "s.toml"
+    scenario = ('name = "narrow"\n[track]\nstart_lane = "{lane}"\n[vehicle]\nwidth = 1.8\n'
+                '[traffic]\n'
+                'strategy = "sumo"\nsumocfg = "n.sumocfg"\nwarmup_s = 0\n')
+    path.write_text(scenario.format(lane="a_0"))
+    from enn_traffic.sim.world import make_world
+
+    with pytest.raises(InputError, match="reaches over the edge") as refused:
+        make_world(load_scenario(path))
+    assert refused.value.key == "track.start_lane"
+    path.write_text(scenario.format(lane="auto"))
+    assert load_scenario(path).track.start_lane == "b_0"
+    capsys.readouterr()
+    assert main(["lanes", str(path)]) == 0
+    printed = capsys.readouterr().out
+    assert "1 busier lane left out" in printed and 'start_lane = "b_0"' in printed
+    assert "a_0" not in printed.split("edge_vehicles")[-1]

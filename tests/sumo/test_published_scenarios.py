@@ -13,6 +13,7 @@ from enn_traffic.cli import main
 from enn_traffic.config import load_scenario
 from enn_traffic.roads import load_track
 from enn_traffic.runs.controller import Controller
+from enn_traffic.sumo.command import LEARNER
 from enn_traffic.sumo.states import warm_state
 
 # The road's .sumocfg as publishers ship theirs: a <sumoConfiguration> root, outputs, a log,
@@ -199,13 +200,16 @@ def test_a_collision_says_what_it_was_with(tmp_path, road_net, mode):
     its collision is with a vehicle, named by its SUMO id and type; facing north from the
     eastbound lane, it runs into the road's edge: a wall. Each row says where and when: the
     front bumper's x, y where a straight line at the vehicle's speed puts it, the lane nearest
-    it, and SUMO's clock (the .sumocfg's begin at 1000 s, 12 s of warm-up, then its steps)."""
+    it, and the time SUMO's outputs label that step (the .sumocfg's begin at 1000 s, 12 s of
+    warm-up, then its steps less one): in closed loop SUMO's own fcd output puts the learner
+    there at that time, and there it ends."""
     rows = {}
     for name, start in (("bus", "start_xy = [20.0, 2.0]\nstart_heading_deg = 0.0"),
-                        ("edge", "start_xy = [20.0, -2.0]\nstart_heading_deg = 90.0")):
+                        ("edge", "start_xy = [20.0, 0.5]\nstart_heading_deg = 90.0")):
         folder = tmp_path / name
         folder.mkdir()
-        scenario = load_scenario(road_scenario(folder, road_net, start=start, warmup=12.0))
+        scenario = load_scenario(road_scenario(folder, road_net, start=start, warmup=12.0,
+                                               extra='outputs = ["fcd"]'))
         controller = folder / "straight.npz"
         length = len(np.zeros(19 * 3 + 3 + 3 * 2 + 2))
         Controller.from_scenario(scenario, np.zeros(length), 0.0, 0).save(controller)
@@ -214,11 +218,19 @@ def test_a_collision_says_what_it_was_with(tmp_path, road_net, mode):
                      "--mode", mode, "--out", str(out), "--quiet"]) == 0
         rows[name] = pd.read_csv(out, keep_default_na=False).iloc[0]
     speed, dt = scenario.vehicle.speed, scenario.vehicle.dt
-    for name, (x, y, heading) in (("bus", (20.0, 2.0, 0.0)), ("edge", (20.0, -2.0, 90.0))):
+    for name, (x, y, heading) in (("bus", (20.0, 2.0, 0.0)), ("edge", (20.0, 0.5, 90.0))):
         row, moved = rows[name], rows[name]["steps"] * speed * dt
         assert row["end_x_m"] == pytest.approx(x + moved * np.cos(np.radians(heading)), abs=0.01)
         assert row["end_y_m"] == pytest.approx(y + moved * np.sin(np.radians(heading)), abs=0.01)
-        assert row["end_sumo_time_s"] == pytest.approx(1012.0 + row["steps"] * dt)
+        assert row["end_sumo_time_s"] == pytest.approx(1012.0 + (row["steps"] - 1) * dt)
+        if mode == "closed-loop":
+            starts = list((tmp_path / name).glob("eval_sumo/outputs/*/fcd.xml"))
+            assert len(starts) == 1  # the situation's: no check's, no warm-up's
+            fcd = starts[0].read_text()
+            last = fcd.rpartition("<timestep")[2]
+            assert f'time="{row["end_sumo_time_s"]:.2f}"' in last
+            learner = last.partition(f'id="{LEARNER}"')[2]
+            assert f'x="{row["end_x_m"]:.2f}"' in learner
     assert (rows["bus"]["end_edge"], rows["bus"]["end_lane"]) == ("ew", "ew_0")
     assert rows["edge"]["end_lane"] == ("we_0" if rows["edge"]["end_y_m"] < 0 else "ew_0")
     assert rows["bus"]["outcome"] == "collision" and rows["bus"]["hit"] == "vehicle"
