@@ -94,6 +94,8 @@ def _clear_head(learner, source: Path, net: Path, top: int):
     """The learner's lanes with those whose start would put the body over the road's edge
     left out, as ``start_lane = "auto"`` leaves them, tested in rank order until ``top`` pass
     (the rest are not tested); and how many were left out."""
+    import pandas as pd
+
     from enn_traffic.config import load_scenario
     from enn_traffic.config.track import TrackConfig
     from enn_traffic.config.vehicle import VehicleConfig
@@ -117,7 +119,7 @@ def _clear_head(learner, source: Path, net: Path, top: int):
         keep.append(fits)
         passed += fits
         left_out += not fits
-    return learner[keep], left_out
+    return learner.loc[pd.Series(keep, index=learner.index, dtype=bool)], left_out
 
 
 def _scenario_starts(source, table):

@@ -330,13 +330,16 @@ def road_surfaces(surfaces: dict[str, tuple[object, np.ndarray]],
         steps = np.hypot(*np.diff(shape, axis=0).T)
         halfway = int(np.searchsorted(np.cumsum(steps), steps.sum() / 2))
         anchors.append(shape[halfway] + (shape[halfway + 1] - shape[halfway]) * 0.5)
+    caption = 0.0  # the figure's height the caption under the panels takes
     if lanes:
         listed = ("start lanes, by the demand over them (1, boxed: the start_lane = \"auto\" "
                   "choice): " + ", ".join(f"{rank} {lane}"
                                           for rank, (lane, _) in enumerate(lanes, 1)))
-        figure.text(0.5, 0.01, "\n".join(textwrap.wrap(listed, 60 * len(surfaces))),
-                    ha="center", va="bottom", fontsize=8, color="C3")
+        wrapped = textwrap.wrap(listed, 60 * len(surfaces))
+        figure.text(0.5, 0.01, "\n".join(wrapped), ha="center", va="bottom", fontsize=8,
+                    color="C3")
+        caption = (len(wrapped) * 8 * 1.3 + 6) / 72 / figure.get_figheight()
     figure.suptitle(title, fontsize=11)
-    figure.tight_layout(rect=(0, 0.05 if lanes else 0, 1, 1))
+    figure.tight_layout(rect=(0, caption, 1, 1))
     _rank_labels(figure, last, anchors)
     save_figure(figure, path)

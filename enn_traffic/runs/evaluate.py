@@ -300,6 +300,7 @@ def _render_among_traffic(controller: Controller, scenario: Scenario, out: Path,
 
     world = make_world(evaluation_scenario(controller, scenario, 1))
     life = world.trace_life(controller.chromosome, EVALUATION_KEY, 0, max_steps)
+    seed = world.seeds(EVALUATION_KEY)[0]
     steps, outcome = len(life.poses) - 1, OUTCOMES[life.outcome]
     end = f"end: {outcome} at step {steps}"
     if life.hit == HIT_WALL:
@@ -309,7 +310,8 @@ def _render_among_traffic(controller: Controller, scenario: Scenario, out: Path,
     vehicle, body = world.scenario.vehicle, np.empty((4, 2))
     body_corners(*life.poses[-1, 0], vehicle.length, vehicle.width, body)
     learner_among_traffic(world.track.walls, world.exits, life.poses, out,
-                          f"{scenario.name}: {steps} steps, {outcome}", end, life.hit_body,
+                          f"{scenario.name}: {steps} steps, {outcome}\n"
+                          f"held-out situation 0 (SUMO seed {seed})", end, life.hit_body,
                           learner_body=body)
     return {"steps": steps, "outcome": outcome, "file": str(out)}
 

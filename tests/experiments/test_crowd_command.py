@@ -73,6 +73,9 @@ def test_crowd_writes_tables_3_and_4_the_curve_the_controllers_and_the_gif(crowd
     assert (cost[cost["arm"] == "learning together"]["learner_steps"] == learner_s + 200).all()
     assert ((cost["sumo_s"] > 0) & (cost["sumo_s"] < cost["wall_s"])
             & (cost["wall_s"] < cost["situation_wall_s"])).all()
+    # CPU time: SUMO's within the arm's, the arm's no more than its wall time (one thread)
+    assert ((cost["sumo_cpu_s"] > 0) & (cost["sumo_cpu_s"] <= cost["cpu_s"])
+            & (cost["cpu_s"] <= cost["wall_s"] + 0.05)).all()
 
 
 def test_a_resumed_crowd_measures_nothing_again_and_another_folder_is_refused(crowd_run, capsys):

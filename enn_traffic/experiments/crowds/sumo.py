@@ -410,13 +410,26 @@ def measure_situations(folder: Path, inputs: dict[int, tuple[SumoWorld, np.ndarr
 
 
 COST_COLUMNS = ["strategy", "situation", "arm", "situation_wall_s", "learner_steps", "wall_s",
-                "sumo_s", "learner_steps_per_s", "sumo_share"]
+                "sumo_s", "learner_steps_per_s", "sumo_share", "cpu_s", "sumo_cpu_s",
+                "learner_steps_per_cpu_s", "sumo_cpu_share"]
+
+
+def _cpu(spent: dict) -> dict:
+    """An arm's CPU columns of ``crowd_cost.csv`` (NaN where it was measured without)."""
+    if "cpu_s" not in spent:
+        return dict.fromkeys(COST_COLUMNS[-4:], float("nan"))
+    cpu = max(spent["cpu_s"], 1e-9)
+    return {"cpu_s": round(spent["cpu_s"], 2), "sumo_cpu_s": round(spent["sumo_cpu_s"], 2),
+            "learner_steps_per_cpu_s": round(spent["learner_steps"] / cpu, 1),
+            "sumo_cpu_share": round(spent["sumo_cpu_s"] / cpu, 3)}
 
 
 def cost_table(kept: dict) -> pd.DataFrame:
-    """``crowd_cost.csv``: per situation and arm, the learner-steps it drove, its wall time,
-    the share of it inside SUMO's step, and the situation's wall time (its three arms side by
-    side). A situation kept from before costs were recorded has no rows."""
+    """``crowd_cost.csv``: per situation and arm, the learner-steps it drove, its wall time and
+    the share of it inside SUMO's step, the same in its process's CPU time (what the arm cost:
+    the arms run side by side, and on fewer cores than arms a wall clock also counts the
+    waits for one), and the situation's wall time. A situation kept from before costs were
+    recorded has no rows; one kept from before CPU times were, no CPU figures."""
     rows = []
     for (strategy, situation), result in kept.items():
         cost = result.get("cost")
@@ -427,7 +440,7 @@ def cost_table(kept: dict) -> pd.DataFrame:
                          "learner_steps": spent["learner_steps"],
                          "wall_s": round(spent["wall_s"], 2), "sumo_s": round(spent["sumo_s"], 2),
                          "learner_steps_per_s": round(spent["learner_steps"] / wall, 1),
-                         "sumo_share": round(spent["sumo_s"] / wall, 3)})
+                         "sumo_share": round(spent["sumo_s"] / wall, 3)} | _cpu(spent))
     return pd.DataFrame(rows, columns=COST_COLUMNS)
 
 

@@ -192,13 +192,17 @@ def summary(out: Path) -> list[str]:
 
 
 def cost_lines(cost) -> list[str]:
-    """What the crowd cost (``crowd_cost.csv``): each arm's learner-steps per second and SUMO's
-    share of its wall time, and the wall time per situation (its arms side by side)."""
+    """What the crowd cost (``crowd_cost.csv``): each arm's learner-steps per CPU-second and
+    SUMO's share of that CPU time (its wall time where CPU times were not recorded), and the
+    wall time per situation (its arms side by side)."""
     if cost.empty:
         return ["cost: not recorded (every situation was measured before costs were kept)"]
-    arms = cost.groupby("arm", sort=False)[["learner_steps", "wall_s", "sumo_s"]].sum()
-    per_arm = "; ".join(f"{arm} {row.learner_steps / max(row.wall_s, 1e-9):,.0f} "
-                        f"learner-steps/s, SUMO {row.sumo_s / max(row.wall_s, 1e-9):.0%} of it"
+    cpu = cost["cpu_s"].notna().all() if "cpu_s" in cost else False
+    spent, inside, unit = (("cpu_s", "sumo_cpu_s", "learner-steps per CPU-second") if cpu
+                           else ("wall_s", "sumo_s", "learner-steps/s"))
+    arms = cost.groupby("arm", sort=False)[["learner_steps", spent, inside]].sum()
+    per_arm = "; ".join(f"{arm} {row.learner_steps / max(row[spent], 1e-9):,.0f} {unit}, "
+                        f"SUMO {row[inside] / max(row[spent], 1e-9):.0%} of it"
                         for arm, row in arms.iterrows())
     situations = cost.drop_duplicates(["strategy", "situation"])["situation_wall_s"]
     return [f"cost (crowd_cost.csv): {per_arm}; {situations.mean():.1f} s per situation "

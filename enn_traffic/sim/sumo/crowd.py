@@ -85,7 +85,10 @@ class SumoCrowd:
         self._starts = starts
         self._simulation: Simulation | None = None
         self._runs: list[SumoCrowdRun] = []
-        self.cost = {"learner_steps": 0, "wall_s": 0.0, "sumo_s": 0.0}  # of every run so far
+        # of every run so far: wall and this process's CPU seconds, in all and in SUMO's step
+        # (CPU time is what an arm costs when arms share the cores side by side)
+        self.cost = {"learner_steps": 0, "wall_s": 0.0, "sumo_s": 0.0, "cpu_s": 0.0,
+                     "sumo_cpu_s": 0.0}
 
     def __enter__(self) -> SumoCrowd:
         return self
@@ -172,9 +175,10 @@ class SumoCrowd:
     def advance(self) -> None:
         """The learners where they moved, SUMO one step on, its vehicles read."""
         self._move_learners()
-        started = time.perf_counter()
+        started, cpu = time.perf_counter(), time.process_time()
         self._simulation.step()
         self.cost["sumo_s"] += time.perf_counter() - started
+        self.cost["sumo_cpu_s"] += time.process_time() - cpu
         self.before, self.now = self.now, self.before
         self._read()
         self.t += 1
@@ -194,7 +198,7 @@ class SumoCrowd:
         and tells it of every life it ends and every life that reaches its cap."""
         if self._simulation is None:
             self.start()
-        started = time.perf_counter()
+        started, cpu = time.perf_counter(), time.process_time()
         world, count, lives = self.world, self.count, self.lives
         learners = lives.learners  # its K-row arrays stay when SUMO's slots grow
         genes = np.array(genes, dtype=np.float64)
@@ -239,6 +243,7 @@ class SumoCrowd:
         self._runs.append(run)
         self.cost["learner_steps"] += count * steps
         self.cost["wall_s"] += time.perf_counter() - started
+        self.cost["cpu_s"] += time.process_time() - cpu
         return run
 
 
