@@ -93,6 +93,19 @@ def test_the_busiest_lane_that_does_not_lead_out_is_auto(tmp_path, road_net, cap
     assert (tmp_path / "lanes.csv").read_text().count("\n") == 5
 
 
+def netconvert(folder, stem: str, nodes: str, edges: str) -> None:
+    """``folder/STEM.net.xml``, built by SUMO's netconvert from the nodes and edges given."""
+    import subprocess
+
+    import sumo as sumo_wheel
+
+    (folder / f"{stem}.nod.xml").write_text(nodes)
+    (folder / f"{stem}.edg.xml").write_text(edges)
+    subprocess.run([f"{sumo_wheel.SUMO_HOME}/bin/netconvert", "-n", f"{stem}.nod.xml", "-e",
+                    f"{stem}.edg.xml", "-o", f"{stem}.net.xml", "--no-turnarounds", "true"],
+                   cwd=folder, check=True, capture_output=True)
+
+
 # A junction: "in" (two lanes, west to the middle) turns right (lane 0), runs on (lane 0) or
 # turns left (lane 1), as netconvert connects it.
 JUNCTION_NODES = """<nodes>
@@ -115,15 +128,7 @@ def test_a_lane_carries_the_vehicles_whose_route_goes_on_from_it(tmp_path):
     """Of the 64 vehicles over "in", those turning right or running on (10 + 30) may use only
     lane 0, those turning left (20) only lane 1, those that end there (4) either, one share
     each: 42 and 22, where the edge's count (64) ties them. The ranking follows."""
-    import subprocess
-
-    import sumo as sumo_wheel
-
-    (tmp_path / "j.nod.xml").write_text(JUNCTION_NODES)
-    (tmp_path / "j.edg.xml").write_text(JUNCTION_EDGES)
-    subprocess.run([f"{sumo_wheel.SUMO_HOME}/bin/netconvert", "-n", "j.nod.xml", "-e",
-                    "j.edg.xml", "-o", "j.net.xml", "--no-turnarounds", "true"],
-                   cwd=tmp_path, check=True, capture_output=True)
+    netconvert(tmp_path, "j", JUNCTION_NODES, JUNCTION_EDGES)
     (tmp_path / "j.rou.xml").write_text(JUNCTION_ROUTES)
     table = lane_table(tmp_path / "j.net.xml", [tmp_path / "j.rou.xml"], exits=False)
     lanes = table.set_index("lane")
@@ -214,15 +219,7 @@ def test_a_start_that_puts_the_body_over_the_roads_edge_is_refused_and_auto_skip
     wide: a 1.8 m car there reaches over the road's edge, and every life would end at a wall at
     step 0. Named as the start, it is refused, naming the key; ``auto`` takes b_0 (20), and
     ``lanes`` leaves a_0 out and says so."""
-    import subprocess
-
-    import sumo as sumo_wheel
-
-    (tmp_path / "n.nod.xml").write_text(NARROW_NODES)
-    (tmp_path / "n.edg.xml").write_text(NARROW_EDGES)
-    subprocess.run([f"{sumo_wheel.SUMO_HOME}/bin/netconvert", "-n", "n.nod.xml", "-e",
-                    "n.edg.xml", "-o", "n.net.xml", "--no-turnarounds", "true"],
-                   cwd=tmp_path, check=True, capture_output=True)
+    netconvert(tmp_path, "n", NARROW_NODES, NARROW_EDGES)
     (tmp_path / "n.rou.xml").write_text(NARROW_ROUTES)
     (tmp_path / "n.sumocfg").write_text(NARROW_CONFIG)
     path = tmp_path / "s.toml"
