@@ -253,10 +253,10 @@ def lane_table(net_file: Path, route_files: list[Path] | tuple[Path, ...],
     network's fringe, with ``exits``), whether the learner may start on it (it allows
     passenger cars, is ``min_length`` long or longer,
     :func:`~enn_traffic.roads.network.least_start_length`, and does not end at an exit), the
-    demand's vehicles over its edge that it allows (``edge_vehicles``, whole vehicles) and its
-    share of them (``vehicles``: the module's docstring); the learner's lanes first, ranked
-    by their share, then by length. ``additional_files``: where vehicle types may be defined
-    too."""
+    demand's vehicles over its edge of the classes it allows (``edge_vehicles``) and its share
+    of them (``vehicles``: the module's docstring), expected counts to one decimal; the
+    learner's lanes first, ranked by their share, then by length, then name.
+    ``additional_files``: where vehicle types may be defined too."""
     with slow_step(f"reading {Path(net_file).name}"):
         net = read_net(net_file)
     demand: dict[str, list[tuple[str, str, float]]] = {}
@@ -270,7 +270,7 @@ def lane_table(net_file: Path, route_files: list[Path] | tuple[Path, ...],
         at_exit = edge.getToNode().getID() in fringe
         shares = lane_shares(edge, demand.get(edge.getID(), []))
         edge_vehicles = {lane.getID(): round(sum(
-            v for _, kind, v in demand.get(edge.getID(), []) if lane.allows(kind)))
+            v for _, kind, v in demand.get(edge.getID(), []) if lane.allows(kind)), 1)
             for lane in edge.getLanes()}
         for lane in edge.getLanes():
             cars = lane.allows(LEARNER_CLASS)
@@ -286,7 +286,7 @@ def lane_table(net_file: Path, route_files: list[Path] | tuple[Path, ...],
                                         "length_m", "speed_limit_kmh", "allowed",
                                         "ends_at_fringe", "allows_cars", "learner_may_start"])
     table["vehicles"] = table["vehicles"].astype(np.float64)
-    table["edge_vehicles"] = table["edge_vehicles"].astype(np.int64)
+    table["edge_vehicles"] = table["edge_vehicles"].astype(np.float64)
     table = table.sort_values(["learner_may_start", "vehicles", "length_m", "lane"],
                               ascending=[False, False, False, True], kind="stable")
     return table.reset_index(drop=True)

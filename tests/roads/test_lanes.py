@@ -72,7 +72,7 @@ def test_the_busiest_lane_that_does_not_lead_out_is_auto(tmp_path, road_net, cap
     (we_0, ew_0, me_0; em_0 is for buses), ew_0 carries them, but it ends at the road's west
     end, the network's fringe: a learner there leaves the network within 100 m. So does
     me_0, eastwards. we_0 leads into the road: ``start_lane = "auto"`` starts there, and
-    ``lanes`` lists it alone; the counts are whole vehicles."""
+    ``lanes`` lists it alone."""
     path = road_scenario(tmp_path, road_net, start='start_lane = "auto"')
     scenario = load_scenario(path)
     assert scenario.track.start_lane == "we_0"
@@ -80,7 +80,7 @@ def test_the_busiest_lane_that_does_not_lead_out_is_auto(tmp_path, road_net, cap
     assert list(table["lane"][:1]) == ["we_0"]
     assert dict(zip(table["lane"], table["vehicles"], strict=True)) == {
         "we_0": 0, "ew_0": 60, "em_0": 60, "me_0": 0}
-    assert table["edge_vehicles"].dtype.kind == "i"
+    assert table["edge_vehicles"].dtype.kind == "f"
     assert dict(zip(table["lane"], table["ends_at_fringe"], strict=True)) == {
         "we_0": False, "ew_0": True, "em_0": False, "me_0": True}
     assert list(table["learner_may_start"]) == [True, False, False, False]

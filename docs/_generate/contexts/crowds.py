@@ -373,7 +373,12 @@ def _conflicts(situations: pd.DataFrame) -> dict:
         [f"{arm}_{m}" for arm in arms for m in ("conflicts", "conflicts_2d")]].mean()
     above = sum(int((means[f"{arm}_conflicts_2d"] > means[f"{arm}_conflicts"]).sum())
                 for arm in arms)
-    return {"above": above, "cells": len(means) * len(arms)}
+    rates = situations[["initial", "winner"]].mean() * 3600.0  # collisions per learner-hour
+    return {"above": above, "cells": len(means) * len(arms),
+            "winner_more": int((means["winner_conflicts_2d"]
+                                > means["initial_conflicts_2d"]).sum()),
+            "per_collision": {arm: float(situations[f"{arm}_conflicts_2d"].mean() / rates[arm])
+                              for arm in ("initial", "winner")}}
 
 
 def _family(paper: Path, family: Family, summary: dict) -> dict:
@@ -405,6 +410,7 @@ def _family(paper: Path, family: Family, summary: dict) -> dict:
             _records(table3), _records(table4), strict=True)],
         "winner_below": _apart(table3, "winner_minus_initial")["below"],
         "conflicts": _conflicts(situations),
+        "warmups": scenario.traffic.warmup_states,
         "strategies": len(table4),
         "apart": {name: _apart(table4, f"population_minus_{name}")
                   for name in ("initial_after", "winner_after")},

@@ -11,17 +11,33 @@ import numpy as np
 import pandas as pd
 
 
-def safety(table: pd.DataFrame) -> dict:
-    """What the two safety measures saw of the collisions with vehicles in an ``evaluate``
-    table of closed-loop lives."""
-    hits = table[(table["outcome"] == "collision") & (table["hit"] == "vehicle")]
-    return {"lives": len(table), "controllers": sorted(table["controller"].unique()),
-            "scenarios": sorted(table["scenario"].unique()),
-            "situations": int(table["situation"].nunique()), "hits": len(hits),
+def _safety_counts(table: pd.DataFrame) -> dict:
+    """What the two safety measures saw in ``table``'s lives."""
+    collided = table["outcome"] == "collision"
+    hits = table[collided & (table["hit"] == "vehicle")]
+    walls = table[collided & (table["hit"] == "wall") & (table["min_ttc_2d_s"] == 0)]
+    struck = table[table["suffered"] > 0]
+    untouched = table[~collided & (table["suffered"] == 0)]
+    return {"lives": len(table), "hits": len(hits),
             "finite_2d": int(np.isfinite(hits["min_ttc_2d_s"]).sum()),
             "ssm_inf": int(np.isinf(hits["min_ttc_s"]).sum()),
-            "walls_touching": int(((table["outcome"] == "collision") & (table["hit"] == "wall")
-                                   & (table["min_ttc_2d_s"] == 0)).sum())}
+            "walls_touching": len(walls), "walls_struck": int((walls["suffered"] > 0).sum()),
+            "struck": len(struck),
+            "struck_zero": int(((struck["min_ttc_s"] == 0)
+                                & (struck["min_ttc_2d_s"] == 0)).sum()),
+            "ssm_zero_untouched": int(((untouched["min_ttc_s"] == 0)
+                                       & np.isinf(untouched["min_ttc_2d_s"])).sum())}
+
+
+def safety(table: pd.DataFrame) -> dict:
+    """What the two safety measures saw in an ``evaluate`` table of closed-loop lives: over
+    all of them, and over those from distinct starting states (``same_start_as``: a life that
+    starts as an earlier one is a near copy of it)."""
+    distinct = table[table["same_start_as"] == table["situation"]]
+    return {"lives": len(table), "controllers": sorted(table["controller"].unique()),
+            "scenarios": sorted(table["scenario"].unique()),
+            "situations": int(table["situation"].nunique()),
+            "all": _safety_counts(table), "distinct": _safety_counts(distinct)}
 
 
 def context(root: Path) -> dict:
