@@ -78,7 +78,7 @@ def differences(root: Path = ROOT, only: list[str] | None = None) -> dict[str, s
     found = {}
     for path, text in render(root, only).items():
         file = root / path
-        written = file.read_text() if file.is_file() else ""
+        written = file.read_text(encoding="utf-8") if file.is_file() else ""
         if written != text:
             found[path] = "".join(difflib.unified_diff(
                 written.splitlines(keepends=True), text.splitlines(keepends=True),
@@ -125,7 +125,7 @@ def main(argv: list[str] | None = None) -> int:
                   f"{DOCUMENTS[path][0]} and run python docs/_generate/render.py\n{diff}")
         return 1 if found else 0
     for path, text in render(ROOT, args.documents or None).items():
-        (ROOT / path).write_text(text)
+        (ROOT / path).write_text(text, encoding="utf-8")
         print(f"wrote {path}", file=sys.stderr)
     return 0
 

@@ -55,7 +55,7 @@ def reproduce_quick(quick: bool = False) -> pd.DataFrame:
         subprocess.run([sys.executable, "-m", "enn_traffic", "reproduce", "--quick", "--out",
                         str(out)], env=env, check=True, capture_output=True)
         total = time.perf_counter() - started
-        records = json.loads((out / "summary.json").read_text())
+        records = json.loads((out / "summary.json").read_text(encoding="utf-8"))
     rows = [{"workload": "reproduce --quick", "implementation": name,
              "threads": numba.get_num_threads(), "seconds": record["seconds"]}
             for name, record in records.items()]

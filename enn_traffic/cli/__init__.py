@@ -54,6 +54,9 @@ def _interrupted_note(args) -> str:
 def main(argv: list[str] | None = None) -> int:
     from enn_traffic.core.progress import show_messages
 
+    for stream in (sys.stdout, sys.stderr):  # a path the terminal's encoding cannot show is
+        if hasattr(stream, "reconfigure"):  # escaped, not a crash after the work is done
+            stream.reconfigure(errors="backslashreplace")
     args = build_parser().parse_args(argv)
     show_messages(quiet=getattr(args, "quiet", False))
     handlers, hook = {}, sys.unraisablehook

@@ -131,7 +131,7 @@ def _scenario_starts(source, table):
 
     if source.suffix == ".sumocfg":
         return None
-    written = tomllib.loads(source.read_text()).get("track", {})
+    written = tomllib.loads(source.read_text(encoding="utf-8")).get("track", {})
     if not isinstance(written, dict) or written.get("start_lane") == "auto":
         return None
     track = load_scenario(source).track

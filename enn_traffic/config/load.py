@@ -74,7 +74,7 @@ def load_scenario(path: str | Path) -> Scenario:
     path = Path(path)
     check_input_file(path, "scenario file")
     try:
-        text = path.read_text()
+        text = path.read_text(encoding="utf-8")
         line = _long_dotted_key(text)
         if line:  # Python's TOML reader takes time quadratic in a key's parts
             raise InputError(f"line {line}: a dotted key of more than {MAX_KEY_PARTS} parts "

@@ -114,7 +114,7 @@ def write_atomic(path: str | Path, write: Callable[[IO], None], binary: bool = F
     tmp = path.with_name(f".{path.name}.tmp")
     try:
         path.parent.mkdir(parents=True, exist_ok=True)
-        with open(tmp, "wb" if binary else "w") as handle:
+        with (open(tmp, "wb") if binary else open(tmp, "w", encoding="utf-8")) as handle:
             write(handle)
             handle.flush()
             os.fsync(handle.fileno())
@@ -213,7 +213,7 @@ def _holder(folder: Path) -> str:
     "another process" where it cannot be told."""
     try:
         inode = folder.stat().st_ino
-        for line in Path("/proc/locks").read_text().splitlines():
+        for line in Path("/proc/locks").read_text(encoding="utf-8").splitlines():
             fields = line.split()  # "1: FLOCK ADVISORY WRITE <pid> <dev>:<inode> 0 EOF"
             at = fields.index("FLOCK") if "FLOCK" in fields else -1
             if at >= 0 and "->" not in fields and fields[at + 4].endswith(f":{inode}"):
@@ -331,7 +331,7 @@ def process_folder() -> Path:
 def _ended(pid: int) -> bool:
     """Has process ``pid`` ended (gone, or a zombie not yet reaped)?"""
     try:
-        state = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[0]
+        state = Path(f"/proc/{pid}/stat").read_text(encoding="utf-8").rsplit(")", 1)[1].split()[0]
         return state in ("Z", "X")
     except (OSError, IndexError):  # no such process, or no /proc (not Linux)
         try:

@@ -115,7 +115,7 @@ def kernels_version(root: Path = PACKAGE) -> str:
     for part in RULES:
         if (root / part).is_dir():
             paths.update((root / part).rglob("*.py"))
-    paths.update(path for path in root.rglob("*.py") if "@njit" in path.read_text())
+    paths.update(path for path in root.rglob("*.py") if "@njit" in path.read_text(encoding="utf-8"))
     digest = hashlib.sha256()
     for path in sorted(paths):
         digest.update(path.relative_to(root).as_posix().encode() + b"\0")

@@ -59,8 +59,8 @@ def read(folder: Path, name: str | None = None) -> dict:
     """Facts file ``name`` of a results ``folder`` as written (its name within the folder:
     ``table1``), or, without a name, every facts file of the folder by that name."""
     if name is not None:
-        return json.loads((folder / "facts" / f"{name}.json").read_text())
-    return {path.stem: json.loads(path.read_text())
+        return json.loads((folder / "facts" / f"{name}.json").read_text(encoding="utf-8"))
+    return {path.stem: json.loads(path.read_text(encoding="utf-8"))
             for path in sorted((folder / "facts").glob("*.json"))}
 
 
@@ -97,7 +97,7 @@ def differences(root: Path) -> list[str]:
     for name in FACTS:
         folder = root / FOLDERS[name.partition("/")[0]]
         path = path_of(folder, name)
-        written = json.loads(path.read_text()) if path.is_file() else None
+        written = json.loads(path.read_text(encoding="utf-8")) if path.is_file() else None
         if written != computed(folder, name):
             found.append(str(path))
     return found

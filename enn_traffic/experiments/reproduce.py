@@ -45,7 +45,7 @@ def reproduce(out: Path, quick: bool = False, only: list[str] | None = None,
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     record_path = out / "summary.json"
-    records = json.loads(record_path.read_text()) if record_path.exists() else {}
+    records = json.loads(record_path.read_text(encoding="utf-8")) if record_path.exists() else {}
     study = Study(out, quick, progress, runs_on(executor, address))
     bar = tqdm(names, desc="reproduce", unit="experiment", disable=not progress, position=0,
                file=terminal())
@@ -143,7 +143,7 @@ def _record_again(paper: Path, family: Family, tables: str,
     (commit, code, start time) because ``why``; summary.md written again, its lines from
     the tables as they are now."""
     tree, code, started = made
-    records = json.loads((paper / "summary.json").read_text())
+    records = json.loads((paper / "summary.json").read_text(encoding="utf-8"))
     record = records[family.folder]
     record.setdefault("measured_again", {})[tables] = {
         "commit": tree, "code": code, "seconds": round(time.perf_counter() - started, 1),

@@ -247,8 +247,10 @@ def write_batch(table: pd.DataFrame, out: Path) -> list[Path]:
 
 
 def evaluation_scenario(controller: Controller, scenario: Scenario, episodes: int) -> Scenario:
-    """``scenario`` fitted to the controller, with ``episodes`` traffic situations."""
-    return controller.fit(scenario).with_overrides(traffic={"episodes": episodes})
+    """``scenario`` fitted to the controller, with ``episodes`` traffic situations (a lane
+    keeping scenario's episodes are ``[lane_keeping] episodes``: it has no ``[traffic]``)."""
+    section = "lane_keeping" if scenario.lane_keeping is not None else "traffic"
+    return controller.fit(scenario).with_overrides(**{section: {"episodes": episodes}})
 
 
 def controller_trace(

@@ -242,7 +242,7 @@ def _differences(scenario: Scenario, out: Path) -> str:
         return items
 
     try:
-        kept = flat(tomllib.loads((out / "scenario.toml").read_text()))
+        kept = flat(tomllib.loads((out / "scenario.toml").read_text(encoding="utf-8")))
     except (OSError, tomllib.TOMLDecodeError, UnicodeDecodeError):
         return "settings"
     ours = flat(tomllib.loads(scenario.to_toml()))

@@ -375,3 +375,23 @@ def test_a_run_started_with_sigint_ignored_still_stops_on_kill_int(tmp_path, roo
     process.send_signal(signal.SIGINT)
     assert process.wait(timeout=30) == 130
     assert "continue with --resume" in process.stderr.read()
+
+
+def test_a_locale_without_utf8_runs_every_command_and_shows_any_path(tmp_path):
+    """Under LC_ALL=C without Python's UTF-8 mode every command died at import (a source file
+    read without an encoding); with a terminal in latin-1, a file written under a path of
+    Greek letters ended the command with UnicodeEncodeError after the work was done. Now
+    ``--help`` runs, and ``lanes --out`` writes its file, says where (escaped) and exits 0."""
+    import os
+
+    c_locale = {**os.environ, "LC_ALL": "C", "PYTHONUTF8": "0", "PYTHONCOERCECLOCALE": "0"}
+    done = subprocess.run([sys.executable, "-m", "enn_traffic", "--help"], env=c_locale,
+                          capture_output=True, text=True, timeout=120)
+    assert done.returncode == 0, done.stderr
+    out = tmp_path / "Ωμέγα.csv"
+    latin = {**os.environ, "PYTHONIOENCODING": "latin-1"}
+    done = subprocess.run([sys.executable, "-m", "enn_traffic", "lanes", "street_mixed",
+                           "--top", "2", "--out", str(out)], env=latin, capture_output=True,
+                          timeout=300)
+    assert done.returncode == 0, done.stderr
+    assert out.is_file() and b"\\u03a9" in done.stdout

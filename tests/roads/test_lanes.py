@@ -53,10 +53,16 @@ def test_demand_counts_every_kind_of_route_by_hand(tmp_path):
         ("a", "tram"): 2, ("b", "tram"): 2})
 
 
-def test_demand_routes_trips_where_they_drive(tmp_path, root):
+def test_demand_routes_trips_where_they_drive(tmp_path, root, monkeypatch):
     """A trip and a flow of 4 from the ring's west side to its north side: counted on their
     end edges only, the ring's south and east sides between would get nothing; routed by
-    duarouter, as SUMO routes them when they depart, every edge of the way counts 5."""
+    duarouter, as SUMO routes them when they depart, every edge of the way counts 5. The
+    routing leaves no temporary folder behind (it left an ``enn-routes-*`` each time)."""
+    import tempfile
+
+    temporary = tmp_path / "tmp"
+    temporary.mkdir()
+    monkeypatch.setattr(tempfile, "tempdir", str(temporary))
     path = tmp_path / "trips.rou.xml"
     path.write_text('<routes><trip id="t" depart="0" from="g1_0to0_0" to="g1_1to1_0"/>'
                     '<flow id="f" begin="0" end="100" number="4" from="g1_0to0_0" '
@@ -65,6 +71,7 @@ def test_demand_routes_trips_where_they_drive(tmp_path, root):
     assert demand_per_edge([path]) == ends
     routed = demand_per_edge([path], net_file=root / "sumo_nets" / "sumo_ring.net.xml")
     assert routed == {**ends, ("g0_0to0_1", "passenger"): 5, ("g0_1to1_1", "passenger"): 5}
+    assert list(temporary.iterdir()) == []
 
 
 def test_the_busiest_lane_that_does_not_lead_out_is_auto(tmp_path, road_net, capsys):

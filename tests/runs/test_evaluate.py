@@ -115,3 +115,19 @@ def test_a_gif_shows_a_small_track_whole_and_follows_the_learner_on_a_large_map(
     assert high[0] - low[0] > FOLLOW_M  # wider than the view: the GIF follows the learner
     assert (low <= 940 - FOLLOW_M / 2).all() and (high >= 945 + FOLLOW_M / 2).all()
     assert high[0] - low[0] < 200
+
+
+def test_lane_keeping_is_evaluated_on_as_many_situations_as_asked(tmp_path, capsys):
+    """``evaluate lk.npz lane_keeping --episodes 3``: three lives, where it was refused for
+    [traffic] keys the scenario does not have (lane keeping keeps its episodes in
+    ``[lane_keeping]``)."""
+    from enn_traffic.config.shipped import shipped_scenario
+
+    scenario = shipped_scenario("lane_keeping")
+    genes = np.zeros(NetworkSpec(scenario.layer_sizes).chromosome_length)
+    controller = tmp_path / "lk.npz"
+    Controller.from_scenario(scenario, genes, 0.0, 0).save(controller)
+    out = tmp_path / "lk.csv"
+    assert main(["evaluate", str(controller), "lane_keeping", "--episodes", "3", "--out",
+                 str(out), "--quiet"]) == 0
+    assert pd.read_csv(out)["situation"].tolist() == [0, 1, 2]

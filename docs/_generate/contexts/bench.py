@@ -63,7 +63,7 @@ def context(root: Path) -> dict:
     def read(name: str) -> pd.DataFrame:
         return pd.read_csv(folder / f"{name}.csv")
 
-    summary = json.loads((root / "results" / "paper" / "summary.json").read_text())
+    summary = json.loads((root / "results" / "paper" / "summary.json").read_text(encoding="utf-8"))
     return {"bench": {
         "first_run": rows(read("first_run_issue62")),
         "contention": contention(read("contention_issue62")),

@@ -104,8 +104,8 @@ def context(root: Path) -> dict:
     rules = {rule["rule"]: name for name, rule in facts["plan"]["scenarios"].items()
              if rule["rule"]}
     return {"comparison": {
-        "protocol": json.loads((folder / "protocol.json").read_text()),
-        "scenarios": list(json.loads((folder / "scenarios.json").read_text())),
+        "protocol": json.loads((folder / "protocol.json").read_text(encoding="utf-8")),
+        "scenarios": list(json.loads((folder / "scenarios.json").read_text(encoding="utf-8"))),
         "facts": facts,
         "spin_rule": _spin_rule(pd.read_csv(folder / "spin_rule.csv")),
         "rule_scenarios": rules,

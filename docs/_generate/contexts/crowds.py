@@ -458,7 +458,7 @@ def _family(paper: Path, family: Family, summary: dict) -> dict:
 
 def context(root: Path) -> dict:
     paper = root / "results" / "paper"
-    summary = json.loads((paper / "summary.json").read_text())
+    summary = json.loads((paper / "summary.json").read_text(encoding="utf-8"))
     return {"crowds": {"paper": _paper(), "arena": _arena(paper), "ablation": _ablation(paper),
                        "departures": _departures(paper),
                        "authors_rules": _authors_rules(paper),

@@ -50,7 +50,7 @@ def _pattern(matrix: np.ndarray) -> dict:
 
 def _summary(paper: Path) -> dict:
     """summary.json: each experiment's wall time and the commit that made it."""
-    return json.loads((paper / "summary.json").read_text())
+    return json.loads((paper / "summary.json").read_text(encoding="utf-8"))
 
 
 def navigation(paper: Path) -> dict:

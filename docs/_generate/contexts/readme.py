@@ -51,7 +51,7 @@ def experiments(root: Path) -> list[str]:
     in the order ``reproduce`` runs them."""
     from enn_traffic.experiments import EXPERIMENTS
 
-    summary = json.loads((root / "results" / "paper" / "summary.json").read_text())
+    summary = json.loads((root / "results" / "paper" / "summary.json").read_text(encoding="utf-8"))
     return [name for name in EXPERIMENTS if name in summary]
 
 

@@ -70,7 +70,7 @@ def _zero_shares(situations: pd.DataFrame) -> dict:
 
 def context(root: Path) -> dict:
     folder = root / "results" / "baseline_round2"
-    protocol = json.loads((folder / "protocol.json").read_text())
+    protocol = json.loads((folder / "protocol.json").read_text(encoding="utf-8"))
     facts = read_facts(folder)
     runs = pd.read_csv(folder / "comparison.csv")
     summary = pd.read_csv(folder / "comparison_summary.csv")

@@ -65,7 +65,7 @@ def context(root: Path) -> dict:
                  for row in keys(model, name)]
     lane_keeping = [row for name, model in found.items() if name.startswith("lane_keeping")
                     for row in keys(model, name)]
-    shipped = [{"name": path.stem,
-                "description": tomllib.loads(path.read_text()).get("description", "")}
+    shipped = [{"name": path.stem, "description": tomllib.loads(
+                   path.read_text(encoding="utf-8")).get("description", "")}
                for path in sorted((root / "scenarios").glob("*.toml"))]
     return {"scenario_keys": scenario, "lane_keeping_keys": lane_keeping, "shipped": shipped}

@@ -43,7 +43,7 @@ def safety(table: pd.DataFrame) -> dict:
 def context(root: Path) -> dict:
     safe = safety(pd.read_csv(root / "results" / "safety" / "city_closed_loop.csv"))
     folder = root / "results" / "crowd_brunswick"
-    scenario = tomllib.loads((folder / "crowd.toml").read_text())
+    scenario = tomllib.loads((folder / "crowd.toml").read_text(encoding="utf-8"))
     generations = pd.read_csv(folder / "individual" / "generations.csv")
     best = generations["best_fitness"].idxmax()
     bred = pd.read_csv(folder / "table4_learners.csv")["generations_bred"]

@@ -198,7 +198,7 @@ def _kept(path: Path, settings: dict, earlier: list[dict] = ()) -> dict | None:
     the same settings as an earlier digest of these rules wrote them: :func:`_measured_as`), or
     None."""
     if path.is_file():
-        kept = json.loads(path.read_text())
+        kept = json.loads(path.read_text(encoding="utf-8"))
         if kept.get("settings") == settings or kept.get("settings") in earlier:
             return kept
     return None

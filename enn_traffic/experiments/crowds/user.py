@@ -242,7 +242,8 @@ def draw_crowd(world, out: Path, progress: bool) -> Path:
     path, stamp = out / "crowd.gif", out / "crowds" / "gif.json"
     files = [out / "controllers" / f"learner{k}.npz" for k in range(scenario.traffic.learners)]
     drawn_from = key_of(scenario.to_toml(), GIF_SECONDS, *(file.read_bytes() for file in files))
-    if path.is_file() and stamp.is_file() and json.loads(stamp.read_text()) == drawn_from:
+    if (path.is_file() and stamp.is_file()
+            and json.loads(stamp.read_text(encoding="utf-8")) == drawn_from):
         return path  # a resumed run: drawn from these controllers already
     genes = np.array([Controller.load(file).chromosome for file in files])
     seed = world.seeds(SITUATION_KEY)[0]

@@ -47,7 +47,7 @@ def _shipped(folder: Path) -> dict:
     from enn_traffic.config.shipped import SCENARIOS, shipped_scenario
 
     found = {}
-    for name, digest in json.loads((folder / "scenarios.json").read_text()).items():
+    for name, digest in json.loads((folder / "scenarios.json").read_text(encoding="utf-8")).items():
         shipped = (SCENARIOS / f"{name}.toml").is_file() and shipped_scenario(name)
         found[name] = shipped if shipped and scenario_digest(shipped) == digest else None
     return found
@@ -115,7 +115,7 @@ def starts(folder: Path) -> dict:
     track has and how many validation and test take, the median distance from a test start to
     the nearest validation start facing the same way, and the training start's distance to
     the nearest test start (m)."""
-    protocol = json.loads((folder / "protocol.json").read_text())
+    protocol = json.loads((folder / "protocol.json").read_text(encoding="utf-8"))
     training, track_starts, validation, test = _narrow_starts(protocol)
     validation = set(validation)
 
@@ -275,7 +275,7 @@ def round2_starts(folder: Path) -> dict:
     test situations whose start is no validation start."""
     from enn_traffic.roads.network import ANYWHERE_SPACING_M
 
-    protocol = json.loads((folder / "protocol.json").read_text())
+    protocol = json.loads((folder / "protocol.json").read_text(encoding="utf-8"))
     _, _, validation, test = _narrow_starts(protocol)
     shared = [start in set(validation) for start in test]
     situations = pd.read_csv(folder / "situations.csv")
@@ -301,7 +301,7 @@ def round2_settings(folder: Path) -> dict:
     from enn_traffic.envs.rangefinder import rangefinder_world
     from enn_traffic.experiments.gradient_rl import scoring
 
-    protocol = json.loads((folder / "protocol.json").read_text())
+    protocol = json.loads((folder / "protocol.json").read_text(encoding="utf-8"))
     if protocol["test_key"] not in keys.COMPARISON_SECOND_ROUND_TEST.keys:
         raise ValueError(f"{folder}: test keys from {protocol['test_key']:,} are not the "
                          "second round's")

@@ -141,7 +141,7 @@ def check_protocol(out: Path) -> None:
     path = out / "protocol.json"
     if path.is_file():
         try:
-            theirs = json.loads(path.read_text())
+            theirs = json.loads(path.read_text(encoding="utf-8"))
         except (OSError, ValueError) as exc:
             raise InputError(f"not readable ({exc})", path) from None
         if theirs != protocol():
@@ -166,7 +166,7 @@ def check_scenarios(out: Path, scenarios: list[Scenario]) -> None:
     known: dict[str, str] = {}
     if path.is_file():
         try:
-            known = dict(json.loads(path.read_text()))
+            known = dict(json.loads(path.read_text(encoding="utf-8")))
         except (OSError, ValueError, TypeError) as exc:
             raise InputError(f"not readable ({exc})", path) from None
     for scenario in scenarios:
