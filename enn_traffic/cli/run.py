@@ -58,15 +58,17 @@ def run(args) -> int:
         overrides["generations"] = args.generations
     if args.population:
         overrides["population_size"] = args.population
-        if args.population < scenario.ga.tournament_size:  # a tournament fits its population
+        lowered = args.population < scenario.ga.tournament_size
+        if lowered:  # a tournament fits its population
             overrides["tournament_size"] = args.population
-            note(f"ga.tournament_size {scenario.ga.tournament_size} lowered to "
-                 f"--population {args.population}")
     warn_unread(scenario, "run")
-    scenario = scenario.with_overrides(
+    tournament = scenario.ga.tournament_size
+    scenario = scenario.with_overrides(  # a bad --population is refused before any note
         **({"ga": overrides} if overrides else {}),
         **({"seed": args.seed} if args.seed is not None else {}),
     )
+    if args.population and lowered:
+        note(f"ga.tournament_size {tournament} lowered to --population {args.population}")
     out = args.out or Path("results") / scenario.name
     args.run_folder = out  # for the message of an interrupt (_interrupted_note)
     check_out(out)  # before any world, nothing written yet

@@ -151,6 +151,9 @@ class GAState:
         except Exception as exc:  # a damaged archive raises many types (zipfile, numpy, json)
             raise InputError(f"checkpoint is unreadable or corrupted ({type(exc).__name__}: "
                              f"{exc})", path) from None
+        if not isinstance(state.extra, dict):
+            raise InputError(f"holds a {type(state.extra).__name__}, not a mapping", path,
+                             "extra")
         if state.population.dtype.kind not in "iufc":
             raise InputError(f"checkpoint population holds {state.population.dtype} values, "
                              "not numbers", path)

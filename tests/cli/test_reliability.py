@@ -237,7 +237,8 @@ def test_an_edited_checkpoint_is_refused_naming_its_field_and_best_npz_is_kept(t
              "champions": data["champions"][:, :4], "generation": np.array(-1)}
     edits = [(field, {field: value}) for field, value in edits.items()] + [
         ("best_chromosome", {"best_chromosome": data["best_chromosome"] * np.nan}),
-        ("population", {"population": data["population"].astype(complex)})]
+        ("population", {"population": data["population"].astype(complex)}),
+        ("extra", {"extra": np.array("[1, 2]")})]
     for field, edit in edits:
         out = tmp_path / f"edited_{len(list(tmp_path.iterdir()))}"
         out.mkdir()
@@ -395,3 +396,14 @@ def test_a_locale_without_utf8_runs_every_command_and_shows_any_path(tmp_path):
                           timeout=300)
     assert done.returncode == 0, done.stderr
     assert out.is_file() and b"\\u03a9" in done.stdout
+
+
+def test_a_population_of_one_is_refused_without_a_note_before(tmp_path, root, capsys):
+    """``--population 1`` said the tournament was lowered to 1 and then refused the
+    population: now the refusal alone, naming the key."""
+    from enn_traffic.cli import main
+
+    assert main(["run", str(root / "scenarios" / "navigation_narrow.toml"), "--population",
+                 "1", "--out", str(tmp_path / "run")]) == 2
+    error = capsys.readouterr().err
+    assert "ga.population_size" in error and "lowered" not in error
