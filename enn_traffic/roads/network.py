@@ -261,12 +261,34 @@ def _read_net(path: Path, *stamp: int) -> sumolib.net.Net:
     if problem:
         raise InputError(f"not a readable SUMO network: {problem}", path)
     try:
-        return sumolib.net.readNet(str(path), withInternal=True)
+        net = sumolib.net.readNet(str(path), withInternal=True)
     except ElementTree.ParseError as exc:
         raise InputError(f"not a readable SUMO network: {exc}", path) from None
     except Exception as exc:  # sumolib raises plain exceptions on malformed nets
         message = f"not a readable SUMO network: {type(exc).__name__}: {exc}"
         raise InputError(message, path) from None
+    _check_whole(net, path)
+    return net
+
+
+def _check_whole(net: sumolib.net.Net, path: Path) -> None:
+    """An InputError naming the first junction an edge names that the file does not hold
+    (sumolib makes one up, with no position), or the first junction or lane whose position
+    or shape holds a coordinate that is not a number."""
+    for node in net.getNodes():
+        if node._coord is None:  # sumolib's own record: getCoord() fails on it
+            raise InputError(f"junction {node.getID()!r}, which its edges name, is not in the "
+                             "file (a network cut short, or edited by hand?)", path)
+        if not all(math.isfinite(value) for value in node._coord[:2]):
+            raise InputError(f"junction {node.getID()!r}: its position is not a number", path)
+        if not all(math.isfinite(value) for point in node.getShape() for value in point[:2]):
+            raise InputError(f"junction {node.getID()!r}: its shape holds a coordinate that "
+                             "is not a number", path)
+    for edge in net.getEdges(withInternal=True):
+        for lane in edge.getLanes():
+            if not all(math.isfinite(value) for point in lane.getShape() for value in point[:2]):
+                raise InputError(f"lane {lane.getID()!r}: its shape holds a coordinate that "
+                                 "is not a number", path)
 
 
 def drives_on(lane, surface: Surface) -> bool:

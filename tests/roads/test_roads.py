@@ -1,3 +1,5 @@
+import warnings
+
 import numpy as np
 import pytest
 from shapely.geometry import LineString, Polygon
@@ -167,3 +169,27 @@ def test_lanes_at_names_the_lane_under_a_point_and_none_off_the_road(root):
     x0, y0, _, _ = track.bounds
     points = np.array([beside, (x0 - 50.0, y0 - 50.0), (np.nan, np.nan)])
     assert lanes_at(net_file, points) == ["g0_0to1_0_2", "", ""]
+
+
+@pytest.mark.parametrize("edit, message", [
+    # a lane's first coordinate not a number: shapely warned, then the start was "off the road"
+    (lambda text: text.replace('<lane id="e0_0" index="0" speed="13.89" length="36.00" '
+                               'width="12.00" shape="-2.00,', '<lane id="e0_0" index="0" '
+                               'speed="13.89" length="36.00" width="12.00" shape="nan,', 1),
+     "lane 'e0_0': its shape holds a coordinate that is not a number"),
+    # a junction its edges name, left out of the file: read as if the network were whole
+    (lambda text: text.replace('<junction id="n0" type="dead_end"', '<removed id="n0"', 1),
+     "junction 'n0', which its edges name, is not in the file"),
+])
+def test_a_network_with_a_missing_junction_or_a_coordinate_not_a_number_is_refused(
+        tmp_path, root, monkeypatch, edit, message):
+    monkeypatch.setenv("ENN_TRAFFIC_CACHE", str(tmp_path / "cache"))  # no walls built before
+    text = (root / "sumo_nets" / "track_narrow.net.xml").read_text()
+    net = tmp_path / "edited.net.xml"
+    net.write_text(edit(text))
+    assert net.read_text() != text
+    with warnings.catch_warnings():  # shapely's RuntimeWarning came before the error
+        warnings.simplefilter("error")
+        with pytest.raises(InputError, match=message) as info:
+            load_track(net)
+    assert "edited.net.xml" in str(info.value)
