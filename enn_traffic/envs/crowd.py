@@ -20,6 +20,7 @@ from __future__ import annotations
 from pathlib import Path
 
 import numpy as np
+from gymnasium.error import ResetNeeded
 from numba import njit
 from pettingzoo import ParallelEnv
 
@@ -78,6 +79,7 @@ class ArenaCrowdEnv(ParallelEnv):
         self.max_steps = world.max_steps
         self._rng = np.random.default_rng()
         self._step = None
+        self.crowd = None  # until reset
 
     def observation_space(self, agent: str):
         return self._observation_space
@@ -120,6 +122,8 @@ class ArenaCrowdEnv(ParallelEnv):
         return observation_of(out, self._observation_space)
 
     def step(self, actions: dict):
+        if self.crowd is None:
+            raise ResetNeeded("call reset() before step()")
         crowd, gain = self.crowd, self.world.physics.gain
         steering = crowd.work.steering
         actions = checked_actions(actions, self.agents)

@@ -202,3 +202,13 @@ def test_the_vector_env_renders_its_first_worlds_as_a_grid():
                            render_mode="rgb_array")
     many.reset(seed=0)
     assert many.render().shape == (4 * height, 4 * width, 3)  # the first 16 worlds, 4 × 4
+
+
+def test_a_pettingzoo_crowd_stepped_before_reset_asks_for_a_reset():
+    """The arena's parallel crowd raised AttributeError ('no attribute crowd'), a type the docs
+    do not name; it raises gymnasium's ResetNeeded, as every env here does."""
+    from enn_traffic.envs.crowd import ArenaCrowdEnv
+
+    crowd = ArenaCrowdEnv(shipped_scenario("arena_strategy1"), learners=2)
+    with pytest.raises(gym.error.ResetNeeded):
+        crowd.step({agent: np.zeros(2, np.float32) for agent in crowd.possible_agents})
