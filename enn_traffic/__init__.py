@@ -2,6 +2,7 @@
 
 import os
 import sys
+import tempfile
 from pathlib import Path
 
 from enn_traffic.core.cache import cache_folder, prune_kernel_folders
@@ -21,13 +22,24 @@ def _numba_cache_dir() -> str:
     """numba's on-disk cache checks only each function's own file, not the modules it calls;
     a cache folder per version of the kernels' sources (:func:`~enn_traffic.core.provenance.
     kernels_version`) keeps a stale kernel from running. It lies in the project's cache folder
-    (:func:`~enn_traffic.core.cache.cache_folder`: ``$ENN_TRAFFIC_CACHE``, ``$XDG_CACHE_HOME``)."""
-    return str(cache_folder() / f"numba-{kernels_version()}")
+    (:func:`~enn_traffic.core.cache.cache_folder`: ``$ENN_TRAFFIC_CACHE``, ``$XDG_CACHE_HOME``),
+    or, where that cannot be written (read-only, or a file), in the temporary folder: numba
+    would otherwise write its kernels beside the package's sources."""
+    name = f"numba-{kernels_version()}"
+    for base in (cache_folder(), Path(tempfile.gettempdir()) / f"enn-traffic-{os.getuid()}"):
+        try:
+            (base / name).mkdir(parents=True, exist_ok=True)
+        except OSError:
+            continue
+        if os.access(base / name, os.W_OK | os.X_OK):
+            return str(base / name)
+    return str(Path(tempfile.mkdtemp(prefix="enn-traffic-numba-")))
 
 
 if "NUMBA_CACHE_DIR" not in os.environ:
+    _new = not (cache_folder() / f"numba-{kernels_version()}").is_dir()
     os.environ["NUMBA_CACHE_DIR"] = _numba_cache_dir()
-    if not os.path.isdir(os.environ["NUMBA_CACHE_DIR"]):  # a new version: its kernels compile
+    if _new:  # a new version: its kernels compile, the oldest folders go
         prune_kernel_folders(Path(os.environ["NUMBA_CACHE_DIR"]))
 # numba's parallel loops run on OpenMP (libgomp), whose idle threads spin by default: beside
 # other busy processes (pytest -n 2, a process pool, a second user) a parallel region then

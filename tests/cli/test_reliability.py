@@ -6,6 +6,7 @@ import signal
 import subprocess
 import sys
 import time
+from pathlib import Path
 
 import numpy as np
 import pandas as pd
@@ -407,3 +408,29 @@ def test_a_population_of_one_is_refused_without_a_note_before(tmp_path, root, ca
                  "1", "--out", str(tmp_path / "run")]) == 2
     error = capsys.readouterr().err
     assert "ga.population_size" in error and "lowered" not in error
+
+
+def test_kernels_never_compile_into_the_package_when_the_cache_folder_is_unusable(tmp_path):
+    """With ENN_TRAFFIC_CACHE naming a file, numba wrote its kernels into the package's own
+    __pycache__ folders (the checkout, or site-packages); now into a folder of the temporary
+    folder, and nothing new lands beside the sources."""
+    import os
+
+    import enn_traffic
+
+    package = Path(enn_traffic.__file__).parent
+    started = time.time()
+    blocker = tmp_path / "a_file"
+    blocker.write_text("not a folder")
+    script = ("import os, enn_traffic\nfrom enn_traffic.sim.safety import time_to_contact\n"
+              "import numpy as np\nbox = np.array([[0., 0.], [1., 0.], [1., 1.], [0., 1.]])\n"
+              "time_to_contact(box, box + 5.0, -1.0, -1.0)\nprint(os.environ['NUMBA_CACHE_DIR'])")
+    env = {**os.environ, "ENN_TRAFFIC_CACHE": str(blocker), "TMPDIR": str(tmp_path)}
+    env.pop("NUMBA_CACHE_DIR", None)
+    done = subprocess.run([sys.executable, "-c", script], env=env, capture_output=True,
+                          text=True, timeout=300)
+    assert done.returncode == 0, done.stderr
+    folder = Path(done.stdout.strip().splitlines()[-1])
+    assert folder.is_dir() and folder.is_relative_to(tmp_path)
+    assert any(folder.rglob("*.nbi"))
+    assert not [p for p in package.rglob("*.nbi") if p.stat().st_mtime >= started]
