@@ -17,6 +17,7 @@ import signal
 import threading
 from concurrent.futures import ProcessPoolExecutor
 from dataclasses import replace
+from pathlib import Path
 from typing import Protocol
 
 import numpy as np
@@ -179,10 +180,34 @@ def connect_ray(address: str | None = None):
     if not ray.is_initialized():
         try:
             ray.init(address=address, include_dashboard=False, log_to_driver=False,
-                     configure_logging=False)
+                     configure_logging=False, **_short_temp_dir(address))
         except (ConnectionError, RuntimeError, ValueError) as exc:
             raise InputError(f"cannot reach Ray at {address}: {exc}", key="--address") from None
     return ray
+
+
+RAY_TEMP_ROOM = 40  # characters of a temporary folder's path that Ray's sockets leave room for
+
+
+def _short_temp_dir(address: str | None) -> dict:
+    """A local Ray's session folder where its sockets' paths fit the 107 bytes a Unix socket
+    may have: under the temporary folder when its path is short, else ``/tmp/ray-UID``
+    (``$RAY_TMPDIR``, when set, is Ray's own choice and stands)."""
+    import tempfile
+
+    if address is not None or os.environ.get("RAY_TMPDIR"):
+        return {}
+    if len(tempfile.gettempdir()) <= RAY_TEMP_ROOM:
+        return {}
+    short = Path("/tmp") / f"ray-{os.getuid()}"
+    try:
+        short.mkdir(mode=0o700, exist_ok=True)
+    except OSError:
+        raise InputError(f"the temporary folder's path ({len(tempfile.gettempdir())} "
+                         "characters) is too long for Ray's sockets and /tmp cannot be "
+                         "written: set RAY_TMPDIR to a short folder", key="--executor") \
+            from None
+    return {"_temp_dir": str(short)}
 
 
 class RayEvaluator:

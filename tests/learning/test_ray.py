@@ -69,3 +69,21 @@ def test_batch_evaluation_on_ray_gives_the_local_table(local_ray, root, tmp_path
     local = evaluate_batch(controllers, scenarios, episodes=2, progress=False)
     on_ray = evaluate_batch(controllers, scenarios, episodes=2, executor="ray", progress=False)
     pd.testing.assert_frame_equal(local, on_ray)
+
+
+def test_ray_starts_under_a_temporary_folder_too_long_for_its_sockets(tmp_path, root):
+    """With TMPDIR 170 characters deep, a local Ray died in a traceback (its sockets' paths
+    past a Unix socket's 107 bytes); now it starts in /tmp/ray-UID and evaluate runs."""
+    import os
+    import subprocess
+    import sys
+
+    long = tmp_path / ("l" * 60) / ("m" * 60) / ("n" * 40)
+    long.mkdir(parents=True)
+    controller = root / "results" / "paper" / "controllers" / "table1"
+    done = subprocess.run(
+        [sys.executable, "-m", "enn_traffic", "evaluate", str(next(controller.glob("*.npz"))),
+         "navigation_narrow", "--executor", "ray", "--episodes", "2", "--quiet"],
+        env={**os.environ, "TMPDIR": str(long)}, capture_output=True, text=True, timeout=300)
+    assert done.returncode == 0, done.stderr[-2000:]
+    assert "collision" in done.stdout or "capped" in done.stdout
