@@ -112,11 +112,31 @@ def _run_command(args) -> int:
         print(f"\nenn-traffic: {stopped} after {time.perf_counter() - started:.0f} s"
               f"{_interrupted_note(args)}", file=sys.stderr)
         return 143 if isinstance(cause, Terminated) else 130
+    except Exception as exc:
+        if not _worker_lost(exc):
+            raise
+        first = str(exc).strip().splitlines()[0][:200] if str(exc).strip() else ""
+        print(f"enn-traffic: error: a worker process died ({type(exc).__name__}: {first})"
+              f"{_interrupted_note(args)}", file=sys.stderr)
+        return 1
 
 
 _FILE_TROUBLE = {errno.ENOSPC, errno.EDQUOT, errno.EROFS, errno.EACCES, errno.EPERM,
                  errno.EFBIG, errno.EIO, errno.ENOENT, errno.ENOTDIR, errno.EISDIR, errno.ELOOP,
                  errno.ENAMETOOLONG}
+
+
+# What a pool or a Ray cluster raises when a worker process dies under it (killed, out of
+# memory): known by name, so that the check needs no Ray installed.
+LOST_WORKERS = {("concurrent.futures.process", "BrokenProcessPool"),
+                ("ray.exceptions", "ActorDiedError"), ("ray.exceptions", "RayActorError"),
+                ("ray.exceptions", "WorkerCrashedError"),
+                ("ray.exceptions", "ActorUnavailableError")}
+
+
+def _worker_lost(exc: BaseException) -> bool:
+    """Is ``exc`` (or one of its types' bases) a worker process dying under a pool or Ray?"""
+    return any((kind.__module__, kind.__name__) in LOST_WORKERS for kind in type(exc).__mro__)
 
 
 def _interrupted(exc: BaseException | None) -> KeyboardInterrupt | None:
