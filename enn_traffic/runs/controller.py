@@ -159,6 +159,11 @@ class Controller:
                                  "rings") from None
         return controller
 
+    def _named(self) -> str:
+        """"the controller FILE's" (its file when it was loaded from one), for a misfit's
+        message that names the scenario's file and key."""
+        return f"the controller {self.source}'s" if self.source else "the controller's"
+
     def fit(self, scenario: Scenario, path: str | Path | None = None) -> Scenario:
         """``scenario`` with this controller's network and sensor, and the spin rule it was
         evolved under: a controller is measured by the rules it learnt by (the paper's rule,
@@ -168,12 +173,12 @@ class Controller:
         if scenario.lane_keeping is not None:
             if self.layer_sizes[0] != scenario.inputs:
                 raise InputError(
-                    f"the controller's network takes {self.layer_sizes[0]} inputs, the "
+                    f"{self._named()} network takes {self.layer_sizes[0]} inputs, the "
                     f"scenario's camera gives {scenario.inputs}", path, "lane_keeping.lookahead_m")
         elif self.layer_sizes[0] != ((scenario.sensor.beams + sum(r[0] for r in self.rings))
                                      * len(self.channels)):
             raise InputError(
-                f"the controller's network takes {self.layer_sizes[0]} beams, the scenario's "
+                f"{self._named()} network takes {self.layer_sizes[0]} beams, the scenario's "
                 f"sensor has {scenario.sensor.beams}"
                 + (f" (and the controller's own rings {sum(int(r[0]) for r in self.rings)})"
                    if self.rings else "")

@@ -165,6 +165,7 @@ def test_controller_that_does_not_fit_the_sensor(small_run, tmp_path, root):
     result = cli("evaluate", small_run / "best.npz", scenario)
     assert result.returncode == 2 and "sensor.beams" in result.stderr
     assert "Traceback" not in result.stderr
+    assert str(small_run / "best.npz") in result.stderr  # which controller, in a matrix too
 
 
 def test_nan_controller_is_refused(small_run, tmp_path, root):
