@@ -11,6 +11,7 @@ import functools
 import hashlib
 import math
 import os
+import tempfile
 from collections.abc import Iterator
 from pathlib import Path
 
@@ -86,9 +87,24 @@ def _inputs_key(scenario: Scenario) -> list[str]:
 def state_folder() -> Path:
     """Where saved warm-ups are kept: ``$ENN_TRAFFIC_SUMO_STATES``, else ``sumo-states/`` in
     the user's own cache folder (:func:`~enn_traffic.core.cache.cache_folder`; read at every call,
-    so that worker processes, which inherit the environment, use the same folder)."""
+    so that worker processes, which inherit the environment, use the same folder); where that
+    cannot be written, in the temporary folder."""
     folder = os.environ.get(STATE_FOLDER_VARIABLE)
-    return Path(folder) if folder else cache_folder() / "sumo-states"
+    chosen = Path(folder) if folder else cache_folder() / "sumo-states"
+    return chosen if _writable_folder(chosen) else (
+        Path(tempfile.gettempdir()) / f"enn-traffic-{os.getuid()}" / "sumo-states")
+
+
+@functools.lru_cache(maxsize=8)
+def _writable_folder(folder: Path) -> bool:
+    """Can warm-ups be saved in ``folder`` (made if missing)? Where not (read-only, or a
+    file), they are kept in the temporary folder instead, as the walls' cache tolerates an
+    unwritable folder: a warm-up saved nowhere would be simulated at every start."""
+    try:
+        folder.mkdir(parents=True, exist_ok=True)
+    except OSError:
+        return False
+    return os.access(folder, os.W_OK | os.X_OK)
 
 
 def state_path(scenario: Scenario, seed: int, keep_rng: bool) -> Path:

@@ -237,3 +237,20 @@ def test_a_collision_says_what_it_was_with(tmp_path, road_net, mode):
     assert rows["bus"]["hit_vehicle"].startswith("bus.") and rows["bus"]["hit_type"] == "bus"
     assert rows["edge"]["outcome"] == "collision" and rows["edge"]["hit"] == "wall"
     assert rows["edge"]["hit_vehicle"] == "" and rows["edge"]["steps"] < 5
+
+
+def test_an_unwritable_warm_up_folder_keeps_warm_ups_in_the_temporary_folder(
+        tmp_path, road_net, monkeypatch):
+    """ENN_TRAFFIC_SUMO_STATES naming a file (a folder that cannot be written): a SUMO run
+    stopped with "Permission denied" or "Not a directory", where an unwritable walls cache is
+    tolerated; the warm-up is saved in the temporary folder instead, and loads."""
+    import tempfile
+
+    blocker = tmp_path / "a_file"
+    blocker.write_text("not a folder")
+    monkeypatch.setenv("ENN_TRAFFIC_SUMO_STATES", str(blocker))
+    monkeypatch.setattr(tempfile, "tempdir", str(tmp_path / "tmp"))
+    (tmp_path / "tmp").mkdir()
+    scenario = load_scenario(road_scenario(tmp_path, road_net))
+    state = warm_state(scenario, 7, keep_rng=False)
+    assert state.is_file() and state.is_relative_to(tmp_path / "tmp")
