@@ -60,6 +60,7 @@ from enn_traffic.core.progress import slow_step, terminal
 from enn_traffic.core.provenance import SAME_RULES, rules_version, sources_of
 from enn_traffic.experiments.choosing import final_population, specialists
 from enn_traffic.experiments.common import save_arrays, save_controller
+from enn_traffic.experiments.crowds.cost import cost_table
 from enn_traffic.experiments.crowds.settings import CrowdSettings
 from enn_traffic.experiments.crowds.stats import (
     Measured,
@@ -407,41 +408,6 @@ def measure_situations(folder: Path, inputs: dict[int, tuple[SumoWorld, np.ndarr
                           f"{title}, mean of the situations in {learning.window_s:g} s windows",
                           "collisions per learner-second")
     return measured
-
-
-COST_COLUMNS = ["strategy", "situation", "arm", "situation_wall_s", "learner_steps", "wall_s",
-                "sumo_s", "learner_steps_per_s", "sumo_share", "cpu_s", "sumo_cpu_s",
-                "learner_steps_per_cpu_s", "sumo_cpu_share"]
-
-
-def _cpu(spent: dict) -> dict:
-    """An arm's CPU columns of ``crowd_cost.csv`` (NaN where it was measured without)."""
-    if "cpu_s" not in spent:
-        return dict.fromkeys(COST_COLUMNS[-4:], float("nan"))
-    cpu = max(spent["cpu_s"], 1e-9)
-    return {"cpu_s": round(spent["cpu_s"], 2), "sumo_cpu_s": round(spent["sumo_cpu_s"], 2),
-            "learner_steps_per_cpu_s": round(spent["learner_steps"] / cpu, 1),
-            "sumo_cpu_share": round(spent["sumo_cpu_s"] / cpu, 3)}
-
-
-def cost_table(kept: dict) -> pd.DataFrame:
-    """``crowd_cost.csv``: per situation and arm, the learner-steps it drove, its wall time and
-    the share of it inside SUMO's step, the same in its process's CPU time (what the arm cost:
-    the arms run side by side, and on fewer cores than arms a wall clock also counts the
-    waits for one), and the situation's wall time. A situation kept from before costs were
-    recorded has no rows; one kept from before CPU times were, no CPU figures."""
-    rows = []
-    for (strategy, situation), result in kept.items():
-        cost = result.get("cost")
-        for arm, spent in (cost or {}).get("arms", {}).items():
-            wall = max(spent["wall_s"], 1e-9)
-            rows.append({"strategy": strategy, "situation": situation, "arm": arm,
-                         "situation_wall_s": round(cost["situation_wall_s"], 2),
-                         "learner_steps": spent["learner_steps"],
-                         "wall_s": round(spent["wall_s"], 2), "sumo_s": round(spent["sumo_s"], 2),
-                         "learner_steps_per_s": round(spent["learner_steps"] / wall, 1),
-                         "sumo_share": round(spent["sumo_s"] / wall, 3)} | _cpu(spent))
-    return pd.DataFrame(rows, columns=COST_COLUMNS)
 
 
 def table(situations: pd.DataFrame, columns: list[str]) -> pd.DataFrame:

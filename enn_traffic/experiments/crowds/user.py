@@ -34,6 +34,7 @@ from enn_traffic.core.io import check_not_source, folder_lock, write_text
 from enn_traffic.core.progress import slow_step
 from enn_traffic.experiments import facts
 from enn_traffic.experiments.common import save_controller
+from enn_traffic.experiments.crowds.cost import cost_lines
 from enn_traffic.experiments.crowds.settings import CrowdSettings
 from enn_traffic.experiments.crowds.sumo import (
     SITUATION_KEY,
@@ -189,24 +190,6 @@ def summary(out: Path) -> list[str]:
                      "copied start population; give crowd.learning_s more time than "
                      "crowd.population_size lives of crowd.life_cap_steps steps")
     return lines + cost_lines(pd.read_csv(out / "crowd_cost.csv"))
-
-
-def cost_lines(cost) -> list[str]:
-    """What the crowd cost (``crowd_cost.csv``): each arm's learner-steps per CPU-second and
-    SUMO's share of that CPU time (its wall time where CPU times were not recorded), and the
-    wall time per situation (its arms side by side)."""
-    if cost.empty:
-        return ["cost: not recorded (every situation was measured before costs were kept)"]
-    cpu = cost["cpu_s"].notna().all() if "cpu_s" in cost else False
-    spent, inside, unit = (("cpu_s", "sumo_cpu_s", "learner-steps per CPU-second") if cpu
-                           else ("wall_s", "sumo_s", "learner-steps/s"))
-    arms = cost.groupby("arm", sort=False)[["learner_steps", spent, inside]].sum()
-    per_arm = "; ".join(f"{arm} {row.learner_steps / max(row[spent], 1e-9):,.0f} {unit}, "
-                        f"SUMO {row[inside] / max(row[spent], 1e-9):.0%} of it"
-                        for arm, row in arms.iterrows())
-    situations = cost.drop_duplicates(["strategy", "situation"])["situation_wall_s"]
-    return [f"cost (crowd_cost.csv): {per_arm}; {situations.mean():.1f} s per situation "
-            f"({len(situations)} measured here)"]
 
 
 def record_crowd(scenario: Scenario, genes: np.ndarray, seed: int, seconds: float
