@@ -52,9 +52,22 @@ def run(args) -> int:
                              "scenarios (the compiled vector environment)")
     out = args.out or Path("results/baseline")
     check_output_folder(out)
+    _not_another_commands(out)
     check_unlocked(out)
     with folder_lock(out):
         campaign.compare(scenarios, out, plan, args.workers or campaign.default_workers(),
                          progress=not args.quiet)
     print(campaign.summary_text(out))
     return 0
+
+
+def _not_another_commands(out: Path) -> None:
+    """Refuse a folder that holds a run or a crowd (``run`` and ``crowd`` refuse each other's
+    folders too): a comparison's files would be mixed in among theirs."""
+    from enn_traffic.experiments.crowds.user import MARKER
+    from enn_traffic.runs.run import CHECKPOINT
+
+    for name, what in ((CHECKPOINT, "a run"), (MARKER, "a crowd run")):
+        if (out / name).is_file():
+            raise InputError(f"holds {what} ({name}); a comparison writes a folder of its own: "
+                             "give another --out", out, "--out")

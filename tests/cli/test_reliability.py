@@ -465,3 +465,19 @@ def test_a_worker_killed_mid_run_is_one_line_and_resume_gives_the_uninterrupted_
     resumed = _run("run", scenario, "--out", broken, "--executor", "process", "--resume", *RUN)
     assert resumed.returncode == 0, resumed.stderr
     assert_same_run(whole, broken)
+
+
+@pytest.mark.parametrize("name, what", [("checkpoint.npz", "a run"),
+                                        ("crowd.toml", "a crowd run")])
+def test_baseline_never_mixes_its_files_into_a_run_or_a_crowd(tmp_path, capsys, name, what):
+    """``baseline --out`` into a finished run's or crowd's folder wrote its comparison among
+    their files, where ``run`` and ``crowd`` refuse each other's folders: now refused too."""
+    from enn_traffic.cli import main
+
+    out = tmp_path / "taken"
+    out.mkdir()
+    (out / name).write_bytes(b"theirs")
+    assert main(["baseline", "arena_strategy1", "--plan", "GA:1M:1", "--out", str(out),
+                 "--quiet"]) == 2
+    assert f"holds {what}" in capsys.readouterr().err
+    assert sorted(p.name for p in out.iterdir()) == [name]
