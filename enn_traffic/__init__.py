@@ -2,10 +2,9 @@
 
 import os
 import sys
-import tempfile
 from pathlib import Path
 
-from enn_traffic.core.cache import cache_folder, prune_kernel_folders
+from enn_traffic.core.cache import cache_folder, prune_kernel_folders, writable_folder
 from enn_traffic.core.provenance import kernels_version
 from enn_traffic.core.registry import MovedModules
 
@@ -23,17 +22,11 @@ def _numba_cache_dir() -> str:
     a cache folder per version of the kernels' sources (:func:`~enn_traffic.core.provenance.
     kernels_version`) keeps a stale kernel from running. It lies in the project's cache folder
     (:func:`~enn_traffic.core.cache.cache_folder`: ``$ENN_TRAFFIC_CACHE``, ``$XDG_CACHE_HOME``),
-    or, where that cannot be written (read-only, or a file), in the temporary folder: numba
-    would otherwise write its kernels beside the package's sources."""
+    or, where that cannot be written, in the temporary folder
+    (:func:`~enn_traffic.core.cache.writable_folder`): numba would otherwise write its kernels
+    beside the package's sources."""
     name = f"numba-{kernels_version()}"
-    for base in (cache_folder(), Path(tempfile.gettempdir()) / f"enn-traffic-{os.getuid()}"):
-        try:
-            (base / name).mkdir(parents=True, exist_ok=True)
-        except OSError:
-            continue
-        if os.access(base / name, os.W_OK | os.X_OK):
-            return str(base / name)
-    return str(Path(tempfile.mkdtemp(prefix="enn-traffic-numba-")))
+    return str(writable_folder(cache_folder() / name, name))
 
 
 if "NUMBA_CACHE_DIR" not in os.environ:

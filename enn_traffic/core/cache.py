@@ -30,6 +30,22 @@ def cache_folder() -> Path:
     return Path(base) / "enn-traffic"
 
 
+@functools.lru_cache(maxsize=16)
+def writable_folder(preferred: Path, name: str) -> Path:
+    """``preferred``, made if missing, where files can be written in it; else ``name`` in a
+    folder of the user's own in the temporary folder (a read-only cache folder, or
+    ``$ENN_TRAFFIC_CACHE`` naming a file, then costs work done again, never a failed run);
+    else a new temporary folder. Asked once per process and folder."""
+    for folder in (preferred, Path(tempfile.gettempdir()) / f"enn-traffic-{os.getuid()}" / name):
+        try:
+            folder.mkdir(parents=True, exist_ok=True)
+        except OSError:
+            continue
+        if os.access(folder, os.W_OK | os.X_OK):
+            return folder
+    return Path(tempfile.mkdtemp(prefix=f"enn-traffic-{name}-"))
+
+
 def file_digest(path: Path) -> str:
     """SHA-256 of a file's bytes."""
     digest = hashlib.sha256()

@@ -18,6 +18,10 @@ import math
 import numpy as np
 from numba import njit
 
+from enn_traffic.sumo import ssm
+
+CONFLICT_TTC = ssm.SSM_THRESHOLDS["TTC"]  # below it, a 2-D conflict, as SSM's TTC conflict
+
 
 @njit(cache=True)
 def time_to_contact(a: np.ndarray, b: np.ndarray, vx: float, vy: float) -> float:
@@ -54,6 +58,13 @@ def _projection(body: np.ndarray, nx: float, ny: float) -> tuple[float, float]:
     return low, high
 
 
+@njit(cache=True, inline="always")
+def _centre(corners: np.ndarray) -> tuple[float, float]:
+    """The middle of a body's four corners."""
+    return (0.25 * (corners[0, 0] + corners[1, 0] + corners[2, 0] + corners[3, 0]),
+            0.25 * (corners[0, 1] + corners[1, 1] + corners[2, 1] + corners[3, 1]))
+
+
 @njit(cache=True)
 def least_time_to_contact(corners: np.ndarray, vx: float, vy: float, ids: np.ndarray,
                           gone: np.ndarray, slot_corners: np.ndarray, slot_centres: np.ndarray,
@@ -64,8 +75,7 @@ def least_time_to_contact(corners: np.ndarray, vx: float, vy: float, ids: np.nda
     its slot held another vehicle then); a vehicle that has left the learner's world (its id
     in ``gone``: cleared from its start, or after running into it) is not there for it, as
     for the blame rule. inf when none is within reach or none comes closer."""
-    x = 0.25 * (corners[0, 0] + corners[1, 0] + corners[2, 0] + corners[3, 0])
-    y = 0.25 * (corners[0, 1] + corners[1, 1] + corners[2, 1] + corners[3, 1])
+    x, y = _centre(corners)
     least = math.inf
     for s in range(ids.shape[1]):
         if ids[now, s] < 0 or ids[now, s] == gone[s]:
@@ -101,8 +111,7 @@ def least_time_among(corners: np.ndarray, vx: float, vy: float, bodies: np.ndarr
     ``centres`` and moving at ``velocities`` (n, 2), leaving out those ``skip`` marks; bodies
     whose bounding circles (``gap`` the sum of two radii) do not meet within ``horizon`` are
     not tried. inf when none comes that close."""
-    x = 0.25 * (corners[0, 0] + corners[1, 0] + corners[2, 0] + corners[3, 0])
-    y = 0.25 * (corners[0, 1] + corners[1, 1] + corners[2, 1] + corners[3, 1])
+    x, y = _centre(corners)
     least = math.inf
     for i in range(bodies.shape[0]):
         if skip[i]:

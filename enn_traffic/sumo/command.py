@@ -9,6 +9,7 @@ clockwise); ours is the same point with the heading in radians, 0 = east, counte
 
 from __future__ import annotations
 
+import functools
 import gzip
 import hashlib
 import math
@@ -18,6 +19,7 @@ from pathlib import Path
 from numba import njit
 
 from enn_traffic.config import Scenario, begin_time, route_files, sumo_config
+from enn_traffic.core.cache import file_stamp
 from enn_traffic.core.errors import InputError
 
 LEARNER = "enn_learner"
@@ -99,13 +101,25 @@ SNAPSHOT_TIME = re.compile(rb'<snapshot\b[^>]*?\btime="([^"]+)"')
 
 def state_time(path: Path) -> str:
     """The SUMO time a saved state was written at, as it wrote it (its ``<snapshot>``, after
-    the configuration SUMO writes first)."""
+    the configuration SUMO writes first): read once per process while the file is unchanged,
+    every closed-loop start loading the same warm-up."""
+    return _state_time(path, *file_stamp(path))
+
+
+@functools.lru_cache(maxsize=64)
+def _state_time(path: Path, *stamp: int) -> str:
+    head = b""
     with gzip.open(path, "rb") if path.name.endswith(".gz") else open(path, "rb") as file:
-        found = SNAPSHOT_TIME.search(file.read(1 << 20))
-    if found is None:
-        raise InputError("not a SUMO state: no <snapshot time=...> in its first megabyte "
-                         "(a warm-up enn-traffic saved; delete it to simulate it again)", path)
-    return found.group(1).decode()
+        while len(head) < 1 << 20:  # a block at a time, until the snapshot's tag
+            block = file.read(1 << 14)
+            head += block
+            found = SNAPSHOT_TIME.search(head)
+            if found is not None:
+                return found.group(1).decode()
+            if not block:
+                break
+    raise InputError("not a SUMO state: no <snapshot time=...> in its first megabyte "
+                     "(a warm-up enn-traffic saved; delete it to simulate it again)", path)
 
 
 def listed(path: Path, folder: Path) -> str:

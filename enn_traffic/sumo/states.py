@@ -11,7 +11,6 @@ import functools
 import hashlib
 import math
 import os
-import tempfile
 from collections.abc import Iterator
 from pathlib import Path
 
@@ -25,7 +24,7 @@ from enn_traffic.config import (
     route_files,
     sumo_config,
 )
-from enn_traffic.core.cache import cache_folder, content_digest, file_stamp
+from enn_traffic.core.cache import cache_folder, content_digest, file_stamp, writable_folder
 from enn_traffic.core.errors import InputError
 from enn_traffic.core.io import gzip_problem, max_input_bytes
 from enn_traffic.core.progress import bar, slow_step
@@ -91,20 +90,7 @@ def state_folder() -> Path:
     cannot be written, in the temporary folder."""
     folder = os.environ.get(STATE_FOLDER_VARIABLE)
     chosen = Path(folder) if folder else cache_folder() / "sumo-states"
-    return chosen if _writable_folder(chosen) else (
-        Path(tempfile.gettempdir()) / f"enn-traffic-{os.getuid()}" / "sumo-states")
-
-
-@functools.lru_cache(maxsize=8)
-def _writable_folder(folder: Path) -> bool:
-    """Can warm-ups be saved in ``folder`` (made if missing)? Where not (read-only, or a
-    file), they are kept in the temporary folder instead, as the walls' cache tolerates an
-    unwritable folder: a warm-up saved nowhere would be simulated at every start."""
-    try:
-        folder.mkdir(parents=True, exist_ok=True)
-    except OSError:
-        return False
-    return os.access(folder, os.W_OK | os.X_OK)
+    return writable_folder(chosen, "sumo-states")
 
 
 def state_path(scenario: Scenario, seed: int, keep_rng: bool) -> Path:

@@ -37,7 +37,7 @@ from enn_traffic.sim.rules import (
     spun,
     wall_arrays,
 )
-from enn_traffic.sim.safety import least_time_among
+from enn_traffic.sim.safety import CONFLICT_TTC, least_time_among
 from enn_traffic.sim.sensors import (
     clear_seen,
     fill_channels,
@@ -52,9 +52,6 @@ from enn_traffic.sim.sumo.replay import (
     visible_centres,
 )
 from enn_traffic.sim.world import COLLIDED, LEFT_NETWORK, SPUN
-from enn_traffic.sumo import ssm
-
-CONFLICT_TTC = ssm.SSM_THRESHOLDS["TTC"]  # a 2-D conflict: the 2-D TTC below SSM's threshold
 
 
 class Near(NamedTuple):
@@ -255,7 +252,7 @@ def count_conflict(k, physics, vehicles, learners, n, m, me) -> None:
     """Learner ``k``'s 2-D time to collision (:mod:`~enn_traffic.sim.safety`) with the bodies
     :func:`sense_learner` gathered: SUMO's vehicles in its world, each moving as it did in the
     last step, and the other learners, each at its speed along its heading (its own motion):
-    a conflict each time it comes below :data:`CONFLICT_TTC`."""
+    a conflict each time it comes below :data:`~enn_traffic.sim.safety.CONFLICT_TTC`."""
     near, others = learners.near_slots, learners.near_learners
     for i in range(n):
         near.absent[i] = not in_world(near.ids, near.gone, i)

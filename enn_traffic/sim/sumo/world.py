@@ -32,7 +32,7 @@ from enn_traffic.core.progress import slow_step
 from enn_traffic.roads.network import lane_spots
 from enn_traffic.sim.arena import LearnerWorld
 from enn_traffic.sim.rules import Physics
-from enn_traffic.sim.safety import least_time_to_contact
+from enn_traffic.sim.safety import CONFLICT_TTC, least_time_to_contact
 from enn_traffic.sim.sumo.live import LiveTraffic
 from enn_traffic.sim.sumo.replay import (
     RUNNING,
@@ -394,7 +394,7 @@ class SumoWorld(LearnerWorld):
                     live.state.learner.corners[0], speed * math.cos(heading),
                     speed * math.sin(heading), live.ids, live.state.gone, live.corners,
                     live.centres, live.before, live.now, dt, live.followed)
-                least, below = min(least, ttc), below + (ttc < ssm.SSM_THRESHOLDS["TTC"])
+                least, below = min(least, ttc), below + (ttc < CONFLICT_TTC)
                 outcome = step(live.t, genes, self.layer_sizes, live.physics, self.geometry,
                                live.ids, live.corners, live.centres, live.before, live.now,
                                limit, live.state)
