@@ -37,7 +37,8 @@ def run(args) -> int:
         check_output_file(args.out, suffixes=(".csv",))
     if args.plot:
         check_output_file(args.plot, "--plot", suffixes=(".png", ".svg", ".pdf"))
-    net, routes, additional, shortest = sumo_sources(scenario_path(args.source))
+    net, routes, additional, start = sumo_sources(scenario_path(args.source))
+    shortest = start.shortest
     # ties of demand are ranked by length, then by the lane's name
     table = lane_table(net, routes, additional, shortest)
     learner = table[table["learner_may_start"]]
@@ -63,7 +64,7 @@ def run(args) -> int:
           f"edge_vehicles, those whose route goes on from that lane (docs/sumo.md):")
     columns = ["lane", "edge", "vehicles", "edge_vehicles", "length_m", "speed_limit_kmh",
                "allowed"]
-    learner, skipped = _clear_head(learner, source, net, args.top)
+    learner, skipped = _clear_head(learner, start.clear, args.top)
     ranked = learner[columns].assign(rank=range(1, len(learner) + 1))
     print(ranked.head(args.top)[["rank", *columns]].to_string(index=False))
     if skipped:
@@ -90,26 +91,12 @@ def run(args) -> int:
     return 0
 
 
-def _clear_head(learner, source: Path, net: Path, top: int):
+def _clear_head(learner, clear, top: int):
     """The learner's lanes with those whose start would put the body over the road's edge
-    left out, as ``start_lane = "auto"`` leaves them, tested in rank order until ``top`` pass
-    (the rest are not tested); and how many were left out."""
+    (``clear`` false) left out, as ``start_lane = "auto"`` leaves them, tested in rank order
+    until ``top`` pass (the rest are not tested); and how many were left out."""
     import pandas as pd
 
-    from enn_traffic.config import load_scenario
-    from enn_traffic.config.track import TrackConfig
-    from enn_traffic.config.vehicle import VehicleConfig
-    from enn_traffic.roads.network import clear_starts
-
-    if source.suffix == ".sumocfg":
-        defaults = VehicleConfig()
-        clear = clear_starts(net, TrackConfig.model_fields["start_offset"].default,
-                             defaults.length, defaults.width)
-    else:
-        scenario = load_scenario(source)
-        track, vehicle = scenario.track, scenario.vehicle
-        clear = clear_starts(net, track.start_offset, vehicle.length, vehicle.width,
-                             track.surface, scenario.fringe_exits)
     keep, left_out, passed = [], 0, 0
     for lane in learner["lane"]:
         if passed >= top:

@@ -6,9 +6,10 @@ from __future__ import annotations
 import importlib.util
 import re
 import tomllib
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from pathlib import Path
+from typing import NamedTuple
 
 from enn_traffic.config.scenario import Scenario, track_key, validated
 from enn_traffic.config.sumo_inputs import route_files, sumo_config
@@ -174,16 +175,14 @@ def network_named(scenario: Scenario) -> Iterator[None]:
 def _with_auto_lane(scenario: Scenario, path: Path) -> Scenario:
     """``start_lane = "auto"`` made the lane it stands for (enn_traffic.roads.lanes)."""
     track = scenario.track
-    length = least_start_length(track.start_offset, scenario.vehicle.length)
     config = sumo_config(scenario)
     additional = config.additional_files if config is not None else ()
     with network_named(scenario):
         read_net(track.net)  # read once per process: auto_lane reads it from memory
-    vehicle = scenario.vehicle
-    clear = clear_starts(track.net, track.start_offset, vehicle.length, vehicle.width,
-                         track.surface, scenario.fringe_exits)
+    rule = start_rule(track.net, scenario)
     try:
-        lane = auto_lane(track.net, route_files(scenario), length, additional, clear=clear)
+        lane = auto_lane(track.net, route_files(scenario), rule.shortest, additional,
+                         clear=rule.clear)
     except InputError as exc:
         raise InputError(f"auto: {exc.message}", path, "track.start_lane") from None
     return scenario.model_copy(update={"track": track.model_copy(update={"start_lane": lane})})
@@ -211,21 +210,42 @@ def _with_sumocfg(scenario: Scenario, path: Path) -> Scenario:
     return scenario
 
 
-def sumo_sources(path: Path) -> tuple[Path, list[Path], list[Path], float]:
+class StartRule(NamedTuple):
+    """What ``start_lane = "auto"`` asks of a lane besides its demand: to be ``shortest`` m long
+    or longer (:func:`~enn_traffic.roads.network.least_start_length`), and that the body
+    at ``start_offset`` along it lie on the road (``clear``,
+    :func:`~enn_traffic.roads.network.clear_starts`)."""
+
+    shortest: float
+    clear: Callable[[str], bool]
+
+
+def start_rule(net: Path, scenario: Scenario | None = None) -> StartRule:
+    """The :class:`StartRule` of ``scenario`` on ``net`` (by its ``start_offset``, body, road
+    surface and fringe), or, without one, of the default ``start_offset`` and body."""
+    if scenario is None:
+        offset = TrackConfig.model_fields["start_offset"].default
+        vehicle, surface, exits = VehicleConfig(), "passenger", True
+    else:
+        offset, vehicle = scenario.track.start_offset, scenario.vehicle
+        surface, exits = scenario.track.surface, scenario.fringe_exits
+    return StartRule(least_start_length(offset, vehicle.length),
+                     clear_starts(net, offset, vehicle.length, vehicle.width, surface, exits))
+
+
+def sumo_sources(path: Path) -> tuple[Path, list[Path], list[Path], StartRule]:
     """The network, route files and additional files of a ``.sumocfg``, or of a scenario of
-    one track (its SUMO traffic's; no route files without SUMO traffic), and the shortest lane
-    its learner may start on (:func:`~enn_traffic.roads.network.least_start_length`; a
-    ``.sumocfg``'s: by the default ``start_offset`` and body)."""
+    one track (its SUMO traffic's; no route files without SUMO traffic), and the rule a lane
+    its learner may start on meets (:func:`start_rule`; a ``.sumocfg``'s: by the default
+    ``start_offset`` and body)."""
     if path.suffix == ".sumocfg":
         if not path.is_file():
             raise InputError("SUMO configuration not found", path)
         config = read_sumocfg(path)
         if config.net_file is None:
             raise InputError("names no net-file", path, "net-file")
-        shortest = least_start_length(TrackConfig.model_fields["start_offset"].default,
-                                      VehicleConfig.model_fields["length"].default)
         return (config.net_file, list(config.route_files), list(config.additional_files),
-                shortest)
+                start_rule(config.net_file))
     scenario = load_scenario(path)
     if isinstance(scenario.track, list):
         raise InputError("give a scenario of one track (or its .sumocfg)", path, "track")
@@ -234,4 +254,4 @@ def sumo_sources(path: Path) -> tuple[Path, list[Path], list[Path], float]:
     config = sumo_config(scenario)
     return (scenario.track.net, route_files(scenario) if scenario.traffic.is_sumo else [],
             list(config.additional_files) if config is not None else [],
-            least_start_length(scenario.track.start_offset, scenario.vehicle.length))
+            start_rule(scenario.track.net, scenario))
