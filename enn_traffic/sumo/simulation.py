@@ -6,6 +6,7 @@ and closes its own."""
 
 from __future__ import annotations
 
+import atexit
 import contextlib
 import gzip
 import math
@@ -303,6 +304,15 @@ class Simulation:
 
 EMPTY_TL_STATE = re.compile(r'(<tlLogic\b[^>]*?) state=""')
 DRIVE_WAYS = re.compile(r'^[ \t]*<(?:sub)?[dD]riveWay\b[^>]*/>[ \t]*\n', re.M)
+
+
+@atexit.register
+def _close_at_exit() -> None:
+    """A SUMO still running as the process ends (a closed-loop environment never closed, an
+    exception before its close) is closed, so that its folder goes with it."""
+    if Simulation.running is not None:
+        with contextlib.suppress(Exception):
+            Simulation.running.close()
 
 
 def make_loadable(path: Path) -> None:
