@@ -22,7 +22,6 @@ within the lane's length) is never a learner's lane for ``auto``.
 
 from __future__ import annotations
 
-import gzip
 import shutil
 import subprocess
 import tempfile
@@ -39,15 +38,12 @@ from enn_traffic.core.errors import InputError
 from enn_traffic.core.progress import slow_step
 from enn_traffic.roads.network import LEARNER_CLASS, fringe_nodes, read_net
 from enn_traffic.roads.sumocfg import parse_time
+from enn_traffic.roads.xmlread import iterparse, open_xml
 
 # The vehicle classes the ``allowed`` column names (of SUMO's 41), in this order.
 SHOWN_CLASSES = ("passenger", "taxi", "bus", "delivery", "truck", "motorcycle", "bicycle",
                  "pedestrian", "tram", "rail_urban", "rail")
 UNBOUNDED_FLOW_S = 3600.0  # a flow without an end counts this long
-
-
-def _open(path: Path):
-    return gzip.open(path, "rb") if path.name.endswith(".gz") else open(path, "rb")
 
 
 def _flow_vehicles(element: ElementTree.Element) -> float:
@@ -74,8 +70,8 @@ def vehicle_classes(files: list[Path] | tuple[Path, ...]) -> dict[str, str]:
     classes: dict[str, str] = {}
     for path in files:
         try:
-            with _open(path) as handle:
-                for _, element in ElementTree.iterparse(handle):
+            with open_xml(path) as handle:
+                for _, element in iterparse(handle):
                     if element.tag == "vType":  # kept whole: a distribution may hold it
                         if element.get("id"):
                             classes[element.get("id")] = element.get("vClass", "passenger")
@@ -145,9 +141,9 @@ def demand_per_move(route_files: list[Path] | tuple[Path, ...],
 
     for path in route_files:
         try:
-            with _open(path) as handle:
+            with open_xml(path) as handle:
                 depth = 0
-                for event, element in ElementTree.iterparse(handle, ("start", "end")):
+                for event, element in iterparse(handle, ("start", "end")):
                     if event == "start":
                         depth += 1
                         continue

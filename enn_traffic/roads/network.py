@@ -36,6 +36,7 @@ from enn_traffic.core.geometry import body_corners
 from enn_traffic.core.io import check_input_file
 from enn_traffic.core.progress import slow_step
 from enn_traffic.roads.sumocfg import xml_problem
+from enn_traffic.roads.xmlread import read_sumo_net
 
 SLIVER_M = 0.2  # holes narrower than this are gaps between lanes, not walls
 SNAP_M = 0.05  # gaps between lane and junction shapes up to twice this are closed
@@ -261,7 +262,7 @@ def _read_net(path: Path, *stamp: int) -> sumolib.net.Net:
     if problem:
         raise InputError(f"not a readable SUMO network: {problem}", path)
     try:
-        net = sumolib.net.readNet(str(path), withInternal=True)
+        net = read_sumo_net(path, withInternal=True)
     except ElementTree.ParseError as exc:
         raise InputError(f"not a readable SUMO network: {exc}", path) from None
     except Exception as exc:  # sumolib raises plain exceptions on malformed nets

@@ -30,6 +30,7 @@ import sumolib
 from enn_traffic.core.cache import file_stamp
 from enn_traffic.core.errors import InputError
 from enn_traffic.core.io import check_input_file
+from enn_traffic.roads.xmlread import XML_BLOCK, iterparse, parse_root
 
 FILE_OPTIONS = ("net-file", "route-files", "additional-files")
 
@@ -166,7 +167,7 @@ def read_sumocfg(path: Path) -> SumoConfig:
     file and its option)."""
     check_input_file(path, "SUMO configuration")
     try:
-        root = ElementTree.parse(path).getroot()
+        root = parse_root(path)
     except (ElementTree.ParseError, OSError, LookupError, ValueError) as exc:
         raise InputError(f"not a readable SUMO configuration: {exc}", path) from None
     settings, gui_only = _settings(root)
@@ -228,7 +229,7 @@ def departure_span(route_files: list[Path] | tuple[Path, ...]) -> tuple[float, f
     departures = []
     for file in route_files:
         try:
-            for _, element in ElementTree.iterparse(file):
+            for _, element in iterparse(file):
                 tag = element.tag
                 if tag in ("flow", "personFlow"):
                     times = [element.get("begin", "0"), element.get("end", "inf")]
@@ -302,9 +303,6 @@ def check_included(files: list[Path] | tuple[Path, ...], source: Path, key: str)
 MAX_XML_DEPTH = 64  # SUMO's own files nest a few levels (routes, vehicle, route, stop)
 
 
-XML_BLOCK = 16 << 20  # bytes fed to the XML parser at a time (xml_problem)
-
-
 @functools.lru_cache(maxsize=256)
 def xml_problem(file: Path, *stamp: int) -> str | None:
     """Why ``file`` (gzipped when it ends in ``.gz``) is not well-formed XML, or None; read
@@ -315,9 +313,7 @@ def xml_problem(file: Path, *stamp: int) -> str | None:
     parser = ElementTree.XMLPullParser(events=("start", "end"))
     try:
         with opener(file, "rb") as handle:
-            # fed in blocks of XML_BLOCK: expat before 2.6 parses a token cut by a block's end
-            # again at every block, and iterparse's 16 KiB blocks took 78 s over a network
-            # holding a 64 MB comment (CVE-2023-52425)
+            # fed in blocks of XML_BLOCK (enn_traffic.roads.xmlread says why)
             for block in iter(lambda: handle.read(XML_BLOCK), b""):
                 parser.feed(block)
                 for event, element in parser.read_events():
