@@ -436,23 +436,25 @@ def test_kernels_never_compile_into_the_package_when_the_cache_folder_is_unusabl
     assert not [p for p in package.rglob("*.nbi") if p.stat().st_mtime >= started]
 
 
+@pytest.mark.parametrize("executor", ["process", pytest.param("ray", marks=pytest.mark.full)])
 def test_a_worker_killed_mid_run_is_one_line_and_resume_gives_the_uninterrupted_run(
-        tmp_path, root):
-    """SIGKILL to a process-pool worker between generations 2 and 12 (as the OOM killer
-    would): the run ends in one line naming the dead worker and how to go on, no traceback,
-    exit 1 (it was the pool's raw BrokenProcessPool traceback); --resume gives the run never
-    disturbed."""
+        tmp_path, root, executor):
+    """SIGKILL to a process-pool worker or a Ray actor between generations 2 and 12 (as the
+    OOM killer would): the run ends in one line naming the dead worker and how to go on, no
+    traceback, exit 1 (it was the pool's raw BrokenProcessPool traceback, Ray's
+    ActorDiedError); --resume gives the run never disturbed."""
     scenario = root / "scenarios" / "arena_strategy1.toml"
     whole = tmp_path / "whole"
     assert _run("run", scenario, "--out", whole, *RUN).returncode == 0
     broken = tmp_path / "broken"
-    process = _run("run", scenario, "--out", broken, "--executor", "process", *RUN, wait=False)
-    deadline = time.monotonic() + 180
+    process = _run("run", scenario, "--out", broken, "--executor", executor, *RUN, wait=False)
+    find = (["pgrep", "-P", str(process.pid), "-f", "spawn_main"] if executor == "process"
+            else ["pgrep", "-f", "ray::_WorldActor"])
+    deadline = time.monotonic() + 300
     workers: list[str] = []
     while process.poll() is None and time.monotonic() < deadline:
         if _generation_done(broken) >= 2:
-            workers = subprocess.run(["pgrep", "-P", str(process.pid), "-f", "spawn_main"],
-                                     capture_output=True, text=True).stdout.split()
+            workers = subprocess.run(find, capture_output=True, text=True).stdout.split()
             if workers:
                 break
         time.sleep(0.01)
@@ -462,7 +464,7 @@ def test_a_worker_killed_mid_run_is_one_line_and_resume_gives_the_uninterrupted_
     assert process.returncode == 1, stderr
     assert "a worker process died" in stderr and "--resume" in stderr
     assert "Traceback" not in stderr
-    resumed = _run("run", scenario, "--out", broken, "--executor", "process", "--resume", *RUN)
+    resumed = _run("run", scenario, "--out", broken, "--executor", executor, "--resume", *RUN)
     assert resumed.returncode == 0, resumed.stderr
     assert_same_run(whole, broken)
 

@@ -201,6 +201,41 @@ def test_crowd_situations_on_ray_are_the_local_ones(crowd_run, tmp_path):
             np.testing.assert_array_equal(local["chromosome"], spread["chromosome"])
 
 
+@pytest.mark.full
+def test_a_ray_worker_killed_in_a_situation_gives_the_uninterrupted_tables(crowd_run, tmp_path):
+    """SIGKILL to the Ray worker running a situation (as the OOM killer would): Ray runs the
+    task again, and the crowd ends with the tables and controllers of a run never disturbed."""
+    import os
+    import signal
+    import subprocess
+    import sys
+    import time
+
+    scenario, out = crowd_run
+    broken = tmp_path / "broken"
+    process = subprocess.Popen([sys.executable, "-m", "enn_traffic", "crowd", str(scenario),
+                                "--out", str(broken), "--executor", "ray", "--quiet"],
+                               stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+    killed, deadline = None, time.monotonic() + 300
+    while killed is None and process.poll() is None and time.monotonic() < deadline:
+        found = subprocess.run(["pgrep", "-f", "ray::_situation_task"], capture_output=True,
+                               text=True).stdout.split()
+        if found:
+            time.sleep(0.3)  # inside its SUMO
+            killed = int(found[0])
+            os.kill(killed, signal.SIGKILL)
+        time.sleep(0.05)
+    stderr = process.communicate(timeout=600)[1]
+    assert killed is not None, "no situation task to kill before the crowd ended"
+    assert process.returncode == 0, stderr
+    for name in ["crowd_situations.csv", "table4_learners.csv", "table3.csv", "table4.csv"]:
+        pd.testing.assert_frame_equal(pd.read_csv(broken / name), pd.read_csv(out / name))
+    for k in range(4):
+        with np.load(out / "controllers" / f"learner{k}.npz") as whole, \
+                np.load(broken / "controllers" / f"learner{k}.npz") as again:
+            np.testing.assert_array_equal(whole["chromosome"], again["chromosome"])
+
+
 def test_a_scenario_named_like_the_crowds_own_file_is_never_written_over(root, tmp_path, capsys):
     """A newcomer's scenario ``OUT/crowd.toml`` was taken for a crowd run, and ``--resume``
     wrote the crowd's copy of the scenario over it."""
