@@ -165,6 +165,16 @@ def test_an_input_that_is_no_regular_file_of_bounded_size_is_refused_before_it_i
     assert not (tmp_path / "out" / "best.npz").exists()
 
 
+def test_a_compressed_bomb_names_the_file_that_inflates(capsys, tmp_path, monkeypatch):
+    """The scenario's key and the file that inflates, both (the key alone was named)."""
+    monkeypatch.chdir(tmp_path)
+    monkeypatch.setenv(MAX_INPUT_MB_VARIABLE, "1")
+    bomb = _special(tmp_path, "a gzip bomb", ".net.xml")
+    argv, names = _placed(tmp_path, None, "track.net", bomb)
+    message = refusal(capsys, argv, names, key="track.net")
+    assert bomb.name in message, message
+
+
 # --- XML and TOML built to choke a reader ---------------------------------------------------
 
 XML_BODIES = {
