@@ -26,6 +26,7 @@ WORKLOADS = Registry("workload", {
     "sumo": "enn_traffic.bench.sumo:sumo",
     "recording": "enn_traffic.bench.sumo:recording",
     "crowd_scale": "enn_traffic.bench.sumo:crowd_scale",
+    "crowd_marginal": "enn_traffic.bench.marginal:crowd_marginal",
     "city": "enn_traffic.bench.sumo:city",
     "lane_keeping": "enn_traffic.bench.kernels:lane_keeping",
     "crowd_ray": "enn_traffic.bench.sumo:crowd_ray",

@@ -5,6 +5,7 @@ from __future__ import annotations
 from pathlib import Path
 
 from enn_traffic.cli.args import EPILOG, check_out, int_in, nonempty_path, run_folder_options
+from enn_traffic.config.base import MAX_LEARNERS
 
 # What an interrupted crowd leaves.
 INTERRUPTED = ("; the individual run's generations and finished situations are "
@@ -27,7 +28,7 @@ def add_parser(commands) -> None:
                          help="a SUMO scenario file, or a shipped one's name (sumo_strategy1)")
     command.add_argument("--out", metavar="DIR", type=nonempty_path,
                          help="folder (default: results/<scenario name>_crowd)")
-    command.add_argument("--learners", metavar="N", type=int_in(1, 1000),
+    command.add_argument("--learners", metavar="N", type=int_in(1, MAX_LEARNERS),
                          help="override traffic.learners (vehicles learning in one SUMO)")
     command.add_argument("--quick", action="store_true",
                          help="minutes: 2 generations of the GA, 20 s of learning in 10 s "

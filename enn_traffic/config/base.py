@@ -14,7 +14,7 @@ Radius = Annotated[float, Field(gt=0, le=10_000)]
 Length = Annotated[float, Field(gt=0, le=100_000)]
 # Learners in one SUMO: the largest count measured, each learner's own cost flat per learner
 # there while SUMO's step grows with them (docs/bench.md, "Learners in one city SUMO")
-MAX_LEARNERS = 1000
+MAX_LEARNERS = 3000
 # Seeds are mixed into 64-bit keys (enn_traffic.core.keys): a larger one would wrap silently.
 MAX_SEED = 2**63 - 1
 # TOML has no tuples and no paths: these two take a list and a string (their items stay strict)

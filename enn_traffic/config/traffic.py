@@ -153,8 +153,9 @@ class TrafficConfig(Section):
     learners: int = Field(
         8, ge=1, le=MAX_LEARNERS, description="`strategy = \"sumo\"`: learners that drive at "
         "once in one SUMO, every vehicle a learner (Tables 3–4, paper §5.5; `enn-traffic "
-        "crowd`); at most 1,000 in one SUMO, [bench.md](bench.md#learners-in-one-city-sumo) "
-        "(more: `crowd --executor ray` runs the situations side by side)")
+        f"crowd`); at most {MAX_LEARNERS:,} in one SUMO, "
+        "[bench.md](bench.md#learners-in-one-city-sumo) (more: `crowd --executor ray` runs "
+        "the situations side by side)")
     mode: Literal["replay", "closed-loop"] = Field(
         "replay", description="SUMO traffic: `replay` (SUMO runs once per traffic situation "
         "without the learner; every chromosome meets the recording) or `closed-loop` (the learner "

@@ -10,6 +10,8 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from enn_traffic.config.base import MAX_LEARNERS
+
 
 def _safety_counts(table: pd.DataFrame) -> dict:
     """What the two safety measures saw in ``table``'s lives."""
@@ -47,7 +49,7 @@ def context(root: Path) -> dict:
     generations = pd.read_csv(folder / "individual" / "generations.csv")
     best = generations["best_fitness"].idxmax()
     bred = pd.read_csv(folder / "table4_learners.csv")["generations_bred"]
-    return {"safety": safe, "crowd": {
+    return {"safety": safe, "max_learners": MAX_LEARNERS, "crowd": {
         "learners": scenario["traffic"]["learners"], "settings": scenario["crowd"],
         "population": scenario["ga"]["population_size"],
         "situations": len(pd.read_csv(folder / "crowd_situations.csv")),

@@ -1,0 +1,151 @@
+"""What a learner costs beside what a SUMO-driven vehicle costs, in one warmed-up city SUMO: the
+crowd's step (SUMO's step, placing the learners, reading SUMO's vehicles, blame and sensing,
+re-entries) with one learner, then with N SUMO-driven vehicles added, then with N learners
+added; each arm in a fresh process, the marginal cost of an added vehicle per step inside
+SUMO's step and outside it."""
+
+from __future__ import annotations
+
+import tempfile
+import time
+import xml.etree.ElementTree as ElementTree
+from pathlib import Path
+
+import numba
+import numpy as np
+import pandas as pd
+
+from enn_traffic.bench.measure import city_with_lights
+
+ADDED = "bench_added_"  # the SUMO ids of the added SUMO-driven vehicles
+SETTLE_STEPS = 100  # steps between adding vehicles and timing (the added ones depart)
+
+
+def _trip_ends(trips: Path, after_s: float, count: int) -> list[tuple[str, str]]:
+    """``count`` (from, to) edge pairs of the trips that depart after ``after_s`` (cycled)."""
+    pairs = [(e.get("from"), e.get("to")) for e in ElementTree.parse(trips).getroot()
+             if e.tag == "trip" and float(e.get("depart", "0")) > after_s]
+    return [pairs[i % len(pairs)] for i in range(count)]
+
+
+class _Added:
+    """SUMO-driven vehicles on the trips of ``pairs``, routed by SUMO; one that arrives is
+    replaced by the next pair's, so that about as many as were added drive at any time.
+    :meth:`after_step` keeps count of those driving and of its own time (taken out of the
+    timed seconds)."""
+
+    def __init__(self, pairs: list[tuple[str, str]]):
+        self.pairs, self.next, self.driving, self.spent = pairs, 0, set(), 0.0
+
+    def add(self, count: int) -> None:
+        import libsumo
+
+        for _ in range(count):
+            origin, destination = self.pairs[self.next % len(self.pairs)]
+            name = f"{ADDED}{self.next}"
+            self.next += 1
+            edges = libsumo.simulation.findRoute(origin, destination).edges
+            if edges:
+                libsumo.route.add(name, edges)
+                libsumo.vehicle.add(name, name, depart="now", departLane="best",
+                                    departPos="random_free", departSpeed="max")
+
+    def after_step(self) -> None:
+        """Note the added vehicles that departed and arrived in the step; replace the
+        arrived."""
+        import libsumo
+
+        started = time.perf_counter()
+        self.driving.update(v for v in libsumo.simulation.getDepartedIDList()
+                            if v.startswith(ADDED))
+        arrived = self.driving.intersection(libsumo.simulation.getArrivedIDList())
+        self.driving -= arrived
+        self.add(len(arrived))
+        self.spent += time.perf_counter() - started
+
+
+def marginal_seconds(net: Path, trips: Path, added_vehicles: int, learners: int,
+                     steps: int) -> dict:
+    """``learners`` learners in one SUMO of the city ``net`` (its
+    ``trips``; closed loop, after 300 s of warm-up), with ``added_vehicles`` SUMO-driven
+    vehicles added on trips of its own demand; ``steps`` steps timed after
+    :data:`SETTLE_STEPS`, each learner driving a random network of its own. The seconds, those
+    inside SUMO's step, the vehicles SUMO drove (its own and the added), the added ones
+    driving, the learners' re-entries. Run in a fresh process."""
+    import resource
+
+    from enn_traffic.config import load_scenario
+    from enn_traffic.sim.sumo.crowd import SumoCrowd
+    from enn_traffic.sim.world import make_world
+
+    with tempfile.TemporaryDirectory(prefix="enn-bench-marginal-") as folder:
+        path = Path(folder) / "city.toml"
+        path.write_text(f'name = "city"\n[track]\nnet = "{net}"\nstart_lane = "auto"\n'
+                        f'[traffic]\nstrategy = "sumo"\nroutes = ["{trips}"]\n'
+                        f'mode = "closed-loop"\nwarmup_s = 300.0\nwarmup_states = 1\n'
+                        f"learners = {learners}\n")
+        scenario = load_scenario(path)
+        world = make_world(scenario)
+        dt = scenario.vehicle.dt
+        genes = world.spec.in_source_layout(np.random.default_rng(learners).uniform(
+            -1, 1, (learners, world.spec.chromosome_length)))
+        added = _Added(_trip_ends(trips, scenario.traffic.warmup_s, 4 * added_vehicles + 1))
+        with SumoCrowd(world, world.seeds(1)[0]) as crowd:
+            crowd.run(dt, genes)  # start SUMO, let the learners enter
+            added.add(added_vehicles)
+            read, present = crowd._read, []
+
+            def read_after_step():  # the crowd reads SUMO's vehicles after each step
+                added.after_step()
+                present.append(len(added.driving))
+                read()
+
+            crowd._read = read_after_step
+            crowd.run(SETTLE_STEPS * dt, genes)
+            present.clear()
+            added.spent, sumo_before, started = 0.0, crowd.cost["sumo_s"], time.perf_counter()
+            run = crowd.run(steps * dt, genes)
+            seconds = time.perf_counter() - started - added.spent
+            sumo_seconds = crowd.cost["sumo_s"] - sumo_before
+            entries = int(run.collisions.sum() + run.spins.sum() + run.exits.sum())
+            import libsumo
+
+            vehicles = libsumo.vehicle.getIDCount() - learners
+    return {"seconds": seconds, "sumo_seconds": sumo_seconds, "vehicles": vehicles,
+            "added_driving": float(np.mean(present)), "entries": entries,
+            "peak_mb": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024}
+
+
+def crowd_marginal(quick: bool = False) -> pd.DataFrame:
+    """The marginal cost of a SUMO-driven vehicle and of a learner, N of each added to the
+    same warmed-up city (the random city with actuated lights of the SUMO step rows), per
+    added vehicle and step, inside SUMO's step and outside it; N = 300 and 3,000 (30 and 300
+    with ``quick``)."""
+    from enn_traffic.sumo.fresh import fresh_calls
+
+    net, trips = city_with_lights(150 if quick else 1500, 0.5)
+    counts = (30, 300) if quick else (300, 3000)
+    steps = 50 if quick else 300
+    arms = [(0, 1)] + [(n, 1) for n in counts] + [(0, n) for n in counts]
+    measured = fresh_calls([(marginal_seconds, net, trips, v, k, steps) for v, k in arms])
+    base = measured[0]
+    rows = []
+    for (vehicles, learners), m in zip(arms, measured, strict=True):
+        added = m["added_driving"] if vehicles else learners - 1
+        outside, base_outside = (m["seconds"] - m["sumo_seconds"],
+                                 base["seconds"] - base["sumo_seconds"])
+        per = 1e6 / (added * steps) if added else np.nan
+        rows.append({
+            "workload": f"marginal cost: random city with actuated lights, "
+                        f"{base['vehicles']:,} SUMO vehicles",
+            "implementation": (f"1 learner, +{vehicles:,} SUMO-driven vehicles" if vehicles
+                               else f"{learners:,} learner{'s' * (learners > 1)}"),
+            "threads": numba.get_num_threads(), "steps": steps, "seconds": m["seconds"],
+            "added_driving": added, "ms_per_step": 1000 * m["seconds"] / steps,
+            "sumo_ms_per_step": 1000 * m["sumo_seconds"] / steps,
+            "us_per_added_step": (m["seconds"] - base["seconds"]) * per,
+            "sumo_us_per_added_step": (m["sumo_seconds"] - base["sumo_seconds"]) * per,
+            "outside_us_per_added_step": (outside - base_outside) * per,
+            "entries_per_learner_step": m["entries"] / (learners * steps),
+            "peak_memory_mb": m["peak_mb"]})
+    return pd.DataFrame(rows)
