@@ -19,6 +19,10 @@ from enn_traffic.bench.measure import city_with_lights
 
 ADDED = "bench_added_"  # the SUMO ids of the added SUMO-driven vehicles
 SETTLE_STEPS = 100  # steps between adding vehicles and timing (the added ones depart)
+# Where a step's time outside SUMO's step goes: placing the learners in SUMO (one moveToXY
+# each), reading SUMO's vehicles, the two compiled calls (blame; sensing and driving), and the
+# re-entries of the learners whose lives ended.
+PARTS = ("move", "read", "kernels", "reenter")
 
 
 def _trip_ends(trips: Path, after_s: float, count: int) -> list[tuple[str, str]]:
@@ -71,12 +75,23 @@ def marginal_seconds(net: Path, trips: Path, added_vehicles: int, learners: int,
     vehicles added on trips of its own demand; ``steps`` steps timed after
     :data:`SETTLE_STEPS`, each learner driving a random network of its own. The seconds, those
     inside SUMO's step, the vehicles SUMO drove (its own and the added), the added ones
-    driving, the learners' re-entries. Run in a fresh process."""
+    driving, the learners' re-entries, the seconds of each of :data:`PARTS`, and the peak
+    resident memory. Run in a fresh process."""
     import resource
 
     from enn_traffic.config import load_scenario
-    from enn_traffic.sim.sumo.crowd import SumoCrowd
+    from enn_traffic.sim.sumo import crowd as sumo_crowd
     from enn_traffic.sim.world import make_world
+
+    spent = dict.fromkeys(PARTS, 0.0)
+
+    def timed(call, part):
+        def wrapped(*args):
+            started = time.perf_counter()
+            result = call(*args)
+            spent[part] += time.perf_counter() - started
+            return result
+        return wrapped
 
     with tempfile.TemporaryDirectory(prefix="enn-bench-marginal-") as folder:
         path = Path(folder) / "city.toml"
@@ -90,10 +105,10 @@ def marginal_seconds(net: Path, trips: Path, added_vehicles: int, learners: int,
         genes = world.spec.in_source_layout(np.random.default_rng(learners).uniform(
             -1, 1, (learners, world.spec.chromosome_length)))
         added = _Added(_trip_ends(trips, scenario.traffic.warmup_s, 4 * added_vehicles + 1))
-        with SumoCrowd(world, world.seeds(1)[0]) as crowd:
+        with sumo_crowd.SumoCrowd(world, world.seeds(1)[0]) as crowd:
             crowd.run(dt, genes)  # start SUMO, let the learners enter
             added.add(added_vehicles)
-            read, present = crowd._read, []
+            read, present = timed(crowd._read, "read"), []
 
             def read_after_step():  # the crowd reads SUMO's vehicles after each step
                 added.after_step()
@@ -101,10 +116,19 @@ def marginal_seconds(net: Path, trips: Path, added_vehicles: int, learners: int,
                 read()
 
             crowd._read = read_after_step
+            crowd._move_learners = timed(crowd._move_learners, "move")
+            crowd.reenter = timed(crowd.reenter, "reenter")
+            kernels = sumo_crowd.learner_events, sumo_crowd.drive
+            sumo_crowd.learner_events = timed(kernels[0], "kernels")
+            sumo_crowd.drive = timed(kernels[1], "kernels")
             crowd.run(SETTLE_STEPS * dt, genes)
             present.clear()
+            spent.update(dict.fromkeys(PARTS, 0.0))
             added.spent, sumo_before, started = 0.0, crowd.cost["sumo_s"], time.perf_counter()
-            run = crowd.run(steps * dt, genes)
+            try:
+                run = crowd.run(steps * dt, genes)
+            finally:
+                sumo_crowd.learner_events, sumo_crowd.drive = kernels
             seconds = time.perf_counter() - started - added.spent
             sumo_seconds = crowd.cost["sumo_s"] - sumo_before
             entries = int(run.collisions.sum() + run.spins.sum() + run.exits.sum())
@@ -113,7 +137,8 @@ def marginal_seconds(net: Path, trips: Path, added_vehicles: int, learners: int,
             vehicles = libsumo.vehicle.getIDCount() - learners
     return {"seconds": seconds, "sumo_seconds": sumo_seconds, "vehicles": vehicles,
             "added_driving": float(np.mean(present)), "entries": entries,
-            "peak_mb": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024}
+            "peak_mb": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024,
+            **{f"{part}_seconds": spent[part] for part in PARTS}}
 
 
 def crowd_marginal(quick: bool = False) -> pd.DataFrame:
@@ -146,6 +171,8 @@ def crowd_marginal(quick: bool = False) -> pd.DataFrame:
             "us_per_added_step": (m["seconds"] - base["seconds"]) * per,
             "sumo_us_per_added_step": (m["sumo_seconds"] - base["sumo_seconds"]) * per,
             "outside_us_per_added_step": (outside - base_outside) * per,
+            **{f"{part}_us_per_added_step": (m[f"{part}_seconds"] - base[f"{part}_seconds"])
+               * per for part in PARTS},
             "entries_per_learner_step": m["entries"] / (learners * steps),
             "peak_memory_mb": m["peak_mb"]})
     return pd.DataFrame(rows)

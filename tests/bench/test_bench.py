@@ -45,3 +45,24 @@ def test_the_printed_table_has_a_block_per_workload_with_its_own_columns():
     assert "1,234,568" in navigation and "0.05" in navigation and "calls" not in navigation
     assert "vehicle_steps_per_s" not in fresh and fresh.splitlines()[1].split()[-1] == "3"
     assert "nan" not in (navigation + fresh).lower()
+
+
+@pytest.mark.full
+def test_the_marginal_row_adds_as_many_sumo_vehicles_and_learners_as_it_says():
+    """crowd_marginal's arms on the small city: the SUMO-driven vehicles it adds drive (SUMO
+    routes them, an arrived one is replaced) and the learners it adds are SUMO vehicles too,
+    so that each arm's cost is that of the vehicles its row names."""
+    from enn_traffic.bench.marginal import marginal_seconds
+    from enn_traffic.bench.measure import city_with_lights
+    from enn_traffic.sumo.fresh import fresh_calls
+
+    net, trips = city_with_lights(150, 0.5)
+    alone, vehicles, learners = fresh_calls([(marginal_seconds, net, trips, 0, 1, 20),
+                                             (marginal_seconds, net, trips, 30, 1, 20),
+                                             (marginal_seconds, net, trips, 0, 31, 20)])
+    assert vehicles["added_driving"] >= 27  # a few may wait for room on their first edge
+    assert vehicles["vehicles"] >= alone["vehicles"] + 27
+    assert learners["vehicles"] < alone["vehicles"] + 15  # learners are not SUMO's own
+    assert learners["entries"] > alone["entries"]
+    for part in ("move", "read", "kernels", "reenter"):
+        assert learners[f"{part}_seconds"] > 0
