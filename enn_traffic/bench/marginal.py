@@ -69,11 +69,11 @@ class _Added:
 
 
 def marginal_seconds(net: Path, trips: Path, added_vehicles: int, learners: int,
-                     steps: int) -> dict:
-    """``learners`` learners in one SUMO of the city ``net`` (its
-    ``trips``; closed loop, after 300 s of warm-up), with ``added_vehicles`` SUMO-driven
-    vehicles added on trips of its own demand; ``steps`` steps timed after
-    :data:`SETTLE_STEPS`, each learner driving a random network of its own. The seconds, those
+                     steps: int, ssm: bool = True) -> dict:
+    """``learners`` learners in one SUMO of the city ``net`` (its ``trips``; closed loop,
+    after 300 s of warm-up), with ``added_vehicles`` SUMO-driven vehicles added on trips of
+    its own demand; ``steps`` steps timed after :data:`SETTLE_STEPS`, each learner driving a
+    random network of its own, with an SSM device unless not ``ssm``. The seconds, those
     inside SUMO's step, the vehicles SUMO drove (its own and the added), the added ones
     driving, the learners' re-entries, the seconds of each of :data:`PARTS`, and the peak
     resident memory. Run in a fresh process."""
@@ -84,6 +84,8 @@ def marginal_seconds(net: Path, trips: Path, added_vehicles: int, learners: int,
     from enn_traffic.sim.world import make_world
 
     spent = dict.fromkeys(PARTS, 0.0)
+    if not ssm:
+        sumo_crowd.ssm.ssm_options = lambda learners=(): ()
 
     def timed(call, part):
         def wrapped(*args):
@@ -151,11 +153,14 @@ def crowd_marginal(quick: bool = False) -> pd.DataFrame:
     net, trips = city_with_lights(150 if quick else 1500, 0.5)
     counts = (30, 300) if quick else (300, 3000)
     steps = 50 if quick else 300
-    arms = [(0, 1)] + [(n, 1) for n in counts] + [(0, n) for n in counts]
-    measured = fresh_calls([(marginal_seconds, net, trips, v, k, steps) for v, k in arms])
+    # the last arm: the most learners without their SSM devices (what the devices cost)
+    arms = ([(0, 1, True)] + [(n, 1, True) for n in counts] + [(0, n, True) for n in counts]
+            + [(0, counts[-1], False)])
+    measured = fresh_calls([(marginal_seconds, net, trips, v, k, steps, ssm)
+                            for v, k, ssm in arms])
     base = measured[0]
     rows = []
-    for (vehicles, learners), m in zip(arms, measured, strict=True):
+    for (vehicles, learners, ssm), m in zip(arms, measured, strict=True):
         added = m["added_driving"] if vehicles else learners - 1
         outside, base_outside = (m["seconds"] - m["sumo_seconds"],
                                  base["seconds"] - base["sumo_seconds"])
@@ -164,7 +169,8 @@ def crowd_marginal(quick: bool = False) -> pd.DataFrame:
             "workload": f"marginal cost: random city with actuated lights, "
                         f"{base['vehicles']:,} SUMO vehicles",
             "implementation": (f"1 learner, +{vehicles:,} SUMO-driven vehicles" if vehicles
-                               else f"{learners:,} learner{'s' * (learners > 1)}"),
+                               else f"{learners:,} learner{'s' * (learners > 1)}"
+                               + ("" if ssm else ", no SSM devices")),
             "threads": numba.get_num_threads(), "steps": steps, "seconds": m["seconds"],
             "added_driving": added, "ms_per_step": 1000 * m["seconds"] / steps,
             "sumo_ms_per_step": 1000 * m["sumo_seconds"] / steps,
