@@ -36,7 +36,7 @@ WORKLOADS = Registry("workload", {
 })
 # Workloads that take minutes whatever the settings (a compile from an empty cache, a whole
 # reproduction): ``bench --quick`` runs them only when ``--only`` names them.
-LONG = ("first_run", "crowd_ray", "reproduce_quick", "bench_quick", "test_suite")
+LONG = ("first_run", "crowd_marginal", "crowd_ray", "reproduce_quick", "bench_quick", "test_suite")
 # Workloads that need the project's git checkout, not only the package: run only when named.
 CHECKOUT = {"test_suite": "the README's pytest in a clone of the git checkout, cold and warm"}
 

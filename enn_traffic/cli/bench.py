@@ -18,8 +18,8 @@ def add_parser(commands) -> None:
     command.add_argument("--quick", action="store_true",
                          help="about a minute: shorter timings on smaller inputs, whose "
                          "rates are not comparable with the full bench's; without "
-                         f"{', '.join(long[:-1])} and {long[-1]} (a whole command each, the "
-                         "same with or without --quick) unless --only names them")
+                         f"{', '.join(long[:-1])} and {long[-1]} (minutes each, with or without "
+                         "--quick) unless --only names them")
     command.add_argument("--out", type=nonempty_path, metavar="FILE.csv",
                          help="also write the table")
     command.add_argument("--only", metavar="NAME,...",

@@ -40,6 +40,28 @@ def crowd_scale(table: pd.DataFrame) -> dict:
             "steps": int(table["steps"].iloc[0])}
 
 
+def crowd_marginal(table: pd.DataFrame) -> dict:
+    """The rows, and per count N the added learner's cost over the added SUMO-driven
+    vehicle's, in all, inside SUMO's step and outside it."""
+    vehicles = table[table["implementation"].str.contains("SUMO-driven")]
+    learners = table[table["implementation"].str.endswith("learners")]
+    ratios = [{"count": int(learner["added_driving"]) + 1,
+               "vehicles": float(vehicle["added_driving"]),
+               **{part: learner[column] / vehicle[column] for part, column in (
+                   ("all", "us_per_added_step"), ("sumo", "sumo_us_per_added_step"),
+                   ("outside", "outside_us_per_added_step"))}}
+              for (_, vehicle), (_, learner) in zip(vehicles.iterrows(), learners.iterrows(),
+                                                    strict=True)]
+    bare = table[table["implementation"].str.endswith("no SSM devices")].iloc[0]
+    equipped = learners.iloc[-1]
+    ssm_us = equipped["sumo_us_per_added_step"] - bare["sumo_us_per_added_step"]
+    return {"rows": rows(table), "ratios": ratios, "workload": table["workload"].iloc[0],
+            "steps": int(table["steps"].iloc[0]),
+            "ssm": {"us": ssm_us, "share": ssm_us / equipped["sumo_us_per_added_step"],
+                    "bare_us": bare["sumo_us_per_added_step"],
+                    "vehicle_us": vehicles.iloc[-1]["sumo_us_per_added_step"]}}
+
+
 def recording(table: pd.DataFrame) -> dict:
     """The GA's generations and the environment's life, each recorded over the whole cap
     first (``whole``) and as far as the lives reach (``reach``)."""
@@ -75,6 +97,7 @@ def context(root: Path) -> dict:
         "published": rows(read("published_issue60")),
         "crowd_scale": crowd_scale(read("crowd_scale_issue63")),
         "crowd_ray": rows(read("crowd_ray_issue63")),
+        "crowd_marginal": crowd_marginal(read("crowd_marginal_issue83")),
         "recording": recording(read("recording_issue50")),
         "sb3": rows(read("sb3_issue52")),
         "summary": summary, "max_learners": MAX_LEARNERS}}
