@@ -8,7 +8,6 @@ from __future__ import annotations
 
 import tempfile
 import time
-import xml.etree.ElementTree as ElementTree
 from pathlib import Path
 
 import numba
@@ -16,56 +15,13 @@ import numpy as np
 import pandas as pd
 
 from enn_traffic.bench.measure import city_with_lights
+from enn_traffic.sumo.timing import AddedTraffic, trip_ends
 
-ADDED = "bench_added_"  # the SUMO ids of the added SUMO-driven vehicles
 SETTLE_STEPS = 100  # steps between adding vehicles and timing (the added ones depart)
 # Where a step's time outside SUMO's step goes: placing the learners in SUMO (one moveToXY
 # each), reading SUMO's vehicles, the two compiled calls (blame; sensing and driving), and the
 # re-entries of the learners whose lives ended.
 PARTS = ("move", "read", "kernels", "reenter")
-
-
-def _trip_ends(trips: Path, after_s: float, count: int) -> list[tuple[str, str]]:
-    """``count`` (from, to) edge pairs of the trips that depart after ``after_s`` (cycled)."""
-    pairs = [(e.get("from"), e.get("to")) for e in ElementTree.parse(trips).getroot()
-             if e.tag == "trip" and float(e.get("depart", "0")) > after_s]
-    return [pairs[i % len(pairs)] for i in range(count)]
-
-
-class _Added:
-    """SUMO-driven vehicles on the trips of ``pairs``, routed by SUMO; one that arrives is
-    replaced by the next pair's, so that about as many as were added drive at any time.
-    :meth:`after_step` keeps count of those driving and of its own time (taken out of the
-    timed seconds)."""
-
-    def __init__(self, pairs: list[tuple[str, str]]):
-        self.pairs, self.next, self.driving, self.spent = pairs, 0, set(), 0.0
-
-    def add(self, count: int) -> None:
-        import libsumo
-
-        for _ in range(count):
-            origin, destination = self.pairs[self.next % len(self.pairs)]
-            name = f"{ADDED}{self.next}"
-            self.next += 1
-            edges = libsumo.simulation.findRoute(origin, destination).edges
-            if edges:
-                libsumo.route.add(name, edges)
-                libsumo.vehicle.add(name, name, depart="now", departLane="best",
-                                    departPos="random_free", departSpeed="max")
-
-    def after_step(self) -> None:
-        """Note the added vehicles that departed and arrived in the step; replace the
-        arrived."""
-        import libsumo
-
-        started = time.perf_counter()
-        self.driving.update(v for v in libsumo.simulation.getDepartedIDList()
-                            if v.startswith(ADDED))
-        arrived = self.driving.intersection(libsumo.simulation.getArrivedIDList())
-        self.driving -= arrived
-        self.add(len(arrived))
-        self.spent += time.perf_counter() - started
 
 
 def marginal_seconds(net: Path, trips: Path, added_vehicles: int, learners: int,
@@ -106,7 +62,7 @@ def marginal_seconds(net: Path, trips: Path, added_vehicles: int, learners: int,
         dt = scenario.vehicle.dt
         genes = world.spec.in_source_layout(np.random.default_rng(learners).uniform(
             -1, 1, (learners, world.spec.chromosome_length)))
-        added = _Added(_trip_ends(trips, scenario.traffic.warmup_s, 4 * added_vehicles + 1))
+        added = AddedTraffic(trip_ends(trips, scenario.traffic.warmup_s, 4 * added_vehicles + 1))
         with sumo_crowd.SumoCrowd(world, world.seeds(1)[0]) as crowd:
             crowd.run(dt, genes)  # start SUMO, let the learners enter
             added.add(added_vehicles)
@@ -134,9 +90,7 @@ def marginal_seconds(net: Path, trips: Path, added_vehicles: int, learners: int,
             seconds = time.perf_counter() - started - added.spent
             sumo_seconds = crowd.cost["sumo_s"] - sumo_before
             entries = int(run.collisions.sum() + run.spins.sum() + run.exits.sum())
-            import libsumo
-
-            vehicles = libsumo.vehicle.getIDCount() - learners
+            vehicles = crowd.simulation.vehicle_count() - learners
     return {"seconds": seconds, "sumo_seconds": sumo_seconds, "vehicles": vehicles,
             "added_driving": float(np.mean(present)), "entries": entries,
             "peak_mb": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024,

@@ -1,11 +1,13 @@
-"""SUMO's own step time with learners moved in it, as the closed loop moves them: what
-``enn-traffic bench --only sumo_step`` measures, kept here because it drives libsumo itself."""
+"""SUMO's own step time with learners moved in it, as the closed loop moves them (what
+``enn-traffic bench --only sumo_step`` measures), and SUMO-driven vehicles added to a running
+SUMO (``bench --only crowd_marginal``): kept here because they drive libsumo themselves."""
 
 from __future__ import annotations
 
 import math
 import tempfile
 import time
+import xml.etree.ElementTree as ElementTree
 from pathlib import Path
 
 import libsumo
@@ -56,3 +58,45 @@ def step_seconds(source: list[str], learners: int, steps: int, warmup_steps: int
             return seconds, lanes, vehicles
         finally:
             libsumo.close()
+
+
+ADDED = "bench_added_"  # the SUMO ids of the added SUMO-driven vehicles
+
+
+def trip_ends(trips: Path, after_s: float, count: int) -> list[tuple[str, str]]:
+    """``count`` (from, to) edge pairs of the trips that depart after ``after_s`` (cycled)."""
+    pairs = [(e.get("from"), e.get("to")) for e in ElementTree.parse(trips).getroot()
+             if e.tag == "trip" and float(e.get("depart", "0")) > after_s]
+    return [pairs[i % len(pairs)] for i in range(count)]
+
+
+class AddedTraffic:
+    """SUMO-driven vehicles on the trips of ``pairs``, routed by SUMO; one that arrives is
+    replaced by the next pair's, so that about as many as were added drive at any time.
+    :meth:`after_step` keeps count of those driving and of its own time (taken out of the
+    timed seconds)."""
+
+    def __init__(self, pairs: list[tuple[str, str]]):
+        self.pairs, self.next, self.driving, self.spent = pairs, 0, set(), 0.0
+
+    def add(self, count: int) -> None:
+        for _ in range(count):
+            origin, destination = self.pairs[self.next % len(self.pairs)]
+            name = f"{ADDED}{self.next}"
+            self.next += 1
+            edges = libsumo.simulation.findRoute(origin, destination).edges
+            if edges:
+                libsumo.route.add(name, edges)
+                libsumo.vehicle.add(name, name, depart="now", departLane="best",
+                                    departPos="random_free", departSpeed="max")
+
+    def after_step(self) -> None:
+        """Note the added vehicles that departed and arrived in the step; replace the
+        arrived."""
+        started = time.perf_counter()
+        self.driving.update(v for v in libsumo.simulation.getDepartedIDList()
+                            if v.startswith(ADDED))
+        arrived = self.driving.intersection(libsumo.simulation.getArrivedIDList())
+        self.driving -= arrived
+        self.add(len(arrived))
+        self.spent += time.perf_counter() - started
