@@ -4,7 +4,12 @@ import os
 import sys
 from pathlib import Path
 
-from enn_traffic.core.cache import cache_folder, prune_kernel_folders, writable_folder
+from enn_traffic.core.cache import (
+    cache_folder,
+    prune_kernel_folders,
+    tolerate_damaged_kernels,
+    writable_folder,
+)
 from enn_traffic.core.provenance import kernels_version
 from enn_traffic.core.registry import MovedModules
 
@@ -34,6 +39,7 @@ if "NUMBA_CACHE_DIR" not in os.environ:
     os.environ["NUMBA_CACHE_DIR"] = _numba_cache_dir()
     if _new:  # a new version: its kernels compile, the oldest folders go
         prune_kernel_folders(Path(os.environ["NUMBA_CACHE_DIR"]))
+tolerate_damaged_kernels()
 # numba's parallel loops run on OpenMP (libgomp), whose idle threads spin by default: beside
 # other busy processes (pytest -n 2, a process pool, a second user) a parallel region then
 # waits for a descheduled spinner, and two threads run slower than one. Idle threads

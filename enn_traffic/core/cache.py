@@ -117,6 +117,37 @@ def cached_arrays(kind: str, key: str, build: Callable[[], dict[str, np.ndarray]
     return arrays
 
 
+def tolerate_damaged_kernels() -> None:
+    """A compiled kernel's entry in numba's cache (its index or its data file) that does not
+    load whole (cut short, a flipped byte, another file's bytes) reads as absent: the kernel
+    compiles again and its entry is written anew, as the project's own entries are built
+    again. numba itself reads an index of another version or source as absent, but a damaged
+    file stopped the command with an unpickling traceback."""
+    from numba.core import caching
+
+    cache_file = caching.IndexDataCacheFile
+    if getattr(cache_file, "tolerates_damage", False):
+        return
+    load_index, load_data = cache_file._load_index, cache_file._load_data
+
+    def _load_index(self):
+        try:
+            return load_index(self)
+        except Exception:  # whatever unpickling a damaged file raises
+            return {}
+
+    def _load_data(self, name):
+        try:
+            return load_data(self, name)
+        except OSError:
+            raise
+        except Exception as exc:  # numba's load() reads an OSError as "no entry"
+            raise OSError(f"damaged numba cache entry {name}") from exc
+
+    cache_file._load_index, cache_file._load_data = _load_index, _load_data
+    cache_file.tolerates_damage = True
+
+
 def prune_kernel_folders(current: Path, keep: int = 3, grace_s: float = 3600.0) -> list[Path]:
     """Removes the compiled kernels of older versions (``numba-*`` beside ``current``) but the
     ``keep`` most recently used, and any used in the last ``grace_s`` seconds (another checkout

@@ -407,6 +407,32 @@ def test_a_damaged_cache_entry_is_built_again(capsys, tmp_path, monkeypatch, kin
     assert capsys.readouterr().out == clean
 
 
+@pytest.mark.parametrize("how", ["cut short", "a flipped bit", "empty", "text"])
+def test_a_damaged_compiled_kernel_is_compiled_again(tmp_path, how):
+    """numba's cache entry of a kernel (its index and its data file) damaged: the kernel
+    compiles again and gives the same value (a cut index or data file stopped every command
+    with numba's unpickling traceback)."""
+    code = ("import numpy as np, enn_traffic; from enn_traffic.core.geometry import body_corners; "
+            "out = np.empty((4, 2)); body_corners(1.0, 2.0, 0.5, 4.0, 2.0, out); "
+            "print(repr(out.sum()))")
+    env = {**os.environ, "NUMBA_CACHE_DIR": str(tmp_path / "numba")}
+
+    def run() -> subprocess.CompletedProcess:
+        return subprocess.run([sys.executable, "-c", code], env=env, capture_output=True,
+                              text=True, cwd=tmp_path)
+
+    first = run()
+    assert first.returncode == 0, first.stderr
+    entries = sorted((tmp_path / "numba").rglob("*body_corners*.nb[ic]"))
+    assert {p.suffix for p in entries} == {".nbi", ".nbc"}
+    for entry in entries:
+        _damage(entry, how)
+    again = run()
+    assert again.returncode == 0, again.stderr
+    assert again.stdout == first.stdout
+    assert run().stdout == first.stdout  # and its entry was written anew
+
+
 def test_a_damaged_saved_warm_up_is_simulated_again(capsys, tmp_path, monkeypatch, road_net):
     """A saved warm-up cut short was handed to SUMO, which refused it ("traffic.routes: SUMO
     failed to start"), and never rebuilt."""
