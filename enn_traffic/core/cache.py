@@ -15,6 +15,7 @@ import contextlib
 import functools
 import hashlib
 import os
+import sys
 import tempfile
 from collections.abc import Callable
 from pathlib import Path
@@ -35,15 +36,24 @@ def writable_folder(preferred: Path, name: str) -> Path:
     """``preferred``, made if missing, where files can be written in it; else ``name`` in a
     folder of the user's own in the temporary folder (a read-only cache folder, or
     ``$ENN_TRAFFIC_CACHE`` naming a file, then costs work done again, never a failed run);
-    else a new temporary folder. Asked once per process and folder."""
+    else a new temporary folder. Asked once per process and folder; a folder other than
+    ``preferred`` is said in one line on stderr (numba and SUMO read entries only from a
+    folder they can write, so what ``preferred`` holds is not used)."""
+    chosen = None
     for folder in (preferred, Path(tempfile.gettempdir()) / f"enn-traffic-{os.getuid()}" / name):
         try:
             folder.mkdir(parents=True, exist_ok=True)
         except OSError:
             continue
         if os.access(folder, os.W_OK | os.X_OK):
-            return folder
-    return Path(tempfile.mkdtemp(prefix=f"enn-traffic-{name}-"))
+            chosen = folder
+            break
+    if chosen == preferred:
+        return preferred
+    chosen = chosen or Path(tempfile.mkdtemp(prefix=f"enn-traffic-{name}-"))
+    print(f"enn-traffic: note: cannot write {preferred}; using {chosen} instead (set "
+          "ENN_TRAFFIC_CACHE to a folder you can write)", file=sys.stderr)
+    return chosen
 
 
 def file_digest(path: Path) -> str:

@@ -413,7 +413,7 @@ def test_a_population_of_one_is_refused_without_a_note_before(tmp_path, root, ca
 def test_kernels_never_compile_into_the_package_when_the_cache_folder_is_unusable(tmp_path):
     """With ENN_TRAFFIC_CACHE naming a file, numba wrote its kernels into the package's own
     __pycache__ folders (the checkout, or site-packages); now into a folder of the temporary
-    folder, and nothing new lands beside the sources."""
+    folder, which one line names, and nothing new lands beside the sources."""
     import os
 
     import enn_traffic
@@ -433,6 +433,9 @@ def test_kernels_never_compile_into_the_package_when_the_cache_folder_is_unusabl
     folder = Path(done.stdout.strip().splitlines()[-1])
     assert folder.is_dir() and folder.is_relative_to(tmp_path)
     assert any(folder.rglob("*.nbi"))
+    # said, not silent: the folder left in the temporary folder is named, once
+    notes = [line for line in done.stderr.splitlines() if line.startswith("enn-traffic: note:")]
+    assert len(notes) == 1 and str(folder) in notes[0] and "ENN_TRAFFIC_CACHE" in notes[0]
     assert not [p for p in package.rglob("*.nbi") if p.stat().st_mtime >= started]
 
 
