@@ -49,6 +49,31 @@ tolerate_damaged_kernels()
 if "OMP_WAIT_POLICY" not in os.environ and "GOMP_SPINCOUNT" not in os.environ:
     os.environ["OMP_WAIT_POLICY"] = "PASSIVE"
 
+
+
+def _utf8_ctype() -> None:
+    """Python reads and writes paths as UTF-8 under a C or POSIX locale (its UTF-8 mode),
+    while SUMO's readers take a path's bytes in the C library's locale: under ``LC_ALL=C`` a
+    path holding "ü" reached SUMO as a file that does not exist. Where the two differ, this
+    process and the SUMO tools it starts take the C.UTF-8 locale for characters (nothing else
+    changes; a locale of another encoding, which Python then uses too, is left as it is)."""
+    import locale
+
+    if sys.getfilesystemencoding().lower().replace("-", "") != "utf8":
+        return
+    if locale.nl_langinfo(locale.CODESET).lower().replace("-", "") == "utf8":
+        return
+    try:
+        locale.setlocale(locale.LC_CTYPE, "C.UTF-8")
+    except locale.Error:  # no such locale here: paths of ASCII letters still work
+        return
+    os.environ["LC_CTYPE"] = "C.UTF-8"
+    if os.environ.get("LC_ALL"):
+        os.environ["LC_ALL"] = "C.UTF-8"
+
+
+_utf8_ctype()
+
 # Modules a user's code may import by their names before the package's folders became its
 # layers: they import, with a DeprecationWarning, for one release.
 MOVED = {

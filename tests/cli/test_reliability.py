@@ -399,6 +399,24 @@ def test_a_locale_without_utf8_runs_every_command_and_shows_any_path(tmp_path):
     assert out.is_file() and b"\\u03a9" in done.stdout
 
 
+def test_sumo_reads_a_path_of_any_letters_under_the_c_locale(tmp_path, road_net):
+    """Under LC_ALL=C (Python then reads paths as UTF-8) SUMO took a scenario folder named
+    with "ü" for a missing file: "File ... is not accessible (No such file or directory)",
+    exit 2. Now SUMO and its tools get the C.UTF-8 locale for characters, and it runs."""
+    import os
+
+    from sumo_road import road_scenario
+
+    folder = tmp_path / "straße ü"
+    folder.mkdir()
+    scenario = road_scenario(folder, road_net)
+    best = Path(__file__).resolve().parents[2] / "results/paper/controllers/table1/strategy1.npz"
+    done = subprocess.run([sys.executable, "-m", "enn_traffic", "evaluate", str(best),
+                           str(scenario), "--quiet"], env={**os.environ, "LC_ALL": "C"},
+                          capture_output=True, text=True, timeout=300, cwd=folder)
+    assert done.returncode == 0, done.stderr
+
+
 def test_a_population_of_one_is_refused_without_a_note_before(tmp_path, root, capsys):
     """``--population 1`` said the tournament was lowered to 1 and then refused the
     population: now the refusal alone, naming the key."""
