@@ -132,7 +132,8 @@ def tolerate_damaged_kernels() -> None:
     load whole (cut short, a flipped byte, another file's bytes) reads as absent: the kernel
     compiles again and its entry is written anew, as the project's own entries are built
     again. numba itself reads an index of another version or source as absent, but a damaged
-    file stopped the command with an unpickling traceback."""
+    file stopped the command with an unpickling traceback. A kernel whose entry cannot be
+    written is not kept, and runs."""
     from numba.core import caching
 
     cache_file = caching.IndexDataCacheFile
@@ -156,6 +157,16 @@ def tolerate_damaged_kernels() -> None:
 
     cache_file._load_index, cache_file._load_data = _load_index, _load_data
     cache_file.tolerates_damage = True
+
+    # A kernel that compiled but cannot be kept (a full disk, a file-size limit) still runs;
+    # numba removes its partial file and lets the error through, which stopped the command.
+    save_overload = caching.Cache.save_overload
+
+    def _save_overload(self, sig, data):
+        with contextlib.suppress(OSError):
+            save_overload(self, sig, data)
+
+    caching.Cache.save_overload = _save_overload
 
 
 def prune_kernel_folders(current: Path, keep: int = 3, grace_s: float = 3600.0) -> list[Path]:

@@ -125,6 +125,9 @@ def _fresh_state(scenario: Scenario, key: str, population: np.ndarray | None = N
 
 
 RUN_OWN = ("sumo",)  # what a run writes before its first checkpoint, besides scenario.toml
+# What a start of the same run may have written beside its scenario.toml when it stopped
+# before its first checkpoint was whole (a full disk): written over by the new start.
+RUN_FILES = ("best.npz", "generations.csv", OUTPUTS, "learning_curve.png")
 
 
 def _check_fresh_folder(scenario: Scenario, out: Path, force: bool) -> None:
@@ -135,8 +138,8 @@ def _check_fresh_folder(scenario: Scenario, out: Path, force: bool) -> None:
     check_not_source(own, scenario.source)
     if force or not out.is_dir():
         return
-    _refuse_others(out, lambda path: path.name == own.name and path.is_file()
-                   and path.read_text(errors="replace") == scenario.to_toml())
+    same_run = own.is_file() and own.read_text(errors="replace") == scenario.to_toml()
+    _refuse_others(out, lambda path: same_run and (path == own or path.name in RUN_FILES))
 
 
 def _refuse_others(out: Path, own) -> None:
@@ -162,7 +165,9 @@ def check_folder_unread(out: str | Path, source: Path, resume: bool = False,
         if not resume:
             raise InputError(ALREADY_A_RUN, out)
         return
-    _refuse_others(out, lambda path: path.name == "scenario.toml")
+    started = (out / "scenario.toml").is_file()  # compared once the scenario is read
+    _refuse_others(out, lambda path: started and (path.name == "scenario.toml"
+                                                  or path.name in RUN_FILES))
 
 
 ALREADY_A_RUN = ("the folder already holds a run; pass --resume to continue it or --force to "

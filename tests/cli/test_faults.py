@@ -256,6 +256,21 @@ def test_a_full_disk_is_reported_with_the_path_and_nothing_half_written(tmp_path
     assert message == (f"enn-traffic: error: {out}/checkpoint.npz: cannot write: File too "
                        "large"), message
     assert not list(out.glob(".*.tmp")) and not (out / "checkpoint.npz").exists()
+    # what that start left (its scenario.toml, best.npz, generations.csv) is its own: a new
+    # start and --resume take the folder once there is room (both refused it as the user's)
+    left = sorted(p.name for p in out.iterdir())
+    assert "best.npz" in left and "scenario.toml" in left, left
+    for flags in ([], ["--resume"]):
+        again = subprocess.run([sys.executable, "-m", "enn_traffic", "run", str(ARENA), "--out",
+                                str(out), "--quiet", "--population", "100", "--generations",
+                                "2", *flags], capture_output=True, text=True)
+        assert again.returncode == 0, again.stderr
+        (out / "checkpoint.npz").unlink()
+    # a run of other settings did not leave them: refused as before
+    other = subprocess.run([sys.executable, "-m", "enn_traffic", "run", str(ARENA), "--out",
+                            str(out), "--quiet", "--population", "50", "--generations", "2"],
+                           capture_output=True, text=True)
+    assert other.returncode == 2 and "holds files but no run to resume" in other.stderr
 
 
 def test_a_second_run_into_a_folder_in_use_is_refused_naming_the_first(tmp_path):
