@@ -44,9 +44,10 @@ def add_parser(commands) -> None:
 def run(args) -> int:
     from enn_traffic.config import load_scenario
     from enn_traffic.config.shipped import scenario_path
+    from enn_traffic.core.errors import InputError
     from enn_traffic.core.progress import slow_step
     from enn_traffic.learning.evaluators import make_evaluator
-    from enn_traffic.runs.run import check_folder, check_folder_unread, evolve
+    from enn_traffic.runs.run import CHECKPOINT, check_folder, check_folder_unread, evolve
 
     if args.out:  # said before the scenario's network is read
         check_out(args.out)
@@ -57,6 +58,10 @@ def run(args) -> int:
     if args.generations:
         overrides["generations"] = args.generations
     if args.population:
+        if args.population <= scenario.ga.elite_count:  # named as the option, not the file's key
+            raise InputError(f"{args.population} is not above the scenario's ga.elite_count "
+                             f"({scenario.ga.elite_count}, {scenario.source.name}): give a "
+                             "larger population, or lower elite_count there", key="--population")
         overrides["population_size"] = args.population
         lowered = args.population < scenario.ga.tournament_size
         if lowered:  # a tournament fits its population
@@ -73,6 +78,8 @@ def run(args) -> int:
     args.run_folder = out  # for the message of an interrupt (_interrupted_note)
     check_out(out)  # before any world, nothing written yet
     check_folder(scenario, out, resume=args.resume, force=args.force)
+    if args.resume and not (out / CHECKPOINT).exists():  # a mistyped --out shows here
+        note(f"{out} holds no run to resume: starting one")
     scenario = scenario.with_sumo_output(out / "sumo", console=args.verbose)
     with slow_step(f"preparing the worlds of {scenario.name}"):
         evaluator = make_evaluator(scenario, args.executor, args.address)

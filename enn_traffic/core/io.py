@@ -67,21 +67,25 @@ def check_input_file(path: str | Path, what: str = "file", source: str | Path | 
             raise InputError(f"{what} is {kind}, not a file{named}", *where)
     limit = max_input_bytes()
     if status.st_size > limit:
-        raise InputError(f"{what} is {status.st_size / 2**20:,.0f} MB, more than the "
-                         f"{limit / 2**20:,.0f} MB an input may be ({MAX_INPUT_MB_VARIABLE})"
-                         f"{named}", *where)
+        raise InputError(f"{what} is {_size(status.st_size)}, more than the "
+                         f"{_size(limit)} an input may be ({MAX_INPUT_MB_VARIABLE}){named}",
+                         *where)
     if path.name.endswith(".gz"):
         problem = gzip_problem(path, limit, status.st_ino, status.st_size, status.st_mtime_ns)
         if problem:
             raise InputError(f"{what} {problem}{named}", *where)
 
 
+def _size(size: int) -> str:
+    """A file size in MB, or in bytes below 1 MB (a limit below a megabyte said as 0 MB)."""
+    return f"{size / 2**20:,.0f} MB" if size >= 2**20 else f"{size:,} bytes"
+
+
 def inflation_problem(inflated: int, packed: int, limit: int) -> str | None:
     """Why data of ``packed`` bytes that inflates to ``inflated`` may not be read: past the
     input limit, or more than ``GZIP_RATIO`` times past 64 MB (a compressed bomb)."""
     if inflated > limit:
-        return (f"inflates past the {limit / 2**20:,.0f} MB an input may be "
-                f"({MAX_INPUT_MB_VARIABLE})")
+        return f"inflates past the {_size(limit)} an input may be ({MAX_INPUT_MB_VARIABLE})"
     if inflated > 64 * 2**20 and inflated > GZIP_RATIO * max(packed, 1):
         return (f"inflates more than {GZIP_RATIO} times ({packed:,} bytes to over "
                 f"{inflated:,}): a compressed bomb")

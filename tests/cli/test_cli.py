@@ -293,3 +293,13 @@ def test_run_says_it_ignores_the_crowd_section(tmp_path, root):
                  tmp_path / "out", "--quiet")
     assert result.returncode == 0, result.stderr
     assert "[crowd] is read only by 'enn-traffic crowd' and 'reproduce'" in result.stderr
+
+
+def test_resume_of_a_folder_without_a_run_says_it_starts_one(tmp_path, capsys, root):
+    """A mistyped --out with --resume started a fresh run without a word."""
+    from enn_traffic.cli import main
+
+    out = tmp_path / "typo"
+    assert main(["run", str(root / "scenarios" / "navigation_narrow.toml"), "--out", str(out),
+                 "--population", "10", "--generations", "1", "--resume", "--quiet"]) == 0
+    assert f"{out} holds no run to resume: starting one" in capsys.readouterr().err

@@ -336,13 +336,16 @@ COMMAND_LINES = {
                                    "--out", "r.gif"],
     "--episodes beyond the cap": ["evaluate", BEST, NARROW, "--episodes", "1001"],
     "--population beyond the schema": ["run", NARROW, "--population", "100001"],
+    "--population not above the elites": ["run", "sumo_strategy1", "--population", "4"],
 }
 
 
 @pytest.mark.parametrize("case", list(COMMAND_LINES))
 def test_a_bad_command_line_exits_2_before_any_work(capsys, tmp_path, monkeypatch, case):
     monkeypatch.chdir(tmp_path)
-    refusal(capsys, COMMAND_LINES[case])
+    message = refusal(capsys, COMMAND_LINES[case])
+    if "--population" in COMMAND_LINES[case]:  # named as the option given, not a file's key
+        assert "--population" in message, message
     assert not list(tmp_path.iterdir()), "something was written"
 
 
