@@ -365,3 +365,19 @@ def test_seeds_piled_at_the_cap_give_a_point_not_a_missing_interval():
                 "minus_ga_high_simultaneous"]].tolist() == [0.0] * 5
     assert row["p_value"] == 1.0 and row["p_holm"] == 1.0 and row["above_ga"] == 0.5
     assert t_interval(runs["test_fitness"].to_numpy()) == (20_000.0, 20_000.0)
+
+
+@pytest.mark.full
+def test_a_gradient_rl_run_leaves_nothing_in_the_temporary_folder(tmp_path, monkeypatch):
+    """SB3's own logger made an empty SB3-<time> folder in TMPDIR for every run of the
+    comparison (a fresh probe found four after one baseline command)."""
+    pytest.importorskip("stable_baselines3")
+    import tempfile
+
+    monkeypatch.setattr(tempfile, "tempdir", str(tmp_path))
+    scenario = shipped_scenario("arena_strategy1")
+    setting = next(iter(protocol.SEARCH["PPO"]))
+    settings = protocol.SEARCH["PPO"][setting]
+    runs.rl_run(scenario, "PPO", settings, settings["n_envs"] * settings["n_steps"], seed=1,
+                test=False)
+    assert not [p.name for p in tmp_path.iterdir() if p.name.startswith("SB3-")]

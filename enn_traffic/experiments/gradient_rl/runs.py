@@ -136,6 +136,7 @@ def rl_run(scenario: Scenario, method: str, settings: dict, budget: int, seed: i
     try:
         import torch
         from stable_baselines3.common.callbacks import BaseCallback
+        from stable_baselines3.common.logger import Logger
         from stable_baselines3.common.vec_env import VecNormalize
 
         from enn_traffic.envs.sb3 import sb3_vec_env
@@ -150,6 +151,8 @@ def rl_run(scenario: Scenario, method: str, settings: dict, budget: int, seed: i
     seed = int(run_seed(seed, budget).generate_state(1)[0] % 2**31)
     venv.seed(seed)
     model = rl_model(method, venv, settings, seed)
+    # a logger of no outputs: SB3's own makes an empty SB3-<time> folder in TMPDIR per run
+    model.set_logger(Logger(folder=None, output_formats=[]))
     every = max(1, budget // CHECKPOINTS)
     snapshots: list[tuple[int, float, NumpyPolicy]] = []
     lives: list[int] = []
