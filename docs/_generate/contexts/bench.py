@@ -41,25 +41,29 @@ def crowd_scale(table: pd.DataFrame) -> dict:
 
 
 def crowd_marginal(table: pd.DataFrame) -> dict:
-    """The rows, and per count N the added learner's cost over the added SUMO-driven
-    vehicle's, in all, inside SUMO's step and outside it."""
-    vehicles = table[table["implementation"].str.contains("SUMO-driven")]
-    learners = table[table["implementation"].str.endswith("learners")]
+    """The rows; per count N the added learner's cost (random networks) over the added
+    SUMO-driven vehicle's, in all, in SUMO's step and outside it; what the most learners'
+    SSM devices cost; and the most learners driving a trained controller."""
+    name = table["implementation"]
+    vehicles = table[name.str.contains("SUMO-driven")]
+    learners = table[name.str.endswith("learners")]
     ratios = [{"count": int(learner["added_driving"]) + 1,
-               "vehicles": float(vehicle["added_driving"]),
                **{part: learner[column] / vehicle[column] for part, column in (
                    ("all", "us_per_added_step"), ("sumo", "sumo_us_per_added_step"),
                    ("outside", "outside_us_per_added_step"))}}
               for (_, vehicle), (_, learner) in zip(vehicles.iterrows(), learners.iterrows(),
                                                     strict=True)]
-    bare = table[table["implementation"].str.endswith("no SSM devices")].iloc[0]
-    equipped = learners.iloc[-1]
+    bare = table[name.str.endswith("no SSM devices")].iloc[0]
+    trained = table[name.str.endswith("a trained controller")].iloc[0]
+    equipped, vehicle = learners.iloc[-1], vehicles.iloc[-1]
     ssm_us = equipped["sumo_us_per_added_step"] - bare["sumo_us_per_added_step"]
     return {"rows": rows(table), "ratios": ratios, "workload": table["workload"].iloc[0],
-            "steps": int(table["steps"].iloc[0]),
+            "steps": int(table["steps"].iloc[0]), "runs": int(table["runs"].iloc[0]),
+            "most": equipped.to_dict(), "vehicle": vehicle.to_dict(),
             "ssm": {"us": ssm_us, "share": ssm_us / equipped["sumo_us_per_added_step"],
-                    "bare_us": bare["sumo_us_per_added_step"],
-                    "vehicle_us": vehicles.iloc[-1]["sumo_us_per_added_step"]}}
+                    "bare_us": bare["sumo_us_per_added_step"]},
+            "trained": {**trained.to_dict(),
+                        "ratio": trained["us_per_added_step"] / vehicle["us_per_added_step"]}}
 
 
 def recording(table: pd.DataFrame) -> dict:
@@ -95,7 +99,7 @@ def context(root: Path) -> dict:
         "fresh": rows(read("fresh_issue62")),
         "sumo_step": rows(read("sumo_step_issue60")),
         "published": rows(read("published_issue60")),
-        "crowd_scale": crowd_scale(read("crowd_scale_issue63")),
+        "crowd_scale": crowd_scale(read("crowd_scale_issue83")),
         "crowd_ray": rows(read("crowd_ray_issue63")),
         "crowd_marginal": crowd_marginal(read("crowd_marginal_issue83")),
         "recording": recording(read("recording_issue50")),
