@@ -15,7 +15,7 @@ import numba
 import numpy as np
 import pandas as pd
 
-from enn_traffic.bench.measure import city_with_lights
+from enn_traffic.bench.measure import city_crowd, city_with_lights, timing_into
 from enn_traffic.sumo.timing import AddedTraffic, trip_ends
 
 SETTLE_STEPS = 100  # steps between adding vehicles and timing (the added ones depart)
@@ -42,30 +42,14 @@ def marginal_seconds(net: Path, trips: Path, added_vehicles: int, learners: int,
     resident memory. Run in a fresh process."""
     import resource
 
-    from enn_traffic.config import load_scenario
     from enn_traffic.sim.sumo import crowd as sumo_crowd
-    from enn_traffic.sim.world import make_world
 
     spent = dict.fromkeys(PARTS, 0.0)
+    timed = timing_into(spent)
     if not ssm:
         sumo_crowd.ssm.ssm_options = lambda learners=(): ()
-
-    def timed(call, part):
-        def wrapped(*args):
-            started = time.perf_counter()
-            result = call(*args)
-            spent[part] += time.perf_counter() - started
-            return result
-        return wrapped
-
     with tempfile.TemporaryDirectory(prefix="enn-bench-marginal-") as folder:
-        path = Path(folder) / "city.toml"
-        path.write_text(f'name = "city"\n[track]\nnet = "{net}"\nstart_lane = "auto"\n'
-                        f'[traffic]\nstrategy = "sumo"\nroutes = ["{trips}"]\n'
-                        f'mode = "closed-loop"\nwarmup_s = 300.0\nwarmup_states = 1\n'
-                        f"learners = {learners}\n")
-        scenario = load_scenario(path)
-        world = make_world(scenario)
+        scenario, world = city_crowd(Path(folder), net, trips, learners)
         dt = scenario.vehicle.dt
         if controller is None:
             genes = world.spec.in_source_layout(np.random.default_rng(learners).uniform(

@@ -148,6 +148,33 @@ def city_with_lights(iterations: int, period_s: float) -> tuple[Path, Path]:
     return folder / "lights.net.xml", folder / "lights.trips.xml"
 
 
+def city_crowd(folder: Path, net: Path, trips: Path, learners: int):
+    """The scenario of ``learners`` learners in one SUMO of the city ``net`` and its
+    ``trips`` (closed loop, after one shared 300 s warm-up), written into ``folder``, and its
+    world."""
+    from enn_traffic.config import load_scenario
+
+    path = folder / "city.toml"
+    path.write_text(f'name = "city"\n[track]\nnet = "{net}"\nstart_lane = "auto"\n'
+                    f'[traffic]\nstrategy = "sumo"\nroutes = ["{trips}"]\n'
+                    f'mode = "closed-loop"\nwarmup_s = 300.0\nwarmup_states = 1\n'
+                    f"learners = {learners}\n")
+    scenario = load_scenario(path)
+    return scenario, make_world(scenario)
+
+
+def timing_into(spent: dict[str, float]) -> Callable:
+    """``timed(call, part)``: ``call``, its seconds added to ``spent[part]`` at every call."""
+    def timed(call, part):
+        def wrapped(*args):
+            started = time.perf_counter()
+            result = call(*args)
+            spent[part] += time.perf_counter() - started
+            return result
+        return wrapped
+    return timed
+
+
 @contextlib.contextmanager
 def environment(**values: str | None) -> Iterator[None]:
     """Environment variables set (None: unset) while inside, then as they were."""

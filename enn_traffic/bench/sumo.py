@@ -16,11 +16,13 @@ import numpy as np
 import pandas as pd
 
 from enn_traffic.bench.measure import (
+    city_crowd,
     city_with_lights,
     compiled_workload,
     environment,
     rate_table,
     timed_generations,
+    timing_into,
 )
 from enn_traffic.config.shipped import shipped_scenario
 from enn_traffic.learning import ga
@@ -241,27 +243,12 @@ def crowd_scale_seconds(net: Path, trips: Path, learners: int, steps: int) -> di
     and the process's peak resident memory (libsumo runs in it). Run in a fresh process."""
     import resource
 
-    from enn_traffic.config import load_scenario
     from enn_traffic.sim.sumo import crowd as sumo_crowd
 
     inside = {"sumo": 0.0, "kernels": 0.0}
-
-    def timed(call, part):
-        def wrapped(*args):
-            started = time.perf_counter()
-            result = call(*args)
-            inside[part] += time.perf_counter() - started
-            return result
-        return wrapped
-
+    timed = timing_into(inside)
     with tempfile.TemporaryDirectory(prefix="enn-bench-crowd-") as folder:
-        path = Path(folder) / "city.toml"
-        path.write_text(f'name = "city"\n[track]\nnet = "{net}"\nstart_lane = "auto"\n'
-                        f'[traffic]\nstrategy = "sumo"\nroutes = ["{trips}"]\n'
-                        f'mode = "closed-loop"\nwarmup_s = 300.0\nwarmup_states = 1\n'
-                        f"learners = {learners}\n")
-        scenario = load_scenario(path)
-        world = make_world(scenario)
+        scenario, world = city_crowd(Path(folder), net, trips, learners)
         genes = world.spec.in_source_layout(np.random.default_rng(learners).uniform(
             -1, 1, (learners, world.spec.chromosome_length)))
         with SumoCrowd(world, world.seeds(1)[0]) as crowd:
