@@ -30,7 +30,7 @@ import sumolib
 from enn_traffic.core.cache import file_stamp
 from enn_traffic.core.errors import InputError
 from enn_traffic.core.io import check_input_file
-from enn_traffic.roads.xmlread import XML_BLOCK, iterparse, parse_root
+from enn_traffic.roads.xmlread import iterparse, parse_root
 
 FILE_OPTIONS = ("net-file", "route-files", "additional-files")
 
@@ -310,23 +310,17 @@ def xml_problem(file: Path, *stamp: int) -> str | None:
     on amplification) and external entities."""
     opener = gzip.open if file.name.endswith(".gz") else open
     depth = 0
-    parser = ElementTree.XMLPullParser(events=("start", "end"))
     try:
         with opener(file, "rb") as handle:
-            # fed in blocks of XML_BLOCK (enn_traffic.roads.xmlread says why)
-            for block in iter(lambda: handle.read(XML_BLOCK), b""):
-                parser.feed(block)
-                for event, element in parser.read_events():
-                    if event == "start":
-                        depth += 1
-                        if depth > MAX_XML_DEPTH:
-                            return (f"elements nested more than {MAX_XML_DEPTH} deep (SUMO's "
-                                    "files nest a few levels; SUMO takes minutes on such a "
-                                    "file)")
-                    else:
-                        depth -= 1
-                        element.clear()
-            parser.close()
+            for event, element in iterparse(handle, ("start", "end")):
+                if event == "start":
+                    depth += 1
+                    if depth > MAX_XML_DEPTH:
+                        return (f"elements nested more than {MAX_XML_DEPTH} deep (SUMO's "
+                                "files nest a few levels; SUMO takes minutes on such a file)")
+                else:
+                    depth -= 1
+                    element.clear()
     except (ElementTree.ParseError, LookupError, ValueError, OSError, EOFError,
             zlib.error) as exc:
         return str(exc)

@@ -43,18 +43,14 @@ def iterparse(source: str | os.PathLike | BinaryIO, events: tuple[str, ...] = ("
 
 
 def parse_root(source: str | os.PathLike | BinaryIO) -> ElementTree.Element:
-    """The root element of the XML file ``source`` (a path, or a file opened in binary), fed
-    :data:`XML_BLOCK` bytes at a time (:func:`xml.etree.ElementTree.parse` feeds 64 KiB)."""
-    parser = ElementTree.XMLParser()
-    owned = isinstance(source, (str, os.PathLike))
-    handle = open(source, "rb") if owned else source  # noqa: SIM115 (closed below)
-    try:
-        for block in iter(lambda: handle.read(XML_BLOCK), b""):
-            parser.feed(block)
-        return parser.close()
-    finally:
-        if owned:
-            handle.close()
+    """The root element of the XML file ``source`` (a path, or a file opened in binary), the
+    whole tree under it, read by :func:`iterparse` (:func:`xml.etree.ElementTree.parse`
+    feeds 64 KiB at a time)."""
+    events = iterparse(source, ("start",))
+    _, root = next(events)
+    for _ in events:  # the rest of the tree, kept under the root
+        pass
+    return root
 
 
 def open_xml(path: Path) -> BinaryIO:
