@@ -50,7 +50,6 @@ if "OMP_WAIT_POLICY" not in os.environ and "GOMP_SPINCOUNT" not in os.environ:
     os.environ["OMP_WAIT_POLICY"] = "PASSIVE"
 
 
-
 def _utf8_ctype() -> None:
     """Python reads and writes paths as UTF-8 under a C or POSIX locale (its UTF-8 mode),
     while SUMO's readers take a path's bytes in the C library's locale: under ``LC_ALL=C`` a

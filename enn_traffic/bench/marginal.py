@@ -16,6 +16,7 @@ import numpy as np
 import pandas as pd
 
 from enn_traffic.bench.measure import city_crowd, city_with_lights, timing_into
+from enn_traffic.core.provenance import PACKAGE
 from enn_traffic.sumo.timing import AddedTraffic, trip_ends
 
 SETTLE_STEPS = 100  # steps between adding vehicles and timing (the added ones depart)
@@ -26,8 +27,7 @@ PARTS = ("move", "read", "kernels", "reenter")
 # A trained controller for the learners of an arm (random networks end a life every few
 # steps; a trained one drives on): the city's Table 1 winner of strategy 1.
 # (The checkout's committed results, as bench test_suite reads the checkout.)
-TRAINED = (Path(__file__).resolve().parents[2] / "results" / "paper" / "controllers" / "city"
-           / "table1" / "strategy1.npz")
+TRAINED = PACKAGE.parent / "results" / "paper" / "controllers" / "city" / "table1" / "strategy1.npz"
 
 
 def marginal_seconds(net: Path, trips: Path, added_vehicles: int, learners: int,
