@@ -599,6 +599,14 @@ def test_a_bad_input_limit_in_the_environment_is_one_message(capsys, tmp_path, m
     refusal(capsys, ["run", NARROW, "--out", tmp_path / "out"], MAX_INPUT_MB_VARIABLE)
 
 
+def test_an_input_limit_below_a_megabyte_is_said_in_bytes(capsys, tmp_path, monkeypatch):
+    """A limit of 0.0001 MB read "scenario file is 0 MB, more than the 0 MB an input may be"."""
+    monkeypatch.chdir(tmp_path)
+    monkeypatch.setenv(MAX_INPUT_MB_VARIABLE, "0.0001")
+    message = refusal(capsys, ["run", NARROW, "--out", tmp_path / "out"], NARROW.name)
+    assert f"is {NARROW.stat().st_size:,} bytes, more than the 104 bytes" in message, message
+
+
 def test_render_never_writes_over_a_file_it_reads(capsys, tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)
     scenario = tmp_path / "scenario.png"  # a scenario file of an odd name
