@@ -46,8 +46,6 @@ def marginal_seconds(net: Path, trips: Path, added_vehicles: int, learners: int,
 
     spent = dict.fromkeys(PARTS, 0.0)
     timed = timing_into(spent)
-    if not ssm:
-        sumo_crowd.ssm.ssm_options = lambda learners=(): ()
     with tempfile.TemporaryDirectory(prefix="enn-bench-marginal-") as folder:
         scenario, world = city_crowd(Path(folder), net, trips, learners)
         dt = scenario.vehicle.dt
@@ -60,7 +58,7 @@ def marginal_seconds(net: Path, trips: Path, added_vehicles: int, learners: int,
             chromosome = Controller.load(controller).chromosome
             genes = np.tile(world.spec.in_source_layout(chromosome)[0], (learners, 1))
         added = AddedTraffic(trip_ends(trips, scenario.traffic.warmup_s, 4 * added_vehicles + 1))
-        with sumo_crowd.SumoCrowd(world, world.seeds(1)[0]) as crowd:
+        with sumo_crowd.SumoCrowd(world, world.seeds(1)[0], ssm_devices=ssm) as crowd:
             crowd.run(dt, genes)  # start SUMO, let the learners enter
             added.add(added_vehicles)
             read, present = timed(crowd._read, "read"), []

@@ -247,3 +247,16 @@ def test_a_crowds_conflicts_are_the_same_whatever_ran_before_in_the_process():
     assert counted(fresh(_driving_arm, *spans)[0]) == before
     here = counted(_driving_arm(*spans)[0])
     assert [c for c, _ in here] != [c for c, _ in before]
+
+
+@pytest.mark.parametrize("devices", [True, False])
+def test_learners_carry_ssm_devices_unless_told_not_to(world, devices):
+    """The crowd's tables count the learners' SSM conflicts; a crowd made without the devices
+    (bench crowd_marginal's arm of what they cost) equips no learner."""
+    import libsumo
+
+    starts = np.array([[60.0, 5.0, 0.0], [30.0, 5.0, 0.0]])
+    with SumoCrowd(world, seed=1, starts=starts, ssm_devices=devices) as crowd:
+        crowd.run(0.2, straight(world))
+        equipped = [libsumo.vehicle.getParameter(v, "has.ssm.device") for v in crowd.ids]
+    assert equipped == ["true" if devices else "false"] * 2

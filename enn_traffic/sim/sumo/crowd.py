@@ -75,10 +75,13 @@ class SumoCrowd:
     :class:`~enn_traffic.sim.crowd.Crowd` keeps its vehicles. Use it as a context manager:
     SUMO closes, and the runs' SSM conflicts are counted, on leaving it."""
 
-    def __init__(self, world: SumoWorld, seed: int, starts: np.ndarray | None = None):
+    def __init__(self, world: SumoWorld, seed: int, starts: np.ndarray | None = None,
+                 ssm_devices: bool = True):
         """The learners enter at ``starts`` (K, 3: x, y, heading), or at free spots drawn
-        from ``seed``."""
+        from ``seed``; they carry SSM devices unless not ``ssm_devices`` (then no SSM
+        conflict is counted)."""
         self.world = world
+        self.ssm_devices = ssm_devices
         self.seed = seed
         self.count = world.scenario.traffic.learners
         self.ids = tuple(learner_id(k) for k in range(self.count))
@@ -107,8 +110,9 @@ class SumoCrowd:
         vehicle = scenario.vehicle
         state = world.warm_state(self.seed) or states.warm_state(scenario, self.seed,
                                                                keep_rng=True)
-        self._simulation = simulation = Simulation(
-            scenario, self.seed, state, extra=ssm.ssm_options(self.ids), learners=self.ids)
+        devices = ssm.ssm_options(self.ids) if self.ssm_devices else ()
+        self._simulation = simulation = Simulation(scenario, self.seed, state, extra=devices,
+                                                   learners=self.ids)
         self.physics = world._learner_physics(simulation.largest_radius())
         self.slots = recording.slot_arrays(2, 64)
         self.before, self.now = 0, 1  # rows of the slot arrays; they swap every step
