@@ -15,13 +15,19 @@ def learner_id(index: int) -> str:
     return LEARNER if index == 0 else f"{LEARNER}_{index}"
 
 
-def add_learner(length: float, width: float, speed: float, vehicle: str = LEARNER) -> None:
+def add_learner(length: float, width: float, speed: float, vehicle: str = LEARNER,
+                ssm_device: bool = True) -> None:
     """Put a learner into the running SUMO as a vehicle with no route, that obeys no speed
     or lane-change rule and is moved by :func:`move_learner` (the learners share one
-    vehicle type, made with the first)."""
+    vehicle type, made with the first). It carries an SSM device if ``ssm_device`` (the
+    first learner's choice holds for all), which measures as the start's options say
+    (:func:`~enn_traffic.sumo.ssm.ssm_options`)."""
     kind = LEARNER_TYPE
     if kind not in libsumo.vehicletype.getIDList():
         libsumo.vehicletype.copy("DEFAULT_VEHTYPE", kind)
+        # SUMO equips a vehicle by its type's parameter at every start (its own list of
+        # vehicle ids, --device.ssm.explicit, is read once per process: ssm.ssm_options)
+        libsumo.vehicletype.setParameter(kind, "has.ssm.device", str(ssm_device).lower())
         libsumo.vehicletype.setLength(kind, length)
         libsumo.vehicletype.setWidth(kind, width)
         libsumo.vehicletype.setMaxSpeed(kind, max(speed, 1e-3))

@@ -69,7 +69,7 @@ class Simulation:
         Simulation.running = self
         command = sumo_command(scenario, seed, self.folder, state, save_rng)
         if "ssm" in scenario.traffic.outputs and "--device.ssm.file" not in extra:
-            extra = (*extra, *ssm_options(()))  # no learner here: every vehicle's device
+            extra = (*extra, *ssm_options())  # how the devices of every vehicle write
         try:
             with slow_step(f"starting SUMO on {scenario.name}'s traffic (seed {seed})"), \
                     self.console():

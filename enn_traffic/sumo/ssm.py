@@ -1,5 +1,6 @@
-"""SUMO's SSM device on the learners (closed loop): the options that equip them, and the
-conflicts it wrote (docs/sumo.md, "Safety figures")."""
+"""SUMO's SSM device on the learners (closed loop): the options it writes by, and the
+conflicts it wrote (docs/sumo.md, "Safety figures"). The learners carry it by their vehicle
+type's ``has.ssm.device`` parameter (:func:`~enn_traffic.sumo.learners.add_learner`)."""
 
 from __future__ import annotations
 
@@ -18,11 +19,13 @@ SSM_THRESHOLDS = {"TTC": 1.5, "DRAC": 3.0, "PET": 2.0}
 SSM_RANGE_M = 50.0
 
 
-def ssm_options(learners: tuple[str, ...] = (LEARNER,)) -> tuple[str, ...]:
-    """SUMO options that equip the learners (their SUMO ids) with SSM devices writing to
-    ``SSM_FILE`` in the start's folder (read it with ``Simulation.close(read=...)``)."""
-    explicit = ("--device.ssm.explicit", ",".join(learners)) if learners else ()
-    return (*explicit, "--device.ssm.measures", " ".join(SSM_THRESHOLDS),
+def ssm_options() -> tuple[str, ...]:
+    """SUMO options by which every SSM device measures and writes to ``SSM_FILE`` in the
+    start's folder (read it with ``Simulation.close(read=...)``). They equip no vehicle: the
+    learners carry a device by their type's parameter, every vehicle by ``traffic.outputs =
+    ["ssm"]``. Not ``--device.ssm.explicit``: SUMO reads that list once per process and keeps
+    it for every later start (docs/sumo.md, "One SUMO start, one process")."""
+    return ("--device.ssm.measures", " ".join(SSM_THRESHOLDS),
             "--device.ssm.thresholds", " ".join(f"{v:g}" for v in SSM_THRESHOLDS.values()),
             "--device.ssm.range", f"{SSM_RANGE_M:g}", "--device.ssm.trajectories", "false",
             "--device.ssm.file", SSM_FILE, *SSM_DEFAULTS)

@@ -30,7 +30,7 @@ def step_seconds(source: list[str], learners: int, steps: int, warmup_steps: int
                        "--no-step-log", "true", "--no-warnings", "true", "--verbose", "false",
                        "--duration-log.statistics", "false", "--gui-settings-file", "",
                        "--collision.action", "none", "--output-prefix", output_prefix(Path(folder)),
-                       *ssm_options(tuple(learner_id(k) for k in range(learners)))])
+                       *ssm_options()])
         try:
             for _ in range(warmup_steps):
                 libsumo.simulationStep()

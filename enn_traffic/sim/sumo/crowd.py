@@ -110,7 +110,7 @@ class SumoCrowd:
         vehicle = scenario.vehicle
         state = world.warm_state(self.seed) or states.warm_state(scenario, self.seed,
                                                                keep_rng=True)
-        devices = ssm.ssm_options(self.ids) if self.ssm_devices else ()
+        devices = ssm.ssm_options() if self.ssm_devices else ()
         self._simulation = simulation = Simulation(scenario, self.seed, state, extra=devices,
                                                    learners=self.ids)
         self.physics = world._learner_physics(simulation.largest_radius())
@@ -124,7 +124,8 @@ class SumoCrowd:
                 self.reenter(k)
             else:
                 lives.place(k, self._starts[k], self.physics)
-            add_learner(vehicle.length, vehicle.width, vehicle.speed, self.ids[k])
+            add_learner(vehicle.length, vehicle.width, vehicle.speed, self.ids[k],
+                        self.ssm_devices)
         self._move_learners()
         self.t = 0  # steps since the learners entered
         self._detected_at = -1  # the step last detected: once a step, whoever asks
