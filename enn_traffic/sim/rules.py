@@ -394,14 +394,20 @@ def respawn(v, kind, physics, geometry, vehicles, rng) -> bool:
 
 
 @njit(cache=True)
-def respawn_on_lanes(v, kind, spots, physics, geometry, vehicles, rng) -> bool:
+def respawn_on_lanes(v, kind, spots, clear_of_walls, physics, geometry, vehicles, rng) -> bool:
     """:func:`respawn` at one of ``spots`` (S, 3: x, y, heading along the lanes, facing their
-    traffic): a network's roads can fill little of its bounding box."""
+    traffic): a network's roads can fill little of its bounding box. ``clear_of_walls`` (S,
+    int8) remembers, per spot, whether a body there touches no wall (1), touches one (0) or
+    is not known yet (-1): walls stay put, and the test against them costs a pass over every
+    wall (:func:`inside`)."""
     trial = np.empty((4, 2))
     for _ in range(200):
         spot = min(int(next_uniform(rng) * spots.shape[0]), spots.shape[0] - 1)
         x, y, heading = spots[spot, 0], spots[spot, 1], spots[spot, 2]
-        if _enter_if_free(v, x, y, heading, kind, physics, geometry, vehicles, rng, trial):
+        if clear_of_walls[spot] < 0:
+            clear_of_walls[spot] = clear_of_walls_at(x, y, heading, physics, geometry, trial)
+        if clear_of_walls[spot] and clear_of_vehicles(v, x, y, physics, vehicles.pose):
+            enter(v, x, y, heading, kind, physics, vehicles, rng)
             return True
     return False
 
@@ -410,18 +416,33 @@ def respawn_on_lanes(v, kind, spots, physics, geometry, vehicles, rng) -> bool:
 def _enter_if_free(v, x, y, heading, kind, physics, geometry, vehicles, rng, trial) -> bool:
     """Place vehicle ``v`` at (x, y, heading) with a fresh life if its body there touches no
     wall, its rear is on the area and every other vehicle is ``clearance`` away."""
-    walls, pose = geometry.walls, vehicles.pose
+    if not clear_of_walls_at(x, y, heading, physics, geometry, trial):
+        return False
+    if not clear_of_vehicles(v, x, y, physics, vehicles.pose):
+        return False
+    enter(v, x, y, heading, kind, physics, vehicles, rng)
+    return True
+
+
+@njit(cache=True, inline="always")
+def clear_of_walls_at(x, y, heading, physics, geometry, trial) -> bool:
+    """Does a body at (x, y, heading) touch no wall, its rear on the area? (``trial``: (4, 2)
+    work array, left holding the body's corners)"""
+    walls = geometry.walls
     body_corners(x, y, heading, physics.length, physics.width, trial)
     candidates = nearby_walls(x, y, physics, geometry.cell_start, geometry.cell_walls,
                               geometry.all_walls)
     if box_hits_walls(trial, walls, candidates, candidates.shape[0]):
         return False
-    if not inside(trial[2, 0], trial[2, 1], walls):
-        return False
+    return inside(trial[2, 0], trial[2, 1], walls)
+
+
+@njit(cache=True, inline="always")
+def clear_of_vehicles(v, x, y, physics, pose) -> bool:
+    """Is every vehicle but ``v`` at least ``clearance`` from (x, y)?"""
     for other in range(pose.shape[0]):
         if other != v and math.hypot(x - pose[other, 0], y - pose[other, 1]) < physics.clearance:
             return False
-    enter(v, x, y, heading, kind, physics, vehicles, rng)
     return True
 
 

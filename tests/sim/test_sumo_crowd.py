@@ -264,3 +264,25 @@ def test_learners_carry_ssm_devices_unless_told_not_to(world, devices):
         crowd.run(0.2, straight(world))
         equipped = [libsumo.vehicle.getParameter(v, "has.ssm.device") for v in crowd.ids]
     assert equipped == ["true" if devices else "false"] * 2
+
+
+def test_the_spots_remembered_free_of_walls_are_those_the_walls_leave_free():
+    """Re-entries remember per lane spot whether a body there touches a wall (a pass over every
+    wall each time otherwise): after lives on the Cologne junctions that end and re-enter,
+    every spot remembered says what testing it again says, and both answers occur."""
+    from enn_traffic.experiments.families import CITY
+    from enn_traffic.sim.rules import clear_of_walls_at
+
+    world = make_world(CITY.scenario(1).with_overrides(
+        traffic={"mode": "closed-loop", "learners": 8}))
+    genes = np.random.default_rng(3).uniform(-1, 1, (8, world.spec.chromosome_length))
+    with SumoCrowd(world, seed=1) as crowd:
+        run = crowd.run(20.0, genes)
+        known = crowd.lives.clear_of_walls
+        spots, physics = world.lane_spots, crowd.physics
+    assert run.collisions.sum() + run.exits.sum() > 0
+    trial = np.empty((4, 2))
+    remembered = np.flatnonzero(known >= 0)
+    assert [bool(known[s]) for s in remembered] == [
+        clear_of_walls_at(*spots[s], physics, world.geometry, trial) for s in remembered]
+    assert set(known[remembered].tolist()) == {0, 1}

@@ -23,7 +23,6 @@ from enn_traffic.sim.buckets import buckets_for
 from enn_traffic.sim.crowd import ALIVE, CrowdRun, Learning
 from enn_traffic.sim.rules import (
     enter,
-    respawn_on_lanes,
     vehicles_at,
     work_for,
 )
@@ -33,6 +32,7 @@ from enn_traffic.sim.sumo.crowd_rules import (
     learner_events,
     learners_for,
     near_for,
+    reenter,
 )
 from enn_traffic.sim.sumo.world import SumoWorld
 from enn_traffic.sim.world import COLLIDED, LEFT_NETWORK, SPUN
@@ -267,6 +267,7 @@ class _Lives:
         self.learners = learners_for(count, physics.spin_window, slots)
         self.work = work_for(geometry, layer_sizes, count)
         self.rng = np.full(1, np.uint64(seed), dtype=np.uint64)
+        self.clear_of_walls: np.ndarray | None = None  # per lane spot (rules.respawn_on_lanes)
 
     @property
     def pose(self) -> np.ndarray:
@@ -293,18 +294,16 @@ class _Lives:
               scenario) -> None:
         """Learner ``k`` starts a life at a free spot: one of ``spots`` along the lanes
         (facing their traffic), touching no wall, ``respawn_clearance`` from every learner
-        and, if one is found within :data:`RESPAWN_TRIES` draws, from every SUMO vehicle."""
+        and, if one is found within :data:`RESPAWN_TRIES` draws, from every SUMO vehicle
+        (:func:`~.crowd_rules.reenter`)."""
+        if self.clear_of_walls is None or len(self.clear_of_walls) != len(spots):
+            self.clear_of_walls = np.full(len(spots), -1, dtype=np.int8)  # none known yet
         ids, _, centres = slots
-        present = ids[row] >= 0
-        for _ in range(RESPAWN_TRIES):
-            if not respawn_on_lanes(k, NETWORK, spots, physics, geometry, self.vehicles,
-                                    self.rng):
-                raise InputError("no free spot for a learner along the lanes in 200 draws "
-                                 "(learners packed closer than traffic.respawn_clearance?)",
-                                 scenario.source, "track.net")
-            gaps = np.hypot(*(centres[row][present] - self.vehicles.centres[k]).T)
-            if not np.any(gaps < physics.clearance):
-                break
+        if not reenter(k, NETWORK, spots, self.clear_of_walls, physics, geometry,
+                       self.vehicles, self.rng, centres[row], ids[row], RESPAWN_TRIES):
+            raise InputError("no free spot for a learner along the lanes in 200 draws "
+                             "(learners packed closer than traffic.respawn_clearance?)",
+                             scenario.source, "track.net")
         self.learners.life[k] = 0
         self.learners.gone[k] = -1
         self.learners.closing[k] = False

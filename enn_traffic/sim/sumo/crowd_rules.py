@@ -1,6 +1,7 @@
 """The compiled rules of several learners in a live SUMO (:mod:`enn_traffic.sim.sumo.crowd`):
-the blame rule, exits and spins of every learner at a step (:func:`learner_events`), and every
-learner sensing, counting its 2-D conflicts, deciding and moving (:func:`drive`).
+the blame rule, exits and spins of every learner at a step (:func:`learner_events`), every
+learner sensing, counting its 2-D conflicts, deciding and moving (:func:`drive`), and a
+learner re-entering at a free spot (:func:`reenter`).
 
 The blame rule is the arena's and the closed loop's (:mod:`enn_traffic.sim.rules`,
 :mod:`enn_traffic.sim.sumo.replay`):
@@ -33,6 +34,7 @@ from enn_traffic.sim.rules import (
     hits_earlier_body,
     left_network,
     move_all,
+    respawn_on_lanes,
     responsible,
     spun,
     wall_arrays,
@@ -328,3 +330,27 @@ def observe(physics, geometry, slots, now, vehicles, learners, out) -> None:
 
 
 move_once = njit(cache=True)(move.py_func)
+
+
+@njit(cache=True)
+def reenter(k, kind, spots, clear_of_walls, physics, geometry, vehicles, rng, centres, ids,
+            tries) -> bool:
+    """Learner ``k`` (of ``vehicles``, the learners) starts a new life at one of ``spots``
+    (:func:`~enn_traffic.sim.rules.respawn_on_lanes`, which ``clear_of_walls`` serves): the
+    first of ``tries`` drawn that is ``clearance`` from every SUMO vehicle (``centres`` of
+    the slots whose ``ids`` are not negative), else the last drawn. False when no spot free of
+    walls and learners was found."""
+    for _ in range(tries):
+        if not respawn_on_lanes(k, kind, spots, clear_of_walls, physics, geometry, vehicles,
+                                rng):
+            return False
+        x, y = vehicles.centres[k, 0], vehicles.centres[k, 1]
+        clear = True
+        for slot in range(ids.shape[0]):
+            if ids[slot] >= 0 and math.hypot(centres[slot, 0] - x,
+                                            centres[slot, 1] - y) < physics.clearance:
+                clear = False
+                break
+        if clear:
+            break
+    return True
