@@ -261,8 +261,7 @@ class SumoCrowdEnv(ParallelEnv):
         self.crowd = crowd = SumoCrowd(world, world.seeds(key)[situation])
         crowd.start()
         if crowd.detect():  # a learner whose entry is taken enters again
-            for k in np.flatnonzero(crowd.lives.learners.events != ALIVE):
-                crowd.reenter(k)
+            crowd.reenter(np.flatnonzero(crowd.lives.learners.events != ALIVE))
         self.agents = self.possible_agents[:]
         self.steps = 0
         readings = self._readings()

@@ -440,8 +440,12 @@ def clear_of_walls_at(x, y, heading, physics, geometry, trial) -> bool:
 @njit(cache=True, inline="always")
 def clear_of_vehicles(v, x, y, physics, pose) -> bool:
     """Is every vehicle but ``v`` at least ``clearance`` from (x, y)?"""
+    clearance = physics.clearance
     for other in range(pose.shape[0]):
-        if other != v and math.hypot(x - pose[other, 0], y - pose[other, 1]) < physics.clearance:
+        dx, dy = x - pose[other, 0], y - pose[other, 1]
+        if abs(dx) > clearance or abs(dy) > clearance:
+            continue
+        if other != v and math.hypot(dx, dy) < clearance:
             return False
     return True
 

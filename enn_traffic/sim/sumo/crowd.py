@@ -119,10 +119,10 @@ class SumoCrowd:
         self.lives = lives = _Lives(self.count, self.physics, world.geometry,
                                     world.layer_sizes, self.slots[0].shape[1], self.seed)
         self._read()
+        if self._starts is None:
+            self.reenter(np.arange(self.count))
         for k in range(self.count):
-            if self._starts is None:
-                self.reenter(k)
-            else:
+            if self._starts is not None:
                 lives.place(k, self._starts[k], self.physics)
             add_learner(vehicle.length, vehicle.width, vehicle.speed, self.ids[k],
                         self.ssm_devices)
@@ -130,11 +130,13 @@ class SumoCrowd:
         self.t = 0  # steps since the learners entered
         self._detected_at = -1  # the step last detected: once a step, whoever asks
 
-    def reenter(self, k: int) -> None:
-        """Learner ``k`` starts a new life at a free spot along the lanes."""
+    def reenter(self, learners) -> None:
+        """The ``learners`` (indices, in order) start new lives at free spots along the
+        lanes."""
         world = self.world
-        self.lives.enter(k, self.physics, world.geometry, world.lane_spots, self.slots,
-                         self.now, world.scenario)
+        self.lives.enter(np.asarray(learners, dtype=np.int64).reshape(-1), self.physics,
+                         world.geometry, world.lane_spots, self.slots, self.now,
+                         world.scenario)
 
     def _move_learners(self) -> None:
         """Place every learner in SUMO for its next step (libsumo moves one vehicle a call)."""
@@ -221,7 +223,8 @@ class SumoCrowd:
         for step in range(steps + 1):
             trace[step] = lives.pose
             if self.detect():
-                for k in np.flatnonzero(learners.events != ALIVE):
+                ended = np.flatnonzero(learners.events != ALIVE)
+                for k in ended:
                     outcome = int(learners.events[k])
                     outcomes[outcome][k] += 1
                     if learns[k]:
@@ -229,7 +232,7 @@ class SumoCrowd:
                                                        int(learners.life[k] - unseen_from[k]),
                                                        outcome == SPUN)
                     unseen_from[k] = 0
-                    self.reenter(k)
+                self.reenter(ended)  # in order, as each depends on those before
             for k in np.flatnonzero(learns & (learners.life >= cap)) if cap else ():
                 genes[k] = learning.life_capped(k, int(learners.life[k] - unseen_from[k]))
                 unseen_from[k] = learners.life[k] = 0
@@ -290,20 +293,22 @@ class _Lives:
         self.learners.gone[k] = -1
         self.learners.closing[k] = False
 
-    def enter(self, k: int, physics, geometry, spots: np.ndarray, slots: tuple, row: int,
-              scenario) -> None:
-        """Learner ``k`` starts a life at a free spot: one of ``spots`` along the lanes
-        (facing their traffic), touching no wall, ``respawn_clearance`` from every learner
-        and, if one is found within :data:`RESPAWN_TRIES` draws, from every SUMO vehicle
-        (:func:`~.crowd_rules.reenter`)."""
+    def enter(self, entering: np.ndarray, physics, geometry, spots: np.ndarray, slots: tuple,
+              row: int, scenario) -> None:
+        """The learners ``entering`` (in order) start lives at free spots: each at one of
+        ``spots`` along the lanes (facing their traffic), touching no wall,
+        ``respawn_clearance`` from every learner and, if one is found within
+        :data:`RESPAWN_TRIES` draws, from every SUMO vehicle (:func:`~.crowd_rules.reenter`,
+        one compiled call for all)."""
         if self.clear_of_walls is None or len(self.clear_of_walls) != len(spots):
             self.clear_of_walls = np.full(len(spots), -1, dtype=np.int8)  # none known yet
         ids, _, centres = slots
-        if not reenter(k, NETWORK, spots, self.clear_of_walls, physics, geometry,
-                       self.vehicles, self.rng, centres[row], ids[row], RESPAWN_TRIES):
+        if reenter(entering, NETWORK, spots, self.clear_of_walls, physics, geometry,
+                   self.vehicles, self.rng, centres[row], ids[row],
+                   RESPAWN_TRIES) < len(entering):
             raise InputError("no free spot for a learner along the lanes in 200 draws "
                              "(learners packed closer than traffic.respawn_clearance?)",
                              scenario.source, "track.net")
-        self.learners.life[k] = 0
-        self.learners.gone[k] = -1
-        self.learners.closing[k] = False
+        self.learners.life[entering] = 0
+        self.learners.gone[entering] = -1
+        self.learners.closing[entering] = False

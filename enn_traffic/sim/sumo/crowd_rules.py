@@ -333,24 +333,30 @@ move_once = njit(cache=True)(move.py_func)
 
 
 @njit(cache=True)
-def reenter(k, kind, spots, clear_of_walls, physics, geometry, vehicles, rng, centres, ids,
-            tries) -> bool:
-    """Learner ``k`` (of ``vehicles``, the learners) starts a new life at one of ``spots``
-    (:func:`~enn_traffic.sim.rules.respawn_on_lanes`, which ``clear_of_walls`` serves): the
-    first of ``tries`` drawn that is ``clearance`` from every SUMO vehicle (``centres`` of
-    the slots whose ``ids`` are not negative), else the last drawn. False when no spot free of
-    walls and learners was found."""
-    for _ in range(tries):
-        if not respawn_on_lanes(k, kind, spots, clear_of_walls, physics, geometry, vehicles,
-                                rng):
-            return False
-        x, y = vehicles.centres[k, 0], vehicles.centres[k, 1]
-        clear = True
-        for slot in range(ids.shape[0]):
-            if ids[slot] >= 0 and math.hypot(centres[slot, 0] - x,
-                                            centres[slot, 1] - y) < physics.clearance:
-                clear = False
+def reenter(entering, kind, spots, clear_of_walls, physics, geometry, vehicles, rng, centres,
+            ids, tries) -> int:
+    """The learners ``entering`` (rows of ``vehicles``, the learners; in order) start new
+    lives, each at one of ``spots`` (:func:`~enn_traffic.sim.rules.respawn_on_lanes`, which
+    ``clear_of_walls`` serves): the first of ``tries`` drawn that is ``clearance`` from every
+    SUMO vehicle (``centres`` of the slots whose ``ids`` are not negative), else the last
+    drawn. Returns how many entered: fewer when no spot free of walls and learners was
+    found for the next one."""
+    clearance = physics.clearance
+    for done in range(entering.shape[0]):
+        k = entering[done]
+        for _ in range(tries):
+            if not respawn_on_lanes(k, kind, spots, clear_of_walls, physics, geometry,
+                                    vehicles, rng):
+                return done
+            x, y = vehicles.centres[k, 0], vehicles.centres[k, 1]
+            clear = True
+            for slot in range(ids.shape[0]):
+                dx, dy = centres[slot, 0] - x, centres[slot, 1] - y
+                if abs(dx) > clearance or abs(dy) > clearance:  # farther: no hypot needed
+                    continue
+                if ids[slot] >= 0 and math.hypot(dx, dy) < clearance:
+                    clear = False
+                    break
+            if clear:
                 break
-        if clear:
-            break
-    return True
+    return entering.shape[0]
