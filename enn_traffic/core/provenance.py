@@ -38,10 +38,12 @@ RULES = ("sim", "learning", "sumo", "roads", "core/geometry.py", "core/neural.py
 # channels (a sensor of distances alone reads, and drives, as it did). ad197a53d028: the rules
 # before the SUMO crowd's learners counted their 2-D conflicts and lanes split their edge's
 # demand (every life is the same; a start_lane = "auto" resolves into the scenario's
-# fingerprint, so a start it moves is another run). 935db775f49b and da99c7326da3: the
-# rules before the learners carried their SSM device by their vehicle type and re-entries
-# remembered which lane spots the walls leave free (every crowd, traced, the same).
-SAME_RULES = ("72e67a1dafd1", "13c0276f6863", "ad197a53d028", "935db775f49b", "da99c7326da3")
+# fingerprint, so a start it moves is another run). 935db775f49b, da99c7326da3 and
+# abb36c8bd1ce: the rules before the learners carried their SSM device by their vehicle type
+# and a step's re-entries ran in one compiled call that remembers which lane spots the walls
+# leave free (every crowd, traced, the same).
+SAME_RULES = ("72e67a1dafd1", "13c0276f6863", "ad197a53d028", "935db775f49b", "da99c7326da3",
+              "abb36c8bd1ce")
 
 
 def source_digest(paths: Iterable[Path]) -> str:
