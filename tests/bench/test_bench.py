@@ -66,3 +66,24 @@ def test_the_marginal_row_adds_as_many_sumo_vehicles_and_learners_as_it_says():
     assert learners["entries"] > alone["entries"]
     for part in ("move", "read", "kernels", "reenter"):
         assert learners[f"{part}_seconds"] > 0
+
+
+@pytest.mark.full
+def test_two_checkouts_measured_interleaved_give_a_learners_cost_by_part(root, render):
+    """bench.checkouts on the small city, this checkout as both: four runs (each checkout with
+    many learners and with one, in order), each with its commit, and docs/bench.md's reading
+    of them: a cost per learner-step of each checkout, by part."""
+    from enn_traffic.bench.checkouts import compare
+
+    table = compare({"before": root, "after": root}, learners=6, steps=20, rounds=1,
+                    caches=None, city=150)
+    assert table[["checkout", "learners"]].values.tolist() == [
+        ["before", 6], ["before", 1], ["after", 6], ["after", 1]]
+    assert table["commit"].str.fullmatch(r"[0-9a-f]{12}(\+changes)?").all()
+    from contexts.bench import checkouts  # importable while the ``render`` fixture lasts
+
+    figures = checkouts(table)
+    for label in ("before", "after"):
+        assert figures[label]["all"] > 0 and figures[label]["kernels"] > 0
+        assert figures[label]["all_min"] <= figures[label]["all"] <= figures[label]["all_max"]
+    assert figures["ratio"] > 0
