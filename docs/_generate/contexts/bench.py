@@ -66,6 +66,34 @@ def crowd_marginal(table: pd.DataFrame) -> dict:
                         "ratio": trained["us_per_added_step"] / vehicle["us_per_added_step"]}}
 
 
+PARTS = ("move", "read", "kernels", "reenter")  # bench.marginal.PARTS, as the CSV names them
+
+
+def checkouts(table: pd.DataFrame) -> dict:
+    """A ``python -m enn_traffic.bench.checkouts`` table: per checkout and round, the cost of a
+    learner per step (the run of one learner taken off), in all, in SUMO's step and by part
+    (µs); per checkout the medians over the rounds, and after over before."""
+    figures = {}
+    for label, runs in table.groupby("checkout", sort=False):
+        many, one = runs[runs["learners"] > 1], runs[runs["learners"] == 1]
+        per = 1e6 / ((many["learners"].to_numpy() - 1) * many["steps"].to_numpy())
+        columns = {"all": "seconds", "sumo": "sumo_seconds",
+                   **{part: f"{part}_seconds" for part in PARTS}}
+        each = {name: (many[column].to_numpy() - one[column].to_numpy()) * per
+                for name, column in columns.items()}
+        figures[label] = {
+            "commit": runs["commit"].iloc[0], "rounds": len(many),
+            "learners": int(many["learners"].iloc[0]), "steps": int(many["steps"].iloc[0]),
+            "ms_per_step": 1000 * float((many["seconds"] / many["steps"]).median()),
+            "entries_per_learner_step": float((many["entries"] / many["learners"]
+                                               / many["steps"]).median()),
+            **{name: float(pd.Series(values).median()) for name, values in each.items()},
+            "all_min": float(each["all"].min()), "all_max": float(each["all"].max())}
+    before, after = figures["before"], figures["after"]
+    return {"before": before, "after": after,
+            "ratio": after["ms_per_step"] / before["ms_per_step"]}
+
+
 def recording(table: pd.DataFrame) -> dict:
     """The GA's generations and the environment's life, each recorded over the whole cap
     first (``whole``) and as far as the lives reach (``reach``)."""
@@ -102,6 +130,7 @@ def context(root: Path) -> dict:
         "crowd_scale": crowd_scale(read("crowd_scale_issue83")),
         "crowd_ray": rows(read("crowd_ray_issue63")),
         "crowd_marginal": crowd_marginal(read("crowd_marginal_issue83")),
+        "crowd_reentry": checkouts(read("crowd_reentry_issue83")),
         "recording": recording(read("recording_issue50")),
         "sb3": rows(read("sb3_issue52")),
         "summary": summary, "max_learners": MAX_LEARNERS}}
