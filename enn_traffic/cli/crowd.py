@@ -47,12 +47,8 @@ def add_parser(commands) -> None:
 def run(args) -> int:
     from enn_traffic.config import load_scenario
     from enn_traffic.config.shipped import scenario_path
-    from enn_traffic.experiments.crowds.user import (
-        check_folder,
-        check_room,
-        crowd_scenario,
-        run_crowd,
-    )
+    from enn_traffic.experiments.crowds.user import check_folder, crowd_scenario, run_crowd
+    from enn_traffic.sim.sumo.crowd import check_room
 
     if args.out:  # said before the scenario's network is read
         check_out(args.out)

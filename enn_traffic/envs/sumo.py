@@ -21,7 +21,7 @@ import numpy as np
 from gymnasium.error import ResetNeeded
 from pettingzoo import ParallelEnv
 
-from enn_traffic.config import Scenario, load_scenario
+from enn_traffic.config import MAX_LEARNERS, Scenario, load_scenario
 from enn_traffic.envs.batch import compiled
 from enn_traffic.envs.child import InChild
 from enn_traffic.envs.rangefinder import (
@@ -37,7 +37,7 @@ from enn_traffic.envs.rangefinder import (
 from enn_traffic.sim.crowd import ALIVE
 from enn_traffic.sim.sensors import reading_count, unseen_readings
 from enn_traffic.sim.sumo import world as recordings
-from enn_traffic.sim.sumo.crowd import SumoCrowd
+from enn_traffic.sim.sumo.crowd import SumoCrowd, check_room
 from enn_traffic.sim.sumo.crowd_rules import move_once as move_learners
 from enn_traffic.sim.sumo.crowd_rules import observe
 from enn_traffic.sim.sumo.live import LiveTraffic
@@ -210,12 +210,12 @@ class SumoCrowdEnv(ParallelEnv):
         world = sumo_world(scenario)
         if render_mode is not None:
             raise ValueError(f"{world.scenario.name}: the SUMO crowd does not render")
-        if learners is not None:
-            if int(learners) < 1:
-                raise ValueError(f"{world.scenario.name}: learners must be at least 1, "
-                                 f"not {learners}")
-            traffic = world.scenario.traffic.model_copy(update={"learners": int(learners)})
-            world = SumoWorld(world.scenario.model_copy(update={"traffic": traffic}))
+        if learners is not None:  # checked as the scenario file's key is, named as given
+            if not 1 <= int(learners) <= MAX_LEARNERS:
+                raise ValueError(f"{world.scenario.name}: learners must be from 1 to "
+                                 f"{MAX_LEARNERS:,}, not {learners}")
+            world = SumoWorld(world.scenario.with_overrides(traffic={"learners": int(learners)}))
+        check_room(world.scenario, "traffic.learners" if learners is None else "learners")
         self.world = world
         self.possible_agents = [f"vehicle_{k}"
                                 for k in range(world.scenario.traffic.learners)]

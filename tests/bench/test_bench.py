@@ -1,5 +1,6 @@
 """The bench's own machinery: the networks it generates are kept in the cache folder."""
 
+import re
 import subprocess
 
 import pytest
@@ -87,3 +88,20 @@ def test_two_checkouts_measured_interleaved_give_a_learners_cost_by_part(root, r
         assert figures[label]["all"] > 0 and figures[label]["kernels"] > 0
         assert figures[label]["all_min"] <= figures[label]["all"] <= figures[label]["all_max"]
     assert figures["ratio"] > 0
+
+
+def test_checkouts_refuses_what_is_not_a_work_tree_and_rounds_below_one(tmp_path, root,
+                                                                       capsys):
+    """``python -m enn_traffic.bench.checkouts`` given a commit instead of a folder, or no
+    round, says so in one line with exit status 2, before anything runs."""
+    from enn_traffic.bench.checkouts import main
+
+    for argv, said in ([["abc123", str(root), "--out", str(tmp_path / "x.csv")],
+                        "before: .* is not a work tree of the project"],
+                       [[str(root), str(root), "--out", str(tmp_path / "x.csv"), "--rounds",
+                         "0"], "--rounds: must be at least 1, not 0"]):
+        with pytest.raises(SystemExit) as stopped:
+            main(argv)
+        assert stopped.value.code == 2
+        assert re.search(said, capsys.readouterr().err)
+    assert not (tmp_path / "x.csv").exists()

@@ -100,7 +100,7 @@ def test_parallel_env_gives_the_sumo_crowd_for_a_sumo_scenario():
         assert isinstance(env, SumoCrowdEnv) and len(env.possible_agents) == 2
     finally:
         env.close()
-    with pytest.raises(ValueError, match="learners must be at least 1"):
+    with pytest.raises(ValueError, match="learners must be from 1 to 3,000, not 0"):
         SumoCrowdEnv(shipped_scenario("sumo_strategy1"), learners=0)
 
 
@@ -156,3 +156,18 @@ def test_learners_read_the_closing_speed_of_sumos_vehicles_and_of_each_other():
             assert np.all(other < 60.0)
             moving += int((other > 0.5).sum())
     assert moving > 10, moving
+
+
+def test_a_learner_count_given_as_an_argument_is_checked_as_the_files_key_is():
+    """``learners`` beyond the schema's cap, or more than the ring's lanes take at the
+    respawn clearance, is refused at once, naming the argument, before SUMO starts."""
+    from enn_traffic.config import MAX_LEARNERS
+    from enn_traffic.core.errors import InputError
+    from enn_traffic.sumo.simulation import Simulation
+
+    scenario = shipped_scenario("sumo_strategy1")
+    with pytest.raises(ValueError, match=f"learners must be from 1 to {MAX_LEARNERS:,}"):
+        SumoCrowdEnv(scenario, learners=MAX_LEARNERS + 1)
+    with pytest.raises(InputError, match="^learners: 2000 learners do not fit"):
+        SumoCrowdEnv(scenario, learners=2000)
+    assert Simulation.running is None

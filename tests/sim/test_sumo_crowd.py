@@ -286,3 +286,19 @@ def test_the_spots_remembered_free_of_walls_are_those_the_walls_leave_free():
     assert [bool(known[s]) for s in remembered] == [
         clear_of_walls_at(*spots[s], physics, world.geometry, trial) for s in remembered]
     assert set(known[remembered].tolist()) == {0, 1}
+
+
+def test_a_crowd_whose_learners_find_no_room_ends_its_sumo(world):
+    """A start that fails once SUMO runs (here: more learners than the ring's lanes take)
+    ends that SUMO, so that the process can start the next one."""
+    import libsumo
+
+    from enn_traffic.core.errors import InputError
+    from enn_traffic.sumo.simulation import Simulation
+
+    packed = make_world(world.scenario.with_overrides(traffic={"learners": 400}))
+    with pytest.raises(InputError, match="no free spot for a learner"):
+        SumoCrowd(packed, seed=1).start()
+    assert Simulation.running is None and not libsumo.simulation.isLoaded()
+    with SumoCrowd(world, seed=1) as crowd:
+        assert crowd.run(0.5, straight(world)).collisions.tolist() == [0, 0]

@@ -48,11 +48,6 @@ from enn_traffic.sim.world import make_world
 MARKER = "crowd.toml"  # the scenario a folder's crowd run measures: written first
 GIF_SECONDS = 30.0  # SUMO time the GIF shows
 INDIVIDUAL = "individual"
-# Random draws fill lanes with learners at respawn_clearance apart only so far (random
-# sequential adsorption jams near 3/4 of the lanes' room): refused above this share of it
-PACKING = 0.5
-
-
 # --quick: the shipped families' quick spans and situations
 QUICK = dict(SUMO_LEARNING.quick)
 
@@ -84,20 +79,6 @@ def individual_scenario(scenario: Scenario) -> Scenario:
     learners = type(scenario.traffic).model_fields["learners"].default
     return scenario.with_overrides(crowd=type(scenario.crowd)().model_dump(),
                                    traffic={"learners": learners})
-
-
-def check_room(scenario: Scenario, key: str = "traffic.learners") -> None:
-    """Refuse, in seconds, more learners than the network's lanes can take in at
-    ``traffic.respawn_clearance`` apart; ``key``: where the count came from."""
-    world = make_world(scenario.with_overrides(traffic={"mode": "closed-loop"}))
-    spots = world.lane_spots
-    spacing = max(scenario.traffic.respawn_clearance, scenario.vehicle.length)
-    room = int(len(spots) * 5.0 / spacing * PACKING)  # lane_spots: a spot every 5 m
-    if scenario.traffic.learners > room:
-        raise InputError(f"{scenario.traffic.learners} learners do not fit: the lanes learners "
-                         f"enter on ({len(spots) * 5.0 / 1000:.1f} km) take about {room} at "
-                         f"traffic.respawn_clearance = {scenario.traffic.respawn_clearance:g} m "
-                         "apart", None if key.startswith("--") else scenario.source, key)
 
 
 def check_folder(out: Path, resume: bool, force: bool, source: Path | None = None) -> None:

@@ -18,6 +18,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from enn_traffic.config import Scenario
 from enn_traffic.core.errors import InputError
 from enn_traffic.sim.buckets import buckets_for
 from enn_traffic.sim.crowd import ALIVE, CrowdRun, Learning
@@ -41,6 +42,23 @@ from enn_traffic.sumo.learners import add_learner, learner_id, move_learner, rem
 from enn_traffic.sumo.simulation import FAR, Simulation
 
 RESPAWN_TRIES = 50  # free spots drawn before a learner re-enters beside SUMO's vehicles anyway
+# Random draws fill lanes with learners at respawn_clearance apart only so far (random
+# sequential adsorption jams near 3/4 of the lanes' room): refused above this share of it
+PACKING = 0.5
+
+
+def check_room(scenario: Scenario, key: str = "traffic.learners") -> None:
+    """Refuse, in seconds, more learners than the network's lanes can take in at
+    ``traffic.respawn_clearance`` apart; ``key``: where the count came from (a key of the
+    scenario file, or an option or argument that set it)."""
+    spots = SumoWorld(scenario.with_overrides(traffic={"mode": "closed-loop"})).lane_spots
+    spacing = max(scenario.traffic.respawn_clearance, scenario.vehicle.length)
+    room = int(len(spots) * 5.0 / spacing * PACKING)  # lane_spots: a spot every 5 m
+    if scenario.traffic.learners > room:
+        raise InputError(f"{scenario.traffic.learners} learners do not fit: the lanes learners "
+                         f"enter on ({len(spots) * 5.0 / 1000:.1f} km) take about {room} at "
+                         f"traffic.respawn_clearance = {scenario.traffic.respawn_clearance:g} m "
+                         "apart", scenario.source if key.startswith("traffic.") else None, key)
 
 
 @dataclass
@@ -107,12 +125,22 @@ class SumoCrowd:
     def start(self) -> None:
         """Start SUMO and put the learners in (:meth:`run` does it when first called)."""
         world, scenario = self.world, self.world.scenario
-        vehicle = scenario.vehicle
         state = world.warm_state(self.seed) or states.warm_state(scenario, self.seed,
                                                                keep_rng=True)
         devices = ssm.ssm_options() if self.ssm_devices else ()
         self._simulation = simulation = Simulation(scenario, self.seed, state, extra=devices,
                                                    learners=self.ids)
+        try:
+            self._enter(simulation)
+        except BaseException:  # SUMO ends with the failed start, as with a failed step
+            self._simulation = None
+            simulation.close()
+            raise
+
+    def _enter(self, simulation: Simulation) -> None:
+        """The learners into the started ``simulation``, at their starts or free spots."""
+        vehicle = self.world.scenario.vehicle
+        world = self.world
         self.physics = world._learner_physics(simulation.largest_radius())
         self.slots = recording.slot_arrays(2, 64)
         self.before, self.now = 0, 1  # rows of the slot arrays; they swap every step
