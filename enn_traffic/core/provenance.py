@@ -41,10 +41,11 @@ RULES = ("sim", "learning", "sumo", "roads", "core/geometry.py", "core/neural.py
 # fingerprint, so a start it moves is another run). 935db775f49b, da99c7326da3 and
 # abb36c8bd1ce: the rules before the learners carried their SSM device by their vehicle type
 # and a step's re-entries ran in one compiled call that remembers which lane spots the walls
-# leave free (every crowd, traced, the same); 1a96cbd6b58d: before a crowd whose learners
-# find no room ended its SUMO and the check of that room moved beside the crowd.
+# leave free (every crowd, traced, the same); 1a96cbd6b58d and d1d4ccb609c7: before a crowd
+# whose learners find no room ended its SUMO, the check of that room moved beside the crowd
+# and a learner carried an SSM device only where its caller asks for one.
 SAME_RULES = ("72e67a1dafd1", "13c0276f6863", "ad197a53d028", "935db775f49b", "da99c7326da3",
-              "abb36c8bd1ce", "1a96cbd6b58d")
+              "abb36c8bd1ce", "1a96cbd6b58d", "d1d4ccb609c7")
 
 
 def source_digest(paths: Iterable[Path]) -> str:

@@ -16,12 +16,13 @@ def learner_id(index: int) -> str:
 
 
 def add_learner(length: float, width: float, speed: float, vehicle: str = LEARNER,
-                ssm_device: bool = True) -> None:
+                ssm_device: bool = False) -> None:
     """Put a learner into the running SUMO as a vehicle with no route, that obeys no speed
     or lane-change rule and is moved by :func:`move_learner` (the learners share one
     vehicle type, made with the first). It carries an SSM device if ``ssm_device`` (the
-    first learner's choice holds for all), which measures as the start's options say
-    (:func:`~enn_traffic.sumo.ssm.ssm_options`)."""
+    first learner's choice holds for all), which measures and writes as the start's options
+    say: give it only to a start given :func:`~enn_traffic.sumo.ssm.ssm_options` (without
+    them SUMO writes the device's file into the working folder)."""
     kind = LEARNER_TYPE
     if kind not in libsumo.vehicletype.getIDList():
         libsumo.vehicletype.copy("DEFAULT_VEHTYPE", kind)

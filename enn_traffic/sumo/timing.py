@@ -43,7 +43,7 @@ def step_seconds(source: list[str], learners: int, steps: int, warmup_steps: int
                 lane = lanes[k * len(lanes) // max(learners, 1)]
                 edge, index = lane.rsplit("_", 1)
                 paths.append((edge, int(index), libsumo.lane.getLength(lane)))
-                add_learner(4.3, 1.7, 10.0, learner_id(k))
+                add_learner(4.3, 1.7, 10.0, learner_id(k), ssm_device=True)
             vehicles = libsumo.vehicle.getIDCount() - learners
             started = time.perf_counter()
             for t in range(steps):

@@ -332,10 +332,13 @@ def test_a_traced_collision_ends_with_the_learners_body_on_what_it_hit(tmp_path,
     assert not boxes_overlap(body(-2), life.hit_body)
 
 
-def test_the_learners_speed_factor_lets_them_go_their_speed_on_the_slowest_lane(root):
+def test_the_learners_speed_factor_lets_them_go_their_speed_on_the_slowest_lane(root,
+                                                                              tmp_path):
     """The ring's slowest car lanes are its right turns inside the junctions (4.88 m/s in its
     .net.xml): a 10 m/s learner's type gets the factor 10 / 4.88, enters at 10 m/s, and a 3 m/s
-    one gets SUMO's usual 1 (in a fresh process: libsumo keeps state between starts)."""
+    one gets SUMO's usual 1 (in a fresh process: libsumo keeps state between starts). A
+    learner added to a start not told where SSM writes carries no SSM device, so nothing is
+    written into the working folder (SUMO's ``ssm_<id>.xml``)."""
     script = f"""
 import libsumo
 from enn_traffic.sumo.command import LEARNER, LEARNER_TYPE
@@ -348,8 +351,10 @@ libsumo.simulationStep()
 print(libsumo.vehicletype.getSpeedFactor(LEARNER_TYPE), libsumo.vehicle.getSpeed(LEARNER))
 libsumo.close()
 """
-    done = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True)
+    done = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True,
+                          cwd=tmp_path)
     assert done.returncode == 0, done.stderr
+    assert list(tmp_path.iterdir()) == []
     factors, inserted = (list(map(float, line.split())) for line in done.stdout.split("\n")[:2])
     assert factors == pytest.approx([10.0 / 4.88, 1.0])
     assert inserted == pytest.approx([10.0 / 4.88, 10.0])
