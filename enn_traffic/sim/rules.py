@@ -440,14 +440,18 @@ def clear_of_walls_at(x, y, heading, physics, geometry, trial) -> bool:
 @njit(cache=True, inline="always")
 def clear_of_vehicles(v, x, y, physics, pose) -> bool:
     """Is every vehicle but ``v`` at least ``clearance`` from (x, y)?"""
-    clearance = physics.clearance
     for other in range(pose.shape[0]):
-        dx, dy = x - pose[other, 0], y - pose[other, 1]
-        if abs(dx) > clearance or abs(dy) > clearance:
-            continue
-        if other != v and math.hypot(dx, dy) < clearance:
+        if other != v and closer_than(x - pose[other, 0], y - pose[other, 1],
+                                      physics.clearance):
             return False
     return True
+
+
+@njit(cache=True, inline="always")
+def closer_than(dx, dy, reach) -> bool:
+    """``hypot(dx, dy) < reach``, the hypot computed only where neither leg exceeds ``reach``
+    (exact: a faithful hypot is never below its larger leg)."""
+    return abs(dx) <= reach and abs(dy) <= reach and math.hypot(dx, dy) < reach
 
 
 @njit(cache=True, inline="always")

@@ -31,6 +31,7 @@ from enn_traffic.sim.buckets import Buckets, buckets_for, fill, nearby
 from enn_traffic.sim.crowd import ALIVE
 from enn_traffic.sim.rules import (
     NO_HIT,
+    closer_than,
     hits_earlier_body,
     left_network,
     move_all,
@@ -341,22 +342,24 @@ def reenter(entering, kind, spots, clear_of_walls, physics, geometry, vehicles, 
     SUMO vehicle (``centres`` of the slots whose ``ids`` are not negative), else the last
     drawn. Returns how many entered: fewer when no spot free of walls and learners was
     found for the next one."""
-    clearance = physics.clearance
     for done in range(entering.shape[0]):
         k = entering[done]
         for _ in range(tries):
             if not respawn_on_lanes(k, kind, spots, clear_of_walls, physics, geometry,
                                     vehicles, rng):
                 return done
-            x, y = vehicles.centres[k, 0], vehicles.centres[k, 1]
-            clear = True
-            for slot in range(ids.shape[0]):
-                dx, dy = centres[slot, 0] - x, centres[slot, 1] - y
-                if abs(dx) > clearance or abs(dy) > clearance:  # farther: no hypot needed
-                    continue
-                if ids[slot] >= 0 and math.hypot(dx, dy) < clearance:
-                    clear = False
-                    break
-            if clear:
+            if clear_of_slots(vehicles.centres[k, 0], vehicles.centres[k, 1], centres, ids,
+                              physics.clearance):
                 break
     return entering.shape[0]
+
+
+@njit(cache=True, inline="always")
+def clear_of_slots(x, y, centres, ids, clearance) -> bool:
+    """Is every SUMO vehicle (``centres`` of the slots whose ``ids`` are not negative) at
+    least ``clearance`` from (x, y)?"""
+    for slot in range(ids.shape[0]):
+        if ids[slot] >= 0 and closer_than(centres[slot, 0] - x, centres[slot, 1] - y,
+                                          clearance):
+            return False
+    return True
