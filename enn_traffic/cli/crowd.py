@@ -49,6 +49,7 @@ def run(args) -> int:
     from enn_traffic.config.shipped import scenario_path
     from enn_traffic.experiments.crowds.user import check_folder, crowd_scenario, run_crowd
     from enn_traffic.sim.sumo.crowd import check_room
+    from enn_traffic.sim.sumo.world import SumoWorld
 
     if args.out:  # said before the scenario's network is read
         check_out(args.out)
@@ -59,7 +60,8 @@ def run(args) -> int:
     out = args.out or Path("results") / f"{scenario.name}_crowd"
     check_out(out)  # before any world, nothing written yet
     check_folder(out, resume=args.resume, force=args.force, source=scenario.source)
-    check_room(scenario, "--learners" if args.learners else "traffic.learners")
+    check_room(SumoWorld(scenario.with_overrides(traffic={"mode": "closed-loop"})),
+               "--learners" if args.learners else "traffic.learners")
     scenario = scenario.with_sumo_output(out / "sumo", console=args.verbose)
     lines = run_crowd(scenario, out, args.executor, args.address,
                       resume=args.resume, force=args.force, progress=not args.quiet)

@@ -215,7 +215,7 @@ class SumoCrowdEnv(ParallelEnv):
                 raise ValueError(f"{world.scenario.name}: learners must be from 1 to "
                                  f"{MAX_LEARNERS:,}, not {learners}")
             world = SumoWorld(world.scenario.with_overrides(traffic={"learners": int(learners)}))
-        check_room(world.scenario, "traffic.learners" if learners is None else "learners")
+        check_room(world, "traffic.learners" if learners is None else "learners")
         self.world = world
         self.possible_agents = [f"vehicle_{k}"
                                 for k in range(world.scenario.traffic.learners)]

@@ -18,7 +18,6 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from enn_traffic.config import Scenario
 from enn_traffic.core.errors import InputError
 from enn_traffic.sim.buckets import buckets_for
 from enn_traffic.sim.crowd import ALIVE, CrowdRun, Learning
@@ -47,11 +46,11 @@ RESPAWN_TRIES = 50  # free spots drawn before a learner re-enters beside SUMO's 
 PACKING = 0.5
 
 
-def check_room(scenario: Scenario, key: str = "traffic.learners") -> None:
-    """Refuse, in seconds, more learners than the network's lanes can take in at
+def check_room(world: SumoWorld, key: str = "traffic.learners") -> None:
+    """Refuse, in seconds, more learners than the world's lanes can take in at
     ``traffic.respawn_clearance`` apart; ``key``: where the count came from (a key of the
     scenario file, or an option or argument that set it)."""
-    spots = SumoWorld(scenario.with_overrides(traffic={"mode": "closed-loop"})).lane_spots
+    scenario, spots = world.scenario, world.lane_spots
     spacing = max(scenario.traffic.respawn_clearance, scenario.vehicle.length)
     room = int(len(spots) * 5.0 / spacing * PACKING)  # lane_spots: a spot every 5 m
     if scenario.traffic.learners > room:
