@@ -21,8 +21,9 @@ def add_learner(length: float, width: float, speed: float, vehicle: str = LEARNE
     or lane-change rule and is moved by :func:`move_learner` (the learners share one
     vehicle type, made with the first). It carries an SSM device if ``ssm_device`` (the
     first learner's choice holds for all), which measures and writes as the start's options
-    say: give it only to a start given :func:`~enn_traffic.sumo.ssm.ssm_options` (without
-    them SUMO writes the device's file into the working folder)."""
+    say: only for a start given :func:`~enn_traffic.sumo.ssm.ssm_options`
+    (``Simulation.has_ssm_options``; without them SUMO writes the device's file into the
+    working folder)."""
     kind = LEARNER_TYPE
     if kind not in libsumo.vehicletype.getIDList():
         libsumo.vehicletype.copy("DEFAULT_VEHTYPE", kind)

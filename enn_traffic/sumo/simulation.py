@@ -70,6 +70,8 @@ class Simulation:
         command = sumo_command(scenario, seed, self.folder, state, save_rng)
         if "ssm" in scenario.traffic.outputs and "--device.ssm.file" not in extra:
             extra = (*extra, *ssm_options())  # how the devices of every vehicle write
+        # SSM devices write into this start's folder: a learner added here may carry one
+        self.has_ssm_options = "--device.ssm.file" in extra
         try:
             with slow_step(f"starting SUMO on {scenario.name}'s traffic (seed {seed})"), \
                     self.console():

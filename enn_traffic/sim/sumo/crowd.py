@@ -152,7 +152,7 @@ class SumoCrowd:
             if self._starts is not None:
                 lives.place(k, self._starts[k], self.physics)
             add_learner(vehicle.length, vehicle.width, vehicle.speed, self.ids[k],
-                        self.ssm_devices)
+                        simulation.has_ssm_options)
         self._move_learners()
         self.t = 0  # steps since the learners entered
         self._detected_at = -1  # the step last detected: once a step, whoever asks

@@ -50,7 +50,8 @@ class LiveTraffic:
             self.at_start = int((self.ids[self.now] >= 0).sum())
             clear_start(self.state.learner.centres, self.ids[self.now], self.centres[self.now],
                         self.state.gone, self.physics.clearance)
-            add_learner(vehicle.length, vehicle.width, vehicle.speed, ssm_device=True)
+            add_learner(vehicle.length, vehicle.width, vehicle.speed,
+                        ssm_device=simulation.has_ssm_options)
             # Vehicles farther than this from the learner's front bumper can neither be seen
             # nor be hit within a step: the sensor's range, two bodies and two steps of both
             # vehicles' travel.
