@@ -327,7 +327,7 @@ class _Lives:
         ``respawn_clearance`` from every learner and, if one is found within
         :data:`RESPAWN_TRIES` draws, from every SUMO vehicle (:func:`~.crowd_rules.reenter`,
         one compiled call for all)."""
-        if self.clear_of_walls is None or len(self.clear_of_walls) != len(spots):
+        if self.clear_of_walls is None:  # the world's spots, known at the first entry
             self.clear_of_walls = np.full(len(spots), -1, dtype=np.int8)  # none known yet
         ids, _, centres = slots
         if reenter(entering, NETWORK, spots, self.clear_of_walls, physics, geometry,
