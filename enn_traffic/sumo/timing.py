@@ -7,11 +7,11 @@ from __future__ import annotations
 import math
 import tempfile
 import time
-import xml.etree.ElementTree as ElementTree
 from pathlib import Path
 
 import libsumo
 
+from enn_traffic.roads.xmlread import parse_root
 from enn_traffic.sumo.command import output_prefix
 from enn_traffic.sumo.learners import add_learner, learner_id, move_learner
 from enn_traffic.sumo.ssm import ssm_options
@@ -65,7 +65,7 @@ ADDED = "bench_added_"  # the SUMO ids of the added SUMO-driven vehicles
 
 def trip_ends(trips: Path, after_s: float, count: int) -> list[tuple[str, str]]:
     """``count`` (from, to) edge pairs of the trips that depart after ``after_s`` (cycled)."""
-    pairs = [(e.get("from"), e.get("to")) for e in ElementTree.parse(trips).getroot()
+    pairs = [(e.get("from"), e.get("to")) for e in parse_root(trips)
              if e.tag == "trip" and float(e.get("depart", "0")) > after_s]
     return [pairs[i % len(pairs)] for i in range(count)]
 
