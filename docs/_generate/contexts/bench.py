@@ -66,9 +66,6 @@ def crowd_marginal(table: pd.DataFrame) -> dict:
                         "ratio": trained["us_per_added_step"] / vehicle["us_per_added_step"]}}
 
 
-PARTS = ("move", "read", "kernels", "reenter")  # bench.marginal.PARTS, as the CSV names them
-
-
 def checkouts(table: pd.DataFrame) -> dict:
     """A ``python -m enn_traffic.bench.checkouts`` table: per checkout and round, the cost of a
     learner per step (the run of one learner taken off), in all, in SUMO's step and by part
@@ -77,8 +74,10 @@ def checkouts(table: pd.DataFrame) -> dict:
     for label, runs in table.groupby("checkout", sort=False):
         many, one = runs[runs["learners"] > 1], runs[runs["learners"] == 1]
         per = 1e6 / ((many["learners"].to_numpy() - 1) * many["steps"].to_numpy())
-        columns = {"all": "seconds", "sumo": "sumo_seconds",
-                   **{part: f"{part}_seconds" for part in PARTS}}
+        # the whole, SUMO's step, and each part the CSV times (``<part>_seconds``)
+        columns = {"all": "seconds", **{column.removesuffix("_seconds"): column
+                                        for column in table.columns
+                                        if column.endswith("_seconds")}}
         each = {name: (many[column].to_numpy() - one[column].to_numpy()) * per
                 for name, column in columns.items()}
         figures[label] = {
