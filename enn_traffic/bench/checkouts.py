@@ -1,14 +1,12 @@
-"""What a change bought: bench ``crowd_marginal``'s measurement
-(:func:`~enn_traffic.bench.marginal.marginal_seconds`: learners in one warmed-up city SUMO, the
-step's time by part) run in two checkouts of the project, one fresh interpreter per run, the
-checkouts interleaved over the rounds so that both meet the same machine. Each checkout keeps
-its own cache folder (numba's kernels, SUMO's warm-ups).
-
-    python -m enn_traffic.bench.checkouts BEFORE AFTER --out results/bench/NAME.csv
+"""Measure what a change bought: bench crowd_marginal's measurement (learners in one
+warmed-up SUMO of the random city, a step's time by part) in two git work trees of the project
+(make one with `git worktree add FOLDER COMMIT`), each run in a fresh interpreter with its own
+cache folder, the two interleaved over the rounds. Each round runs both with the learners and
+with one learner; a round of 3,000 learners and 300 steps took about 3 minutes on 2 cores.
 
 One row per run: the checkout's label and commit, the round, the learners, and what
-``marginal_seconds`` returns; docs/bench.md turns the rows into the cost per learner and step
-(the run of one learner taken off), by part."""
+bench.marginal.marginal_seconds returns; docs/bench.md turns the rows into the cost per
+learner and step (the run of one learner taken off), by part."""
 
 from __future__ import annotations
 
@@ -77,13 +75,6 @@ def compare(checkouts: dict[str, Path], learners: int, steps: int, rounds: int,
     return pd.DataFrame(rows)
 
 
-DESCRIPTION = """Measure what a change bought: bench crowd_marginal's measurement (learners
-in one warmed-up SUMO of the random city, a step's time by part) in two git work trees of the
-project (make one with `git worktree add FOLDER COMMIT`), each run in a fresh interpreter,
-the two interleaved over the rounds. Each round runs both with the learners and with one
-learner; a round of 3,000 learners and 300 steps takes about 2 to 3 minutes."""
-
-
 def _positive(text: str) -> int:
     value = int(text)
     if value < 1:
@@ -93,7 +84,7 @@ def _positive(text: str) -> int:
 
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(
-        prog="python -m enn_traffic.bench.checkouts", description=DESCRIPTION,
+        prog="python -m enn_traffic.bench.checkouts", description=__doc__.split("\n\n")[0],
         formatter_class=argparse.ArgumentDefaultsHelpFormatter)
     parser.add_argument("before", type=Path, help="work tree of the code before the change")
     parser.add_argument("after", type=Path, help="work tree of the code after it")
