@@ -38,14 +38,16 @@ RULES = ("sim", "learning", "sumo", "roads", "core/geometry.py", "core/neural.py
 # channels (a sensor of distances alone reads, and drives, as it did). ad197a53d028: the rules
 # before the SUMO crowd's learners counted their 2-D conflicts and lanes split their edge's
 # demand (every life is the same; a start_lane = "auto" resolves into the scenario's
-# fingerprint, so a start it moves is another run). 935db775f49b, da99c7326da3 and
-# abb36c8bd1ce: the rules before the learners carried their SSM device by their vehicle type
-# and a step's re-entries ran in one compiled call that remembers which lane spots the walls
-# leave free (every crowd, traced, the same); 1a96cbd6b58d and d1d4ccb609c7: before a crowd
-# whose learners find no room ended its SUMO, the check of that room moved beside the crowd
-# and a learner carried an SSM device only where its caller asks for one.
-SAME_RULES = ("72e67a1dafd1", "13c0276f6863", "ad197a53d028", "935db775f49b", "da99c7326da3",
-              "abb36c8bd1ce", "1a96cbd6b58d", "d1d4ccb609c7")
+# fingerprint, so a start it moves is another run). The rest: the rules of issues 82 and 83
+# on SUMO's readers and crowd, commit by commit (the cap on learners raised to 3,000, the XML
+# readers fed in blocks, the learners' SSM device set by their vehicle type and only where the
+# start writes SSM, re-entries in one compiled call that remembers the lane spots the walls
+# leave free, a failed crowd start ending its SUMO): every crowd, traced, and every test's
+# life the same.
+SAME_RULES = ("72e67a1dafd1", "13c0276f6863", "ad197a53d028",
+              "6b6259b1fa90", "ca0cd856c646", "b8dc5d7b1b60", "c6b06d6a604f", "fd611642ca7f",
+              "935db775f49b", "da99c7326da3", "abb36c8bd1ce", "1a96cbd6b58d", "d1d4ccb609c7",
+              "a7b125e5a324", "03de6bb5eb98", "3d3ea4d5b7fd", "961c1f8cd0b2", "852aaf9ed580")
 
 
 def source_digest(paths: Iterable[Path]) -> str:
