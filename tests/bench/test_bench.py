@@ -72,15 +72,16 @@ def test_the_marginal_row_adds_as_many_sumo_vehicles_and_learners_as_it_says():
 
 @pytest.mark.full
 def test_two_checkouts_measured_interleaved_give_a_learners_cost_by_part(root, render):
-    """bench.checkouts on the small city, this checkout as both: four runs (each checkout with
-    many learners and with one, in order), each with its commit, and docs/bench.md's reading
-    of them: a cost per learner-step of each checkout, by part."""
+    """bench.checkouts on the small city, this checkout as both, two rounds: eight runs (each
+    checkout with many learners and with one, in order), each with its commit, and
+    docs/bench.md's reading of them: a cost per learner-step of each checkout, by part, the
+    median of the rounds within their range."""
     from enn_traffic.bench.checkouts import compare
 
-    table = compare({"before": root, "after": root}, learners=6, steps=20, rounds=1,
+    table = compare({"before": root, "after": root}, learners=6, steps=20, rounds=2,
                     caches=None, city=150)
     assert table[["checkout", "learners"]].values.tolist() == [
-        ["before", 6], ["before", 1], ["after", 6], ["after", 1]]
+        ["before", 6], ["before", 1], ["after", 6], ["after", 1]] * 2
     assert table["commit"].str.fullmatch(r"[0-9a-f]{12}(\+changes)?").all()
     from contexts.bench import checkouts  # importable while the ``render`` fixture lasts
 
@@ -88,11 +89,10 @@ def test_two_checkouts_measured_interleaved_give_a_learners_cost_by_part(root, r
     for label in ("before", "after"):
         row = figures[label]
         assert (row["commit"], row["rounds"], row["learners"], row["steps"]) == (
-            table["commit"].iloc[0], 1, 6, 20)
+            table["commit"].iloc[0], 2, 6, 20)
         assert all(np.isfinite(row[part]) for part in ("all", "sumo", "move", "read",
                                                        "kernels", "reenter"))
-        assert row["all_min"] <= row["all"] <= row["all_max"]
-    assert figures["ratio"] > 0
+        assert row["all_min"] <= row["all"] <= row["all_max"]  # the median of the rounds
 
 
 def test_checkouts_refuses_what_is_not_a_work_tree_and_rounds_below_one(tmp_path, root,
