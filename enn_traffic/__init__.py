@@ -39,6 +39,8 @@ if "NUMBA_CACHE_DIR" not in os.environ:
     os.environ["NUMBA_CACHE_DIR"] = _numba_cache_dir()
     if _new:  # a new version: its kernels compile, the oldest folders go
         prune_kernel_folders(Path(os.environ["NUMBA_CACHE_DIR"]))
+    if "numba" in sys.modules:  # imported first, it read its settings without ours
+        sys.modules["numba"].config.CACHE_DIR = os.environ["NUMBA_CACHE_DIR"]
 tolerate_damaged_kernels()
 # numba's parallel loops run on OpenMP (libgomp), whose idle threads spin by default: beside
 # other busy processes (pytest -n 2, a process pool, a second user) a parallel region then

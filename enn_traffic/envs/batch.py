@@ -25,8 +25,9 @@ from numba import njit, prange
 from enn_traffic.config.traffic import ACTION
 from enn_traffic.core.progress import slow_step
 from enn_traffic.sim.arena import ArenaWorld, settle, start_world
+from enn_traffic.sim.readings import reading_count, seen_for, work_row
 from enn_traffic.sim.rules import Vehicles, Work, copy_row, copy_rows, drive_all, wall_arrays
-from enn_traffic.sim.sensors import reading_count, seen_for, sense
+from enn_traffic.sim.sensors import sense
 from enn_traffic.sim.world import RUNNING, SPUN
 
 
@@ -71,7 +72,7 @@ class Worlds(NamedTuple):
     tally: np.ndarray  # (N, 4): suffered, near steps, near max, hit (arena.SUFFERED, ...)
     steering: np.ndarray  # (N, V)
     readings: np.ndarray  # (N, B) work array: every vehicle's readings
-    seen: np.ndarray  # (N, B or 0, 2) work array: what its beams met (sensors.seen_for)
+    seen: np.ndarray | None  # (N, B, 2) work array: what its beams met (readings.seen_for)
     activation: np.ndarray  # (N, width) the traffic networks' work arrays
     scratch: np.ndarray
     situation: np.ndarray  # (N,) index into the pool
@@ -95,7 +96,7 @@ class Worlds(NamedTuple):
             np.zeros((*shape, 2)), np.zeros(shape, np.bool_), np.zeros((*shape, 2)),
             np.zeros((count, 1), np.uint64), np.zeros((count, world.physics.spin_window, 2)),
             np.zeros(count, np.int64), np.zeros((count, 4), np.int64), np.zeros(shape),
-            np.zeros((count, beams)), np.zeros((count, *seen.shape)),
+            np.zeros((count, beams)), None if seen is None else np.zeros((count, *seen.shape)),
             np.zeros((count, width)), np.zeros((count, width)),
             np.zeros(count, np.int64), np.zeros((count, beams)), np.zeros(count),
             np.full(count, RUNNING, np.int64), np.zeros(count, np.int64),
@@ -115,14 +116,14 @@ def world_vehicles(worlds, i):
 def world_work(worlds, i):
     """World ``i``'s work arrays (:class:`~enn_traffic.sim.rules.Work`), views into
     ``worlds``."""
-    return Work(worlds.readings[i], worlds.seen[i], worlds.activation[i], worlds.scratch[i],
-                worlds.steering[i])
+    return Work(worlds.readings[i], work_row(worlds.seen, i), worlds.activation[i],
+                worlds.scratch[i], worlds.steering[i])
 
 
 @njit(cache=True, inline="always")
 def observe(vehicles, physics, geometry, out, seen):
     """The learner (vehicle 0) senses walls and the other bodies into ``out`` (``seen``: a
-    :func:`~enn_traffic.sim.sensors.seen_for` work array)."""
+    :func:`~enn_traffic.sim.readings.seen_for` work array)."""
     walls, cell_start, cell_walls, all_walls = wall_arrays(geometry)
     sense(0, vehicles.pose, physics, geometry.beams, geometry.channels, walls, cell_start,
           cell_walls, all_walls, vehicles.pose.shape[0] > 1, vehicles.corners, vehicles.centres,
@@ -144,7 +145,7 @@ def begin(i, m, pool, worlds, physics, geometry, max_steps):
                 worlds.tally[i])
     settle(0, worlds.kinds[i], vehicles, worlds.rng[i], worlds.recent[i], physics, geometry,
            max_steps, worlds.tally[i])
-    observe(vehicles, physics, geometry, worlds.observation[i], worlds.seen[i])
+    observe(vehicles, physics, geometry, worlds.observation[i], work_row(worlds.seen, i))
 
 
 @njit(cache=True)
@@ -158,7 +159,7 @@ def step_world(i, action, autoreset, pool, worlds, layer_sizes, physics, geometr
     steps[i] += 1
     outcome[i] = settle(steps[i], worlds.kinds[i], vehicles, worlds.rng[i], worlds.recent[i],
                         physics, geometry, max_steps, worlds.tally[i])
-    observe(vehicles, physics, geometry, worlds.observation[i], worlds.seen[i])
+    observe(vehicles, physics, geometry, worlds.observation[i], work_row(worlds.seen, i))
     worlds.reward[i] = 1.0
     if outcome[i] == RUNNING:
         return

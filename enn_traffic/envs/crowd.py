@@ -39,8 +39,9 @@ from enn_traffic.envs.rangefinder import (
     steering_of,
 )
 from enn_traffic.sim.crowd import ALIVE, Crowd, crowd_events, step_once
+from enn_traffic.sim.readings import reading_count, seen_for
 from enn_traffic.sim.rules import wall_arrays
-from enn_traffic.sim.sensors import reading_count, seen_for, sense
+from enn_traffic.sim.sensors import sense
 from enn_traffic.sim.world import OUTCOMES, SPUN
 
 

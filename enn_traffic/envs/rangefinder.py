@@ -33,7 +33,7 @@ from gymnasium.vector.utils import batch_space
 from enn_traffic.config import Scenario, load_scenario
 from enn_traffic.envs.batch import Batch, Situations
 from enn_traffic.sim.arena import HIT, SUFFERED, ArenaWorld
-from enn_traffic.sim.sensors import COS, SIN, reading_bounds
+from enn_traffic.sim.readings import COS, SIN, reading_bounds
 from enn_traffic.sim.world import CAPPED, OUTCOMES, RUNNING, SPUN
 
 TRAINING_KEYS = 1_000_000  # reset draws its traffic key among the first training keys

@@ -35,7 +35,7 @@ from enn_traffic.envs.rangefinder import (
     steering_of,
 )
 from enn_traffic.sim.crowd import ALIVE
-from enn_traffic.sim.sensors import reading_count, unseen_readings
+from enn_traffic.sim.readings import reading_count, unseen_readings
 from enn_traffic.sim.sumo import world as recordings
 from enn_traffic.sim.sumo.crowd import SumoCrowd, check_room
 from enn_traffic.sim.sumo.crowd_rules import move_once as move_learners

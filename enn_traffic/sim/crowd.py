@@ -238,7 +238,7 @@ class Crowd:
         twin = copy.copy(self)
         twin.kinds, twin.rng = self.kinds.copy(), self.rng.copy()
         twin.vehicles, twin.lives, twin.work = (
-            type(record)(*(array.copy() for array in record))
+            type(record)(*(None if array is None else array.copy() for array in record))
             for record in (self.vehicles, self.lives, self.work))
         return twin
 

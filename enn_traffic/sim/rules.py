@@ -39,19 +39,16 @@ from enn_traffic.core.geometry import (
 from enn_traffic.core.neural import network_buffers
 from enn_traffic.core.neural import steering as network_steering
 from enn_traffic.sim.bicycle import bicycle_step
-from enn_traffic.sim.sensors import (
+from enn_traffic.sim.readings import (
     RANGE,
-    WallGrid,
     beam_table,
     channel_codes,
     clear_seen,
     fill_channels,
-    nearby_walls,
     reading_count,
     seen_for,
-    sense,
-    sense_walls_of,
 )
+from enn_traffic.sim.sensors import WallGrid, nearby_walls, sense, sense_walls_of
 from enn_traffic.sim.strategies import (
     STRATEGY_FIELDS,
     next_uniform,
@@ -123,11 +120,11 @@ def vehicles_at(count: int) -> Vehicles:
 
 class Work(NamedTuple):
     """A step's work arrays: one vehicle's readings and what its beams met
-    (:func:`~enn_traffic.sim.sensors.seen_for`), the networks' layer buffers
+    (:func:`~enn_traffic.sim.readings.seen_for`), the networks' layer buffers
     (:func:`~enn_traffic.core.neural.network_buffers`) and every vehicle's steering (V,)."""
 
     readings: np.ndarray
-    seen: np.ndarray
+    seen: np.ndarray | None
     activation: np.ndarray
     scratch: np.ndarray
     steering: np.ndarray
@@ -138,8 +135,8 @@ class Geometry(NamedTuple):
     loops take them out by name once (``walls = geometry.walls``) and hand the rules the arrays
     themselves: a compiled call that takes a tuple of arrays is many times slower."""
 
-    beams: np.ndarray  # the rangefinder's beams (enn_traffic.sim.sensors.beam_table)
-    channels: np.ndarray  # what each beam reads (enn_traffic.sim.sensors.channel_codes)
+    beams: np.ndarray  # the rangefinder's beams (enn_traffic.sim.readings.beam_table)
+    channels: np.ndarray | None  # what each beam reads (readings.channel_codes; None: distances)
     walls: np.ndarray  # (S, 4)
     cell_start: np.ndarray  # the wall grid (WallGrid)
     cell_walls: np.ndarray

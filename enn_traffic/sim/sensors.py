@@ -5,7 +5,7 @@ of beams, :attr:`enn_traffic.config.Scenario.beams`); its reading is the distanc
 nearest wall or vehicle-body edge it crosses, or its range when it crosses none. Readings are
 raw metres, as the authors feed them to the network. Further channels (``[sensor] channels``:
 the closing speed of what a beam meets) follow the distances, every beam's each
-(:func:`fill_channels`).
+(:mod:`enn_traffic.sim.readings`).
 
 Walls are culled with a uniform grid: each cell lists the walls within reach of any point in
 the cell, so a sensing step only tests the walls that can matter (docs/design.md, "Speed").
@@ -19,10 +19,19 @@ from typing import NamedTuple
 import numpy as np
 from numba import njit
 
-from enn_traffic.config.sensor import CHANNELS
 from enn_traffic.core import cache
 from enn_traffic.core.errors import InputError
 from enn_traffic.core.progress import slow_step
+from enn_traffic.sim.readings import (
+    COS,
+    FAN_ANGLE,
+    FAN_BEAM,
+    RANGE,
+    SIN,
+    clear_seen,
+    fill_channels,
+    note_seen,
+)
 
 GRID_VERSION = 1  # raised when the cells a grid lists change
 CELL_SIZE = 5.0  # m: the side of a wall grid's cells
@@ -192,113 +201,6 @@ def ray_segment_distance(x, y, ux, uy, max_range, x1, y1, x2, y2) -> float:
     return max_range
 
 
-# The beams as the kernels take them (:func:`beam_table`): one row per beam, in the network's
-# input order, with its direction's cosine and sine relative to the heading and its range; and
-# one row per rank of angle, right to left, with that angle and the beam that has it (a
-# sensing step finds the beams that can reach a wall or a body by bisecting the angles).
-COS, SIN, RANGE, FAN_ANGLE, FAN_BEAM = range(5)
-
-
-def beam_table(beams: list[tuple[float, float]]) -> np.ndarray:
-    """The (B, 5) table of ``beams``, each (angle relative to the heading in radians, range in
-    metres), in the network's input order (paper §3: the rangefinder's beams)."""
-    angles = np.array([angle for angle, _ in beams], dtype=np.float64)
-    table = np.empty((len(beams), 5))
-    table[:, COS], table[:, SIN] = np.cos(angles), np.sin(angles)
-    table[:, RANGE] = [reach for _, reach in beams]
-    # bearings are measured in [-π, π]: a beam past either end (a ring behind) is put back in
-    angles = np.where(angles > math.pi, angles - 2 * math.pi,
-                      np.where(angles < -math.pi, angles + 2 * math.pi, angles))
-    order = np.argsort(angles, kind="stable")
-    table[:, FAN_ANGLE], table[:, FAN_BEAM] = angles[order], order
-    return table
-
-
-# What a beam reads (``[sensor] channels``, named in enn_traffic.config.sensor.CHANNELS), as
-# the codes the compiled step takes: a channel is its name there, its branch in
-# :func:`fill_channels` and its bounds in :func:`reading_bounds`.
-CODES = {name: code for code, name in enumerate(CHANNELS)}
-DISTANCE, CLOSING_SPEED = CODES["distance"], CODES["closing_speed"]
-
-
-def channel_codes(names: list[str]) -> np.ndarray:
-    """The codes of the channels ``names`` (``[sensor] channels``), in their order."""
-    return np.array([CODES[name] for name in names], dtype=np.int64)
-
-
-@njit(cache=True)
-def reading_count(geometry) -> int:
-    """Readings a vehicle's sensor gives each step, the network's inputs: one per beam of the
-    :func:`beam_table` and channel (every world, environment and buffer asks here, compiled
-    kernels too). Channel by channel: the distances of every beam, then the next channel's."""
-    return geometry.beams.shape[0] * geometry.channels.shape[0]
-
-
-def reading_bounds(geometry) -> tuple[np.ndarray, np.ndarray]:
-    """Each reading's least and greatest value, what an environment's observation space holds:
-    a distance from 0 (a body at the sensor) to the beam's range (nothing within it); a
-    closing speed is unbounded (SUMO's vehicles set their own speeds)."""
-    ranges = geometry.beams[:, RANGE]
-    low, high = [], []
-    for code in geometry.channels:
-        if code == DISTANCE:
-            low.append(np.zeros_like(ranges))
-            high.append(ranges.copy())
-        else:
-            low.append(np.full_like(ranges, -np.inf))
-            high.append(np.full_like(ranges, np.inf))
-    return np.concatenate(low), np.concatenate(high)
-
-
-def unseen_readings(geometry) -> np.ndarray:
-    """What the sensor reads when it meets nothing: each beam's range, every further channel
-    0."""
-    readings = np.zeros(reading_count(geometry))
-    readings[: geometry.beams.shape[0]] = geometry.beams[:, RANGE]
-    return readings
-
-
-@njit(cache=True)
-def seen_for(beams, channels) -> np.ndarray:
-    """Room for what each beam meets, (B, 2), when ``channels`` go beyond the distance: the
-    velocity of the body it meets (m/s; a wall's is 0), noted as the bodies are sensed. No
-    rows when they do not: the distances need nothing noted. A work array, made once per
-    world or observer, not at every sensing: made there, it ran the arena batch at 0.89 of
-    its rate before channels, against 0.99 made once (bench A/B, 3 rounds each)."""
-    rows = beams.shape[0] if channels.shape[0] > 1 else 0
-    return np.zeros((rows, 2))
-
-
-@njit(cache=True, inline="always")
-def clear_seen(seen) -> None:
-    """Every beam of ``seen`` (:func:`seen_for`) meets a wall or nothing, until a body is
-    sensed."""
-    for b in range(seen.shape[0]):
-        seen[b, 0], seen[b, 1] = 0.0, 0.0
-
-
-@njit(cache=True, inline="always")
-def fill_channels(channels, beams, seen, cos_h, sin_h, speed, readings) -> None:
-    """The readings of every channel after the distances (``channels``: codes from
-    :func:`channel_codes`), for a vehicle whose heading has cosine ``cos_h`` and sine
-    ``sin_h``, moving at ``speed`` (m/s); ``seen``: :func:`seen_for`, filled. A beam that
-    reads its range met nothing.
-
-    Closing speed: how fast the distance along the beam shrinks, the vehicle's velocity less
-    what it met's, along the beam (m/s, negative when it draws away); 0 when it meets
-    nothing."""
-    count = beams.shape[0]
-    vx, vy = speed * cos_h, speed * sin_h
-    for c in range(1, channels.shape[0]):
-        for b in range(count):
-            value = 0.0
-            if channels[c] == CLOSING_SPEED and readings[b] < beams[b, RANGE]:
-                ux = cos_h * beams[b, COS] - sin_h * beams[b, SIN]
-                uy = sin_h * beams[b, COS] + cos_h * beams[b, SIN]
-                value = (vx - seen[b, 0]) * ux + (vy - seen[b, 1]) * uy
-            readings[c * count + b] = value
-
-
 @njit(cache=True, inline="always")
 def sense_walls(x, y, cos_h, sin_h, beams, walls, candidates, readings):
     """Fill ``readings`` with each beam's distance to the nearest candidate wall (its range
@@ -423,8 +325,8 @@ def sense(v, pose, physics, beams, channels, walls, cell_start, cell_walls, all_
     """Rangefinder readings of vehicle ``v`` (paper §3): the nearest wall along each beam and,
     when ``bodies``, the nearest edge of any other body (``corners``, ``centres``, and the
     centres a step ``before``; ``me``, its own there, skipped); then the further ``channels``
-    (:func:`~enn_traffic.sim.sensors.fill_channels`; ``seen``: a
-    :func:`~enn_traffic.sim.sensors.seen_for` work array)."""
+    (:func:`~enn_traffic.sim.readings.fill_channels`; ``seen``: a
+    :func:`~enn_traffic.sim.readings.seen_for` work array)."""
     x, y, cos_h, sin_h = sense_walls_of(v, pose, physics, beams, walls, cell_start, cell_walls,
                                         all_walls, readings)
     clear_seen(seen)
@@ -450,8 +352,8 @@ def sense_bodies(me, x, y, cos_h, sin_h, beams, corners, centres, before, radius
                  seen):
     """Lower ``readings`` of a vehicle at (x, y) (heading cosine ``cos_h``, sine ``sin_h``)
     to the nearest edge of any body but ``me`` (``beams``: a
-    :func:`~enn_traffic.sim.sensors.beam_table`), and where ``seen``
-    (:func:`~enn_traffic.sim.sensors.seen_for`) has rows, note there the velocity of the body
+    :func:`~enn_traffic.sim.readings.beam_table`), and where ``seen``
+    (:func:`~enn_traffic.sim.readings.seen_for`) is an array, note there the velocity of the body
     each beam met, from its centre a step (``dt`` seconds) ``before``. A body is skipped when
     its bounding circle lies beyond every reading, and its edges are tested only along the
     beams that pass through that circle: those within the circle's angular half-width of its bearing
@@ -459,7 +361,6 @@ def sense_bodies(me, x, y, cos_h, sin_h, beams, corners, centres, before, radius
     vehicle is outside of, only the edges that face it are tested: a ray enters a convex body
     through one of those (:func:`facing_edges`)."""
     count = beams.shape[0]
-    noted = seen.shape[0] > 0
     far = largest(readings, count) + radius + 1e-9  # readings only fall: a looser cut, same result
     for other in range(corners.shape[0]):
         if other == me:
@@ -492,9 +393,8 @@ def sense_bodies(me, x, y, cos_h, sin_h, beams, corners, centres, before, radius
                 )  # fmt: skip
                 if d < readings[b]:
                     readings[b] = d
-                    if noted:
-                        seen[b, 0] = (centres[other, 0] - before[other, 0]) / dt
-                        seen[b, 1] = (centres[other, 1] - before[other, 1]) / dt
+                    note_seen(seen, b, (centres[other, 0] - before[other, 0]) / dt,
+                              (centres[other, 1] - before[other, 1]) / dt)
 
 
 EDGE_MARGIN = 1e-9  # m²: an edge nearly in line with the sensing point counts as facing it

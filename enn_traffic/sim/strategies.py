@@ -32,7 +32,7 @@ import numpy as np
 from numba import njit
 
 from enn_traffic.config.traffic import CIRCLING, NETWORK, NONE, STRAIGHT, WANDER
-from enn_traffic.sim.sensors import COS, RANGE, SIN
+from enn_traffic.sim.readings import COS, RANGE, SIN
 
 TURN_SIDES = {"open": 0.0, "left": 1.0, "right": -1.0}
 

@@ -457,6 +457,30 @@ def test_kernels_never_compile_into_the_package_when_the_cache_folder_is_unusabl
     assert not [p for p in package.rglob("*.nbi") if p.stat().st_mtime >= started]
 
 
+def test_kernels_never_compile_into_the_package_when_numba_is_imported_first(tmp_path):
+    """A program that imports numba (or a library that does) before enn_traffic: numba read
+    its cache setting at its own import, and wrote every kernel into the package's own
+    __pycache__ folders; now they go to the project's cache folder."""
+    import os
+
+    import enn_traffic
+
+    package = Path(enn_traffic.__file__).parent
+    started = time.time()
+    script = ("import numba, os, enn_traffic\nfrom enn_traffic.sim.safety import "
+              "time_to_contact\nimport numpy as np\n"
+              "box = np.array([[0., 0.], [1., 0.], [1., 1.], [0., 1.]])\n"
+              "time_to_contact(box, box + 5.0, -1.0, -1.0)\nprint(os.environ['NUMBA_CACHE_DIR'])")
+    env = {**os.environ, "ENN_TRAFFIC_CACHE": str(tmp_path / "cache")}
+    env.pop("NUMBA_CACHE_DIR", None)
+    done = subprocess.run([sys.executable, "-c", script], env=env, capture_output=True,
+                          text=True, timeout=300)
+    assert done.returncode == 0, done.stderr
+    folder = Path(done.stdout.strip().splitlines()[-1])
+    assert folder.is_relative_to(tmp_path / "cache") and any(folder.rglob("*.nbi"))
+    assert not [p for p in package.rglob("*.nbi") if p.stat().st_mtime >= started]
+
+
 @pytest.mark.parametrize("executor", ["process", pytest.param("ray", marks=pytest.mark.full)])
 def test_a_worker_killed_mid_run_is_one_line_and_resume_gives_the_uninterrupted_run(
         tmp_path, root, executor):

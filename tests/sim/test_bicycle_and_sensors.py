@@ -5,10 +5,10 @@ import pytest
 
 from enn_traffic.core.geometry import body_polygon, box_hits_segment, boxes_overlap
 from enn_traffic.sim.bicycle import bicycle_step
+from enn_traffic.sim.readings import beam_table
 from enn_traffic.sim.sensors import (
     ANGLE_MARGIN,
     WallGrid,
-    beam_table,
     nearby_walls,
     ray_segment_distance,
     rough_atan2,
@@ -166,7 +166,7 @@ def test_a_second_ring_behind_reads_what_every_beam_against_every_wall_reads():
                     np.arange(len(walls)), readings)
         sense_bodies(-1, 0.0, 0.0, math.cos(heading), math.sin(heading), table, corners,
                      corners.mean(axis=1), corners.mean(axis=1), radius, 0.1, readings,
-                     np.zeros((0, 2)))
+                     None)
         edges = np.concatenate([walls] + [np.hstack([body, np.roll(body, -1, axis=0)])
                                           for body in corners])
         np.testing.assert_array_equal(
@@ -191,7 +191,7 @@ def test_bodies_seen_through_facing_edges_as_through_all_four():
         readings = np.full(19, 25.0)
         sense_bodies(-1, 0.0, 0.0, math.cos(heading), math.sin(heading),
                      beam_table([(a, 25.0) for a in angles]), corners, centres, centres, radius,
-                     0.1, readings, np.zeros((0, 2)))
+                     0.1, readings, None)
         edges = np.concatenate([np.hstack([body, np.roll(body, -1, axis=0)]) for body in corners])
         np.testing.assert_array_equal(
             readings, _every_beam_every_segment(0.0, 0.0, heading, angles, 25.0, edges))

@@ -15,13 +15,8 @@ from enn_traffic.envs.rangefinder import RangefinderEnv, action_of
 from enn_traffic.envs.sumo import SumoEnv
 from enn_traffic.runs.controller import Controller
 from enn_traffic.sim.arena import ArenaWorld
-from enn_traffic.sim.sensors import (
-    beam_table,
-    channel_codes,
-    fill_channels,
-    sense_bodies,
-    sense_walls,
-)
+from enn_traffic.sim.readings import beam_table, channel_codes, fill_channels
+from enn_traffic.sim.sensors import sense_bodies, sense_walls
 
 BOTH = {"channels": ["distance", "closing_speed"]}
 RADIUS = 0.5 * math.hypot(4.3, 2.5)

@@ -10,7 +10,8 @@ from enn_traffic.config import load_scenario
 from enn_traffic.core.errors import InputError
 from enn_traffic.core.geometry import body_polygon
 from enn_traffic.sim.arena import ArenaWorld
-from enn_traffic.sim.sensors import beam_table, sense_bodies
+from enn_traffic.sim.readings import beam_table
+from enn_traffic.sim.sensors import sense_bodies
 from enn_traffic.sim.world import COLLIDED
 
 
@@ -43,7 +44,7 @@ def test_beams_see_other_vehicles_bodies():
     angles = np.array([-math.pi / 2, 0.0, math.pi / 2])
     readings = np.full(3, 25.0)
     sense_bodies(0, 0.0, 0.0, 1.0, 0.0, beam_table([(a, 25.0) for a in angles]), corners,
-                 centres, centres, 0.5 * math.hypot(4.3, 2.5), 0.1, readings, np.zeros((0, 2)))
+                 centres, centres, 0.5 * math.hypot(4.3, 2.5), 0.1, readings, None)
     np.testing.assert_allclose(readings, [25.0, 10.0, 25.0])
 
 

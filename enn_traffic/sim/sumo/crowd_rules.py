@@ -29,6 +29,7 @@ from numba import njit
 from enn_traffic.core.neural import steering as network_steering
 from enn_traffic.sim.buckets import Buckets, buckets_for, fill, nearby
 from enn_traffic.sim.crowd import ALIVE
+from enn_traffic.sim.readings import clear_seen, fill_channels, seen_for
 from enn_traffic.sim.rules import (
     NO_HIT,
     closer_than,
@@ -41,13 +42,7 @@ from enn_traffic.sim.rules import (
     wall_arrays,
 )
 from enn_traffic.sim.safety import CONFLICT_TTC, least_time_among
-from enn_traffic.sim.sensors import (
-    clear_seen,
-    fill_channels,
-    seen_for,
-    sense_bodies,
-    sense_walls_of,
-)
+from enn_traffic.sim.sensors import sense_bodies, sense_walls_of
 from enn_traffic.sim.sumo.replay import (
     in_world,
     mark_absent,

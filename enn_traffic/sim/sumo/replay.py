@@ -27,6 +27,7 @@ from numba import njit, prange
 
 from enn_traffic.core.geometry import boxes_overlap
 from enn_traffic.core.neural import steering as network_steering
+from enn_traffic.sim.readings import channel_count
 from enn_traffic.sim.rules import (
     HIT_WALL,
     NO_HIT,
@@ -188,7 +189,7 @@ def learner_sense(t, physics, geometry, ids, corners, centres, before, now, max_
     met[0] += within
     met[1] = max(met[1], within)
     channels, moved = geometry.channels, state.moved
-    if channels.shape[0] > 1:
+    if channel_count(channels) > 1:
         moved_from(ids_before, ids_now, centres_before, centres_now, moved)
     sense(0, pose, physics, beams, channels, walls, cell_start, cell_walls, all_walls, True,
           corners_now, visible, moved, -1, state.work.readings, state.work.seen)
