@@ -78,6 +78,20 @@ def test_bad_values_name_file_and_key(tmp_path, net, extra, key, message):
     assert str(info.value).startswith(str(tmp_path / "s.toml"))
 
 
+@pytest.mark.parametrize("nesting", ["[" * 100_000 + "]" * 100_000,
+                                     "{a = " * 100_000 + "1" + "}" * 100_000],
+                         ids=["lists", "inline tables"])
+def test_a_scenario_nested_without_end_is_refused_at_once(tmp_path, nesting):
+    """Lists or inline tables nested 100,000 deep (tomllib recurses per level) are refused in
+    one line naming the file, within a second, not a RecursionError traceback."""
+    import time
+
+    started = time.perf_counter()
+    with pytest.raises(InputError, match="nested too deeply") as info:
+        load_text(tmp_path, f'name = "deep"\nfoo = {nesting}\n')
+    assert info.value.file.endswith(".toml") and time.perf_counter() - started < 1.0
+
+
 def test_missing_network_file(tmp_path):
     with pytest.raises(InputError, match="network file not found") as info:
         load_text(tmp_path, GOOD.format(net="nowhere.net.xml"))
