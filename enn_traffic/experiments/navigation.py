@@ -238,7 +238,7 @@ def generalization_lines(study: Study) -> list[str]:
         f"generalization: (controller, {kind} track) pairs at the step cap, by training: "
         + ", ".join(f"{name}: {int(r['sum'])}/{int(r['size'])} ({100 * r['sum'] / r['size']:.0f}%)"
                     for (group, name), r in shares.iterrows() if group == kind)
-        + (" (issue 25 target for navigation_mixed: 90%)" if kind == "test" else
+        + (" (the target for navigation_mixed: 90%)" if kind == "test" else
            " (the tracks the design was chosen on)")
         for kind in ("test", "validation")
     ] + [
