@@ -91,6 +91,9 @@ def _terminate(number, frame) -> None:
 def _run_command(args) -> int:
     started = time.perf_counter()
     try:
+        if getattr(args, "address", None) is not None and args.executor != "ray":
+            raise InputError("a Ray cluster's address is used with --executor ray only (here "
+                             f"--executor {args.executor})", key="--address")
         return COMMANDS[args.command].run(args)
     except InputError as exc:  # one line, whatever SUMO's message spans
         print(f"enn-traffic: error: {' '.join(str(exc).split())}", file=sys.stderr)

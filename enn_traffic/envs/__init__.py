@@ -25,6 +25,7 @@ are for ``enn-traffic evaluate``, the second is highway-env's own environment.
 
 from __future__ import annotations
 
+import numbers
 import warnings
 from pathlib import Path
 
@@ -105,6 +106,8 @@ def make_vector_env(scenario: str | Path | Scenario, num_envs: int = 1, situatio
     gymnasium's ``SyncVectorEnv`` of replays or ``AsyncVectorEnv`` of closed loops (libsumo
     runs one SUMO per process). ``track`` as in :func:`make_env`; ``max_episode_steps`` (as
     ``gymnasium.make_vec`` passes it) is the worlds' step cap."""
+    if not isinstance(num_envs, numbers.Integral) or num_envs < 1:
+        raise ValueError(f"num_envs must be a whole number of at least 1, not {num_envs!r}")
     scenario = _scenario(scenario, track)
     if max_episode_steps is not None and max_episode_steps != scenario.episode.max_steps:
         scenario = scenario.with_overrides(episode={"max_steps": int(max_episode_steps)})

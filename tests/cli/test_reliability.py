@@ -481,6 +481,20 @@ def test_kernels_never_compile_into_the_package_when_numba_is_imported_first(tmp
     assert not [p for p in package.rglob("*.nbi") if p.stat().st_mtime >= started]
 
 
+@pytest.mark.parametrize("command", ["run", "evaluate", "crowd", "reproduce"])
+def test_a_ray_address_without_the_ray_executor_is_refused(tmp_path, command):
+    """``--address`` is read by the Ray executor only: with another, every command that takes
+    it refuses it in one line, exit 2 (it was silently ignored, the run local)."""
+    args = {"run": ["navigation_narrow"], "evaluate": ["a.npz", "navigation_narrow"],
+            "crowd": ["sumo_strategy1"], "reproduce": []}[command]
+    done = _run(command, *args, "--out", tmp_path / "out", "--address", "auto")
+    assert done.returncode == 2, done.stderr
+    assert done.stderr.strip().splitlines() == [
+        "enn-traffic: error: --address: a Ray cluster's address is used with --executor ray "
+        "only (here --executor local)"]
+    assert not (tmp_path / "out").exists()
+
+
 @pytest.mark.parametrize("executor", ["process", pytest.param("ray", marks=pytest.mark.full)])
 def test_a_worker_killed_mid_run_is_one_line_and_resume_gives_the_uninterrupted_run(
         tmp_path, root, executor):

@@ -190,3 +190,16 @@ def test_a_broken_file_in_the_scenarios_folder_leaves_the_other_ids(root, tmp_pa
     with pytest.warns(UserWarning, match="probe_bad.toml: sensor.channels"):
         assert envs.register_envs() == ("probe_good",)
     gym.envs.registration.registry.pop(env_id("probe_good"))
+
+
+@pytest.mark.parametrize("count", [0, -2, 2.0])
+def test_a_vector_env_of_no_whole_number_of_worlds_is_refused(count):
+    """``num_envs`` 0, negative or not a whole number is refused naming it (0 gave a vector
+    env of no worlds); a numpy integer is a whole number."""
+    with pytest.raises(ValueError, match="num_envs"):
+        gym.make_vec(env_id("navigation_narrow"), num_envs=count,
+                     vectorization_mode="vector_entry_point")
+    env = gym.make_vec(env_id("navigation_narrow"), num_envs=np.int64(2),
+                       vectorization_mode="vector_entry_point")
+    assert env.num_envs == 2
+    env.close()
