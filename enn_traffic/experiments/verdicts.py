@@ -261,6 +261,8 @@ def baseline_facts(folder: Path) -> dict:
     budget both ran, under the first scenario's rule (the paper's), with its Welch t
     interval."""
     table = pd.read_csv(folder / "comparison_differences.csv")
+    if table.empty:  # the GA alone: no method to set beside it
+        raise FileNotFoundError(folder / "comparison_differences.csv")
     first = table[(table["scenario"] == table["scenario"].iloc[0])
                   & (table["budget_steps"] == table["ga_budget_steps"])].dropna(
                       subset=["minus_ga_low"])

@@ -381,3 +381,17 @@ def test_a_gradient_rl_run_leaves_nothing_in_the_temporary_folder(tmp_path, monk
     runs.rl_run(scenario, "PPO", settings, settings["n_envs"] * settings["n_steps"], seed=1,
                 test=False)
     assert not [p.name for p in tmp_path.iterdir() if p.name.startswith("SB3-")]
+
+
+def test_a_plan_of_the_ga_alone_finishes_without_a_verdict(tmp_path, monkeypatch):
+    """A comparison of the GA alone (no gradient-RL method installed or asked for) has no
+    difference to state: it finishes with its tables and no verdict facts (its facts step
+    raised IndexError after every run was done, exit 1)."""
+    monkeypatch.setitem(protocol.SEARCH, "GA", {
+        "P 10": {"population_size": 10}, "P 12": {"population_size": 12}})
+    scenario = shipped_scenario("navigation_narrow").with_overrides(episode={"max_steps": 100})
+    campaign.compare([scenario], tmp_path, protocol.parse_plan("GA:2k:1"), workers=1,
+                     progress=False, search_budget=2_000)
+    assert len(pd.read_csv(tmp_path / "comparison.csv")) == 1
+    assert pd.read_csv(tmp_path / "comparison_differences.csv").empty
+    assert not list(tmp_path.rglob("verdict*.json"))
