@@ -37,8 +37,9 @@ def nonempty_path(text: str) -> Path:
 positive, non_negative = int_in(1), int_in(0)
 seed = int_in(0, 2**63 - 1)  # scenario.MAX_SEED: seeds are mixed into 64-bit keys
 # The schema's own bounds, written again so that --help need not import it (a test compares):
-# ga.generations and ga.population_size, episode.max_steps, traffic.episodes
-count, steps, episodes = int_in(1, 100_000), int_in(1, 10_000_000), int_in(1, 1000)
+# ga.generations, ga.population_size, episode.max_steps, traffic.episodes
+count, population = int_in(1, 100_000), int_in(2, 100_000)
+steps, episodes = int_in(1, 10_000_000), int_in(1, 1000)
 
 
 def run_folder_options(command: argparse.ArgumentParser, resume: str, force: str) -> None:

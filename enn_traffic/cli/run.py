@@ -10,6 +10,7 @@ from enn_traffic.cli.args import (
     count,
     nonempty_path,
     note,
+    population,
     run_folder_options,
     seed,
     warn_unread,
@@ -31,7 +32,7 @@ def add_parser(commands) -> None:
                          help="run folder (default: results/<scenario name>)")
     command.add_argument("--seed", metavar="N", type=seed, help="override the scenario's seed")
     command.add_argument("--generations", metavar="N", type=count, help="override ga.generations")
-    command.add_argument("--population", metavar="N", type=count,
+    command.add_argument("--population", metavar="N", type=population,
                          help="override ga.population_size")
     command.add_argument("--executor", choices=["local", "process", "ray"], default="local",
                          help="where fitness is evaluated (default: local, in-process)")

@@ -275,7 +275,17 @@ class Scenario(Section):
         for track in data["track"] if isinstance(data.get("track"), list) else []:
             if not track["traffic"]:
                 del track["traffic"]
-        return tomli_w.dumps(data)
+        text = tomli_w.dumps(data)
+        try:
+            text.encode("utf-8")
+        except UnicodeEncodeError as exc:  # a name of bytes that are not UTF-8 (Linux allows)
+            before = text[:exc.start].splitlines()
+            tables = [row.strip("[] ") for row in before if row.startswith("[")]
+            key = ".".join([*tables[-1:], before[-1].partition("=")[0].strip()])
+            raise InputError("names a file in a folder whose name is not UTF-8 text, which a "
+                             "TOML file (a run's scenario.toml) cannot hold: rename the folder",
+                             self.source, key) from None
+        return text
 
 
 # pydantic's name of a union's member in an error's location (``literal['a','b']``,

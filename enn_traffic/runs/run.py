@@ -354,6 +354,8 @@ def evolve(
     share as it shares ``scenario`` and the initial population.
     """
     out = Path(out)
+    for one in (scenario, *others):  # one its folder's scenario.toml cannot hold: refused
+        one.to_toml()  # before the folder is made
     with folder_lock(out):
         return _evolve(scenario, out, evaluator, resume, force, progress, initial_population,
                        stop, others)

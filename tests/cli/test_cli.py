@@ -142,7 +142,7 @@ def test_evaluate_on_another_traffic_seed(small_run, root, tmp_path):
         (("run", "no/such.toml"), "scenario file not found"),
         (("evaluate", "no.npz", "scenarios/navigation_narrow.toml"), "controller file not found"),
         (("reproduce", "--only", "fig99"), "unknown experiment"),
-        (("run", "scenarios/navigation_narrow.toml", "--population", "-3"), "integer from 1 to"),
+        (("run", "scenarios/navigation_narrow.toml", "--population", "-3"), "integer from 2 to"),
         (("run", "scenarios/navigation_narrow.toml", "--executor", "ray", "--address",
           "127.0.0.1:9"), "cannot reach Ray"),
         (("reproduce", "--only", "fig7", "--executor", "ray", "--address", "127.0.0.1:9",
@@ -234,16 +234,19 @@ def test_the_command_lines_bounds_are_the_schemas():
     from enn_traffic.cli import args
     from enn_traffic.config import EpisodeConfig, GAConfig, TrafficConfig
 
-    def upper(model, name):
-        return next(m.le for m in model.model_fields[name].metadata if hasattr(m, "le"))
+    def bounds(model, name):
+        metadata = model.model_fields[name].metadata
+        return (next(m.ge for m in metadata if hasattr(m, "ge")),
+                next(m.le for m in metadata if hasattr(m, "le")))
 
-    for parse, bound in [(args.count, upper(GAConfig, "generations")),
-                         (args.count, upper(GAConfig, "population_size")),
-                         (args.steps, upper(EpisodeConfig, "max_steps")),
-                         (args.episodes, upper(TrafficConfig, "episodes"))]:
-        assert parse(str(bound)) == bound
-        with pytest.raises(argparse.ArgumentTypeError):
-            parse(str(bound + 1))
+    for parse, (lower, upper) in [(args.count, bounds(GAConfig, "generations")),
+                                  (args.population, bounds(GAConfig, "population_size")),
+                                  (args.steps, bounds(EpisodeConfig, "max_steps")),
+                                  (args.episodes, bounds(TrafficConfig, "episodes"))]:
+        assert parse(str(lower)) == lower and parse(str(upper)) == upper
+        for outside in (lower - 1, upper + 1):
+            with pytest.raises(argparse.ArgumentTypeError):
+                parse(str(outside))
 
 
 def test_bench_only_refuses_a_workload_it_does_not_have():

@@ -419,13 +419,14 @@ def test_sumo_reads_a_path_of_any_letters_under_the_c_locale(tmp_path, road_net)
 
 def test_a_population_of_one_is_refused_without_a_note_before(tmp_path, root, capsys):
     """``--population 1`` said the tournament was lowered to 1 and then refused the
-    population: now the refusal alone, naming the key."""
-    from enn_traffic.cli import main
-
-    assert main(["run", str(root / "scenarios" / "navigation_narrow.toml"), "--population",
-                 "1", "--out", str(tmp_path / "run")]) == 2
-    error = capsys.readouterr().err
-    assert "ga.population_size" in error and "lowered" not in error
+    population naming the file's key: now the refusal alone, naming --population and its
+    bounds (ga.population_size's)."""
+    result = _run("run", root / "scenarios" / "navigation_narrow.toml", "--population", "1",
+                  "--out", tmp_path / "run")
+    assert result.returncode == 2
+    error = result.stderr.strip().splitlines()[-1]
+    assert "--population" in error and "from 2 to 100,000" in error
+    assert "lowered" not in result.stderr and not (tmp_path / "run").exists()
 
 
 def test_kernels_never_compile_into_the_package_when_the_cache_folder_is_unusable(tmp_path):
@@ -479,6 +480,30 @@ def test_kernels_never_compile_into_the_package_when_numba_is_imported_first(tmp
     folder = Path(done.stdout.strip().splitlines()[-1])
     assert folder.is_relative_to(tmp_path / "cache") and any(folder.rglob("*.nbi"))
     assert not [p for p in package.rglob("*.nbi") if p.stat().st_mtime >= started]
+
+
+def test_a_scenario_in_a_folder_named_by_bytes_not_utf8_is_refused_naming_the_key(
+        tmp_path, root, capsys):
+    """A folder whose name is bytes that are not UTF-8 (Linux allows them) cannot go into a
+    run's scenario.toml: ``run`` refuses it in one line naming the scenario's key, exit 2,
+    before making its folder (it was a UnicodeEncodeError traceback, exit 1)."""
+    import os
+    import shutil
+
+    from enn_traffic.cli import main
+
+    folder = tmp_path / os.fsdecode(b"n\xffdir")
+    folder.mkdir()
+    shutil.copy(root / "sumo_nets" / "track_narrow.net.xml", folder)
+    text = (root / "scenarios" / "navigation_narrow.toml").read_text(encoding="utf-8")
+    (folder / "sc.toml").write_text("\n".join(
+        'net = "track_narrow.net.xml"' if line.startswith("net =") else line
+        for line in text.splitlines()), encoding="utf-8")
+    out = tmp_path / "out"
+    assert main(["run", str(folder / "sc.toml"), "--generations", "1", "--out", str(out)]) == 2
+    error = capsys.readouterr().err.strip().splitlines()[-1]
+    assert "track.net: names a file in a folder whose name is not UTF-8" in error
+    assert not out.exists()
 
 
 @pytest.mark.parametrize("command", ["run", "evaluate", "crowd", "reproduce"])
