@@ -370,17 +370,20 @@ def test_seeds_piled_at_the_cap_give_a_point_not_a_missing_interval():
 @pytest.mark.full
 def test_a_gradient_rl_run_leaves_nothing_in_the_temporary_folder(tmp_path, monkeypatch):
     """SB3's own logger made an empty SB3-<time> folder in TMPDIR for every run of the
-    comparison (a fresh probe found four after one baseline command)."""
+    comparison (a fresh probe found four after one baseline command), and torch its compiler
+    cache folder, torchinductor_<user> (found by the next probe)."""
     pytest.importorskip("stable_baselines3")
     import tempfile
 
     monkeypatch.setattr(tempfile, "tempdir", str(tmp_path))
+    monkeypatch.delenv("TORCHINDUCTOR_CACHE_DIR", raising=False)
+    monkeypatch.setenv("ENN_TRAFFIC_CACHE", str(tmp_path / "cache"))
     scenario = shipped_scenario("arena_strategy1")
     setting = next(iter(protocol.SEARCH["PPO"]))
     settings = protocol.SEARCH["PPO"][setting]
     runs.rl_run(scenario, "PPO", settings, settings["n_envs"] * settings["n_steps"], seed=1,
                 test=False)
-    assert not [p.name for p in tmp_path.iterdir() if p.name.startswith("SB3-")]
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["cache"]
 
 
 def test_a_plan_of_the_ga_alone_finishes_without_a_verdict(tmp_path, monkeypatch):

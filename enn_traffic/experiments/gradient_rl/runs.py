@@ -5,6 +5,7 @@ checkpoints on validation and scores it once on test."""
 from __future__ import annotations
 
 import copy
+import os
 import time
 from dataclasses import dataclass
 
@@ -13,6 +14,7 @@ import pandas as pd
 
 from enn_traffic.config import Scenario
 from enn_traffic.core import interrupts as stopping
+from enn_traffic.core.cache import cache_folder, writable_folder
 from enn_traffic.core.errors import InputError
 from enn_traffic.envs.rangefinder import RangefinderVectorEnv, rangefinder_world
 from enn_traffic.experiments.gradient_rl.policy import NumpyPolicy, numpy_actor
@@ -144,6 +146,11 @@ def rl_run(scenario: Scenario, method: str, settings: dict, budget: int, seed: i
         raise InputError(f"{method} needs the rl extra: pip install -e .[rl] "
                          "(docs/envs.md: a CPU-only torch)") from None
     torch.set_num_threads(1)
+    # torch keeps a compiler cache folder that PPO's first update makes, by default
+    # TMPDIR/torchinductor_<user>: it goes to the project's cache folder (a user's own
+    # TORCHINDUCTOR_CACHE_DIR stands)
+    os.environ.setdefault("TORCHINDUCTOR_CACHE_DIR", str(
+        writable_folder(cache_folder() / "torchinductor", "torchinductor")))
     training = RangefinderVectorEnv(scenario, settings["n_envs"], situations=TRAINING_POOL_KEYS)
     venv = VecNormalize(sb3_vec_env(training),
                         norm_obs=True, norm_reward=settings["norm_reward"],
