@@ -122,18 +122,6 @@ class Scenario(Section):
         return self
 
     @model_validator(mode="after")
-    def _fits_memory(self) -> Scenario:
-        genes = NetworkSpec(self.layer_sizes).chromosome_length
-        if self.ga.population_size * genes > MAX_POPULATION_GENES:
-            raise ValueError(
-                f"ga.population_size: {self.ga.population_size:,} chromosomes of {genes:,} genes "
-                f"(network {list(self.layer_sizes)}) are {self.ga.population_size * genes:,} "
-                f"genes, more than the {MAX_POPULATION_GENES:,} ("
-                f"{MAX_POPULATION_GENES * 8 / 2**30:.1f} GiB) a population may hold; use a "
-                "smaller network or population")
-        return self
-
-    @model_validator(mode="after")
     def _apart(self) -> Scenario:
         """Vehicles start where vehicles fit: no two starts nearer than a body's length."""
         starts = list(self.traffic.starts_xy)
@@ -269,6 +257,20 @@ class Scenario(Section):
         """A copy whose SUMO runs write their console log (and kept outputs) under
         ``folder``, or show SUMO's console instead (``console``)."""
         return self.model_copy(update={"sumo_folder": folder, "sumo_console": console})
+
+    def check_population_fits(self) -> None:
+        """A run's population fits memory: refused, naming ``ga.population_size``, beyond
+        :data:`MAX_POPULATION_GENES`. Asked by a run of the resolved scenario (overrides such
+        as ``--population`` applied), not at loading: evaluating a large network needs no
+        population."""
+        genes = NetworkSpec(self.layer_sizes).chromosome_length
+        if self.ga.population_size * genes > MAX_POPULATION_GENES:
+            raise InputError(
+                f"{self.ga.population_size:,} chromosomes of {genes:,} genes "
+                f"(network {list(self.layer_sizes)}) are {self.ga.population_size * genes:,} "
+                f"genes, more than the {MAX_POPULATION_GENES:,} ("
+                f"{MAX_POPULATION_GENES * 8 / 2**30:.1f} GiB) a population may hold; use a "
+                "smaller network or population", self.source, "ga.population_size")
 
     def to_toml(self) -> str:
         data = self.model_dump(mode="json", exclude_none=True)

@@ -354,8 +354,9 @@ def evolve(
     share as it shares ``scenario`` and the initial population.
     """
     out = Path(out)
-    for one in (scenario, *others):  # one its folder's scenario.toml cannot hold: refused
-        one.to_toml()  # before the folder is made
+    scenario.check_population_fits()  # refused before the folder is made, as is a scenario
+    for one in (scenario, *others):  # its folder's scenario.toml cannot hold
+        one.to_toml()
     with folder_lock(out):
         return _evolve(scenario, out, evaluator, resume, force, progress, initial_population,
                        stop, others)

@@ -506,6 +506,31 @@ def test_a_scenario_in_a_folder_named_by_bytes_not_utf8_is_refused_naming_the_ke
     assert not out.exists()
 
 
+def test_a_population_too_large_for_memory_is_judged_with_the_command_lines_population(
+        tmp_path, root, capsys):
+    """The population's memory limit is a run's, on the resolved scenario: a network of
+    1,072,130 genes loads (evaluate needs no population), 200 of it are refused before the
+    run's folder is made, naming ga.population_size, and --population 4 fits (the limit was
+    checked at loading, on the file's 200, whatever --population said)."""
+    from enn_traffic.cli import main
+    from enn_traffic.config import load_scenario
+
+    text = (root / "scenarios" / "navigation_narrow.toml").read_text(encoding="utf-8")
+    path = tmp_path / "huge.toml"
+    path.write_text(text.replace('net = "../', f'net = "{root}/').replace(
+        "hidden = [3]", "hidden = [1024, 1024]"), encoding="utf-8")
+    scenario = load_scenario(path)
+    assert scenario.ga.population_size == 200
+    with pytest.raises(InputError, match="ga.population_size: 200 chromosomes of 1,072,130"):
+        scenario.check_population_fits()
+    scenario.with_overrides(ga={"population_size": 4, "tournament_size": 4}
+                            ).check_population_fits()
+    out = tmp_path / "out"
+    assert main(["run", str(path), "--generations", "1", "--out", str(out)]) == 2
+    assert "ga.population_size: 200 chromosomes" in capsys.readouterr().err
+    assert not out.exists()
+
+
 @pytest.mark.parametrize("command", ["run", "evaluate", "crowd", "reproduce"])
 def test_a_ray_address_without_the_ray_executor_is_refused(tmp_path, command):
     """``--address`` is read by the Ray executor only: with another, every command that takes
