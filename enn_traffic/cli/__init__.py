@@ -8,6 +8,7 @@ Bad input ends with one message naming the file and key, and exit status 2; neve
 from __future__ import annotations
 
 import argparse
+import codecs
 import errno
 import signal
 import sys
@@ -51,12 +52,26 @@ def _interrupted_note(args) -> str:
     return getattr(COMMANDS[args.command], "INTERRUPTED", "")
 
 
+def _as_given(error: UnicodeEncodeError) -> tuple[str | bytes, int]:
+    """What a character the terminal's encoding cannot write becomes: a byte of a path that
+    was not text in that encoding (Python keeps it as a lone surrogate) the byte it was, so
+    that a printed path pastes back; any other character escaped (``\\u03a9``)."""
+    part = error.object[error.start:error.end]
+    if all("\udc80" <= character <= "\udcff" for character in part):
+        return bytes(ord(character) - 0xDC00 for character in part), error.end
+    return codecs.backslashreplace_errors(error)
+
+
+SHOWN_AS_GIVEN = "enn-traffic-as-given"
+codecs.register_error(SHOWN_AS_GIVEN, _as_given)
+
+
 def main(argv: list[str] | None = None) -> int:
     from enn_traffic.core.progress import show_messages
 
     for stream in (sys.stdout, sys.stderr):  # a path the terminal's encoding cannot show is
         if hasattr(stream, "reconfigure"):  # escaped, not a crash after the work is done
-            stream.reconfigure(errors="backslashreplace")
+            stream.reconfigure(errors=SHOWN_AS_GIVEN)
     args = build_parser().parse_args(argv)
     show_messages(quiet=getattr(args, "quiet", False))
     handlers, hook = {}, sys.unraisablehook

@@ -397,6 +397,14 @@ def test_a_locale_without_utf8_runs_every_command_and_shows_any_path(tmp_path):
                           timeout=300)
     assert done.returncode == 0, done.stderr
     assert out.is_file() and b"\\u03a9" in done.stdout
+    # a path given as bytes the C locale cannot decode is printed as those bytes, so that it
+    # pastes back (it was printed \\udcc3\\udcbc)
+    given = os.fsencode(tmp_path) + b"/o\xc3\xbc.csv"
+    done = subprocess.run([sys.executable, "-m", "enn_traffic", "lanes", "street_mixed",
+                           "--top", "2", "--out", given], env=c_locale, capture_output=True,
+                          timeout=300)
+    assert done.returncode == 0, done.stderr
+    assert given in done.stdout and (tmp_path / "oü.csv").is_file()
 
 
 def test_sumo_reads_a_path_of_any_letters_under_the_c_locale(tmp_path, road_net):
