@@ -277,17 +277,32 @@ class Scenario(Section):
         for track in data["track"] if isinstance(data.get("track"), list) else []:
             if not track["traffic"]:
                 del track["traffic"]
-        text = tomli_w.dumps(data)
-        try:
-            text.encode("utf-8")
-        except UnicodeEncodeError as exc:  # a name of bytes that are not UTF-8 (Linux allows)
-            before = text[:exc.start].splitlines()
-            tables = [row.strip("[] ") for row in before if row.startswith("[")]
-            key = ".".join([*tables[-1:], before[-1].partition("=")[0].strip()])
+        key = _not_utf8(data)
+        if key is not None:  # a name of bytes that are not UTF-8 (Linux allows them)
             raise InputError("names a file in a folder whose name is not UTF-8 text, which a "
                              "TOML file (a run's scenario.toml) cannot hold: rename the folder",
-                             self.source, key) from None
-        return text
+                             self.source, key)
+        return tomli_w.dumps(data)
+
+
+def _not_utf8(value, key: str = "") -> str | None:
+    """The dotted key (``track.net``, ``traffic.routes[0]``) of the first string under
+    ``value`` that UTF-8 cannot encode (a path's undecodable bytes, as Python keeps them),
+    or None."""
+    if isinstance(value, str):
+        try:
+            value.encode("utf-8")
+        except UnicodeEncodeError:
+            return key
+        return None
+    items = (value.items() if isinstance(value, dict)
+             else enumerate(value) if isinstance(value, list) else ())
+    for name, item in items:
+        inner = f"{key}[{name}]" if isinstance(name, int) else f"{key}.{name}" if key else name
+        found = _not_utf8(item, inner)
+        if found is not None:
+            return found
+    return None
 
 
 # pydantic's name of a union's member in an error's location (``literal['a','b']``,

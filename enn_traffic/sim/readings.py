@@ -1,7 +1,7 @@
 """What a rangefinder gives its network (paper §3, §5.2): the beams' table, the channels each
 beam reads (``[sensor] channels``: the distance, then further channels such as the closing
 speed of what it meets) and the readings' count and bounds, which every world, environment
-and buffer asks here. The sensing itself is :mod:`enn_traffic.sim.sensors`'; the channels
+and buffer asks here. The sensing itself is in :mod:`enn_traffic.sim.sensors`; the channels
 after the distances are filled here (:func:`fill_channels`), from what
 :func:`~enn_traffic.sim.sensors.sense_bodies` noted of the bodies each beam met.
 """
@@ -48,17 +48,16 @@ DISTANCE, CLOSING_SPEED = CODES["distance"], CODES["closing_speed"]
 def channel_codes(names: list[str]) -> np.ndarray | None:
     """The codes of the channels ``names`` (``[sensor] channels``), in their order; None for
     the distances alone. None is a type of its own to numba: the kernels compile without the
-    channels' work, which cost the arena batch 7% of its rate when they carried it unused
-    (docs/design.md, the sensor channels' cost)."""
+    channels' work, which slowed the arena batch when they carried it unused (docs/design.md,
+    "Sensor channels' cost", A/B in results/house)."""
     if list(names) == ["distance"]:
         return None
     return np.array([CODES[name] for name in names], dtype=np.int64)
 
 
-# The overloads here choose a body by type, None (the distances alone) or codes. None of them
-# is inlined by numba's own inliner (``inline="always"``): in numba 0.68 that gave the arena's
-# kernels wrong poses; called, they cost nothing measurable (the arena batch ran as fast with
-# the note in sense_bodies' inner loop taken out).
+# The overloads here choose a body by type, None (the distances alone) or codes. numba's own
+# inliner (``inline="always"``) is not asked for them: with it, numba 0.68 compiled the arena's
+# kernels into wrong poses.
 def channel_count(channels: np.ndarray | None) -> int:
     """How many channels each beam reads (``channels``: :func:`channel_codes`)."""
     return 1 if channels is None else channels.shape[0]
@@ -108,8 +107,7 @@ def seen_for(beams: np.ndarray, channels: np.ndarray | None) -> np.ndarray | Non
     """Room for what each beam meets, (B, 2), when ``channels`` go beyond the distance: the
     velocity of the body it meets (m/s; a wall's is 0), noted as the bodies are sensed; None
     for the distances alone, which need nothing noted. A work array, made once per world or
-    observer, not at every sensing: made there, it ran the arena batch at 0.89 of its rate
-    before channels, against 0.99 made once (bench A/B, 3 rounds each)."""
+    observer: made at every sensing, it slowed the arena batch measurably."""
     return None if channels is None else np.zeros((beams.shape[0], 2))
 
 

@@ -376,7 +376,9 @@ def test_a_gradient_rl_run_leaves_nothing_in_the_temporary_folder(tmp_path, monk
     import tempfile
 
     monkeypatch.setattr(tempfile, "tempdir", str(tmp_path))
-    monkeypatch.delenv("TORCHINDUCTOR_CACHE_DIR", raising=False)
+    # set first, so that monkeypatch unsets what rl_run sets for the rest of the process
+    monkeypatch.setenv("TORCHINDUCTOR_CACHE_DIR", "")
+    monkeypatch.delenv("TORCHINDUCTOR_CACHE_DIR")
     monkeypatch.setenv("ENN_TRAFFIC_CACHE", str(tmp_path / "cache"))
     scenario = shipped_scenario("arena_strategy1")
     setting = next(iter(protocol.SEARCH["PPO"]))

@@ -89,6 +89,27 @@ def test_the_arena_reads_distances_as_before_then_closing_speeds(root):
     assert world.evaluate(chromosome).steps.min() >= 1  # the GA's kernels drive it
 
 
+def test_a_sensor_of_distances_alone_carries_no_channel_arrays(root):
+    """Distances alone compile without the channels' work: the geometry's channels, the
+    step's and the vector env's ``seen`` work arrays are None (a type of its own to numba);
+    with closing speed, codes and a (B, 2) array each. Both read distances bit for bit."""
+    from enn_traffic.envs.batch import Worlds
+    from enn_traffic.sim.rules import work_for
+
+    plain = load_scenario(root / "scenarios" / "arena_strategy1.toml")
+    for scenario, alone in ((plain, True), (plain.with_overrides(sensor=BOTH), False)):
+        world = ArenaWorld(scenario)
+        work = work_for(world.geometry, world.layer_sizes, world.vehicles)
+        worlds = Worlds.empty(3, world, world.spec.chromosome_length)
+        if alone:
+            assert world.geometry.channels is None and work.seen is None
+            assert worlds.seen is None
+        else:
+            assert list(world.geometry.channels) == list(channel_codes(BOTH["channels"]))
+            assert work.seen.shape == (scenario.sensor.beams, 2)
+            assert worlds.seen.shape == (3, scenario.sensor.beams, 2)
+
+
 def test_sumo_vehicles_motion_reaches_the_channel(root):
     """Among SUMO's recorded traffic (the closed-loop crowd's, whose learners sense SUMO's
     vehicles and each other: tests/envs/test_sumo_crowd_env.py): the distances are the plain

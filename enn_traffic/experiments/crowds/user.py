@@ -104,10 +104,11 @@ def run_crowd(scenario: Scenario, out: Path, executor: str = "local",
     from enn_traffic.runs.run import RunOutputs, evolve, fingerprint
 
     out = Path(out)
+    settings = scenario.to_toml()  # one the folder cannot hold: refused before it is made
     with folder_lock(out):
         if force:
             shutil.rmtree(out / "crowds", ignore_errors=True)
-        write_text(out / MARKER, scenario.to_toml())
+        write_text(out / MARKER, settings)
         individual = out / INDIVIDUAL
         alone = individual_scenario(scenario)
         with slow_step(f"preparing the worlds of {scenario.name}"):
