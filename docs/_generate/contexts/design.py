@@ -64,6 +64,8 @@ def context(root: Path) -> dict:
     house = root / "results" / "house"
     return {"bench_ab": bench_ab(pd.read_csv(house / "bench_ab.csv")),
             "bench_channels": bench_ab(pd.read_csv(house / "bench_channels_ab.csv")),
+            "bench_distances": bench_ab(pd.read_csv(house / "bench_distances_ab.csv")),
+            "bench_today": bench_ab(pd.read_csv(house / "bench_today_ab.csv")),
             "change_tasks": tasks, "layers": layers, "key_ranges": ranges,
             "key_allocations": allocations,
             "generations_columns": [{"name": name, "meaning": " ".join(
