@@ -48,13 +48,14 @@ RULES = ("sim", "learning", "sumo", "roads", "core/geometry.py", "core/neural.py
 # scenario naming a folder that is not UTF-8 text was refused (every run the same).
 # 2d253fbf0a4d: the rules before a population's memory limit was judged on the resolved
 # scenario, at the run, not at loading (every run the same). d9efc5897251: the rules before
-# that key was found by walking the scenario (the same).
+# that key was found by walking the scenario (the same). e028ae11880c: the rules before the
+# channel helpers kept one body per type (the same compiled code).
 SAME_RULES = ("72e67a1dafd1", "13c0276f6863", "ad197a53d028",
               "6b6259b1fa90", "ca0cd856c646", "b8dc5d7b1b60", "c6b06d6a604f", "fd611642ca7f",
               "935db775f49b", "da99c7326da3", "abb36c8bd1ce", "1a96cbd6b58d", "d1d4ccb609c7",
               "a7b125e5a324", "03de6bb5eb98", "3d3ea4d5b7fd", "961c1f8cd0b2", "852aaf9ed580",
               "e71d2599ee48", "33063551da61", "2d253fbf0a4d",
-              "d9efc5897251")
+              "d9efc5897251", "e028ae11880c")
 
 
 def source_digest(paths: Iterable[Path]) -> str:

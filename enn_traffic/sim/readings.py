@@ -55,12 +55,16 @@ def channel_codes(names: list[str]) -> np.ndarray | None:
     return np.array([CODES[name] for name in names], dtype=np.int64)
 
 
-# The overloads here choose a body by type, None (the distances alone) or codes. numba's own
-# inliner (``inline="always"``) is not asked for them: with it, numba 0.68 compiled the arena's
+# The overloads here choose a body by type, None (the distances alone) or codes; each has one
+# body per type, for compiled code (a call from Python says so). numba's own inliner
+# (``inline="always"``) is not asked for them: with it, numba 0.68 compiled the arena's
 # kernels into wrong poses.
+COMPILED_ONLY = "called from compiled code only, where numba picks its body by type"
+
+
 def channel_count(channels: np.ndarray | None) -> int:
     """How many channels each beam reads (``channels``: :func:`channel_codes`)."""
-    return 1 if channels is None else channels.shape[0]
+    raise TypeError(COMPILED_ONLY)
 
 
 @overload(channel_count)
@@ -103,16 +107,21 @@ def unseen_readings(geometry) -> np.ndarray:
     return readings
 
 
-def seen_for(beams: np.ndarray, channels: np.ndarray | None) -> np.ndarray | None:
+@njit(cache=True)
+def seen_for(beams, channels):
     """Room for what each beam meets, (B, 2), when ``channels`` go beyond the distance: the
     velocity of the body it meets (m/s; a wall's is 0), noted as the bodies are sensed; None
     for the distances alone, which need nothing noted. A work array, made once per world or
     observer: made at every sensing, it slowed the arena batch measurably."""
-    return None if channels is None else np.zeros((beams.shape[0], 2))
+    return _seen_rows(beams, channels)
 
 
-@overload(seen_for)
-def _seen_for(beams, channels):
+def _seen_rows(beams, channels):
+    raise TypeError(COMPILED_ONLY)
+
+
+@overload(_seen_rows)
+def _seen_rows_of(beams, channels):
     if isinstance(channels, types.NoneType):
         return lambda beams, channels: None
     return lambda beams, channels: np.zeros((beams.shape[0], 2))
@@ -120,7 +129,7 @@ def _seen_for(beams, channels):
 
 def work_row(array: np.ndarray | None, i: int) -> np.ndarray | None:
     """Row ``i`` of a stacked work array that may be None (:func:`seen_for`'s, per world)."""
-    return None if array is None else array[i]
+    raise TypeError(COMPILED_ONLY)
 
 
 @overload(work_row)
@@ -133,8 +142,7 @@ def _work_row(array, i):
 def clear_seen(seen: np.ndarray | None) -> None:
     """Every beam of ``seen`` (:func:`seen_for`) meets a wall or nothing, until a body is
     sensed."""
-    if seen is not None:
-        seen[:] = 0.0
+    raise TypeError(COMPILED_ONLY)
 
 
 @overload(clear_seen)
@@ -151,8 +159,7 @@ def _clear_seen(seen):
 def note_seen(seen, b, vx, vy) -> None:
     """Beam ``b`` met a body moving at (``vx``, ``vy``) m/s: noted in ``seen``
     (:func:`seen_for`), nothing when it is None."""
-    if seen is not None:
-        seen[b, 0], seen[b, 1] = vx, vy
+    raise TypeError(COMPILED_ONLY)
 
 
 @overload(note_seen)
@@ -174,8 +181,7 @@ def fill_channels(channels, beams, seen, cos_h, sin_h, speed, readings) -> None:
     Closing speed: how fast the distance along the beam shrinks, the vehicle's velocity less
     what it met's, along the beam (m/s, negative when it draws away); 0 when it meets
     nothing."""
-    if channels is not None:
-        fill_each_channel(channels, beams, seen, cos_h, sin_h, speed, readings)
+    raise TypeError(COMPILED_ONLY)
 
 
 @overload(fill_channels)

@@ -15,7 +15,7 @@ from enn_traffic.envs.rangefinder import RangefinderEnv, action_of
 from enn_traffic.envs.sumo import SumoEnv
 from enn_traffic.runs.controller import Controller
 from enn_traffic.sim.arena import ArenaWorld
-from enn_traffic.sim.readings import beam_table, channel_codes, fill_channels
+from enn_traffic.sim.readings import beam_table, channel_codes, fill_each_channel
 from enn_traffic.sim.sensors import sense_bodies, sense_walls
 
 BOTH = {"channels": ["distance", "closing_speed"]}
@@ -32,8 +32,8 @@ def closing_speeds(table, corners, centres, before, walls=None, speed=10.0, dt=0
     seen = np.zeros((count, 2))
     sense_bodies(-1, 0.0, 0.0, 1.0, 0.0, table, corners, centres, before, RADIUS, dt, readings,
                  seen)
-    fill_channels(channel_codes(["distance", "closing_speed"]), table, seen, 1.0, 0.0, speed,
-                  readings)
+    fill_each_channel(channel_codes(["distance", "closing_speed"]), table, seen, 1.0, 0.0,
+                      speed, readings)
     return readings[:count], readings[count:]
 
 
