@@ -47,7 +47,8 @@ def bench_ab(table: pd.DataFrame) -> dict:
         after = next(code for code in median.index if code != before)
         rows.append({"workload": workload, "implementation": implementation,
                      "threads": int(threads), "ratio": median[after] / median[before],
-                     "overlap": bool(low[after] <= high[before] and low[before] <= high[after])})
+                     "overlap": bool(low[after] <= high[before] and low[before] <= high[after]),
+                     "spread": float(((high - low) / median).max())})
     return {"before": before, "rounds": int(table["round"].nunique()), "rows": rows,
             "overlapping": sum(row["overlap"] for row in rows)}
 
